@@ -1,0 +1,302 @@
+//! Reading and writing DATA.md data sets: a TOML file beside its recordings.
+//!
+//! Three steps, as everywhere in the project: the raw TOML (unknown keys rejected, positions kept for
+//! errors) → checked values → a [`Dataset`] in the project's conventions (midship origin, rudder positive
+//! to starboard, SI). Conversions from `origin = "cg"` and `rudder_sign = -1` happen in [`Dataset::load`].
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::InputError;
+use crate::recording::read_recording;
+use crate::types::{AddedMass, Manoeuvre, Recording, Ship, Side};
+
+/// The point that velocities and positions of a data set refer to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Origin {
+    #[default]
+    Midship,
+    Cg,
+}
+
+/// `kind` of a recording entry.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Kind {
+    Zigzag,
+    Turning,
+    Free,
+}
+
+/// One `[[recording]]` entry as written in the file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RecordingEntry {
+    /// CSV file, relative to the data set file.
+    pub file: String,
+    pub kind: Kind,
+    /// Commanded rudder amplitude [deg].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rudder: Option<f64>,
+    /// Zig-zag heading check angle [deg].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub check: Option<f64>,
+    /// Side of the first rudder execute.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub side: Option<Side>,
+}
+
+/// A data set file as written (DATA.md).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DatasetFile {
+    pub name: String,
+    #[serde(default)]
+    pub origin: Origin,
+    #[serde(default = "one")]
+    pub rudder_sign: i64,
+    pub ship: Ship,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub added_mass: Option<AddedMass>,
+    #[serde(rename = "recording", default)]
+    pub recordings: Vec<RecordingEntry>,
+}
+
+fn one() -> i64 {
+    1
+}
+
+/// A recording of a data set with the manoeuvre it performs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DatasetRecording {
+    /// File name as given in the data set (relative to it); the recording's identity in results.
+    pub file: String,
+    pub manoeuvre: Manoeuvre,
+    pub recording: Recording,
+}
+
+/// A loaded data set in the project's conventions.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Dataset {
+    /// The data set file it was read from.
+    pub path: PathBuf,
+    pub name: String,
+    pub ship: Ship,
+    /// Added-mass derivatives about midship, when the data set gives them.
+    pub added_mass: Option<AddedMass>,
+    pub recordings: Vec<DatasetRecording>,
+}
+
+impl Dataset {
+    /// Read a data set file and all its recordings.
+    pub fn load(path: &Path) -> Result<Dataset, InputError> {
+        Self::load_filtered(path, |_| true)
+    }
+
+    /// Read a data set but only the recordings whose file name `keep` accepts.
+    pub fn load_filtered(path: &Path, keep: impl Fn(&str) -> bool) -> Result<Dataset, InputError> {
+        let text = std::fs::read_to_string(path).map_err(|e| InputError::read(path, &e))?;
+        let file = parse_dataset(path, &text)?;
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let mut recordings = Vec::new();
+        for (i, entry) in file.recordings.iter().enumerate() {
+            if !keep(&entry.file) {
+                continue;
+            }
+            let manoeuvre = manoeuvre_of(path, i, entry)?;
+            let csv = dir.join(&entry.file);
+            if !csv.is_file() {
+                return Err(InputError::key(
+                    path,
+                    format!("recording[{i}].file"),
+                    format!("recording file `{}` not found", csv.display()),
+                ));
+            }
+            let mut recording = read_recording(&csv)?;
+            to_project_conventions(&mut recording, &file);
+            recordings.push(DatasetRecording {
+                file: entry.file.clone(),
+                manoeuvre,
+                recording,
+            });
+        }
+        let added_mass = file.added_mass.map(|a| match file.origin {
+            Origin::Midship => a,
+            Origin::Cg => added_mass_cg_to_midship(a, file.ship.xg),
+        });
+        Ok(Dataset {
+            path: path.to_path_buf(),
+            name: file.name,
+            ship: file.ship,
+            added_mass,
+            recordings,
+        })
+    }
+
+    /// The recording with this file name.
+    pub fn recording(&self, file: &str) -> Option<&DatasetRecording> {
+        self.recordings.iter().find(|r| r.file == file)
+    }
+}
+
+/// Parse and check a data set file's text; `path` names it in errors.
+pub fn parse_dataset(path: &Path, text: &str) -> Result<DatasetFile, InputError> {
+    let file: DatasetFile = toml::from_str(text).map_err(|e| InputError::toml(path, text, &e))?;
+    if file.rudder_sign != 1 && file.rudder_sign != -1 {
+        return Err(InputError::key(
+            path,
+            "rudder_sign",
+            format!("must be 1 or -1, not {}", file.rudder_sign),
+        ));
+    }
+    let s = &file.ship;
+    let positive = [
+        ("lpp", s.lpp),
+        ("beam", s.beam),
+        ("draft", s.draft),
+        ("displacement", s.displacement),
+        ("rho", s.rho),
+        ("kzz", s.kzz),
+        ("u0", s.u0),
+        ("rudder_rate", s.rudder_rate),
+    ];
+    for (key, value) in positive {
+        if !(value.is_finite() && value > 0.0) {
+            return Err(InputError::key(
+                path,
+                format!("ship.{key}"),
+                format!("must be a positive number, not {value}"),
+            ));
+        }
+    }
+    if !s.xg.is_finite() || s.xg.abs() > s.lpp {
+        return Err(InputError::key(
+            path,
+            "ship.xg",
+            format!("must be a finite distance within the ship length, not {}", s.xg),
+        ));
+    }
+    for (i, entry) in file.recordings.iter().enumerate() {
+        manoeuvre_of(path, i, entry)?;
+    }
+    Ok(file)
+}
+
+fn manoeuvre_of(path: &Path, i: usize, e: &RecordingEntry) -> Result<Manoeuvre, InputError> {
+    let need = |key: &str, v: Option<f64>| -> Result<f64, InputError> {
+        match v {
+            Some(x) if x.is_finite() && x > 0.0 => Ok(x),
+            Some(x) => Err(InputError::key(
+                path,
+                format!("recording[{i}].{key}"),
+                format!("must be a positive angle in degrees, not {x}"),
+            )),
+            None => Err(InputError::key(
+                path,
+                format!("recording[{i}].{key}"),
+                format!("required for kind = \"{}\"", kind_word(e.kind)),
+            )),
+        }
+    };
+    let side = || {
+        e.side.ok_or_else(|| {
+            InputError::key(
+                path,
+                format!("recording[{i}].side"),
+                format!("required for kind = \"{}\" (\"port\" or \"starboard\")", kind_word(e.kind)),
+            )
+        })
+    };
+    Ok(match e.kind {
+        Kind::Zigzag => Manoeuvre::ZigZag {
+            rudder_deg: need("rudder", e.rudder)?,
+            check_deg: need("check", e.check)?,
+            side: side()?,
+        },
+        Kind::Turning => Manoeuvre::Turning {
+            rudder_deg: need("rudder", e.rudder)?,
+            side: side()?,
+        },
+        Kind::Free => Manoeuvre::Free,
+    })
+}
+
+fn kind_word(k: Kind) -> &'static str {
+    match k {
+        Kind::Zigzag => "zigzag",
+        Kind::Turning => "turning",
+        Kind::Free => "free",
+    }
+}
+
+/// The data set entry that describes a manoeuvre (inverse of the loader's interpretation).
+pub fn entry_for(file: &str, m: &Manoeuvre) -> RecordingEntry {
+    match *m {
+        Manoeuvre::ZigZag {
+            rudder_deg,
+            check_deg,
+            side,
+        } => RecordingEntry {
+            file: file.into(),
+            kind: Kind::Zigzag,
+            rudder: Some(rudder_deg),
+            check: Some(check_deg),
+            side: Some(side),
+        },
+        Manoeuvre::Turning { rudder_deg, side } => RecordingEntry {
+            file: file.into(),
+            kind: Kind::Turning,
+            rudder: Some(rudder_deg),
+            check: None,
+            side: Some(side),
+        },
+        Manoeuvre::Free => RecordingEntry {
+            file: file.into(),
+            kind: Kind::Free,
+            rudder: None,
+            check: None,
+            side: None,
+        },
+    }
+}
+
+/// Rudder sign and reference point of the source → the project's (midship, rudder + to starboard).
+fn to_project_conventions(rec: &mut Recording, file: &DatasetFile) {
+    if file.rudder_sign == -1 {
+        rec.delta.iter_mut().for_each(|d| *d = -*d);
+    }
+    if file.origin == Origin::Cg {
+        cg_to_midship(rec, file.ship.xg);
+    }
+}
+
+/// Midship lies x_G aft of the centre of gravity: its sway velocity is v_G − x_G r, its position is the
+/// centre of gravity's moved by −x_G along the heading; u and r are the same for every point of the hull.
+pub fn cg_to_midship(rec: &mut Recording, xg_m: f64) {
+    for i in 0..rec.len() {
+        let (s, c) = rec.psi[i].sin_cos();
+        rec.x0[i] -= xg_m * c;
+        rec.y0[i] -= xg_m * s;
+        rec.v[i] -= xg_m * rec.r[i];
+    }
+    if let Some(a) = rec.accelerations.as_mut() {
+        for i in 0..a.v_dot.len() {
+            a.v_dot[i] -= xg_m * a.r_dot[i];
+        }
+    }
+}
+
+/// Added-mass derivatives about the centre of gravity → about midship. With midship velocities
+/// ν_M = (u, v_M, r) and v_G = v_M + x_G r, kinetic energy invariance gives A_M = Hᵀ A_G H with
+/// H = [[1,0,0],[0,1,x_G],[0,0,1]].
+pub fn added_mass_cg_to_midship(a: AddedMass, xg_m: f64) -> AddedMass {
+    AddedMass {
+        X_udot: a.X_udot,
+        Y_vdot: a.Y_vdot,
+        Y_rdot: a.Y_rdot + xg_m * a.Y_vdot,
+        N_vdot: a.N_vdot + xg_m * a.Y_vdot,
+        N_rdot: a.N_rdot + xg_m * (a.Y_rdot + a.N_vdot) + xg_m * xg_m * a.Y_vdot,
+    }
+}

@@ -1,0 +1,30 @@
+//! Recordings and data sets in the DATA.md contract, import of other layouts, prime-system scaling and
+//! acceleration estimation.
+//!
+//! Everything handed to other crates is in the project's conventions (see [`Recording`]): SI units,
+//! midship reference point, rudder positive to starboard. Conversions from a source's own conventions
+//! (`origin = "cg"`, `rudder_sign = -1`, unit suffixes, foreign layouts) happen here and nowhere else.
+//!
+//! - [`recording`]: one DATA.md CSV file → [`Recording`];
+//! - [`dataset`]: a data set TOML and its recordings → [`Dataset`];
+//! - [`import`]: a foreign layout described by a mapping TOML → a DATA.md data set;
+//! - [`write`]: atomic writing of recordings and data sets;
+//! - [`prime`]: the prime system I with U0 (DOMAIN.md §1);
+//! - [`deriv`]: the smoothing differentiator that estimates accelerations;
+//! - [`error`]: [`InputError`], which always names the file and the line/column or key.
+
+pub mod dataset;
+pub mod deriv;
+pub mod error;
+pub mod import;
+pub mod prime;
+pub mod recording;
+pub mod table;
+pub mod types;
+pub mod units;
+pub mod write;
+
+pub use dataset::{Dataset, DatasetFile, DatasetRecording, Origin};
+pub use error::InputError;
+pub use prime::PrimeScale;
+pub use types::*;

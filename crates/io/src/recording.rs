@@ -1,0 +1,154 @@
+//! Reading a DATA.md recording (one manoeuvre, one CSV file).
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use crate::error::InputError;
+use crate::table::{Columns, parse_cell};
+use crate::types::Recording;
+use crate::units::Quantity;
+
+/// Read and validate a recording file. Values are converted to SI; the origin and rudder sign are the
+/// source's (the data set loader converts them, since only it knows them).
+pub fn read_recording(path: &Path) -> Result<Recording, InputError> {
+    let bytes = std::fs::read(path).map_err(|e| InputError::read(path, &e))?;
+    let text = String::from_utf8(bytes)
+        .map_err(|e| InputError::file(path, format!("not UTF-8 (byte {})", e.utf8_error().valid_up_to())))?;
+    parse_recording(path, &text)
+}
+
+/// Parse recording text; `path` only names the source in errors.
+pub fn parse_recording(path: &Path, text: &str) -> Result<Recording, InputError> {
+    // Comments are allowed before the header only; skip them (and blank lines) and remember how many
+    // lines we skipped so that errors point at the real line.
+    let mut skipped = 0usize;
+    let mut rest = text;
+    loop {
+        let (line, tail) = match rest.find('\n') {
+            Some(i) => (&rest[..i], &rest[i + 1..]),
+            None => (rest, ""),
+        };
+        let l = line.trim();
+        if (l.starts_with('#') || l.is_empty()) && !(l.is_empty() && tail.is_empty()) {
+            skipped += 1;
+            rest = tail;
+        } else {
+            break;
+        }
+    }
+    if rest.trim().is_empty() {
+        return Err(InputError::file(path, "no header row"));
+    }
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(rest.as_bytes());
+    let mut records = reader.records();
+    let header = match records.next() {
+        Some(Ok(h)) => h,
+        Some(Err(e)) => return Err(csv_error(path, skipped, &e)),
+        None => return Err(InputError::file(path, "no header row")),
+    };
+    let header_line = skipped + 1;
+    let mut slots: Vec<Option<(Quantity, f64)>> = Vec::with_capacity(header.len());
+    let mut column_of: HashMap<Quantity, (usize, String)> = HashMap::new();
+    for (i, raw) in header.iter().enumerate() {
+        let (name, unit) = split_unit(raw)
+            .map_err(|m| InputError::cell(path, header_line, i + 1, raw, m))?;
+        let quantity = match Quantity::from_name(name) {
+            Some(q) if Quantity::RECORDING.contains(&q) => q,
+            _ => {
+                slots.push(None); // unknown columns are kept by the source but ignored here
+                continue;
+            }
+        };
+        let factor = match unit {
+            None => 1.0,
+            Some(u) => quantity.dimension().to_si(u).ok_or_else(|| {
+                InputError::cell(
+                    path,
+                    header_line,
+                    i + 1,
+                    raw,
+                    format!(
+                        "unknown unit `{u}` for `{name}` (known: {})",
+                        quantity.dimension().known_units()
+                    ),
+                )
+            })?,
+        };
+        if let Some((c, _)) = column_of.get(&quantity) {
+            return Err(InputError::cell(
+                path,
+                header_line,
+                i + 1,
+                raw,
+                format!("duplicate column `{name}` (also column {c})"),
+            ));
+        }
+        column_of.insert(quantity, (i + 1, raw.to_string()));
+        slots.push(Some((quantity, factor)));
+    }
+    let mut values: HashMap<Quantity, Vec<f64>> =
+        column_of.keys().map(|&q| (q, Vec::new())).collect();
+    let mut lines = Vec::new();
+    for rec in records {
+        let rec = rec.map_err(|e| csv_error(path, skipped, &e))?;
+        let line = skipped + rec.position().map_or(0, |p| p.line() as usize);
+        if rec.len() == 1 && rec.get(0).is_some_and(str::is_empty) {
+            continue; // a blank line
+        }
+        if rec.len() != header.len() {
+            return Err(InputError::line(
+                path,
+                line,
+                format!("expected {} fields as in the header, found {}", header.len(), rec.len()),
+            ));
+        }
+        for (i, cell) in rec.iter().enumerate() {
+            if let Some((q, factor)) = slots[i] {
+                let x = parse_cell(cell).map_err(|m| InputError::cell(path, line, i + 1, &header[i], m))?;
+                if let Some(col) = values.get_mut(&q) {
+                    col.push(x * factor);
+                }
+            }
+        }
+        lines.push(line);
+    }
+    Columns {
+        values,
+        lines,
+        column_of,
+    }
+    .into_recording(path)
+    .map_err(|mut e| {
+        // A missing column is a header problem; point at the header line.
+        if e.message.starts_with("missing required column") {
+            e.location = crate::error::Location::Line {
+                line: header_line,
+                column: None,
+            };
+        }
+        e
+    })
+}
+
+/// `psi[deg]` → ("psi", Some("deg")); `psi` → ("psi", None).
+fn split_unit(raw: &str) -> Result<(&str, Option<&str>), String> {
+    match raw.find('[') {
+        None => Ok((raw.trim(), None)),
+        Some(open) => {
+            let close = raw
+                .rfind(']')
+                .filter(|&c| c > open && c == raw.len() - 1)
+                .ok_or_else(|| format!("malformed unit in header `{raw}` (expected `name[unit]`)"))?;
+            Ok((raw[..open].trim(), Some(raw[open + 1..close].trim())))
+        }
+    }
+}
+
+fn csv_error(path: &Path, skipped: usize, e: &csv::Error) -> InputError {
+    let line = e.position().map_or(0, |p| p.line() as usize) + skipped;
+    InputError::line(path, line.max(1), format!("malformed CSV: {e}"))
+}

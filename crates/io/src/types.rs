@@ -1,0 +1,189 @@
+//! The in-memory types every crate shares: a recording in the project's conventions, the ship, the
+//! manoeuvre a recording (or a simulation) performs.
+
+use serde::{Deserialize, Serialize};
+
+/// One manoeuvre's time series in the project's conventions (DATA.md):
+/// SI units (s, m, rad, m/s, rad/s, rad/s²), body axes x forward / y starboard, earth axes x0 north /
+/// y0 east, velocities and positions of the **midship** point, heading and yaw rate positive to
+/// starboard, rudder angle positive when it turns the ship to starboard.
+///
+/// All vectors have the same length; `t` is strictly increasing.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Recording {
+    /// Time [s].
+    pub t: Vec<f64>,
+    /// North position of midship [m].
+    pub x0: Vec<f64>,
+    /// East position of midship [m].
+    pub y0: Vec<f64>,
+    /// Heading [rad], unwrapped (continuous), positive to starboard.
+    pub psi: Vec<f64>,
+    /// Surge velocity of midship [m/s].
+    pub u: Vec<f64>,
+    /// Sway velocity of midship [m/s], positive to starboard.
+    pub v: Vec<f64>,
+    /// Yaw rate [rad/s], positive to starboard.
+    pub r: Vec<f64>,
+    /// Rudder angle [rad], positive turns the ship to starboard.
+    pub delta: Vec<f64>,
+    /// Propeller rate [1/s], when recorded.
+    pub n: Option<Vec<f64>>,
+    /// Recorded accelerations of midship, when the source has them.
+    pub accelerations: Option<Accelerations>,
+}
+
+/// Accelerations in body axes of the midship point.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Accelerations {
+    /// Surge acceleration [m/s²].
+    pub u_dot: Vec<f64>,
+    /// Sway acceleration [m/s²].
+    pub v_dot: Vec<f64>,
+    /// Yaw acceleration [rad/s²].
+    pub r_dot: Vec<f64>,
+}
+
+impl Recording {
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+
+    /// True when there are no samples.
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
+
+    /// Speed over the body's reference point [m/s].
+    pub fn speed(&self, i: usize) -> f64 {
+        self.u[i].hypot(self.v[i])
+    }
+
+    /// Keep the samples whose index is in `range` (used for training windows).
+    pub fn slice(&self, range: std::ops::Range<usize>) -> Recording {
+        let s = |x: &Vec<f64>| x[range.clone()].to_vec();
+        Recording {
+            t: s(&self.t),
+            x0: s(&self.x0),
+            y0: s(&self.y0),
+            psi: s(&self.psi),
+            u: s(&self.u),
+            v: s(&self.v),
+            r: s(&self.r),
+            delta: s(&self.delta),
+            n: self.n.as_ref().map(s),
+            accelerations: self.accelerations.as_ref().map(|a| Accelerations {
+                u_dot: s(&a.u_dot),
+                v_dot: s(&a.v_dot),
+                r_dot: s(&a.r_dot),
+            }),
+        }
+    }
+}
+
+/// Main particulars of the ship a data set describes (the `[ship]` table of DATA.md).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Ship {
+    /// Length between perpendiculars [m].
+    pub lpp: f64,
+    /// Beam [m].
+    pub beam: f64,
+    /// Draft [m].
+    pub draft: f64,
+    /// Displacement volume [m³].
+    pub displacement: f64,
+    /// Water density [kg/m³].
+    pub rho: f64,
+    /// Centre of gravity forward of midship [m].
+    pub xg: f64,
+    /// Yaw radius of gyration about the centre of gravity [m].
+    pub kzz: f64,
+    /// Approach speed U0 [m/s]; the speed of the prime system.
+    pub u0: f64,
+    /// Rudder rate [deg/s].
+    pub rudder_rate: f64,
+}
+
+impl Ship {
+    /// Mass [kg].
+    pub fn mass_kg(&self) -> f64 {
+        self.rho * self.displacement
+    }
+
+    /// Yaw moment of inertia about midship, I_zG + m x_G² [kg m²].
+    pub fn iz_midship_kg_m2(&self) -> f64 {
+        self.mass_kg() * (self.kzz * self.kzz + self.xg * self.xg)
+    }
+
+    /// Rudder rate [rad/s].
+    pub fn rudder_rate_rad_s(&self) -> f64 {
+        self.rudder_rate.to_radians()
+    }
+}
+
+/// Known added-mass derivatives in SI about the data set's origin (DATA.md `[added_mass]`), as
+/// derivatives (negative numbers). After loading they refer to midship.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+#[allow(non_snake_case)]
+pub struct AddedMass {
+    /// X_u̇ [kg].
+    pub X_udot: f64,
+    /// Y_v̇ [kg].
+    pub Y_vdot: f64,
+    /// Y_ṙ [kg m].
+    pub Y_rdot: f64,
+    /// N_v̇ [kg m].
+    pub N_vdot: f64,
+    /// N_ṙ [kg m²].
+    pub N_rdot: f64,
+}
+
+/// Side of the first rudder execute.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Hash)]
+#[serde(rename_all = "lowercase")]
+pub enum Side {
+    Port,
+    Starboard,
+}
+
+impl Side {
+    /// Sign of the first rudder execute in the project's convention (starboard = +1).
+    pub fn sign(self) -> f64 {
+        match self {
+            Side::Port => -1.0,
+            Side::Starboard => 1.0,
+        }
+    }
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Side::Port => "port",
+            Side::Starboard => "starboard",
+        }
+    }
+}
+
+/// What a recording (or a simulation) does with the rudder.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Manoeuvre {
+    /// Zig-zag δ/ψ: rudder to ±`rudder_deg`, reversed at ±`check_deg` heading deviation.
+    ZigZag { rudder_deg: f64, check_deg: f64, side: Side },
+    /// Turning circle: rudder to `rudder_deg` towards `side` and held.
+    Turning { rudder_deg: f64, side: Side },
+    /// Any other rudder history (no standard metrics).
+    Free,
+}
+
+impl Manoeuvre {
+    /// The DATA.md `kind` word.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Manoeuvre::ZigZag { .. } => "zigzag",
+            Manoeuvre::Turning { .. } => "turning",
+            Manoeuvre::Free => "free",
+        }
+    }
+}

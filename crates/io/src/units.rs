@@ -1,0 +1,167 @@
+//! Physical quantities of recording columns and the units each accepts (DATA.md: `name[unit]` overrides
+//! the default SI unit; an unknown unit is an error).
+
+/// The dimension of a column, which decides the units it may be written in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Dimension {
+    Time,
+    Length,
+    Angle,
+    Velocity,
+    AngularRate,
+    Acceleration,
+    AngularAcceleration,
+    Frequency,
+}
+
+impl Dimension {
+    /// Factor that converts a value in `unit` to SI, or None for a unit this dimension does not know.
+    pub fn to_si(self, unit: &str) -> Option<f64> {
+        use std::f64::consts::PI;
+        let deg = PI / 180.0;
+        let f = match (self, unit) {
+            (Dimension::Time, "s") => 1.0,
+            (Dimension::Time, "ms") => 1e-3,
+            (Dimension::Time, "min") => 60.0,
+            (Dimension::Length, "m") => 1.0,
+            (Dimension::Length, "cm") => 1e-2,
+            (Dimension::Length, "mm") => 1e-3,
+            (Dimension::Angle, "rad") => 1.0,
+            (Dimension::Angle, "deg") => deg,
+            (Dimension::Velocity, "m/s") => 1.0,
+            (Dimension::Velocity, "cm/s") => 1e-2,
+            (Dimension::Velocity, "mm/s") => 1e-3,
+            (Dimension::Velocity, "kn") => 1852.0 / 3600.0,
+            (Dimension::AngularRate, "rad/s") => 1.0,
+            (Dimension::AngularRate, "deg/s") => deg,
+            (Dimension::Acceleration, "m/s^2" | "m/s2" | "m/s²") => 1.0,
+            (Dimension::AngularAcceleration, "rad/s^2" | "rad/s2" | "rad/s²") => 1.0,
+            (Dimension::AngularAcceleration, "deg/s^2" | "deg/s2" | "deg/s²") => deg,
+            (Dimension::Frequency, "1/s" | "rps" | "Hz") => 1.0,
+            (Dimension::Frequency, "rpm") => 1.0 / 60.0,
+            _ => return None,
+        };
+        Some(f)
+    }
+
+    /// The units accepted, for error messages.
+    pub fn known_units(self) -> &'static str {
+        match self {
+            Dimension::Time => "s, ms, min",
+            Dimension::Length => "m, cm, mm",
+            Dimension::Angle => "rad, deg",
+            Dimension::Velocity => "m/s, cm/s, mm/s, kn",
+            Dimension::AngularRate => "rad/s, deg/s",
+            Dimension::Acceleration => "m/s^2",
+            Dimension::AngularAcceleration => "rad/s^2, deg/s^2",
+            Dimension::Frequency => "1/s, rps, Hz, rpm",
+        }
+    }
+}
+
+/// A quantity a recording column (or an imported column) can hold.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Quantity {
+    T,
+    X0,
+    Y0,
+    Psi,
+    U,
+    V,
+    R,
+    Delta,
+    N,
+    UDot,
+    VDot,
+    RDot,
+    /// Earth-fixed velocity north [m/s]; only in import mappings (converted to body u, v).
+    X0Dot,
+    /// Earth-fixed velocity east [m/s]; only in import mappings.
+    Y0Dot,
+}
+
+impl Quantity {
+    /// Columns of a DATA.md recording, in the order the project writes them.
+    pub const RECORDING: [Quantity; 12] = [
+        Quantity::T,
+        Quantity::X0,
+        Quantity::Y0,
+        Quantity::Psi,
+        Quantity::U,
+        Quantity::V,
+        Quantity::R,
+        Quantity::Delta,
+        Quantity::N,
+        Quantity::UDot,
+        Quantity::VDot,
+        Quantity::RDot,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Quantity::T => "t",
+            Quantity::X0 => "x0",
+            Quantity::Y0 => "y0",
+            Quantity::Psi => "psi",
+            Quantity::U => "u",
+            Quantity::V => "v",
+            Quantity::R => "r",
+            Quantity::Delta => "delta",
+            Quantity::N => "n",
+            Quantity::UDot => "u_dot",
+            Quantity::VDot => "v_dot",
+            Quantity::RDot => "r_dot",
+            Quantity::X0Dot => "x0_dot",
+            Quantity::Y0Dot => "y0_dot",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Quantity> {
+        [Quantity::X0Dot, Quantity::Y0Dot]
+            .into_iter()
+            .chain(Quantity::RECORDING)
+            .find(|q| q.name() == name)
+    }
+
+    pub fn dimension(self) -> Dimension {
+        match self {
+            Quantity::T => Dimension::Time,
+            Quantity::X0 | Quantity::Y0 => Dimension::Length,
+            Quantity::Psi | Quantity::Delta => Dimension::Angle,
+            Quantity::U | Quantity::V | Quantity::X0Dot | Quantity::Y0Dot => Dimension::Velocity,
+            Quantity::R => Dimension::AngularRate,
+            Quantity::N => Dimension::Frequency,
+            Quantity::UDot | Quantity::VDot => Dimension::Acceleration,
+            Quantity::RDot => Dimension::AngularAcceleration,
+        }
+    }
+
+    /// The SI unit the project writes.
+    pub fn si_unit(self) -> &'static str {
+        match self.dimension() {
+            Dimension::Time => "s",
+            Dimension::Length => "m",
+            Dimension::Angle => "rad",
+            Dimension::Velocity => "m/s",
+            Dimension::AngularRate => "rad/s",
+            Dimension::Acceleration => "m/s^2",
+            Dimension::AngularAcceleration => "rad/s^2",
+            Dimension::Frequency => "1/s",
+        }
+    }
+
+    /// Required in every recording.
+    pub fn required(self) -> bool {
+        matches!(
+            self,
+            Quantity::T
+                | Quantity::X0
+                | Quantity::Y0
+                | Quantity::Psi
+                | Quantity::U
+                | Quantity::V
+                | Quantity::R
+                | Quantity::Delta
+        )
+    }
+}
