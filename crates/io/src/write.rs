@@ -34,7 +34,12 @@ pub fn fmt_sig(x: f64) -> String {
         return "0".into();
     }
     let rounded: f64 = format!("{x:.8e}").parse().unwrap_or(x);
-    format!("{rounded}")
+    // Plain notation reads best in the usual range; far outside it the exponent form is shorter.
+    if (1e-4..1e9).contains(&rounded.abs()) {
+        format!("{rounded}")
+    } else {
+        format!("{rounded:e}")
+    }
 }
 
 /// The CSV text of a recording, with `comments` as `#` lines before the header.

@@ -1,0 +1,31 @@
+//! `shipid import MAPPING.toml --out DIR [--source DIR]`.
+
+use std::path::Path;
+
+use shipid_io::write::write_dataset;
+
+use crate::{CliError, Outcome, failed};
+
+pub fn run(mapping: &Path, out: &Path, source: Option<&Path>) -> Result<Outcome, CliError> {
+    let imported = shipid_io::import::import(mapping, source)?;
+    let comments = vec![
+        format!(
+            "Imported by shipid {} from {} (mapping {}).",
+            env!("CARGO_PKG_VERSION"),
+            imported.dataset.name,
+            mapping.display()
+        ),
+        "Project conventions: SI units, rudder positive to starboard (source sign converted).".into(),
+    ];
+    let recs: Vec<_> = imported.recordings.iter().collect();
+    write_dataset(out, &imported.dataset, &recs, &comments).map_err(failed)?;
+    for line in &imported.provenance {
+        eprintln!("imported {line}");
+    }
+    eprintln!(
+        "wrote {} recordings and {}",
+        recs.len(),
+        out.join("dataset.toml").display()
+    );
+    Ok(Outcome::Ok)
+}

@@ -1,0 +1,62 @@
+//! The `shipid` command line: glue between the crates. Each subcommand lives in its own module and
+//! returns an [`Outcome`] or a [`CliError`]; `main` turns them into output and exit codes
+//! (0 all ok, 1 some case failed, 2 bad input).
+
+pub mod generate;
+pub mod import;
+pub mod metrics_cmd;
+pub mod simulate_cmd;
+pub mod spec;
+
+use std::fmt;
+
+/// How a command ended when it ran to completion.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Outcome {
+    /// Everything succeeded.
+    Ok,
+    /// It ran, but some cases (simulations, fits) failed or diverged; their status is in the output.
+    SomeFailed,
+}
+
+/// A command that could not run.
+#[derive(Debug)]
+pub enum CliError {
+    /// The user's input is wrong (file, key, argument): exit code 2.
+    BadInput(anyhow::Error),
+    /// Something else failed (writing results …): exit code 1.
+    Failed(anyhow::Error),
+}
+
+impl fmt::Display for CliError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            CliError::BadInput(e) | CliError::Failed(e) => write!(f, "{e:#}"),
+        }
+    }
+}
+
+impl CliError {
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            CliError::BadInput(_) => 2,
+            CliError::Failed(_) => 1,
+        }
+    }
+}
+
+impl From<shipid_io::InputError> for CliError {
+    fn from(e: shipid_io::InputError) -> Self {
+        CliError::BadInput(e.into())
+    }
+}
+
+/// Shorthand for an input error with a message.
+pub fn bad_input(msg: impl fmt::Display) -> CliError {
+    CliError::BadInput(anyhow::anyhow!("{msg}"))
+}
+
+/// Shorthand for a failure to write or compute.
+pub fn failed(e: impl Into<anyhow::Error>) -> CliError {
+    CliError::Failed(e.into())
+}

@@ -1,0 +1,68 @@
+//! `shipid metrics DATASET.toml [--json]`: IMO metrics of every recording of a data set.
+
+use std::path::Path;
+
+use serde_json::{Map, Value, json};
+use shipid_io::Dataset;
+use shipid_sim::{Metrics, metrics};
+
+use crate::{CliError, Outcome};
+
+/// Metrics of every recording, keyed by file name.
+pub fn dataset_metrics(ds: &Dataset) -> Vec<(String, &'static str, Metrics)> {
+    ds.recordings
+        .iter()
+        .map(|r| (r.file.clone(), r.manoeuvre.kind(), metrics(&r.recording, &r.manoeuvre, &ds.ship)))
+        .collect()
+}
+
+/// `{"recordings": {"<file>": {"kind": ..., <metric keys>}}}` (DATA.md keys).
+pub fn metrics_json(rows: &[(String, &'static str, Metrics)]) -> Value {
+    let mut recs = Map::new();
+    for (file, kind, m) in rows {
+        let mut o = Map::new();
+        o.insert("kind".into(), json!(kind));
+        for (key, value) in m.entries() {
+            if let Some(v) = value {
+                o.insert(key.into(), json!(v));
+            }
+        }
+        recs.insert(file.clone(), Value::Object(o));
+    }
+    json!({ "recordings": recs })
+}
+
+pub fn run(dataset: &Path, as_json: bool) -> Result<Outcome, CliError> {
+    let ds = Dataset::load(dataset)?;
+    let rows = dataset_metrics(&ds);
+    if as_json {
+        println!("{}", serde_json::to_string_pretty(&metrics_json(&rows)).unwrap_or_default());
+    } else {
+        println!("{} ({})", ds.name, dataset.display());
+        println!("{}", metrics_table(&rows));
+    }
+    Ok(Outcome::Ok)
+}
+
+/// A plain-text table: one row per recording, one column per metric.
+pub fn metrics_table(rows: &[(String, &'static str, Metrics)]) -> String {
+    let header = [
+        "recording", "kind", "os1 [deg]", "os2 [deg]", "t_a", "t_check", "advance", "transfer", "tact. D",
+        "steady D",
+    ];
+    let width = rows.iter().map(|r| r.0.len()).max().unwrap_or(9).max(9);
+    let mut lines = vec![
+        std::iter::once(format!("{:<width$}", header[0]))
+            .chain(header[1..].iter().map(|h| format!("{h:>11}")))
+            .collect::<Vec<_>>()
+            .join(" "),
+    ];
+    for (file, kind, m) in rows {
+        let mut cells = vec![format!("{file:<width$}"), format!("{kind:>11}")];
+        for (_, v) in m.entries() {
+            cells.push(v.map_or_else(|| format!("{:>11}", "-"), |x| format!("{x:>11.3}")));
+        }
+        lines.push(cells.join(" "));
+    }
+    lines.join("\n")
+}

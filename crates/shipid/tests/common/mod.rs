@@ -1,0 +1,33 @@
+//! Helpers shared by the integration tests of the binary.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// The workspace root (tests run in the crate directory).
+pub fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// Run the `shipid` binary from the workspace root.
+pub fn shipid(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_shipid"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("the shipid binary runs")
+}
+
+/// The HSVA recordings of `../shared`, or None after printing a visible skip line. With
+/// `SHIPID_REQUIRE_SHARED=1` (CI) a missing directory fails the test instead.
+pub fn shared_hsva(test: &str) -> Option<PathBuf> {
+    let dir = root().join("../shared/data/kvlcc2-hsva");
+    if dir.is_dir() {
+        return Some(dir);
+    }
+    if std::env::var("SHIPID_REQUIRE_SHARED").is_ok_and(|v| v == "1") {
+        panic!("{test}: ../shared/data/kvlcc2-hsva is missing and SHIPID_REQUIRE_SHARED=1");
+    }
+    eprintln!("SKIPPED {test}: ../shared/data/kvlcc2-hsva not found (set SHIPID_REQUIRE_SHARED=1 to fail instead)");
+    None
+}
