@@ -1,0 +1,209 @@
+//! The identified Abkowitz model: coefficients of a set, the ship, the known acceleration derivatives,
+//! and its accelerations for any state (used by `shipid_sim` to integrate it).
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+use shipid_io::{AddedMass, PrimeScale, Ship};
+
+use crate::design::PrimeInertia;
+use crate::set::{CoefficientSet, Dof, SetError, SetFile};
+
+/// An Abkowitz model ready to evaluate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AbkowitzModel {
+    pub set: CoefficientSet,
+    /// Coefficients per DOF (prime system), in the set's term order.
+    pub coefficients: [Vec<f64>; 3],
+    pub ship: Ship,
+    pub added_mass: AddedMass,
+    inertia: PrimeInertia,
+    /// Inverse of the mass matrix (prime), computed once.
+    inverse_mass: [[f64; 3]; 3],
+    scale: PrimeScale,
+}
+
+/// Why a model cannot be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ModelError {
+    #[error("{dof}: {got} coefficients for {expected} terms")]
+    CoefficientCount { dof: Dof, expected: usize, got: usize },
+    #[error("coefficient {name} is not finite")]
+    NonFinite { name: String },
+    #[error("the mass matrix is singular (check the added masses)")]
+    SingularMass,
+    #[error("set: {0}")]
+    Set(#[from] SetError),
+    #[error("coefficient `{0}` is not a term of the set")]
+    UnknownCoefficient(String),
+    #[error("coefficient `{0}` is missing")]
+    MissingCoefficient(String),
+}
+
+impl AbkowitzModel {
+    pub fn new(
+        set: CoefficientSet,
+        coefficients: [Vec<f64>; 3],
+        ship: Ship,
+        added_mass: AddedMass,
+    ) -> Result<AbkowitzModel, ModelError> {
+        for d in Dof::ALL {
+            let (expected, got) = (set.terms[d.index()].len(), coefficients[d.index()].len());
+            if expected != got {
+                return Err(ModelError::CoefficientCount { dof: d, expected, got });
+            }
+            for (name, v) in set.names(d).into_iter().zip(&coefficients[d.index()]) {
+                if !v.is_finite() {
+                    return Err(ModelError::NonFinite { name });
+                }
+            }
+        }
+        let inertia = PrimeInertia::new(&ship, &added_mass, &set);
+        let inverse_mass = invert3(inertia.mass_matrix()).ok_or(ModelError::SingularMass)?;
+        Ok(AbkowitzModel {
+            set,
+            coefficients,
+            ship,
+            added_mass,
+            inertia,
+            inverse_mass,
+            scale: PrimeScale::of(&ship),
+        })
+    }
+
+    /// Hydrodynamic forces f_X, f_Y, f_N (prime) of the polynomial at a primed state.
+    pub fn forces_prime(&self, du: f64, v: f64, r: f64, delta: f64) -> [f64; 3] {
+        std::array::from_fn(|d| {
+            self.set.terms[d]
+                .iter()
+                .zip(&self.coefficients[d])
+                .map(|(m, b)| b * m.eval(du, v, r, delta))
+                .sum()
+        })
+    }
+
+    /// Accelerations [u̇ m/s², v̇ m/s², ṙ rad/s²] of midship at (u, v [m/s], r [rad/s], δ [rad]).
+    pub fn accelerations(&self, u: f64, v: f64, r: f64, delta: f64) -> [f64; 3] {
+        let s = &self.scale;
+        let (du, vp, rp) = (s.delta_u_prime(u), s.velocity_prime(v), s.yaw_rate_prime(r));
+        let f = self.forces_prime(du, vp, rp, delta);
+        let c = self.inertia.rigid_body_forces(du, vp, rp);
+        let rhs = [f[0] + c[0], f[1] + c[1], f[2] + c[2]];
+        let a: [f64; 3] = std::array::from_fn(|i| (0..3).map(|j| self.inverse_mass[i][j] * rhs[j]).sum());
+        [
+            s.acceleration_from_prime(a[0]),
+            s.acceleration_from_prime(a[1]),
+            s.yaw_acceleration_from_prime(a[2]),
+        ]
+    }
+
+    /// Coefficient by name ("Y_vvr"), prime system.
+    pub fn coefficient(&self, name: &str) -> Option<f64> {
+        Dof::ALL.iter().find_map(|&d| {
+            let j = self.set.names(d).iter().position(|n| n == name)?;
+            Some(self.coefficients[d.index()][j])
+        })
+    }
+}
+
+fn invert3(m: [[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
+    let det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    if !det.is_finite() || det.abs() < 1e-300 {
+        return None;
+    }
+    let c = |a: usize, b: usize, c: usize, d: usize| m[a][b] * m[c][d] - m[a][d] * m[c][b];
+    Some([
+        [c(1, 1, 2, 2) / det, -c(0, 1, 2, 2) / det, c(0, 1, 1, 2) / det],
+        [-c(1, 0, 2, 2) / det, c(0, 0, 2, 2) / det, -c(0, 0, 1, 2) / det],
+        [c(1, 0, 2, 1) / det, -c(0, 0, 2, 1) / det, c(0, 0, 1, 1) / det],
+    ])
+}
+
+/// How a model's coefficients were obtained.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct EstimatorInfo {
+    /// lsq, bounded-lsq, ridge, lasso, svr.
+    pub name: String,
+    /// qp or fast.
+    pub solver: String,
+    /// Hyper-parameters used (lambda, alpha, c, epsilon).
+    #[serde(default)]
+    pub hyper: BTreeMap<String, f64>,
+    /// True when the hyper-parameters were chosen by cross-validation.
+    #[serde(default)]
+    pub tuned: bool,
+}
+
+/// One training recording and the window of it that was used.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrainingWindow {
+    pub dataset: String,
+    pub recording: String,
+    pub t_start_s: f64,
+    pub t_end_s: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub overshoots: Option<u32>,
+    /// "recorded" or how the accelerations were estimated.
+    pub accelerations: String,
+}
+
+/// A model file (TOML), written by `shipid fit`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelFile {
+    pub shipid_version: String,
+    pub kind: String,
+    pub ship: Ship,
+    pub added_mass: AddedMass,
+    pub set: SetFile,
+    pub estimator: EstimatorInfo,
+    #[serde(default)]
+    pub training: Vec<TrainingWindow>,
+    /// Coefficients per DOF: name → value (prime system I, U0 of the ship, midship, δ + to starboard).
+    pub coefficients: BTreeMap<String, BTreeMap<String, f64>>,
+}
+
+impl ModelFile {
+    /// The file for a model.
+    pub fn from_model(m: &AbkowitzModel, estimator: EstimatorInfo, training: Vec<TrainingWindow>) -> ModelFile {
+        let mut coefficients = BTreeMap::new();
+        for d in Dof::ALL {
+            let per: BTreeMap<String, f64> =
+                m.set.names(d).into_iter().zip(m.coefficients[d.index()].iter().copied()).collect();
+            coefficients.insert(d.as_str().to_string(), per);
+        }
+        ModelFile {
+            shipid_version: env!("CARGO_PKG_VERSION").to_string(),
+            kind: "abkowitz".into(),
+            ship: m.ship,
+            added_mass: m.added_mass,
+            set: m.set.file.clone(),
+            estimator,
+            training,
+            coefficients,
+        }
+    }
+
+    /// Rebuild the model; every coefficient of the set must be present and nothing else.
+    pub fn to_model(&self) -> Result<AbkowitzModel, ModelError> {
+        let set = CoefficientSet::from_file(self.set.clone())?;
+        let mut coefficients: [Vec<f64>; 3] = Default::default();
+        for d in Dof::ALL {
+            let given = self.coefficients.get(d.as_str()).cloned().unwrap_or_default();
+            let names = set.names(d);
+            for name in given.keys() {
+                if !names.contains(name) {
+                    return Err(ModelError::UnknownCoefficient(name.clone()));
+                }
+            }
+            for name in names {
+                let v = *given.get(&name).ok_or_else(|| ModelError::MissingCoefficient(name.clone()))?;
+                coefficients[d.index()].push(v);
+            }
+        }
+        AbkowitzModel::new(set, coefficients, self.ship, self.added_mass)
+    }
+}

@@ -1,0 +1,16 @@
+//! The Abkowitz manoeuvring model as data and as equations. No I/O.
+//!
+//! - [`set`]: coefficient sets as TOML data ([`CoefficientSet`]); `full68`, `reduced32` and `chen2021`
+//!   are shipped in `crates/model/sets/`, a user set is any file of the same form;
+//! - [`design`]: primed samples, design matrices Φ and targets y per degree of freedom (DOMAIN.md §2),
+//!   per-term force contributions;
+//! - [`abkowitz`]: an identified model ([`AbkowitzModel`]), its accelerations for any state, and the
+//!   model file written by `shipid fit` ([`ModelFile`]).
+
+pub mod abkowitz;
+pub mod design;
+pub mod set;
+
+pub use abkowitz::{AbkowitzModel, EstimatorInfo, ModelError, ModelFile, TrainingWindow};
+pub use design::{Design, PrimeInertia, Samples, design};
+pub use set::{CoefficientSet, Dof, Known, Monomial, SetError, SetFile};
