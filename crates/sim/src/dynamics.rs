@@ -1,0 +1,220 @@
+//! The state of a ship in 3 DOF and the trait every manoeuvring model implements.
+
+use shipid_io::{AddedMass, Ship};
+use thiserror::Error;
+
+/// Motion state of the **midship** point in the project's conventions (DOMAIN.md §1, DATA.md):
+/// body axes x forward / y starboard, earth axes x0 north / y0 east, heading and yaw rate positive to
+/// starboard, SI units.
+///
+/// Velocities are over ground. Without a current (see [`crate::effects`]) they are also the velocities
+/// through the water that a hydrodynamic model sees.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct State {
+    /// Surge velocity [m/s].
+    pub u: f64,
+    /// Sway velocity of midship [m/s], positive to starboard.
+    pub v: f64,
+    /// Yaw rate [rad/s], positive to starboard.
+    pub r: f64,
+    /// North position of midship [m].
+    pub x0: f64,
+    /// East position of midship [m].
+    pub y0: f64,
+    /// Heading [rad], unwrapped, positive to starboard (0 = north).
+    pub psi: f64,
+}
+
+impl State {
+    /// Straight steady approach at `u_m_s` along north from the origin.
+    pub fn approach(u_m_s: f64) -> State {
+        State {
+            u: u_m_s,
+            ..State::default()
+        }
+    }
+
+    /// Speed of midship [m/s].
+    pub fn speed(&self) -> f64 {
+        self.u.hypot(self.v)
+    }
+
+    /// True when every component is finite.
+    pub fn is_finite(&self) -> bool {
+        self.to_array().iter().all(|x| x.is_finite())
+    }
+
+    /// Time derivative of the earth-fixed pose: [ẋ0, ẏ0, ψ̇] with ẋ0 = u cosψ − v sinψ,
+    /// ẏ0 = u sinψ + v cosψ, ψ̇ = r.
+    pub fn kinematics(&self) -> [f64; 3] {
+        let (s, c) = self.psi.sin_cos();
+        [self.u * c - self.v * s, self.u * s + self.v * c, self.r]
+    }
+
+    /// `[u, v, r, x0, y0, psi]`.
+    pub fn to_array(&self) -> [f64; 6] {
+        [self.u, self.v, self.r, self.x0, self.y0, self.psi]
+    }
+
+    /// Inverse of [`State::to_array`].
+    pub fn from_array(a: [f64; 6]) -> State {
+        State {
+            u: a[0],
+            v: a[1],
+            r: a[2],
+            x0: a[3],
+            y0: a[4],
+            psi: a[5],
+        }
+    }
+}
+
+/// Why a model could not give accelerations for a state.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum DynamicsError {
+    /// The model is non-dimensionalised with the instantaneous speed and undefined at rest.
+    #[error("speed {speed_m_s} m/s is below the model's validity limit of {limit_m_s} m/s")]
+    SpeedTooLow { speed_m_s: f64, limit_m_s: f64 },
+    /// The state is outside the model's domain for another reason.
+    #[error("model cannot be evaluated: {0}")]
+    OutOfDomain(String),
+}
+
+/// Linear hull damping derivatives in the MMG non-dimensionalisation (Yasukawa & Yoshimura 2015):
+/// Y' = Y / (½ρ L d U²), N' = N / (½ρ L² d U²), v' = v/U, r' = r L/U with the instantaneous speed U.
+///
+/// Used by effects that scale a model's sway and yaw damping (shallow water).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LinearHullDerivatives {
+    /// Y'_v [-].
+    pub y_v: f64,
+    /// Y'_r [-].
+    pub y_r: f64,
+    /// N'_v [-].
+    pub n_v: f64,
+    /// N'_r [-].
+    pub n_r: f64,
+}
+
+/// A 3-DOF manoeuvring model: body-axis accelerations of midship for a state and the rudder angle that
+/// acts on the hull.
+///
+/// The MMG reference model implements it; so can an identified Abkowitz model or a Gaussian-process
+/// model of the accelerations. Models are expected to be linear in the accelerations with the rigid-body
+/// plus added-mass matrix of [`Dynamics::ship`] and [`Dynamics::added_mass`] (see [`MassMatrix`]); effects
+/// that add external forces rely on this.
+pub trait Dynamics {
+    /// `[u̇, v̇, ṙ]` [m/s², m/s², rad/s²] of midship for `state` and the actual rudder angle `delta_rad`
+    /// (positive turns the ship to starboard). An `Err` ends a simulation as diverged.
+    fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError>;
+
+    /// The ship the model describes.
+    fn ship(&self) -> &Ship;
+
+    /// Added-mass derivatives about midship (SI, negative numbers).
+    fn added_mass(&self) -> &AddedMass;
+
+    /// Propeller rate [1/s] when the model has one (it is then written to the recording's `n`).
+    fn propeller_rate_hz(&self) -> Option<f64> {
+        None
+    }
+
+    /// The model's own linear hull damping derivatives, when it has them in this form.
+    fn linear_hull_derivatives(&self) -> Option<LinearHullDerivatives> {
+        None
+    }
+}
+
+impl<T: Dynamics + ?Sized> Dynamics for &T {
+    fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
+        (**self).accelerations(state, delta_rad)
+    }
+    fn ship(&self) -> &Ship {
+        (**self).ship()
+    }
+    fn added_mass(&self) -> &AddedMass {
+        (**self).added_mass()
+    }
+    fn propeller_rate_hz(&self) -> Option<f64> {
+        (**self).propeller_rate_hz()
+    }
+    fn linear_hull_derivatives(&self) -> Option<LinearHullDerivatives> {
+        (**self).linear_hull_derivatives()
+    }
+}
+
+impl<T: Dynamics + ?Sized> Dynamics for Box<T> {
+    fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
+        (**self).accelerations(state, delta_rad)
+    }
+    fn ship(&self) -> &Ship {
+        (**self).ship()
+    }
+    fn added_mass(&self) -> &AddedMass {
+        (**self).added_mass()
+    }
+    fn propeller_rate_hz(&self) -> Option<f64> {
+        (**self).propeller_rate_hz()
+    }
+    fn linear_hull_derivatives(&self) -> Option<LinearHullDerivatives> {
+        (**self).linear_hull_derivatives()
+    }
+}
+
+/// Rigid-body plus added-mass matrix about midship (DOMAIN.md §2, with X_v̇ = X_ṙ = Y_u̇ = N_u̇ = 0):
+///
+/// ```text
+/// | m − X_u̇        0              0        |
+/// |   0        m − Y_v̇      m x_G − Y_ṙ    |
+/// |   0      m x_G − N_v̇    I_z − N_ṙ      |
+/// ```
+/// with I_z = I_zG + m x_G² about midship.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MassMatrix {
+    /// Surge entry [kg].
+    pub m11: f64,
+    /// Sway–sway [kg].
+    pub m22: f64,
+    /// Sway–yaw [kg m].
+    pub m23: f64,
+    /// Yaw–sway [kg m].
+    pub m32: f64,
+    /// Yaw–yaw [kg m²].
+    pub m33: f64,
+}
+
+impl MassMatrix {
+    /// The matrix of `ship` with `added_mass` about midship.
+    pub fn new(ship: &Ship, added_mass: &AddedMass) -> MassMatrix {
+        let m = ship.mass_kg();
+        MassMatrix {
+            m11: m - added_mass.X_udot,
+            m22: m - added_mass.Y_vdot,
+            m23: m * ship.xg - added_mass.Y_rdot,
+            m32: m * ship.xg - added_mass.N_vdot,
+            m33: ship.iz_midship_kg_m2() - added_mass.N_rdot,
+        }
+    }
+
+    /// Accelerations `M⁻¹ [X, Y, N]`; `None` when the matrix is singular.
+    pub fn solve(&self, force: [f64; 3]) -> Option<[f64; 3]> {
+        let det = self.m22 * self.m33 - self.m23 * self.m32;
+        if self.m11 == 0.0 || det == 0.0 || !det.is_finite() {
+            return None;
+        }
+        Some([
+            force[0] / self.m11,
+            (self.m33 * force[1] - self.m23 * force[2]) / det,
+            (self.m22 * force[2] - self.m32 * force[1]) / det,
+        ])
+    }
+
+    /// `M a`.
+    pub fn times(&self, acc: [f64; 3]) -> [f64; 3] {
+        [
+            self.m11 * acc[0],
+            self.m22 * acc[1] + self.m23 * acc[2],
+            self.m32 * acc[1] + self.m33 * acc[2],
+        ]
+    }
+}

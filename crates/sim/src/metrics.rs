@@ -1,0 +1,438 @@
+//! IMO manoeuvring metrics (MSC.137(76); DOMAIN.md §5, DATA.md) of a recording, measured or simulated,
+//! by one code path.
+//!
+//! Definitions, chosen to work on noisy tank data as well as on simulations:
+//! - **First execute**: the rudder's initial value δ₀ is its first sample. The first execute is found
+//!   where the rudder first departs from δ₀ by more than [`execute_threshold_deg`] (0.5°, or 10 % of the
+//!   rudder amplitude if that is smaller), with the crossing time interpolated linearly and moved back by
+//!   threshold / rudder rate, i.e. to the moment a rudder moving at the ship's rudder rate would have
+//!   left δ₀. If that first departure is towards the side opposite to the declared one, the record does
+//!   not perform the declared manoeuvre and every metric is undefined. The heading ψ₀ and the midship
+//!   position at the first execute (interpolated) are the original course and the origin.
+//! - **Zig-zag**: with the heading deviation ψ − ψ₀ counted positive towards the first execute side,
+//!   execute k+1 (k ≥ 1) is where the deviation first crosses the check angle with alternating sign
+//!   (+, −, +, …), interpolated linearly. Overshoot k is the extreme deviation beyond the check angle
+//!   between execute k+1 and execute k+2 (or the end of the record). It is defined only for a real peak:
+//!   the heading must turn back afterwards (execute k+2 exists, or a later sample of the record is
+//!   smaller). The peak is refined by a parabola through the three samples around the extreme sample.
+//!   t_a = execute 2 − execute 1 and t_check = first overshoot peak − execute 2, both × U0/L.
+//! - **Turning circle**: along-course and lateral (positive towards the turn) distances of midship from
+//!   the first-execute position. Advance and transfer are taken where the heading change first reaches
+//!   90°, the tactical diameter (lateral distance) where it first reaches 180°, all interpolated
+//!   linearly between samples. The steady diameter is the diameter of a least-squares (Kåsa) circle
+//!   fitted to the track over the last 360° of heading change; it needs at least 540° of heading change
+//!   in the record, so that the fitted turn starts after the 180° point. All ÷ L.
+
+use serde::{Deserialize, Serialize};
+use shipid_io::{Manoeuvre, Recording, Ship, Side};
+
+/// Manoeuvre metrics with the DATA.md keys; `None` (absent in JSON) where undefined.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Metrics {
+    /// First zig-zag overshoot [deg].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub overshoot_1: Option<f64>,
+    /// Second zig-zag overshoot [deg].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub overshoot_2: Option<f64>,
+    /// Time from first to second execute × U0/L [-].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub t_a: Option<f64>,
+    /// Time from second execute to the first overshoot peak × U0/L [-].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub t_check: Option<f64>,
+    /// Advance at 90° heading change ÷ L [-].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub advance: Option<f64>,
+    /// Transfer at 90° heading change ÷ L [-].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transfer: Option<f64>,
+    /// Lateral distance at 180° heading change ÷ L [-].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tactical_diameter: Option<f64>,
+    /// Diameter of the steady turning circle ÷ L [-].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub steady_diameter: Option<f64>,
+}
+
+impl Metrics {
+    /// `(DATA.md key, value)` for all eight metrics, in the order of DATA.md.
+    pub fn entries(&self) -> [(&'static str, Option<f64>); 8] {
+        [
+            ("overshoot_1", self.overshoot_1),
+            ("overshoot_2", self.overshoot_2),
+            ("t_a", self.t_a),
+            ("t_check", self.t_check),
+            ("advance", self.advance),
+            ("transfer", self.transfer),
+            ("tactical_diameter", self.tactical_diameter),
+            ("steady_diameter", self.steady_diameter),
+        ]
+    }
+}
+
+/// Rudder departure [deg] from its initial value that marks the first execute for a rudder amplitude of
+/// `rudder_deg`: 0.5°, or 10 % of the amplitude if smaller. Well above the noise of tank rudder signals
+/// (HSVA: a few hundredths of a degree) and reached within 0.04 s at a rudder rate of 15.8 °/s.
+pub fn execute_threshold_deg(rudder_deg: f64) -> f64 {
+    0.5f64.min(0.1 * rudder_deg.abs())
+}
+
+/// Time, heading and midship position at the first rudder execute.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FirstExecute {
+    /// Time [s].
+    pub t_s: f64,
+    /// Heading ψ₀ [rad]: the original course.
+    pub psi_rad: f64,
+    /// North position of midship [m].
+    pub x0_m: f64,
+    /// East position of midship [m].
+    pub y0_m: f64,
+}
+
+/// An overshoot peak of a zig-zag.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Overshoot {
+    /// Time of the peak [s].
+    pub t_s: f64,
+    /// Heading beyond the check angle at the peak [deg], positive.
+    pub angle_deg: f64,
+}
+
+/// Rudder executes and overshoot peaks of a zig-zag record.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ZigZagEvents {
+    /// The first execute.
+    pub first: FirstExecute,
+    /// Times of execute 1, 2, 3, … [s] (execute 1 = `first.t_s`).
+    pub executes_s: Vec<f64>,
+    /// Overshoot 1, 2, … up to the first undefined one.
+    pub overshoots: Vec<Overshoot>,
+}
+
+/// The metrics of `manoeuvre` in `rec` for `ship` (its L and U0 scale them). Metrics that the record does
+/// not reach, a [`Manoeuvre::Free`], and unusable records (fewer than three samples, unequal column
+/// lengths, non-finite values, time not increasing) give `None`.
+pub fn metrics(rec: &Recording, manoeuvre: &Manoeuvre, ship: &Ship) -> Metrics {
+    if !(usable(rec) && ship.lpp > 0.0 && ship.u0 > 0.0) {
+        return Metrics::default();
+    }
+    match *manoeuvre {
+        Manoeuvre::ZigZag {
+            rudder_deg,
+            check_deg,
+            side,
+        } => zigzag_metrics(rec, rudder_deg, check_deg, side, ship),
+        Manoeuvre::Turning { rudder_deg, side } => turning_metrics(rec, rudder_deg, side, ship),
+        Manoeuvre::Free => Metrics::default(),
+    }
+}
+
+fn usable(rec: &Recording) -> bool {
+    let n = rec.t.len();
+    let cols = [&rec.x0, &rec.y0, &rec.psi, &rec.delta];
+    n >= 3
+        && cols
+            .iter()
+            .all(|c| c.len() == n && c.iter().all(|x| x.is_finite()))
+        && rec.t.iter().all(|x| x.is_finite())
+        && rec.t.windows(2).all(|w| w[1] > w[0])
+}
+
+/// Linear interpolation of `y(t)` at `tq` (clamped to the ends).
+fn interp(t: &[f64], y: &[f64], tq: f64) -> f64 {
+    let i = t.partition_point(|&x| x <= tq);
+    if i == 0 {
+        y[0]
+    } else if i == t.len() {
+        y[t.len() - 1]
+    } else {
+        let w = (tq - t[i - 1]) / (t[i] - t[i - 1]);
+        y[i - 1] + w * (y[i] - y[i - 1])
+    }
+}
+
+/// The first execute towards `side` (see the module docs), or `None` when the rudder never leaves its
+/// initial value, or first leaves it towards the other side.
+pub fn first_execute(
+    rec: &Recording,
+    rudder_deg: f64,
+    side: Side,
+    ship: &Ship,
+) -> Option<FirstExecute> {
+    if !(usable(rec) && rudder_deg.is_finite() && rudder_deg > 0.0) {
+        return None;
+    }
+    let thr = execute_threshold_deg(rudder_deg).to_radians();
+    let d0 = rec.delta[0];
+    let i = rec.delta.iter().position(|d| (d - d0).abs() > thr)?;
+    let s = side.sign();
+    if (rec.delta[i] - d0) * s <= 0.0 {
+        return None;
+    }
+    // i ≥ 1 since the first sample has zero departure.
+    let (a0, a1) = (s * (rec.delta[i - 1] - d0), s * (rec.delta[i] - d0));
+    let crossing = rec.t[i - 1] + (thr - a0) / (a1 - a0) * (rec.t[i] - rec.t[i - 1]);
+    let rate = ship.rudder_rate_rad_s();
+    let back = if rate.is_finite() && rate > 0.0 {
+        thr / rate
+    } else {
+        0.0
+    };
+    let t_s = (crossing - back).max(rec.t[0]);
+    Some(FirstExecute {
+        t_s,
+        psi_rad: interp(&rec.t, &rec.psi, t_s),
+        x0_m: interp(&rec.t, &rec.x0, t_s),
+        y0_m: interp(&rec.t, &rec.y0, t_s),
+    })
+}
+
+/// First index `i ≥ from` where `sign · f` goes from below `level` at `i − 1` to at least `level` at
+/// `i`, with the interpolated crossing fraction between the two samples.
+fn crossing(f: &[f64], sign: f64, level: f64, from: usize) -> Option<(usize, f64)> {
+    (from.max(1)..f.len())
+        .find(|&i| sign * f[i - 1] < level && sign * f[i] >= level)
+        .map(|i| (i, (level - sign * f[i - 1]) / (sign * (f[i] - f[i - 1]))))
+}
+
+/// Vertex of the parabola through three points when it is a maximum inside their span, else the middle
+/// point.
+fn parabola_peak(t: [f64; 3], y: [f64; 3]) -> (f64, f64) {
+    let (h0, h2) = (t[0] - t[1], t[2] - t[1]);
+    let (d0, d2) = (y[0] - y[1], y[2] - y[1]);
+    let a = (d0 / h0 - d2 / h2) / (h0 - h2);
+    let b = d0 / h0 - a * h0;
+    if a < 0.0 {
+        let s = -b / (2.0 * a);
+        if s >= h0 && s <= h2 {
+            return (t[1] + s, y[1] - b * b / (4.0 * a));
+        }
+    }
+    (t[1], y[1])
+}
+
+/// Executes and overshoots of a zig-zag `rudder_deg`/`check_deg` to `side` (see the module docs).
+pub fn zigzag_events(
+    rec: &Recording,
+    rudder_deg: f64,
+    check_deg: f64,
+    side: Side,
+    ship: &Ship,
+) -> Option<ZigZagEvents> {
+    if !(check_deg.is_finite() && check_deg > 0.0) {
+        return None;
+    }
+    let first = first_execute(rec, rudder_deg, side, ship)?;
+    let t = &rec.t;
+    let n = t.len();
+    let s = side.sign();
+    let check = check_deg.to_radians();
+    let dev: Vec<f64> = rec.psi.iter().map(|p| s * (p - first.psi_rad)).collect();
+
+    // Sample index after which to look for the next execute, and the executes with their sample index.
+    let start = t.partition_point(|&x| x <= first.t_s);
+    let mut executes = vec![(first.t_s, start)];
+    let mut sigma = 1.0;
+    let mut from = start;
+    while let Some((i, w)) = crossing(&dev, sigma, check, from) {
+        executes.push((t[i - 1] + w * (t[i] - t[i - 1]), i));
+        sigma = -sigma;
+        from = i + 1;
+    }
+
+    let mut overshoots = Vec::new();
+    for k in 1..executes.len() {
+        let sigma = if k % 2 == 1 { 1.0 } else { -1.0 };
+        let lo = executes[k].1;
+        let hi = executes.get(k + 1).map_or(n, |e| e.1);
+        let Some(i_max) = (lo..hi).max_by(|&a, &b| {
+            (sigma * dev[a])
+                .total_cmp(&(sigma * dev[b]))
+                .then(b.cmp(&a))
+        }) else {
+            break;
+        };
+        let peak_value = sigma * dev[i_max];
+        let turned_back =
+            executes.get(k + 1).is_some() || (i_max + 1..n).any(|j| sigma * dev[j] < peak_value);
+        if !turned_back {
+            break;
+        }
+        let (t_peak, value) = if i_max >= 1 && i_max + 1 < n {
+            parabola_peak(
+                [t[i_max - 1], t[i_max], t[i_max + 1]],
+                [sigma * dev[i_max - 1], peak_value, sigma * dev[i_max + 1]],
+            )
+        } else {
+            (t[i_max], peak_value)
+        };
+        overshoots.push(Overshoot {
+            t_s: t_peak,
+            angle_deg: (value - check).to_degrees(),
+        });
+    }
+    Some(ZigZagEvents {
+        first,
+        executes_s: executes.iter().map(|e| e.0).collect(),
+        overshoots,
+    })
+}
+
+fn zigzag_metrics(
+    rec: &Recording,
+    rudder_deg: f64,
+    check_deg: f64,
+    side: Side,
+    ship: &Ship,
+) -> Metrics {
+    let Some(ev) = zigzag_events(rec, rudder_deg, check_deg, side, ship) else {
+        return Metrics::default();
+    };
+    let scale = ship.u0 / ship.lpp;
+    let e2 = ev.executes_s.get(1).copied();
+    Metrics {
+        overshoot_1: ev.overshoots.first().map(|o| o.angle_deg),
+        overshoot_2: ev.overshoots.get(1).map(|o| o.angle_deg),
+        t_a: e2.map(|e2| (e2 - ev.executes_s[0]) * scale),
+        t_check: e2
+            .zip(ev.overshoots.first())
+            .map(|(e2, o)| (o.t_s - e2) * scale),
+        ..Metrics::default()
+    }
+}
+
+/// Least-squares circle (Kåsa fit: minimises Σ(x² + y² + D x + E y + F)²) through the points; its
+/// radius, or `None` for fewer than three points or collinear points.
+pub fn fit_circle_radius(x: &[f64], y: &[f64]) -> Option<f64> {
+    let n = x.len().min(y.len());
+    if n < 3 {
+        return None;
+    }
+    // Centred coordinates keep the normal equations well conditioned far from the origin.
+    let mx = x[..n].iter().sum::<f64>() / n as f64;
+    let my = y[..n].iter().sum::<f64>() / n as f64;
+    let mut a = [[0.0; 3]; 3];
+    let mut rhs = [0.0; 3];
+    for i in 0..n {
+        let (xi, yi) = (x[i] - mx, y[i] - my);
+        let row = [xi, yi, 1.0];
+        let z = -(xi * xi + yi * yi);
+        for r in 0..3 {
+            for c in 0..3 {
+                a[r][c] += row[r] * row[c];
+            }
+            rhs[r] += row[r] * z;
+        }
+    }
+    let [d, e, f] = solve3(a, rhs)?;
+    let r2 = 0.25 * (d * d + e * e) - f;
+    (r2 > 0.0 && r2.is_finite()).then(|| r2.sqrt())
+}
+
+/// Gaussian elimination with partial pivoting.
+fn solve3(mut a: [[f64; 3]; 3], mut b: [f64; 3]) -> Option<[f64; 3]> {
+    let scale = a.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    for col in 0..3 {
+        let p = (col..3).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
+        if a[p][col].abs() <= 1e-12 * scale {
+            return None;
+        }
+        a.swap(col, p);
+        b.swap(col, p);
+        let pivot = a[col];
+        for row in col + 1..3 {
+            let f = a[row][col] / pivot[col];
+            for (x, p) in a[row].iter_mut().zip(pivot).skip(col) {
+                *x -= f * p;
+            }
+            b[row] -= f * b[col];
+        }
+    }
+    let mut x = [0.0; 3];
+    for row in (0..3).rev() {
+        let s: f64 = (row + 1..3).map(|c| a[row][c] * x[c]).sum();
+        x[row] = (b[row] - s) / a[row][row];
+    }
+    Some(x)
+}
+
+fn turning_metrics(rec: &Recording, rudder_deg: f64, side: Side, ship: &Ship) -> Metrics {
+    let Some(first) = first_execute(rec, rudder_deg, side, ship) else {
+        return Metrics::default();
+    };
+    let t = &rec.t;
+    let n = t.len();
+    let s = side.sign();
+    let (sin0, cos0) = first.psi_rad.sin_cos();
+    let along: Vec<f64> = (0..n)
+        .map(|i| (rec.x0[i] - first.x0_m) * cos0 + (rec.y0[i] - first.y0_m) * sin0)
+        .collect();
+    let lateral: Vec<f64> = (0..n)
+        .map(|i| s * (-(rec.x0[i] - first.x0_m) * sin0 + (rec.y0[i] - first.y0_m) * cos0))
+        .collect();
+    let dev: Vec<f64> = rec.psi.iter().map(|p| s * (p - first.psi_rad)).collect();
+    let start = t.partition_point(|&x| x <= first.t_s);
+    let at = |deg: f64| {
+        crossing(&dev, 1.0, deg.to_radians(), start).map(|(i, w)| {
+            let lerp = |c: &[f64]| c[i - 1] + w * (c[i] - c[i - 1]);
+            (lerp(&along), lerp(&lateral))
+        })
+    };
+    let l = ship.lpp;
+    let at90 = at(90.0);
+    let at180 = at(180.0);
+
+    let steady_diameter = {
+        let end = dev[n - 1];
+        let window_start = end - std::f64::consts::TAU;
+        if window_start >= std::f64::consts::PI {
+            crossing(&dev, 1.0, window_start, start).and_then(|(i, _)| {
+                fit_circle_radius(&rec.x0[i..], &rec.y0[i..]).map(|r| 2.0 * r / l)
+            })
+        } else {
+            None
+        }
+    };
+    Metrics {
+        advance: at90.map(|p| p.0 / l),
+        transfer: at90.map(|p| p.1 / l),
+        tactical_diameter: at180.map(|p| p.1 / l),
+        steady_diameter,
+        ..Metrics::default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parabola_vertex_of_an_exact_parabola() {
+        // y = 3 − 2 (t − 1.3)², unevenly spaced samples.
+        let f = |t: f64| 3.0 - 2.0 * (t - 1.3) * (t - 1.3);
+        let ts = [1.0, 1.2, 1.5];
+        let (tp, yp) = parabola_peak(ts, ts.map(f));
+        assert!((tp - 1.3).abs() < 1e-12 && (yp - 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn circle_fit_recovers_an_offset_circle() {
+        let (x, y): (Vec<f64>, Vec<f64>) = (0..50)
+            .map(|i| {
+                let a = 0.1 + i as f64 * 0.1;
+                (1000.0 + 7.5 * a.cos(), -300.0 + 7.5 * a.sin())
+            })
+            .unzip();
+        let r = fit_circle_radius(&x, &y).unwrap();
+        assert!((r - 7.5).abs() < 1e-9, "{r}");
+        assert!(fit_circle_radius(&[0.0, 1.0, 2.0], &[0.0, 1.0, 2.0]).is_none());
+    }
+
+    #[test]
+    fn threshold_is_half_a_degree_or_ten_percent() {
+        assert_eq!(execute_threshold_deg(35.0), 0.5);
+        assert!((execute_threshold_deg(2.0) - 0.2).abs() < 1e-15);
+    }
+}

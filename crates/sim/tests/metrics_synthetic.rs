@@ -1,0 +1,389 @@
+//! The metric code on synthetic records with known answers, mirror symmetry, robustness.
+
+use proptest::prelude::*;
+use shipid_io::{Manoeuvre, Recording, Side};
+use shipid_sim::metrics::{Metrics, metrics, zigzag_events};
+use shipid_sim::{
+    Dynamics, MmgModel, Replay, SimOptions, State, controller_for, kvlcc2_ship, simulate,
+};
+
+/// A record whose heading, position and rudder are given as functions of time, sampled every `dt_s`.
+fn record(t_end: f64, dt_s: f64, f: impl Fn(f64) -> (f64, f64, f64, f64)) -> Recording {
+    let mut rec = Recording::default();
+    let n = (t_end / dt_s).round() as usize;
+    for i in 0..=n {
+        let t = i as f64 * dt_s;
+        let (x, y, psi, delta) = f(t);
+        rec.t.push(t);
+        rec.x0.push(x);
+        rec.y0.push(y);
+        rec.psi.push(psi);
+        rec.u.push(1.0);
+        rec.v.push(0.0);
+        rec.r.push(0.0);
+        rec.delta.push(delta);
+    }
+    rec
+}
+
+/// Rudder leaving 0 at `t1` at the ship's rudder rate towards `sign`·`amp` [rad].
+fn rudder(t: f64, t1: f64, amp: f64, sign: f64) -> f64 {
+    let rate = kvlcc2_ship().rudder_rate.to_radians();
+    sign * (rate * (t - t1)).clamp(0.0, amp)
+}
+
+/// Mirror image port ↔ starboard: y0, ψ, v, r, δ change sign.
+fn mirror(rec: &Recording) -> Recording {
+    let neg = |v: &Vec<f64>| v.iter().map(|x| -x).collect::<Vec<f64>>();
+    Recording {
+        y0: neg(&rec.y0),
+        psi: neg(&rec.psi),
+        v: neg(&rec.v),
+        r: neg(&rec.r),
+        delta: neg(&rec.delta),
+        ..rec.clone()
+    }
+}
+
+fn close(a: Option<f64>, b: f64, tol: f64) -> bool {
+    a.is_some_and(|a| (a - b).abs() <= tol)
+}
+
+/// Exact circle of radius `radius` entered at t1 from a straight course `course` through (x1, y1).
+fn circle_record(radius: f64, course: f64, side: Side, turns_deg: f64) -> (Recording, f64) {
+    let (t1, omega, u) = (5.0, 0.02, 0.7);
+    let s = side.sign();
+    let (x1, y1) = (12.0, -40.0);
+    let t_end = t1 + turns_deg.to_radians() / omega;
+    let rec = record(t_end, 0.05, |t| {
+        let (dir_x, dir_y) = (course.cos(), course.sin());
+        // Lateral unit vector towards the turn side.
+        let (lat_x, lat_y) = (-s * course.sin(), s * course.cos());
+        if t <= t1 {
+            let d = u * (t - t1);
+            (x1 + d * dir_x, y1 + d * dir_y, course, 0.0)
+        } else {
+            let a = omega * (t - t1);
+            let along = radius * a.sin();
+            let lateral = radius * (1.0 - a.cos());
+            (
+                x1 + along * dir_x + lateral * lat_x,
+                y1 + along * dir_y + lateral * lat_y,
+                course + s * a,
+                rudder(t, t1, 35f64.to_radians(), s),
+            )
+        }
+    });
+    (rec, t1)
+}
+
+#[test]
+fn exact_circle_gives_exact_turning_metrics() {
+    let ship = kvlcc2_ship();
+    let l = ship.lpp;
+    let radius = 1.4 * l;
+    for side in [Side::Starboard, Side::Port] {
+        for course in [0.0, 0.5, -2.0] {
+            let (rec, _) = circle_record(radius, course, side, 720.0);
+            let man = Manoeuvre::Turning {
+                rudder_deg: 35.0,
+                side,
+            };
+            let m = metrics(&rec, &man, &ship);
+            // Linear interpolation between samples 0.057° apart: chord error ~ R (Δψ)²/8 ≈ 1e-7 R.
+            let tol = 1e-5;
+            assert!(
+                close(m.advance, radius / l, tol),
+                "{side:?} {course}: {m:?}"
+            );
+            assert!(close(m.transfer, radius / l, tol), "{m:?}");
+            assert!(close(m.tactical_diameter, 2.0 * radius / l, tol), "{m:?}");
+            assert!(close(m.steady_diameter, 2.0 * radius / l, 1e-9), "{m:?}");
+            assert_eq!((m.overshoot_1, m.t_a), (None, None));
+        }
+    }
+}
+
+#[test]
+fn steady_diameter_needs_540_degrees() {
+    let ship = kvlcc2_ship();
+    let man = Manoeuvre::Turning {
+        rudder_deg: 35.0,
+        side: Side::Starboard,
+    };
+    let (short, _) = circle_record(10.0, 0.0, Side::Starboard, 530.0);
+    let m = metrics(&short, &man, &ship);
+    assert!(
+        m.tactical_diameter.is_some() && m.steady_diameter.is_none(),
+        "{m:?}"
+    );
+    let (long, _) = circle_record(10.0, 0.0, Side::Starboard, 545.0);
+    assert!(metrics(&long, &man, &ship).steady_diameter.is_some());
+    let (quarter, _) = circle_record(10.0, 0.0, Side::Starboard, 80.0);
+    assert_eq!(metrics(&quarter, &man, &ship), Metrics::default());
+}
+
+/// Heading starts to respond this long [s] after the first execute in [`sine_zigzag`].
+const RESPONSE_S: f64 = 1.0;
+
+/// Zig-zag heading deviation a·sin(ω(t − t1 − 1 s)) towards `side` after the first execute at t1 (the
+/// heading responds one second after the rudder moves), with the rudder following the zig-zag law;
+/// overshoots are a − c, t_a = 1 s + asin(c/a)/ω, the first peak π/(2ω) after the heading starts.
+fn sine_zigzag(
+    a_deg: f64,
+    c_deg: f64,
+    omega: f64,
+    side: Side,
+    t_end: f64,
+    dt_s: f64,
+    psi0: f64,
+) -> Recording {
+    let (a, c) = (a_deg.to_radians(), c_deg.to_radians());
+    let t1 = 3.0;
+    let t_start = t1 + RESPONSE_S;
+    let s = side.sign();
+    let t2 = t_start + (c / a).asin() / omega;
+    let period = std::f64::consts::PI / omega;
+    let amp = 20f64.to_radians();
+    record(t_end, dt_s, |t| {
+        let dev = if t <= t_start {
+            0.0
+        } else {
+            a * (omega * (t - t_start)).sin()
+        };
+        // Rudder: to `side` at t1, reversed at every check crossing (every half period after t2).
+        let delta = if t < t2 {
+            rudder(t, t1, amp, s)
+        } else {
+            let k = ((t - t2) / period).floor();
+            let sign = if k as i64 % 2 == 0 { -s } else { s };
+            sign * amp
+        };
+        (0.0, 0.0, psi0 + s * dev, delta)
+    })
+}
+
+#[test]
+fn analytic_heading_gives_exact_overshoots_and_times() {
+    let ship = kvlcc2_ship();
+    let (a, c, omega) = (27.0, 20.0, 0.09);
+    for side in [Side::Starboard, Side::Port] {
+        let rec = sine_zigzag(a, c, omega, side, 120.0, 0.05, 0.3);
+        let man = Manoeuvre::ZigZag {
+            rudder_deg: 20.0,
+            check_deg: c,
+            side,
+        };
+        let m = metrics(&rec, &man, &ship);
+        let scale = ship.u0 / ship.lpp;
+        let t_a = RESPONSE_S + (c / a).asin() / omega;
+        let t_check = RESPONSE_S + std::f64::consts::FRAC_PI_2 / omega - t_a;
+        assert!(close(m.overshoot_1, a - c, 1e-5), "{side:?}: {m:?}");
+        assert!(close(m.overshoot_2, a - c, 1e-5), "{m:?}");
+        assert!(
+            close(m.t_a, t_a * scale, 1e-4),
+            "{m:?} vs t_a {}",
+            t_a * scale
+        );
+        assert!(
+            close(m.t_check, t_check * scale, 1e-4),
+            "{m:?} vs t_check {}",
+            t_check * scale
+        );
+    }
+}
+
+#[test]
+fn too_short_records_leave_metrics_undefined() {
+    let ship = kvlcc2_ship();
+    let (a, c, omega) = (27.0, 20.0, 0.09);
+    let man = Manoeuvre::ZigZag {
+        rudder_deg: 20.0,
+        check_deg: c,
+        side: Side::Starboard,
+    };
+    let first_peak = 3.0 + RESPONSE_S + std::f64::consts::FRAC_PI_2 / omega;
+    // Ends on the rise towards the second peak: overshoot 2 undefined, even though the heading is past
+    // the check angle.
+    let rec = sine_zigzag(a, c, omega, Side::Starboard, first_peak + 30.0, 0.05, 0.0);
+    let m = metrics(&rec, &man, &ship);
+    assert!(m.overshoot_1.is_some() && m.overshoot_2.is_none(), "{m:?}");
+    let json = serde_json::to_string(&m).unwrap();
+    assert!(
+        !json.contains("overshoot_2") && json.contains("overshoot_1") && !json.contains("advance"),
+        "{json}"
+    );
+    // Ends before the first peak: only t_a.
+    let rec = sine_zigzag(a, c, omega, Side::Starboard, first_peak - 2.0, 0.05, 0.0);
+    let m = metrics(&rec, &man, &ship);
+    assert!(
+        m.t_a.is_some() && m.overshoot_1.is_none() && m.t_check.is_none(),
+        "{m:?}"
+    );
+}
+
+#[test]
+fn wrong_side_free_empty_and_nan_records_give_no_metrics() {
+    let ship = kvlcc2_ship();
+    let rec = sine_zigzag(27.0, 20.0, 0.09, Side::Starboard, 100.0, 0.05, 0.0);
+    let port = Manoeuvre::ZigZag {
+        rudder_deg: 20.0,
+        check_deg: 20.0,
+        side: Side::Port,
+    };
+    assert_eq!(metrics(&rec, &port, &ship), Metrics::default());
+    let stbd = Manoeuvre::ZigZag {
+        rudder_deg: 20.0,
+        check_deg: 20.0,
+        side: Side::Starboard,
+    };
+    assert_eq!(metrics(&rec, &Manoeuvre::Free, &ship), Metrics::default());
+    assert_eq!(
+        metrics(&Recording::default(), &stbd, &ship),
+        Metrics::default()
+    );
+    let mut bad = rec.clone();
+    bad.psi[100] = f64::NAN;
+    assert_eq!(metrics(&bad, &stbd, &ship), Metrics::default());
+    let mut unordered = rec.clone();
+    unordered.t[50] = unordered.t[49];
+    assert_eq!(metrics(&unordered, &stbd, &ship), Metrics::default());
+    assert_eq!(serde_json::to_string(&Metrics::default()).unwrap(), "{}");
+}
+
+#[test]
+fn metric_code_is_mirror_symmetric_on_simulations() {
+    let model = MmgModel::kvlcc2();
+    let ship = *model.ship();
+    for man in [
+        Manoeuvre::ZigZag {
+            rudder_deg: 10.0,
+            check_deg: 10.0,
+            side: Side::Starboard,
+        },
+        Manoeuvre::Turning {
+            rudder_deg: 35.0,
+            side: Side::Starboard,
+        },
+    ] {
+        let mut c = controller_for(&man, 2.0).unwrap();
+        let out = simulate(
+            &model,
+            c.as_mut(),
+            State::approach(ship.u0),
+            &SimOptions::new(400.0),
+        )
+        .unwrap();
+        let mirrored_man = match man {
+            Manoeuvre::ZigZag {
+                rudder_deg,
+                check_deg,
+                ..
+            } => Manoeuvre::ZigZag {
+                rudder_deg,
+                check_deg,
+                side: Side::Port,
+            },
+            Manoeuvre::Turning { rudder_deg, .. } => Manoeuvre::Turning {
+                rudder_deg,
+                side: Side::Port,
+            },
+            Manoeuvre::Free => unreachable!(),
+        };
+        let m = metrics(&out.recording, &man, &ship);
+        let mm = metrics(&mirror(&out.recording), &mirrored_man, &ship);
+        assert_eq!(m, mm);
+        assert!(
+            m.entries().iter().filter(|e| e.1.is_some()).count() >= 4,
+            "{m:?}"
+        );
+    }
+}
+
+#[test]
+fn replay_of_its_own_rudder_reproduces_a_zigzag() {
+    let model = MmgModel::kvlcc2();
+    let ship = *model.ship();
+    let man = Manoeuvre::ZigZag {
+        rudder_deg: 20.0,
+        check_deg: 20.0,
+        side: Side::Port,
+    };
+    let opts = SimOptions::new(150.0);
+    let mut c = controller_for(&man, 2.0).unwrap();
+    let original = simulate(&model, c.as_mut(), State::approach(ship.u0), &opts).unwrap();
+    let mut replay = Replay::from_recording(&original.recording).unwrap();
+    let replayed = simulate(&model, &mut replay, State::approach(ship.u0), &opts).unwrap();
+    let (a, b) = (&original.recording, &replayed.recording);
+    assert_eq!(a.len(), b.len());
+    // The replay interpolates the rudder linearly between the 0.05 s samples; the actuator's kinks
+    // (rudder reaching its angle, reversals) fall inside steps, so the runs differ slightly.
+    let max_pos = (0..a.len())
+        .map(|i| (a.x0[i] - b.x0[i]).hypot(a.y0[i] - b.y0[i]))
+        .fold(0.0, f64::max);
+    let max_psi = (0..a.len())
+        .map(|i| (a.psi[i] - b.psi[i]).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        max_pos < 1e-3 * ship.lpp,
+        "max position difference {max_pos} m"
+    );
+    assert!(
+        max_psi.to_degrees() < 0.01,
+        "max heading difference {}°",
+        max_psi.to_degrees()
+    );
+    let (ma, mb) = (metrics(a, &man, &ship), metrics(b, &man, &ship));
+    assert!(
+        (ma.overshoot_1.unwrap() - mb.overshoot_1.unwrap()).abs() < 0.01,
+        "{ma:?} {mb:?}"
+    );
+    assert!(
+        (ma.overshoot_2.unwrap() - mb.overshoot_2.unwrap()).abs() < 0.01,
+        "{ma:?} {mb:?}"
+    );
+    assert_eq!(a.delta, b.delta);
+}
+
+#[test]
+fn zigzag_events_list_every_overshoot() {
+    let ship = kvlcc2_ship();
+    let (a, c, omega) = (27.0, 20.0, 0.09);
+    let rec = sine_zigzag(a, c, omega, Side::Port, 300.0, 0.05, 0.0);
+    let ev = zigzag_events(&rec, 20.0, c, Side::Port, &ship).unwrap();
+    // A half period of 34.9 s: executes at t2, t2 + 34.9, … up to 300 s; overshoots up to the last peak.
+    assert!(ev.executes_s.len() >= 8, "{:?}", ev.executes_s);
+    assert!(ev.overshoots.len() >= 7);
+    for w in ev.executes_s[1..].windows(2) {
+        assert!((w[1] - w[0] - std::f64::consts::PI / omega).abs() < 1e-3);
+    }
+    assert!(
+        ev.overshoots
+            .iter()
+            .all(|o| (o.angle_deg - (a - c)).abs() < 1e-5)
+    );
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// Overshoots of sinusoidal heading histories with random amplitude, check angle, period, sampling
+    /// and side are a − c to within the peak interpolation error, and port/starboard mirror images agree.
+    #[test]
+    fn sinusoid_overshoots(a_over_c in 1.05f64..3.0, c in 1.0f64..35.0, omega in 0.02f64..0.3, dt in 0.02f64..0.5, stbd in any::<bool>()) {
+        let ship = kvlcc2_ship();
+        let side = if stbd { Side::Starboard } else { Side::Port };
+        let a = a_over_c * c;
+        let t_end = 3.0 + RESPONSE_S + 2.2 * std::f64::consts::PI / omega;
+        let rec = sine_zigzag(a, c, omega, side, t_end, dt, 0.0);
+        let man = Manoeuvre::ZigZag { rudder_deg: 20.0, check_deg: c, side };
+        let m = metrics(&rec, &man, &ship);
+        // Parabola through samples of a sine: vertex error ≲ a (ω dt)⁴ / 10 plus the sampling phase.
+        let tol = 1e-3 + a * (omega * dt).powi(4) / 4.0;
+        prop_assert!(close(m.overshoot_1, a - c, tol), "{:?} vs {}", m, a - c);
+        prop_assert!(close(m.overshoot_2, a - c, tol), "{:?} vs {}", m, a - c);
+        let other = if stbd { Side::Port } else { Side::Starboard };
+        let mm = metrics(&mirror(&rec), &Manoeuvre::ZigZag { rudder_deg: 20.0, check_deg: c, side: other }, &ship);
+        prop_assert_eq!(m, mm);
+    }
+}
