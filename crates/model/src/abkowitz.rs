@@ -27,7 +27,11 @@ pub struct AbkowitzModel {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ModelError {
     #[error("{dof}: {got} coefficients for {expected} terms")]
-    CoefficientCount { dof: Dof, expected: usize, got: usize },
+    CoefficientCount {
+        dof: Dof,
+        expected: usize,
+        got: usize,
+    },
     #[error("coefficient {name} is not finite")]
     NonFinite { name: String },
     #[error("the mass matrix is singular (check the added masses)")]
@@ -50,7 +54,11 @@ impl AbkowitzModel {
         for d in Dof::ALL {
             let (expected, got) = (set.terms[d.index()].len(), coefficients[d.index()].len());
             if expected != got {
-                return Err(ModelError::CoefficientCount { dof: d, expected, got });
+                return Err(ModelError::CoefficientCount {
+                    dof: d,
+                    expected,
+                    got,
+                });
             }
             for (name, v) in set.names(d).into_iter().zip(&coefficients[d.index()]) {
                 if !v.is_finite() {
@@ -89,7 +97,8 @@ impl AbkowitzModel {
         let f = self.forces_prime(du, vp, rp, delta);
         let c = self.inertia.rigid_body_forces(du, vp, rp);
         let rhs = [f[0] + c[0], f[1] + c[1], f[2] + c[2]];
-        let a: [f64; 3] = std::array::from_fn(|i| (0..3).map(|j| self.inverse_mass[i][j] * rhs[j]).sum());
+        let a: [f64; 3] =
+            std::array::from_fn(|i| (0..3).map(|j| self.inverse_mass[i][j] * rhs[j]).sum());
         [
             s.acceleration_from_prime(a[0]),
             s.acceleration_from_prime(a[1]),
@@ -107,16 +116,29 @@ impl AbkowitzModel {
 }
 
 fn invert3(m: [[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
-    let det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+    let det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
         + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
     if !det.is_finite() || det.abs() < 1e-300 {
         return None;
     }
     let c = |a: usize, b: usize, c: usize, d: usize| m[a][b] * m[c][d] - m[a][d] * m[c][b];
     Some([
-        [c(1, 1, 2, 2) / det, -c(0, 1, 2, 2) / det, c(0, 1, 1, 2) / det],
-        [-c(1, 0, 2, 2) / det, c(0, 0, 2, 2) / det, -c(0, 0, 1, 2) / det],
-        [c(1, 0, 2, 1) / det, -c(0, 0, 2, 1) / det, c(0, 0, 1, 1) / det],
+        [
+            c(1, 1, 2, 2) / det,
+            -c(0, 1, 2, 2) / det,
+            c(0, 1, 1, 2) / det,
+        ],
+        [
+            -c(1, 0, 2, 2) / det,
+            c(0, 0, 2, 2) / det,
+            -c(0, 0, 1, 2) / det,
+        ],
+        [
+            c(1, 0, 2, 1) / det,
+            -c(0, 0, 2, 1) / det,
+            c(0, 0, 1, 1) / det,
+        ],
     ])
 }
 
@@ -168,11 +190,19 @@ pub struct ModelFile {
 
 impl ModelFile {
     /// The file for a model.
-    pub fn from_model(m: &AbkowitzModel, estimator: EstimatorInfo, training: Vec<TrainingWindow>) -> ModelFile {
+    pub fn from_model(
+        m: &AbkowitzModel,
+        estimator: EstimatorInfo,
+        training: Vec<TrainingWindow>,
+    ) -> ModelFile {
         let mut coefficients = BTreeMap::new();
         for d in Dof::ALL {
-            let per: BTreeMap<String, f64> =
-                m.set.names(d).into_iter().zip(m.coefficients[d.index()].iter().copied()).collect();
+            let per: BTreeMap<String, f64> = m
+                .set
+                .names(d)
+                .into_iter()
+                .zip(m.coefficients[d.index()].iter().copied())
+                .collect();
             coefficients.insert(d.as_str().to_string(), per);
         }
         ModelFile {
@@ -192,7 +222,11 @@ impl ModelFile {
         let set = CoefficientSet::from_file(self.set.clone())?;
         let mut coefficients: [Vec<f64>; 3] = Default::default();
         for d in Dof::ALL {
-            let given = self.coefficients.get(d.as_str()).cloned().unwrap_or_default();
+            let given = self
+                .coefficients
+                .get(d.as_str())
+                .cloned()
+                .unwrap_or_default();
             let names = set.names(d);
             for name in given.keys() {
                 if !names.contains(name) {
@@ -200,7 +234,9 @@ impl ModelFile {
                 }
             }
             for name in names {
-                let v = *given.get(&name).ok_or_else(|| ModelError::MissingCoefficient(name.clone()))?;
+                let v = *given
+                    .get(&name)
+                    .ok_or_else(|| ModelError::MissingCoefficient(name.clone()))?;
                 coefficients[d.index()].push(v);
             }
         }

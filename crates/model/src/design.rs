@@ -61,8 +61,16 @@ impl PrimeInertia {
     pub fn mass_matrix(&self) -> [[f64; 3]; 3] {
         [
             [self.m - self.x_udot, -self.x_vdot, -self.x_rdot],
-            [-self.y_udot, self.m - self.y_vdot, self.m * self.xg - self.y_rdot],
-            [-self.n_udot, self.m * self.xg - self.n_vdot, self.iz - self.n_rdot],
+            [
+                -self.y_udot,
+                self.m - self.y_vdot,
+                self.m * self.xg - self.y_rdot,
+            ],
+            [
+                -self.n_udot,
+                self.m * self.xg - self.n_vdot,
+                self.iz - self.n_rdot,
+            ],
         ]
     }
 
@@ -137,7 +145,9 @@ pub struct Design {
 pub fn design(set: &CoefficientSet, dof: Dof, s: &Samples, inertia: &PrimeInertia) -> Design {
     let terms = &set.terms[dof.index()];
     let n = s.len();
-    let phi = Mat::from_fn(n, terms.len(), |i, j| terms[j].eval(s.du[i], s.v[i], s.r[i], s.delta[i]));
+    let phi = Mat::from_fn(n, terms.len(), |i, j| {
+        terms[j].eval(s.du[i], s.v[i], s.r[i], s.delta[i])
+    });
     let m = inertia.mass_matrix()[dof.index()];
     let y = (0..n)
         .map(|i| {

@@ -88,7 +88,12 @@ impl Monomial {
             return "1".into();
         }
         let mut s = String::new();
-        for (c, n) in [('u', self.du), ('v', self.v), ('r', self.r), ('d', self.delta)] {
+        for (c, n) in [
+            ('u', self.du),
+            ('v', self.v),
+            ('r', self.r),
+            ('d', self.delta),
+        ] {
             s.extend(std::iter::repeat_n(c, n as usize));
         }
         s
@@ -105,7 +110,10 @@ impl Monomial {
     /// Value at primed state (Δu', v', r', δ [rad]).
     #[inline]
     pub fn eval(&self, du: f64, v: f64, r: f64, delta: f64) -> f64 {
-        du.powi(self.du as i32) * v.powi(self.v as i32) * r.powi(self.r as i32) * delta.powi(self.delta as i32)
+        du.powi(self.du as i32)
+            * v.powi(self.v as i32)
+            * r.powi(self.r as i32)
+            * delta.powi(self.delta as i32)
     }
 
     /// Parity under (v, r, δ) → (−v, −r, −δ): true when the term changes sign.
@@ -251,12 +259,21 @@ impl CoefficientSet {
             std::array::from_fn(|i| vec![(f64::NEG_INFINITY, f64::INFINITY); terms[i].len()]);
         for (c_i, c) in file.constraints.iter().enumerate() {
             let key = |k: &str| format!("constraint[{c_i}].{k}");
-            let m = Monomial::parse(&c.term).map_err(|message| SetError { key: key("term"), message })?;
-            let j = terms[c.dof.index()].iter().position(|t| *t == m).ok_or_else(|| SetError {
+            let m = Monomial::parse(&c.term).map_err(|message| SetError {
                 key: key("term"),
-                message: format!("\"{}\" is not a term of {}", c.term, c.dof),
+                message,
             })?;
-            let (mut lo, mut hi) = (c.lower.unwrap_or(f64::NEG_INFINITY), c.upper.unwrap_or(f64::INFINITY));
+            let j = terms[c.dof.index()]
+                .iter()
+                .position(|t| *t == m)
+                .ok_or_else(|| SetError {
+                    key: key("term"),
+                    message: format!("\"{}\" is not a term of {}", c.term, c.dof),
+                })?;
+            let (mut lo, mut hi) = (
+                c.lower.unwrap_or(f64::NEG_INFINITY),
+                c.upper.unwrap_or(f64::INFINITY),
+            );
             match c.sign.as_deref() {
                 None => {}
                 Some("negative") => hi = hi.min(0.0),
@@ -289,17 +306,24 @@ impl CoefficientSet {
 
     /// Regressed coefficients plus known acceleration derivatives.
     pub fn coefficient_count(&self) -> usize {
-        (0..3).map(|i| self.terms[i].len() + self.known[i].len()).sum()
+        (0..3)
+            .map(|i| self.terms[i].len() + self.known[i].len())
+            .sum()
     }
 
     /// Coefficient names of one DOF, in regression order.
     pub fn names(&self, dof: Dof) -> Vec<String> {
-        self.terms[dof.index()].iter().map(|m| m.coefficient_name(dof)).collect()
+        self.terms[dof.index()]
+            .iter()
+            .map(|m| m.coefficient_name(dof))
+            .collect()
     }
 
     /// Whether any term has a finite bound.
     pub fn has_bounds(&self, dof: Dof) -> bool {
-        self.bounds[dof.index()].iter().any(|(l, u)| l.is_finite() || u.is_finite())
+        self.bounds[dof.index()]
+            .iter()
+            .any(|(l, u)| l.is_finite() || u.is_finite())
     }
 
     pub fn knows(&self, dof: Dof, k: Known) -> bool {

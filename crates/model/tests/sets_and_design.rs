@@ -2,7 +2,10 @@
 
 use proptest::prelude::*;
 use shipid_io::{AddedMass, PrimeScale, Recording, Ship};
-use shipid_model::{AbkowitzModel, CoefficientSet, Dof, EstimatorInfo, ModelFile, Monomial, Samples, SetFile, design};
+use shipid_model::{
+    AbkowitzModel, CoefficientSet, Dof, EstimatorInfo, ModelFile, Monomial, Samples, SetFile,
+    design,
+};
 
 fn kvlcc2() -> (Ship, AddedMass) {
     (
@@ -29,7 +32,10 @@ fn kvlcc2() -> (Ship, AddedMass) {
 
 fn check_count(name: &str, per_dof: [usize; 3], total: usize) {
     let s = CoefficientSet::builtin(name).unwrap();
-    let got: Vec<usize> = Dof::ALL.iter().map(|d| s.terms[d.index()].len() + s.known[d.index()].len()).collect();
+    let got: Vec<usize> = Dof::ALL
+        .iter()
+        .map(|d| s.terms[d.index()].len() + s.known[d.index()].len())
+        .collect();
     assert_eq!(got, per_dof, "{name} per DOF (terms + known accelerations)");
     assert_eq!(s.coefficient_count(), total, "{name}");
 }
@@ -46,18 +52,31 @@ fn sets_respect_port_starboard_symmetry() {
     // X is even in (v, r, δ); Y and N are odd except the asymmetry constants and their Δu dependence.
     for name in CoefficientSet::builtin_names() {
         let s = CoefficientSet::builtin(name).unwrap();
-        assert!(s.terms[0].iter().all(|m| !m.is_odd()), "{name}: X must be even");
+        assert!(
+            s.terms[0].iter().all(|m| !m.is_odd()),
+            "{name}: X must be even"
+        );
         for d in [Dof::Y, Dof::N] {
             for m in &s.terms[d.index()] {
                 let asymmetry = m.v + m.r + m.delta == 0;
-                assert!(m.is_odd() || asymmetry, "{name}: {} is even", m.coefficient_name(d));
+                assert!(
+                    m.is_odd() || asymmetry,
+                    "{name}: {} is even",
+                    m.coefficient_name(d)
+                );
             }
         }
     }
     let full = CoefficientSet::builtin("full68").unwrap();
-    assert!(full.names(Dof::Y).contains(&"Y_0".to_string()), "full set has Y_0");
+    assert!(
+        full.names(Dof::Y).contains(&"Y_0".to_string()),
+        "full set has Y_0"
+    );
     let reduced = CoefficientSet::builtin("reduced32").unwrap();
-    assert!(!reduced.names(Dof::N).contains(&"N_0".to_string()), "reduced set has no N_0");
+    assert!(
+        !reduced.names(Dof::N).contains(&"N_0".to_string()),
+        "reduced set has no N_0"
+    );
 }
 
 fn set_error(text: &str) -> String {
@@ -77,11 +96,15 @@ fn bad_set_files_name_the_key() {
         "key `Y.terms[1]`: term \"rv\" appears twice"
     );
     assert_eq!(
-        set_error(&format!("{base}[[constraint]]\ndof = \"N\"\nterm = \"r\"\nsign = \"negative\"\nsource = \"x\"\n")),
+        set_error(&format!(
+            "{base}[[constraint]]\ndof = \"N\"\nterm = \"r\"\nsign = \"negative\"\nsource = \"x\"\n"
+        )),
         "key `constraint[0].term`: \"r\" is not a term of N"
     );
     assert_eq!(
-        set_error(&format!("{base}[[constraint]]\ndof = \"N\"\nterm = \"v\"\nsign = \"down\"\nsource = \"x\"\n")),
+        set_error(&format!(
+            "{base}[[constraint]]\ndof = \"N\"\nterm = \"v\"\nsign = \"down\"\nsource = \"x\"\n"
+        )),
         "key `constraint[0].sign`: \"down\" is neither \"negative\" nor \"positive\""
     );
 }
@@ -91,7 +114,10 @@ fn constraints_become_bounds() {
     let text = "name = \"t\"\nsource = \"test\"\n[X]\nterms = [\"u\"]\n[Y]\nterms = [\"v\", \"r\"]\n[N]\nterms = [\"v\"]\n\
                 [[constraint]]\ndof = \"Y\"\nterm = \"v\"\nsign = \"negative\"\nlower = -1.0\nsource = \"stability\"\n";
     let s = CoefficientSet::from_file(toml::from_str(text).unwrap()).unwrap();
-    assert_eq!(s.bounds[1], vec![(-1.0, 0.0), (f64::NEG_INFINITY, f64::INFINITY)]);
+    assert_eq!(
+        s.bounds[1],
+        vec![(-1.0, 0.0), (f64::NEG_INFINITY, f64::INFINITY)]
+    );
     assert!(s.has_bounds(Dof::Y) && !s.has_bounds(Dof::N));
 }
 
@@ -102,14 +128,19 @@ fn monomial_codes_round_trip() {
         assert_eq!(m.code(), code);
     }
     assert_eq!(Monomial::parse("dvr").unwrap().code(), "vrd");
-    assert_eq!(Monomial::parse("vvr").unwrap().eval(0.5, 2.0, 3.0, 7.0), 12.0);
+    assert_eq!(
+        Monomial::parse("vvr").unwrap().eval(0.5, 2.0, 3.0, 7.0),
+        12.0
+    );
 }
 
 fn model_with(set: &str, seed: u64) -> AbkowitzModel {
     let (ship, am) = kvlcc2();
     let s = CoefficientSet::builtin(set).unwrap();
     let coeffs = std::array::from_fn(|d| {
-        (0..s.terms[d].len()).map(|j| (((j as u64 + 3) * (seed + 11 + d as u64)) as f64 * 0.7).sin() * 0.01).collect()
+        (0..s.terms[d].len())
+            .map(|j| (((j as u64 + 3) * (seed + 11 + d as u64)) as f64 * 0.7).sin() * 0.01)
+            .collect()
     });
     AbkowitzModel::new(s, coeffs, ship, am).unwrap()
 }
@@ -149,13 +180,27 @@ proptest! {
 #[test]
 fn model_file_round_trips_and_rejects_foreign_coefficients() {
     let m = model_with("reduced32", 3);
-    let file = ModelFile::from_model(&m, EstimatorInfo { name: "lsq".into(), solver: "fast".into(), ..Default::default() }, vec![]);
+    let file = ModelFile::from_model(
+        &m,
+        EstimatorInfo {
+            name: "lsq".into(),
+            solver: "fast".into(),
+            ..Default::default()
+        },
+        vec![],
+    );
     let text = toml::to_string(&file).unwrap();
     let back: ModelFile = toml::from_str(&text).unwrap();
     assert_eq!(back.to_model().unwrap(), m);
     let mut bad = back.clone();
-    bad.coefficients.get_mut("Y").unwrap().insert("Y_rrr".into(), 1.0);
-    assert_eq!(bad.to_model().unwrap_err().to_string(), "coefficient `Y_rrr` is not a term of the set");
+    bad.coefficients
+        .get_mut("Y")
+        .unwrap()
+        .insert("Y_rrr".into(), 1.0);
+    assert_eq!(
+        bad.to_model().unwrap_err().to_string(),
+        "coefficient `Y_rrr` is not a term of the set"
+    );
 }
 
 #[test]

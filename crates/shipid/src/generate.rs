@@ -17,7 +17,9 @@ use rand::rngs::StdRng;
 use rand_distr::{Distribution, Normal};
 use shipid_io::dataset::{DatasetFile, Origin, entry_for};
 use shipid_io::{Manoeuvre, Recording, Ship, Side};
-use shipid_sim::{MmgModel, SimOptions, SimStatus, State, controller_for, kvlcc2_added_mass, kvlcc2_ship};
+use shipid_sim::{
+    MmgModel, SimOptions, SimStatus, State, controller_for, kvlcc2_added_mass, kvlcc2_ship,
+};
 
 use crate::spec::manoeuvre_stem;
 use crate::{CliError, failed};
@@ -76,8 +78,9 @@ impl NoiseModel {
 
 /// FNV-1a: a fixed, platform-independent hash to derive per-recording seeds.
 fn fnv1a(s: &str) -> u64 {
-    s.bytes()
-        .fold(0xcbf29ce484222325, |h, b| (h ^ b as u64).wrapping_mul(0x100000001b3))
+    s.bytes().fold(0xcbf29ce484222325, |h, b| {
+        (h ^ b as u64).wrapping_mul(0x100000001b3)
+    })
 }
 
 /// The manoeuvres of the default data set.
@@ -132,9 +135,15 @@ pub fn generate(noise_seed: Option<u64>) -> Result<Generated, CliError> {
     for m in default_manoeuvres() {
         let file = format!("{}.csv", manoeuvre_stem(&m));
         let mut controller = controller_for(&m, T_EXECUTE_S).map_err(failed)?;
-        let options = SimOptions::new(standard_duration_s(&m, &ship)).with_step(DT_S, SAMPLE_INTERVAL_S);
-        let out = shipid_sim::simulate(&model, controller.as_mut(), State::approach(ship.u0), &options)
-            .map_err(failed)?;
+        let options =
+            SimOptions::new(standard_duration_s(&m, &ship)).with_step(DT_S, SAMPLE_INTERVAL_S);
+        let out = shipid_sim::simulate(
+            &model,
+            controller.as_mut(),
+            State::approach(ship.u0),
+            &options,
+        )
+        .map_err(failed)?;
         if let SimStatus::Diverged { t_s, reason } = out.status {
             return Err(failed(anyhow::anyhow!(
                 "the MMG reference diverged in {file} at {t_s} s: {reason}"
@@ -155,7 +164,10 @@ pub fn generate(noise_seed: Option<u64>) -> Result<Generated, CliError> {
         added_mass: Some(kvlcc2_added_mass()),
         recordings: entries,
     };
-    Ok(Generated { dataset, recordings })
+    Ok(Generated {
+        dataset,
+        recordings,
+    })
 }
 
 /// The comment lines written at the top of every generated file.

@@ -15,7 +15,8 @@ pub fn run(mapping: &Path, out: &Path, source: Option<&Path>) -> Result<Outcome,
             imported.dataset.name,
             mapping.display()
         ),
-        "Project conventions: SI units, rudder positive to starboard (source sign converted).".into(),
+        "Project conventions: SI units, rudder positive to starboard (source sign converted)."
+            .into(),
     ];
     let recs: Vec<_> = imported.recordings.iter().collect();
     write_dataset(out, &imported.dataset, &recs, &comments).map_err(failed)?;

@@ -2,11 +2,15 @@
 //! returns an [`Outcome`] or a [`CliError`]; `main` turns them into output and exit codes
 //! (0 all ok, 1 some case failed, 2 bad input).
 
+pub mod fit;
+pub mod fit_cmd;
 pub mod generate;
 pub mod import;
 pub mod metrics_cmd;
 pub mod simulate_cmd;
 pub mod spec;
+pub mod validate;
+pub mod validate_cmd;
 
 use std::fmt;
 

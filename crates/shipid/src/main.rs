@@ -7,7 +7,11 @@ use clap::{Parser, Subcommand};
 use shipid::{CliError, Outcome, failed};
 
 #[derive(Parser)]
-#[command(name = "shipid", version, about = "Ship manoeuvring system identification")]
+#[command(
+    name = "shipid",
+    version,
+    about = "Ship manoeuvring system identification"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -39,13 +43,65 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Simulate a standard manoeuvre with a model.
+    /// Identify an Abkowitz model from a data set.
+    Fit {
+        dataset: PathBuf,
+        /// reduced32, full68, chen2021 or a set file.
+        #[arg(long, default_value = "reduced32")]
+        set: String,
+        /// lsq, bounded-lsq, ridge, lasso or svr.
+        #[arg(long, default_value = "lsq")]
+        estimator: String,
+        /// Ridge λ (on the column-scaled design, least-squares term as a mean).
+        #[arg(long)]
+        lambda: Option<f64>,
+        /// Lasso α (scikit-learn convention on the column-scaled design).
+        #[arg(long)]
+        alpha: Option<f64>,
+        /// SVR C.
+        #[arg(long)]
+        c: Option<f64>,
+        /// SVR ε (units of the prime target; default 1 % of its RMS).
+        #[arg(long)]
+        epsilon: Option<f64>,
+        /// Choose the hyper-parameter by blocked cross-validation.
+        #[arg(long)]
+        tune: bool,
+        /// Training recordings (comma separated file names; default all).
+        #[arg(long, value_delimiter = ',')]
+        recordings: Vec<String>,
+        /// Truncate each training zig-zag after N overshoots.
+        #[arg(long)]
+        overshoots: Option<u32>,
+        /// Time window START:END [s] of each training recording.
+        #[arg(long, value_name = "START:END")]
+        window: Option<String>,
+        /// qp (clarabel reference) or fast.
+        #[arg(long, default_value = "fast")]
+        solver: String,
+        #[arg(long)]
+        out: PathBuf,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Validate a model on a data set: replayed-rudder RMSEs and closed-loop manoeuvre metrics.
+    Validate {
+        /// A model file or `mmg:kvlcc2`.
+        model: String,
+        dataset: PathBuf,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Simulate a standard manoeuvre (or replay recordings) with a model.
     Simulate {
         /// `mmg:kvlcc2` or a model file.
         model: String,
         /// `zigzag:20/20:port` or `turning:35:starboard`.
-        #[arg(long)]
-        manoeuvre: String,
+        #[arg(long, required_unless_present = "replay", conflicts_with = "replay")]
+        manoeuvre: Option<String>,
+        /// Replay every recording's rudder of this data set instead.
+        #[arg(long, value_name = "DATASET.toml")]
+        replay: Option<PathBuf>,
         /// RK4 step [s].
         #[arg(long)]
         dt: Option<f64>,
@@ -65,22 +121,115 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
         Command::Generate { out, noise } => {
             let g = shipid::generate::generate(noise)?;
             let recs: Vec<_> = g.recordings.iter().collect();
-            shipid_io::write::write_dataset(&out, &g.dataset, &recs, &shipid::generate::provenance(noise))
-                .map_err(failed)?;
-            eprintln!("wrote {} recordings and {}", recs.len(), out.join("dataset.toml").display());
+            shipid_io::write::write_dataset(
+                &out,
+                &g.dataset,
+                &recs,
+                &shipid::generate::provenance(noise),
+            )
+            .map_err(failed)?;
+            eprintln!(
+                "wrote {} recordings and {}",
+                recs.len(),
+                out.join("dataset.toml").display()
+            );
             Ok(Outcome::Ok)
         }
-        Command::Import { mapping, out, source } => shipid::import::run(&mapping, &out, source.as_deref()),
+        Command::Import {
+            mapping,
+            out,
+            source,
+        } => shipid::import::run(&mapping, &out, source.as_deref()),
+        Command::Fit {
+            dataset,
+            set,
+            estimator,
+            lambda,
+            alpha,
+            c,
+            epsilon,
+            tune,
+            recordings,
+            overshoots,
+            window,
+            solver,
+            out,
+            json,
+        } => {
+            let window = match (overshoots, window) {
+                (Some(_), Some(_)) => {
+                    return Err(shipid::bad_input("give --overshoots or --window, not both"));
+                }
+                (Some(n), None) => shipid::fit::WindowSpec::Overshoots(n),
+                (None, Some(w)) => parse_window(&w)?,
+                (None, None) => shipid::fit::WindowSpec::Whole,
+            };
+            let solver = match solver.as_str() {
+                "qp" => shipid_estimators::Solver::Qp,
+                "fast" => shipid_estimators::Solver::Fast,
+                other => {
+                    return Err(shipid::bad_input(format!(
+                        "unknown solver `{other}`: expected qp or fast"
+                    )));
+                }
+            };
+            shipid::fit_cmd::run(shipid::fit_cmd::FitArgs {
+                dataset: &dataset,
+                set: &set,
+                estimator: shipid::fit::EstimatorSpec {
+                    name: estimator,
+                    lambda,
+                    alpha,
+                    c,
+                    epsilon,
+                    tune,
+                },
+                recordings,
+                window,
+                solver,
+                out: &out,
+                json,
+            })
+        }
         Command::Metrics { dataset, json } => shipid::metrics_cmd::run(&dataset, json),
         Command::Simulate {
             model,
             manoeuvre,
+            replay,
             dt,
             duration,
             json,
             out,
-        } => shipid::simulate_cmd::run(&model, &manoeuvre, dt, duration, json, out.as_deref()),
+        } => match (manoeuvre, replay) {
+            (_, Some(ds)) => shipid::simulate_cmd::run_replay(&model, &ds, json),
+            (Some(m), None) => {
+                shipid::simulate_cmd::run(&model, &m, dt, duration, json, out.as_deref())
+            }
+            (None, None) => Err(shipid::bad_input("give --manoeuvre or --replay")),
+        },
+        Command::Validate {
+            model,
+            dataset,
+            json,
+        } => shipid::validate_cmd::run(&model, &dataset, json),
     }
+}
+
+fn parse_window(text: &str) -> Result<shipid::fit::WindowSpec, CliError> {
+    let bad = || {
+        shipid::bad_input(format!(
+            "--window `{text}`: expected START:END in seconds, e.g. 0:120"
+        ))
+    };
+    let (a, b) = text.split_once(':').ok_or_else(bad)?;
+    let (start_s, end_s) = (
+        a.trim().parse::<f64>().map_err(|_| bad())?,
+        b.trim().parse::<f64>().map_err(|_| bad())?,
+    );
+    if !(start_s.is_finite() && end_s.is_finite() && end_s > start_s) {
+        return Err(bad());
+    }
+    Ok(shipid::fit::WindowSpec::Time { start_s, end_s })
 }
 
 fn main() -> ExitCode {

@@ -12,7 +12,13 @@ use crate::{CliError, Outcome};
 pub fn dataset_metrics(ds: &Dataset) -> Vec<(String, &'static str, Metrics)> {
     ds.recordings
         .iter()
-        .map(|r| (r.file.clone(), r.manoeuvre.kind(), metrics(&r.recording, &r.manoeuvre, &ds.ship)))
+        .map(|r| {
+            (
+                r.file.clone(),
+                r.manoeuvre.kind(),
+                metrics(&r.recording, &r.manoeuvre, &ds.ship),
+            )
+        })
         .collect()
 }
 
@@ -36,7 +42,10 @@ pub fn run(dataset: &Path, as_json: bool) -> Result<Outcome, CliError> {
     let ds = Dataset::load(dataset)?;
     let rows = dataset_metrics(&ds);
     if as_json {
-        println!("{}", serde_json::to_string_pretty(&metrics_json(&rows)).unwrap_or_default());
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&metrics_json(&rows)).unwrap_or_default()
+        );
     } else {
         println!("{} ({})", ds.name, dataset.display());
         println!("{}", metrics_table(&rows));
@@ -47,7 +56,15 @@ pub fn run(dataset: &Path, as_json: bool) -> Result<Outcome, CliError> {
 /// A plain-text table: one row per recording, one column per metric.
 pub fn metrics_table(rows: &[(String, &'static str, Metrics)]) -> String {
     let header = [
-        "recording", "kind", "os1 [deg]", "os2 [deg]", "t_a", "t_check", "advance", "transfer", "tact. D",
+        "recording",
+        "kind",
+        "os1 [deg]",
+        "os2 [deg]",
+        "t_a",
+        "t_check",
+        "advance",
+        "transfer",
+        "tact. D",
         "steady D",
     ];
     let width = rows.iter().map(|r| r.0.len()).max().unwrap_or(9).max(9);

@@ -5,20 +5,35 @@ use std::path::Path;
 use serde_json::{Map, Value, json};
 use shipid_io::Manoeuvre;
 use shipid_io::write::{recording_csv, write_atomic};
-use shipid_sim::{Dynamics, MmgModel, SimOptions, SimOutput, SimStatus, State, controller_for, metrics};
+use shipid_model::ModelFile;
+use shipid_sim::{
+    AbkowitzDynamics, Dynamics, MmgModel, SimOptions, SimOutput, SimStatus, State, controller_for,
+    metrics,
+};
 
 use crate::generate::{DT_S, SAMPLE_INTERVAL_S, T_EXECUTE_S, standard_duration_s};
 use crate::spec::parse_manoeuvre;
 use crate::{CliError, Outcome, bad_input, failed};
 
-/// A model named on the command line: `mmg:kvlcc2` (the reference).
+/// A model named on the command line: `mmg:kvlcc2` (the reference) or a model file written by
+/// `shipid fit`.
 pub fn load_model(spec: &str) -> Result<Box<dyn Dynamics + Send + Sync>, CliError> {
-    match spec {
-        "mmg:kvlcc2" => Ok(Box::new(MmgModel::kvlcc2())),
-        other => Err(bad_input(format!(
-            "unknown model `{other}`: expected `mmg:kvlcc2` or a model file"
-        ))),
+    if spec == "mmg:kvlcc2" {
+        return Ok(Box::new(MmgModel::kvlcc2()));
     }
+    let path = Path::new(spec);
+    if spec.starts_with("mmg:") || !path.is_file() {
+        return Err(bad_input(format!(
+            "unknown model `{spec}`: expected `mmg:kvlcc2` or a model file"
+        )));
+    }
+    let text = std::fs::read_to_string(path).map_err(|e| shipid_io::InputError::read(path, &e))?;
+    let file: ModelFile =
+        toml::from_str(&text).map_err(|e| shipid_io::InputError::toml(path, &text, &e))?;
+    let model = file
+        .to_model()
+        .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
+    Ok(Box::new(AbkowitzDynamics(model)))
 }
 
 /// Simulate a standard manoeuvre from a steady approach at U0.
@@ -33,10 +48,20 @@ pub fn simulate_manoeuvre(
     let dt = dt_s.unwrap_or(DT_S);
     // Sample at 10 Hz when the step divides it, otherwise every step.
     let ratio = (SAMPLE_INTERVAL_S / dt).round();
-    let sample = if ratio >= 1.0 && (ratio * dt - SAMPLE_INTERVAL_S).abs() < 1e-9 { ratio * dt } else { dt };
-    let options = SimOptions::new(duration_s.unwrap_or_else(|| standard_duration_s(m, &ship))).with_step(dt, sample);
-    shipid_sim::simulate(model, controller.as_mut(), State::approach(ship.u0), &options)
-        .map_err(|e| bad_input(e))
+    let sample = if ratio >= 1.0 && (ratio * dt - SAMPLE_INTERVAL_S).abs() < 1e-9 {
+        ratio * dt
+    } else {
+        dt
+    };
+    let options = SimOptions::new(duration_s.unwrap_or_else(|| standard_duration_s(m, &ship)))
+        .with_step(dt, sample);
+    shipid_sim::simulate(
+        model,
+        controller.as_mut(),
+        State::approach(ship.u0),
+        &options,
+    )
+    .map_err(|e| bad_input(e))
 }
 
 /// The JSON of a simulated manoeuvre: `"status"` and the metric keys, or the divergence instead.
@@ -60,6 +85,52 @@ pub fn outcome_json(out: &SimOutput, m: &Manoeuvre, model: &dyn Dynamics) -> Val
     Value::Object(o)
 }
 
+/// `--replay DATASET.toml`: every recording's rudder replayed from its initial state.
+pub fn run_replay(model_spec: &str, dataset: &Path, as_json: bool) -> Result<Outcome, CliError> {
+    let model = load_model(model_spec)?;
+    let ds = shipid_io::Dataset::load(dataset)?;
+    let mut recs = Map::new();
+    let mut any_failed = false;
+    for r in &ds.recordings {
+        let sim = crate::validate::replay(model.as_ref(), &r.recording);
+        let errors = crate::validate::replay_errors(&sim, &r.recording, model.ship());
+        let mut o = match serde_json::to_value(&sim.status) {
+            Ok(Value::Object(o)) => o,
+            _ => Map::new(),
+        };
+        if matches!(sim.status, SimStatus::Ok) {
+            for (key, value) in metrics(&sim.recording, &r.manoeuvre, model.ship()).entries() {
+                if let Some(v) = value {
+                    o.insert(key.into(), json!(v));
+                }
+            }
+        } else {
+            any_failed = true;
+        }
+        o.insert(
+            "errors".into(),
+            serde_json::to_value(&errors).unwrap_or_default(),
+        );
+        recs.insert(r.file.clone(), Value::Object(o));
+    }
+    let value = json!({ "model": model_spec, "dataset": dataset.display().to_string(), "recordings": recs });
+    if as_json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&value).unwrap_or_default()
+        );
+    } else {
+        for (file, v) in &recs {
+            println!("{file}: {v}");
+        }
+    }
+    Ok(if any_failed {
+        Outcome::SomeFailed
+    } else {
+        Outcome::Ok
+    })
+}
+
 pub fn run(
     model_spec: &str,
     manoeuvre: &str,
@@ -80,7 +151,10 @@ pub fn run(
     }
     let value = outcome_json(&out, &m, model.as_ref());
     if as_json {
-        println!("{}", serde_json::to_string_pretty(&value).unwrap_or_default());
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&value).unwrap_or_default()
+        );
     } else if let Value::Object(o) = &value {
         for (k, v) in o {
             println!("{k:>18}: {v}");

@@ -23,7 +23,9 @@ pub fn parse_manoeuvre(text: &str) -> Result<Manoeuvre, String> {
     match parts.as_slice() {
         ["zigzag", angles, s] => {
             let (rudder, check) = angles.split_once('/').ok_or_else(|| {
-                format!("manoeuvre `{text}`: zig-zag angles must be written rudder/check, e.g. 20/20")
+                format!(
+                    "manoeuvre `{text}`: zig-zag angles must be written rudder/check, e.g. 20/20"
+                )
             })?;
             Ok(Manoeuvre::ZigZag {
                 rudder_deg: angle(rudder, "rudder angle")?,
@@ -53,7 +55,10 @@ pub fn manoeuvre_stem(m: &Manoeuvre) -> String {
             check_deg,
             side: s,
         } => format!("zz{}_{}_{}", rudder_deg, check_deg, side(s)),
-        Manoeuvre::Turning { rudder_deg, side: s } => format!("tc{}_{}", rudder_deg, side(s)),
+        Manoeuvre::Turning {
+            rudder_deg,
+            side: s,
+        } => format!("tc{}_{}", rudder_deg, side(s)),
         Manoeuvre::Free => "free".into(),
     }
 }
@@ -63,7 +68,11 @@ mod tests {
     use super::*;
 
     fn check(text: &str, expected: Result<Manoeuvre, &str>) {
-        assert_eq!(parse_manoeuvre(text), expected.map_err(String::from), "{text}");
+        assert_eq!(
+            parse_manoeuvre(text),
+            expected.map_err(String::from),
+            "{text}"
+        );
     }
 
     #[test]
@@ -85,7 +94,9 @@ mod tests {
         );
         check(
             "zigzag:20:port",
-            Err("manoeuvre `zigzag:20:port`: zig-zag angles must be written rudder/check, e.g. 20/20"),
+            Err(
+                "manoeuvre `zigzag:20:port`: zig-zag angles must be written rudder/check, e.g. 20/20",
+            ),
         );
         check(
             "turning:35:left",
@@ -93,17 +104,27 @@ mod tests {
         );
         check(
             "turning:-5:port",
-            Err("manoeuvre `turning:-5:port`: rudder angle `-5` is not an angle in degrees between 0 and 90"),
+            Err(
+                "manoeuvre `turning:-5:port`: rudder angle `-5` is not an angle in degrees between 0 and 90",
+            ),
         );
         check(
             "spiral",
-            Err("manoeuvre `spiral` not understood: expected zigzag:RUDDER/CHECK:SIDE or turning:RUDDER:SIDE"),
+            Err(
+                "manoeuvre `spiral` not understood: expected zigzag:RUDDER/CHECK:SIDE or turning:RUDDER:SIDE",
+            ),
         );
     }
 
     #[test]
     fn stems() {
-        assert_eq!(manoeuvre_stem(&parse_manoeuvre("zigzag:35/35:port").unwrap()), "zz35_35_ps");
-        assert_eq!(manoeuvre_stem(&parse_manoeuvre("turning:35:starboard").unwrap()), "tc35_sb");
+        assert_eq!(
+            manoeuvre_stem(&parse_manoeuvre("zigzag:35/35:port").unwrap()),
+            "zz35_35_ps"
+        );
+        assert_eq!(
+            manoeuvre_stem(&parse_manoeuvre("turning:35:starboard").unwrap()),
+            "tc35_sb"
+        );
     }
 }

@@ -13,9 +13,16 @@ fn check_exit(args: &[&str], code: i32, stderr_has: &str) {
 
 #[test]
 fn bad_input_exits_with_2_and_names_the_problem() {
-    check_exit(&["metrics", "no/such/dataset.toml"], 2, "error: no/such/dataset.toml: file not found");
     check_exit(
-        &["metrics", "crates/io/tests/fixtures/bad_input/unknown_key.toml"],
+        &["metrics", "no/such/dataset.toml"],
+        2,
+        "error: no/such/dataset.toml: file not found",
+    );
+    check_exit(
+        &[
+            "metrics",
+            "crates/io/tests/fixtures/bad_input/unknown_key.toml",
+        ],
         2,
         "unknown_key.toml:2:1: key `colour`: unknown field `colour`",
     );
@@ -24,20 +31,46 @@ fn bad_input_exits_with_2_and_names_the_problem() {
         2,
         "zig-zag angles must be written rudder/check",
     );
-    check_exit(&["simulate", "mmg:other", "--manoeuvre", "turning:35:port"], 2, "unknown model `mmg:other`");
-    check_exit(&["simulate", "mmg:kvlcc2", "--manoeuvre", "turning:35:port", "--dt=-1"], 2, "invalid simulation option dt_s = -1");
+    check_exit(
+        &["simulate", "mmg:other", "--manoeuvre", "turning:35:port"],
+        2,
+        "unknown model `mmg:other`",
+    );
+    check_exit(
+        &[
+            "simulate",
+            "mmg:kvlcc2",
+            "--manoeuvre",
+            "turning:35:port",
+            "--dt=-1",
+        ],
+        2,
+        "invalid simulation option dt_s = -1",
+    );
     check_exit(&["frobnicate"], 2, "unrecognized subcommand");
 }
 
 #[test]
 fn simulate_prints_status_and_metric_keys() {
-    let out = common::shipid(&["simulate", "mmg:kvlcc2", "--manoeuvre", "zigzag:20/20:starboard", "--json"]);
+    let out = common::shipid(&[
+        "simulate",
+        "mmg:kvlcc2",
+        "--manoeuvre",
+        "zigzag:20/20:starboard",
+        "--json",
+    ]);
     assert!(out.status.success());
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["status"], "ok");
     // DOMAIN.md §6: 20/20 starboard first 10.5° / 15.7°.
-    assert!((v["overshoot_1"].as_f64().unwrap() - 10.5).abs() <= 0.3, "{v}");
-    assert!((v["overshoot_2"].as_f64().unwrap() - 15.7).abs() <= 0.3, "{v}");
+    assert!(
+        (v["overshoot_1"].as_f64().unwrap() - 10.5).abs() <= 0.3,
+        "{v}"
+    );
+    assert!(
+        (v["overshoot_2"].as_f64().unwrap() - 15.7).abs() <= 0.3,
+        "{v}"
+    );
     for key in ["t_a", "t_check"] {
         assert!(v[key].as_f64().is_some(), "{key} in {v}");
     }
@@ -58,10 +91,17 @@ fn simulate_writes_a_readable_time_series() {
         "--out",
         csv.to_str().unwrap(),
     ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let rec = shipid_io::recording::read_recording(&csv).unwrap();
     assert!((rec.t.last().unwrap() - 120.0).abs() < 1e-9);
-    assert!(rec.psi.last().unwrap() < &-1.0, "a port turn turns the heading negative");
+    assert!(
+        rec.psi.last().unwrap() < &-1.0,
+        "a port turn turns the heading negative"
+    );
 }
 
 #[test]

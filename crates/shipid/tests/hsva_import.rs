@@ -20,7 +20,11 @@ fn hsva_overshoots_match_the_source_listing() {
         "--source",
         dir.to_str().unwrap(),
     ]);
-    assert!(imported.status.success(), "{}", String::from_utf8_lossy(&imported.stderr));
+    assert!(
+        imported.status.success(),
+        "{}",
+        String::from_utf8_lossy(&imported.stderr)
+    );
     let ds = format!("{out_dir}/dataset.toml");
     let m = common::shipid(&["metrics", &ds, "--json"]);
     assert!(m.status.success(), "{}", String::from_utf8_lossy(&m.stderr));
@@ -36,13 +40,22 @@ fn hsva_overshoots_match_the_source_listing() {
         assert_eq!(r["kind"], "zigzag");
         let got1 = r["overshoot_1"].as_f64().unwrap();
         let got2 = r["overshoot_2"].as_f64().unwrap();
-        assert!((got1 - os1).abs() <= 0.3, "{file}: first overshoot {got1} vs {os1}");
-        assert!((got2 - os2).abs() <= 0.3, "{file}: second overshoot {got2} vs {os2}");
+        assert!(
+            (got1 - os1).abs() <= 0.3,
+            "{file}: first overshoot {got1} vs {os1}"
+        );
+        assert!(
+            (got2 - os2).abs() <= 0.3,
+            "{file}: second overshoot {got2} vs {os2}"
+        );
     }
     // The SNAME rudder sign is converted: the first execute of a starboard-first run is positive.
     let ds = shipid_io::Dataset::load(std::path::Path::new(&ds)).unwrap();
     let rec = &ds.recording("z20_10_sb.csv").unwrap().recording;
     let max = rec.delta.iter().take(200).cloned().fold(f64::MIN, f64::max);
-    assert!(max > 19f64.to_radians(), "first rudder to starboard is positive, got max {max}");
+    assert!(
+        max > 19f64.to_radians(),
+        "first rudder to starboard is positive, got max {max}"
+    );
     assert!(rec.n.is_some(), "propeller rate imported");
 }

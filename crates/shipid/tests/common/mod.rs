@@ -28,6 +28,8 @@ pub fn shared_hsva(test: &str) -> Option<PathBuf> {
     if std::env::var("SHIPID_REQUIRE_SHARED").is_ok_and(|v| v == "1") {
         panic!("{test}: ../shared/data/kvlcc2-hsva is missing and SHIPID_REQUIRE_SHARED=1");
     }
-    eprintln!("SKIPPED {test}: ../shared/data/kvlcc2-hsva not found (set SHIPID_REQUIRE_SHARED=1 to fail instead)");
+    eprintln!(
+        "SKIPPED {test}: ../shared/data/kvlcc2-hsva not found (set SHIPID_REQUIRE_SHARED=1 to fail instead)"
+    );
     None
 }

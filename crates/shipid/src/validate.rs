@@ -1,0 +1,214 @@
+//! Validation of a model against recordings it may not have seen (`shipid validate`, and the study
+//! runner later):
+//!
+//! - **replay** (open loop): the recording's rudder history is replayed from its initial state; the
+//!   trajectory, heading and velocities are compared sample by sample (RMSE);
+//! - **manoeuvre** (closed loop): the recording's standard manoeuvre (zig-zag or turning circle) is
+//!   re-simulated with its controller, first execute at the recorded time, and its IMO metrics compared
+//!   with the recording's (relative errors, MRAE). Closed loop because a zig-zag's reversals respond to
+//!   the model's own heading; replaying the recorded rudder would not test that.
+
+use serde::Serialize;
+use shipid_io::{DatasetRecording, Manoeuvre, Recording, Ship};
+use shipid_sim::metrics::first_execute;
+use shipid_sim::{
+    Dynamics, Metrics, Replay, SimOptions, SimOutput, SimStatus, State, controller_for, metrics,
+};
+
+use crate::fit::rms;
+
+/// RK4 step for re-simulation, as a fraction of L/U0 (0.05 s for the KVLCC2 model, whose check values
+/// it reproduces to 0.05°).
+pub const DT_OVER_L_OVER_U0: f64 = 0.05 / (7.0 / 1.179);
+
+/// Open-loop replay errors.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ReplayErrors {
+    #[serde(flatten)]
+    pub status: SimStatus,
+    pub position_rmse_over_l: f64,
+    pub heading_rmse_deg: f64,
+    pub u_rmse_m_s: f64,
+    pub v_rmse_m_s: f64,
+    pub r_rmse_deg_s: f64,
+}
+
+/// Closed-loop metrics comparison.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MetricComparison {
+    #[serde(flatten)]
+    pub status: SimStatus,
+    pub recorded: Metrics,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub predicted: Option<Metrics>,
+    /// (predicted − recorded)/recorded per metric both define.
+    pub relative_error: std::collections::BTreeMap<String, f64>,
+    /// Mean of |relative error| over those metrics.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mrae: Option<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RecordingValidation {
+    pub kind: &'static str,
+    pub replay: ReplayErrors,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub manoeuvre: Option<MetricComparison>,
+}
+
+impl RecordingValidation {
+    /// Whether either simulation diverged.
+    pub fn diverged(&self) -> bool {
+        matches!(self.replay.status, SimStatus::Diverged { .. })
+            || self
+                .manoeuvre
+                .as_ref()
+                .is_some_and(|m| matches!(m.status, SimStatus::Diverged { .. }))
+    }
+}
+
+fn initial_state(rec: &Recording) -> State {
+    State {
+        u: rec.u[0],
+        v: rec.v[0],
+        r: rec.r[0],
+        x0: rec.x0[0],
+        y0: rec.y0[0],
+        psi: rec.psi[0],
+    }
+}
+
+fn options(ship: &Ship, duration_s: f64) -> SimOptions {
+    let dt = DT_OVER_L_OVER_U0 * ship.lpp / ship.u0;
+    SimOptions::new(duration_s).with_step(dt, dt)
+}
+
+/// Linear interpolation of (t, y) at `at` (held at the ends).
+pub fn interp(t: &[f64], y: &[f64], at: f64) -> f64 {
+    let i = t.partition_point(|&x| x <= at);
+    if i == 0 {
+        return y[0];
+    }
+    if i >= t.len() {
+        return y[t.len() - 1];
+    }
+    let w = (at - t[i - 1]) / (t[i] - t[i - 1]);
+    y[i - 1] + w * (y[i] - y[i - 1])
+}
+
+/// Replay the recorded rudder from the recorded initial state. Times are shifted so the record starts at 0.
+pub fn replay(model: &dyn Dynamics, rec: &Recording) -> SimOutput {
+    let t0 = rec.t[0];
+    let t_rel: Vec<f64> = rec.t.iter().map(|t| t - t0).collect();
+    let duration = *t_rel.last().unwrap_or(&0.0);
+    let mut ctrl = match Replay::new(t_rel, rec.delta.clone()) {
+        Ok(c) => c,
+        Err(e) => return failed_output(format!("cannot replay: {e}")),
+    };
+    let mut opts = options(model.ship(), duration);
+    opts.initial_rudder_rad = rec.delta[0];
+    shipid_sim::simulate(model, &mut ctrl, initial_state(rec), &opts)
+        .unwrap_or_else(|e| failed_output(format!("cannot simulate: {e}")))
+}
+
+fn failed_output(reason: String) -> SimOutput {
+    SimOutput {
+        recording: Recording::default(),
+        status: SimStatus::Diverged { t_s: 0.0, reason },
+    }
+}
+
+/// RMSEs of a replay against the recording, over the samples the simulation reached.
+pub fn replay_errors(sim: &SimOutput, rec: &Recording, ship: &Ship) -> ReplayErrors {
+    let t0 = rec.t[0];
+    let s = &sim.recording;
+    let end = s.t.last().copied().unwrap_or(-1.0);
+    let (mut dp, mut dpsi, mut du, mut dv, mut dr) = (vec![], vec![], vec![], vec![], vec![]);
+    for i in 0..rec.len() {
+        let t = rec.t[i] - t0;
+        if t > end + 1e-9 || s.is_empty() {
+            break;
+        }
+        let at = |y: &[f64]| interp(&s.t, y, t);
+        dp.push((at(&s.x0) - rec.x0[i]).hypot(at(&s.y0) - rec.y0[i]));
+        dpsi.push(at(&s.psi) - rec.psi[i]);
+        du.push(at(&s.u) - rec.u[i]);
+        dv.push(at(&s.v) - rec.v[i]);
+        dr.push(at(&s.r) - rec.r[i]);
+    }
+    ReplayErrors {
+        status: sim.status.clone(),
+        position_rmse_over_l: rms(&dp) / ship.lpp,
+        heading_rmse_deg: rms(&dpsi).to_degrees(),
+        u_rmse_m_s: rms(&du),
+        v_rmse_m_s: rms(&dv),
+        r_rmse_deg_s: rms(&dr).to_degrees(),
+    }
+}
+
+/// Re-simulate the recording's standard manoeuvre in closed loop and compare its metrics.
+pub fn compare_manoeuvre(
+    model: &dyn Dynamics,
+    r: &DatasetRecording,
+    ship: &Ship,
+) -> Option<MetricComparison> {
+    let rec = &r.recording;
+    let (rudder, side) = match r.manoeuvre {
+        Manoeuvre::ZigZag {
+            rudder_deg, side, ..
+        }
+        | Manoeuvre::Turning { rudder_deg, side } => (rudder_deg, side),
+        Manoeuvre::Free => return None,
+    };
+    let recorded = metrics(rec, &r.manoeuvre, ship);
+    let t0 = rec.t[0];
+    // The controller starts the rudder at its execute time; the metric's execute is interpolated on the
+    // rudder signal, so start the controller where the recorded rudder started to move.
+    let t_exec = first_execute(rec, rudder, side, ship).map_or(0.0, |f| (f.t_s - t0).max(0.0));
+    let sim = match controller_for(&r.manoeuvre, t_exec) {
+        Ok(mut c) => shipid_sim::simulate(
+            model,
+            c.as_mut(),
+            initial_state(rec),
+            &options(ship, rec.t[rec.len() - 1] - t0),
+        )
+        .unwrap_or_else(|e| failed_output(format!("cannot simulate: {e}"))),
+        Err(e) => failed_output(format!("no controller: {e}")),
+    };
+    let predicted =
+        matches!(sim.status, SimStatus::Ok).then(|| metrics(&sim.recording, &r.manoeuvre, ship));
+    let mut relative_error = std::collections::BTreeMap::new();
+    if let Some(p) = &predicted {
+        for ((key, a), (_, b)) in recorded.entries().iter().zip(p.entries().iter()) {
+            if let (Some(a), Some(b)) = (a, b)
+                && a.abs() > 0.0
+            {
+                relative_error.insert(key.to_string(), (b - a) / a);
+            }
+        }
+    }
+    let mrae = (!relative_error.is_empty()).then(|| {
+        relative_error.values().map(|e| e.abs()).sum::<f64>() / relative_error.len() as f64
+    });
+    Some(MetricComparison {
+        status: sim.status,
+        recorded,
+        predicted,
+        relative_error,
+        mrae,
+    })
+}
+
+/// Both comparisons for one recording.
+pub fn validate_recording(
+    model: &dyn Dynamics,
+    r: &DatasetRecording,
+    ship: &Ship,
+) -> RecordingValidation {
+    let sim = replay(model, &r.recording);
+    RecordingValidation {
+        kind: r.manoeuvre.kind(),
+        replay: replay_errors(&sim, &r.recording, ship),
+        manoeuvre: compare_manoeuvre(model, r, ship),
+    }
+}
