@@ -175,7 +175,10 @@ pub fn parse_dataset(path: &Path, text: &str) -> Result<DatasetFile, InputError>
         return Err(InputError::key(
             path,
             "ship.xg",
-            format!("must be a finite distance within the ship length, not {}", s.xg),
+            format!(
+                "must be a finite distance within the ship length, not {}",
+                s.xg
+            ),
         ));
     }
     for (i, entry) in file.recordings.iter().enumerate() {
@@ -205,7 +208,10 @@ fn manoeuvre_of(path: &Path, i: usize, e: &RecordingEntry) -> Result<Manoeuvre, 
             InputError::key(
                 path,
                 format!("recording[{i}].side"),
-                format!("required for kind = \"{}\" (\"port\" or \"starboard\")", kind_word(e.kind)),
+                format!(
+                    "required for kind = \"{}\" (\"port\" or \"starboard\")",
+                    kind_word(e.kind)
+                ),
             )
         })
     };

@@ -76,7 +76,10 @@ impl Differentiator {
 pub fn accelerations_or_estimate(rec: &Recording, ship: &Ship) -> (Accelerations, bool) {
     match &rec.accelerations {
         Some(a) => (a.clone(), false),
-        None => (Differentiator::for_ship(&rec.t, ship).accelerations(rec), true),
+        None => (
+            Differentiator::for_ship(&rec.t, ship).accelerations(rec),
+            true,
+        ),
     }
 }
 

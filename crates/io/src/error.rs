@@ -74,7 +74,13 @@ impl InputError {
         }
     }
 
-    pub fn cell(file: &Path, line: usize, column: usize, name: &str, message: impl Into<String>) -> Self {
+    pub fn cell(
+        file: &Path,
+        line: usize,
+        column: usize,
+        name: &str,
+        message: impl Into<String>,
+    ) -> Self {
         InputError {
             file: file.to_path_buf(),
             location: Location::Line {
@@ -127,9 +133,14 @@ impl InputError {
 /// serde names the offending key in backticks ("unknown field `foo`", "missing field `lpp`"); other
 /// messages quote values or tokens the same way, so only these forms name a key.
 fn backticked(message: &str) -> Option<String> {
-    if !["unknown field", "missing field", "duplicate key", "duplicate field"]
-        .iter()
-        .any(|p| message.starts_with(p))
+    if ![
+        "unknown field",
+        "missing field",
+        "duplicate key",
+        "duplicate field",
+    ]
+    .iter()
+    .any(|p| message.starts_with(p))
     {
         return None;
     }

@@ -124,13 +124,20 @@ pub fn read_mapping(path: &Path) -> Result<Mapping, InputError> {
     let text = std::fs::read_to_string(path).map_err(|e| InputError::read(path, &e))?;
     let m: Mapping = toml::from_str(&text).map_err(|e| InputError::toml(path, &text, &e))?;
     if m.rudder_sign != 1 && m.rudder_sign != -1 {
-        return Err(InputError::key(path, "rudder_sign", format!("must be 1 or -1, not {}", m.rudder_sign)));
+        return Err(InputError::key(
+            path,
+            "rudder_sign",
+            format!("must be 1 or -1, not {}", m.rudder_sign),
+        ));
     }
     if m.format.delimiter != "whitespace" && m.format.delimiter.chars().count() != 1 {
         return Err(InputError::key(
             path,
             "format.delimiter",
-            format!("must be \"whitespace\" or one character, not \"{}\"", m.format.delimiter),
+            format!(
+                "must be \"whitespace\" or one character, not \"{}\"",
+                m.format.delimiter
+            ),
         ));
     }
     if encoding_rs::Encoding::for_label(m.format.encoding.as_bytes()).is_none() {
@@ -144,10 +151,18 @@ pub fn read_mapping(path: &Path) -> Result<Mapping, InputError> {
     for (i, c) in m.columns.iter().enumerate() {
         let key = |k: &str| format!("column[{i}].{k}");
         if c.index == 0 {
-            return Err(InputError::key(path, key("index"), "column numbers start at 1"));
+            return Err(InputError::key(
+                path,
+                key("index"),
+                "column numbers start at 1",
+            ));
         }
         let q = Quantity::from_name(&c.quantity).ok_or_else(|| {
-            InputError::key(path, key("quantity"), format!("unknown quantity \"{}\"", c.quantity))
+            InputError::key(
+                path,
+                key("quantity"),
+                format!("unknown quantity \"{}\"", c.quantity),
+            )
         })?;
         if let Some(u) = &c.unit
             && q.dimension().to_si(u).is_none()
@@ -155,7 +170,11 @@ pub fn read_mapping(path: &Path) -> Result<Mapping, InputError> {
             return Err(InputError::key(
                 path,
                 key("unit"),
-                format!("unknown unit \"{u}\" for {} (known: {})", c.quantity, q.dimension().known_units()),
+                format!(
+                    "unknown unit \"{u}\" for {} (known: {})",
+                    c.quantity,
+                    q.dimension().known_units()
+                ),
             ));
         }
         if let Some(j) = seen.insert(q, i) {
@@ -177,11 +196,18 @@ pub fn read_mapping(path: &Path) -> Result<Mapping, InputError> {
     })?;
     for (i, r) in m.recordings.iter().enumerate() {
         let entry = r.entry();
-        let t = DatasetFile { recordings: vec![entry], ..trial.clone() };
+        let t = DatasetFile {
+            recordings: vec![entry],
+            ..trial.clone()
+        };
         let text = toml::to_string(&t).map_err(|e| InputError::file(path, e.to_string()))?;
         crate::dataset::parse_dataset(path, &text).map_err(|mut e| {
             if let crate::error::Location::Key(k) = &e.location {
-                e.location = crate::error::Location::Key(k.replacen("recording[0]", &format!("recording[{i}]"), 1));
+                e.location = crate::error::Location::Key(k.replacen(
+                    "recording[0]",
+                    &format!("recording[{i}]"),
+                    1,
+                ));
             }
             e
         })?;
@@ -224,7 +250,8 @@ pub fn import(mapping_path: &Path, source_dir: Option<&Path>) -> Result<Imported
         (None, Some(d)) => base.join(d),
         (None, None) => base.to_path_buf(),
     };
-    let encoding = encoding_rs::Encoding::for_label(m.format.encoding.as_bytes()).unwrap_or(encoding_rs::UTF_8);
+    let encoding = encoding_rs::Encoding::for_label(m.format.encoding.as_bytes())
+        .unwrap_or(encoding_rs::UTF_8);
     let mut recordings = Vec::new();
     let mut provenance = Vec::new();
     for r in &m.recordings {
@@ -232,7 +259,10 @@ pub fn import(mapping_path: &Path, source_dir: Option<&Path>) -> Result<Imported
         let bytes = std::fs::read(&src).map_err(|e| InputError::read(&src, &e))?;
         let (text, _, had_errors) = encoding.decode(&bytes);
         if had_errors {
-            return Err(InputError::file(&src, format!("not valid {} text", encoding.name())));
+            return Err(InputError::file(
+                &src,
+                format!("not valid {} text", encoding.name()),
+            ));
         }
         let mut rec = parse_table(&src, &text, &m)?;
         if m.rudder_sign == -1 {
@@ -254,13 +284,20 @@ pub fn parse_table(path: &Path, text: &str, m: &Mapping) -> Result<Recording, In
     let mut slots: Vec<(usize, Quantity, f64, String)> = Vec::new();
     for c in &m.columns {
         let q = Quantity::from_name(&c.quantity).unwrap_or(Quantity::T);
-        let factor = c.unit.as_deref().and_then(|u| q.dimension().to_si(u)).unwrap_or(1.0);
+        let factor = c
+            .unit
+            .as_deref()
+            .and_then(|u| q.dimension().to_si(u))
+            .unwrap_or(1.0);
         let label = format!("{}[{}]", q.name(), c.unit.as_deref().unwrap_or(q.si_unit()));
         slots.push((c.index - 1, q, factor, label));
     }
     let needed = slots.iter().map(|s| s.0 + 1).max().unwrap_or(0);
     let mut values: HashMap<Quantity, Vec<f64>> = slots.iter().map(|s| (s.1, Vec::new())).collect();
-    let column_of = slots.iter().map(|s| (s.1, (s.0 + 1, s.3.clone()))).collect();
+    let column_of = slots
+        .iter()
+        .map(|s| (s.1, (s.0 + 1, s.3.clone())))
+        .collect();
     let mut lines = Vec::new();
     for (i, line) in text.lines().enumerate().skip(m.format.skip_lines) {
         let line_no = i + 1;
@@ -281,12 +318,18 @@ pub fn parse_table(path: &Path, text: &str, m: &Mapping) -> Result<Recording, In
             ));
         }
         for (idx, q, factor, label) in &slots {
-            let x = parse_cell(fields[*idx]).map_err(|msg| InputError::cell(path, line_no, idx + 1, label, msg))?;
+            let x = parse_cell(fields[*idx])
+                .map_err(|msg| InputError::cell(path, line_no, idx + 1, label, msg))?;
             if let Some(col) = values.get_mut(q) {
                 col.push(x * factor);
             }
         }
         lines.push(line_no);
     }
-    Columns { values, lines, column_of }.into_recording(path)
+    Columns {
+        values,
+        lines,
+        column_of,
+    }
+    .into_recording(path)
 }

@@ -12,8 +12,12 @@ use crate::units::Quantity;
 /// source's (the data set loader converts them, since only it knows them).
 pub fn read_recording(path: &Path) -> Result<Recording, InputError> {
     let bytes = std::fs::read(path).map_err(|e| InputError::read(path, &e))?;
-    let text = String::from_utf8(bytes)
-        .map_err(|e| InputError::file(path, format!("not UTF-8 (byte {})", e.utf8_error().valid_up_to())))?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        InputError::file(
+            path,
+            format!("not UTF-8 (byte {})", e.utf8_error().valid_up_to()),
+        )
+    })?;
     parse_recording(path, &text)
 }
 
@@ -54,8 +58,8 @@ pub fn parse_recording(path: &Path, text: &str) -> Result<Recording, InputError>
     let mut slots: Vec<Option<(Quantity, f64)>> = Vec::with_capacity(header.len());
     let mut column_of: HashMap<Quantity, (usize, String)> = HashMap::new();
     for (i, raw) in header.iter().enumerate() {
-        let (name, unit) = split_unit(raw)
-            .map_err(|m| InputError::cell(path, header_line, i + 1, raw, m))?;
+        let (name, unit) =
+            split_unit(raw).map_err(|m| InputError::cell(path, header_line, i + 1, raw, m))?;
         let quantity = match Quantity::from_name(name) {
             Some(q) if Quantity::RECORDING.contains(&q) => q,
             _ => {
@@ -103,12 +107,17 @@ pub fn parse_recording(path: &Path, text: &str) -> Result<Recording, InputError>
             return Err(InputError::line(
                 path,
                 line,
-                format!("expected {} fields as in the header, found {}", header.len(), rec.len()),
+                format!(
+                    "expected {} fields as in the header, found {}",
+                    header.len(),
+                    rec.len()
+                ),
             ));
         }
         for (i, cell) in rec.iter().enumerate() {
             if let Some((q, factor)) = slots[i] {
-                let x = parse_cell(cell).map_err(|m| InputError::cell(path, line, i + 1, &header[i], m))?;
+                let x = parse_cell(cell)
+                    .map_err(|m| InputError::cell(path, line, i + 1, &header[i], m))?;
                 if let Some(col) = values.get_mut(&q) {
                     col.push(x * factor);
                 }
@@ -142,7 +151,9 @@ fn split_unit(raw: &str) -> Result<(&str, Option<&str>), String> {
             let close = raw
                 .rfind(']')
                 .filter(|&c| c > open && c == raw.len() - 1)
-                .ok_or_else(|| format!("malformed unit in header `{raw}` (expected `name[unit]`)"))?;
+                .ok_or_else(|| {
+                    format!("malformed unit in header `{raw}` (expected `name[unit]`)")
+                })?;
             Ok((raw[..open].trim(), Some(raw[open + 1..close].trim())))
         }
     }

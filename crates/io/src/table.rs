@@ -83,8 +83,16 @@ impl Columns {
         let mut take = |q: Quantity| self.values.remove(&q);
         let mut psi = take(Quantity::Psi).unwrap_or_default();
         unwrap_angle(&mut psi);
-        let accelerations = match (take(Quantity::UDot), take(Quantity::VDot), take(Quantity::RDot)) {
-            (Some(u_dot), Some(v_dot), Some(r_dot)) => Some(Accelerations { u_dot, v_dot, r_dot }),
+        let accelerations = match (
+            take(Quantity::UDot),
+            take(Quantity::VDot),
+            take(Quantity::RDot),
+        ) {
+            (Some(u_dot), Some(v_dot), Some(r_dot)) => Some(Accelerations {
+                u_dot,
+                v_dot,
+                r_dot,
+            }),
             _ => None,
         };
         Ok(Recording {

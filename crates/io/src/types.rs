@@ -170,7 +170,11 @@ impl Side {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Manoeuvre {
     /// Zig-zag δ/ψ: rudder to ±`rudder_deg`, reversed at ±`check_deg` heading deviation.
-    ZigZag { rudder_deg: f64, check_deg: f64, side: Side },
+    ZigZag {
+        rudder_deg: f64,
+        check_deg: f64,
+        side: Side,
+    },
     /// Turning circle: rudder to `rudder_deg` towards `side` and held.
     Turning { rudder_deg: f64, side: Side },
     /// Any other rudder history (no standard metrics).

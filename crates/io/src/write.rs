@@ -61,7 +61,14 @@ pub fn recording_csv(rec: &Recording, comments: &[String]) -> String {
     out.push('\n');
     for i in 0..rec.len() {
         let mut row = vec![
-            rec.t[i], rec.x0[i], rec.y0[i], rec.psi[i], rec.u[i], rec.v[i], rec.r[i], rec.delta[i],
+            rec.t[i],
+            rec.x0[i],
+            rec.y0[i],
+            rec.psi[i],
+            rec.u[i],
+            rec.v[i],
+            rec.r[i],
+            rec.delta[i],
         ];
         if let Some(n) = &rec.n {
             row.push(n[i]);
@@ -87,7 +94,10 @@ pub fn write_dataset(
 ) -> std::io::Result<()> {
     std::fs::create_dir_all(dir)?;
     for (entry, rec) in file.recordings.iter().zip(recordings) {
-        write_atomic(&dir.join(&entry.file), recording_csv(rec, header_comments).as_bytes())?;
+        write_atomic(
+            &dir.join(&entry.file),
+            recording_csv(rec, header_comments).as_bytes(),
+        )?;
     }
     let mut text = String::new();
     for c in header_comments {

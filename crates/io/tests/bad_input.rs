@@ -43,7 +43,10 @@ fn csv_empty_cell() {
 
 #[test]
 fn csv_infinite_value_after_comments_points_at_the_real_line() {
-    check("infinite_value.csv", ":5:4: column `psi`: infinite value `inf`");
+    check(
+        "infinite_value.csv",
+        ":5:4: column `psi`: infinite value `inf`",
+    );
 }
 
 #[test]
@@ -77,12 +80,18 @@ fn csv_not_a_number() {
 
 #[test]
 fn csv_too_short() {
-    check("too_short.csv", ": too short: 5 samples, at least 20 are needed");
+    check(
+        "too_short.csv",
+        ": too short: 5 samples, at least 20 are needed",
+    );
 }
 
 #[test]
 fn csv_wrong_field_count() {
-    check("wrong_field_count.csv", ":5: expected 8 fields as in the header, found 7");
+    check(
+        "wrong_field_count.csv",
+        ":5: expected 8 fields as in the header, found 7",
+    );
 }
 
 #[test]
@@ -108,12 +117,18 @@ fn toml_unknown_key_is_named_with_its_position() {
 
 #[test]
 fn toml_missing_ship_key() {
-    check("missing_ship_key.toml", ":4:1: key `lpp`: missing field `lpp`");
+    check(
+        "missing_ship_key.toml",
+        ":4:1: key `lpp`: missing field `lpp`",
+    );
 }
 
 #[test]
 fn toml_rudder_sign_must_be_one_or_minus_one() {
-    check("bad_rudder_sign.toml", ": key `rudder_sign`: must be 1 or -1, not 2");
+    check(
+        "bad_rudder_sign.toml",
+        ": key `rudder_sign`: must be 1 or -1, not 2",
+    );
 }
 
 #[test]
@@ -142,7 +157,10 @@ fn toml_unknown_side() {
 
 #[test]
 fn toml_negative_length() {
-    check("negative_length.toml", ": key `ship.lpp`: must be a positive number, not -7");
+    check(
+        "negative_length.toml",
+        ": key `ship.lpp`: must be a positive number, not -7",
+    );
 }
 
 #[test]

@@ -21,7 +21,11 @@ fn unit_suffixes_convert_to_si_and_heading_is_unwrapped() {
     assert!(close(rec.delta[0], 10.0 * DEG, 1e-12), "deg → rad");
     // 175°, 176°, … crosses ±180° in the file; unwrapped it keeps climbing one degree per sample.
     for w in rec.psi.windows(2) {
-        assert!(close(w[1] - w[0], DEG, 1e-9), "heading step {}", w[1] - w[0]);
+        assert!(
+            close(w[1] - w[0], DEG, 1e-9),
+            "heading step {}",
+            w[1] - w[0]
+        );
     }
     assert!(close(rec.psi[29], 204.0 * DEG, 1e-9));
 }
@@ -41,9 +45,15 @@ fn cg_origin_and_sname_rudder_are_converted_to_midship_and_starboard_positive() 
         }
     );
     for i in 0..rec.len() {
-        assert!(close(rec.delta[i], -raw.delta[i], 1e-15), "rudder sign flipped");
+        assert!(
+            close(rec.delta[i], -raw.delta[i], 1e-15),
+            "rudder sign flipped"
+        );
         assert!(close(rec.u[i], raw.u[i], 1e-15));
-        assert!(close(rec.v[i], raw.v[i] - xg * raw.r[i], 1e-12), "v at midship");
+        assert!(
+            close(rec.v[i], raw.v[i] - xg * raw.r[i], 1e-12),
+            "v at midship"
+        );
         let (s, c) = raw.psi[i].sin_cos();
         assert!(close(rec.x0[i], raw.x0[i] - xg * c, 1e-12));
         assert!(close(rec.y0[i], raw.y0[i] - xg * s, 1e-12));

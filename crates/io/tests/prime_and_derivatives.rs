@@ -42,7 +42,9 @@ fn froude_scaling_keeps_primed_values() {
     let r_full = r_model / lambda.sqrt();
     assert!((model.yaw_rate_prime(r_model) - full.yaw_rate_prime(r_full)).abs() < 1e-12);
     let f_model = 12.0;
-    assert!((model.force_prime(f_model) - full.force_prime(f_model * lambda.powi(3))).abs() < 1e-12);
+    assert!(
+        (model.force_prime(f_model) - full.force_prime(f_model * lambda.powi(3))).abs() < 1e-12
+    );
     assert!((model.time_prime(10.0) - full.time_prime(10.0 * lambda.sqrt())).abs() < 1e-12);
 }
 
@@ -89,7 +91,10 @@ fn signal(t: f64) -> (f64, f64) {
 #[test]
 fn exact_derivative_of_a_cubic_everywhere_including_the_ends() {
     let t: Vec<f64> = (0..200).map(|i| i as f64 * 0.1).collect();
-    let y: Vec<f64> = t.iter().map(|&t| 1.0 - 2.0 * t + 0.3 * t * t - 0.01 * t * t * t).collect();
+    let y: Vec<f64> = t
+        .iter()
+        .map(|&t| 1.0 - 2.0 * t + 0.3 * t * t - 0.01 * t * t * t)
+        .collect();
     let d = Differentiator::for_window(&t, 1.2).derivative(&t, &y);
     for (i, &t) in t.iter().enumerate() {
         let exact = -2.0 + 0.6 * t - 0.03 * t * t;
@@ -127,8 +132,17 @@ fn noisy_signal_derivative_is_close_and_far_better_than_finite_differences() {
             .map(|i| (noisy[i + 1] - noisy[i - 1]) / (t[i + 1] - t[i - 1]) - dy[i])
             .collect();
         let scale = rms(&dy);
-        assert!(rms(&err) < 0.1 * scale, "{hz} Hz: rms error {} vs signal {scale}", rms(&err));
-        assert!(rms(&err) < 0.25 * rms(&fd), "{hz} Hz: {} vs finite differences {}", rms(&err), rms(&fd));
+        assert!(
+            rms(&err) < 0.1 * scale,
+            "{hz} Hz: rms error {} vs signal {scale}",
+            rms(&err)
+        );
+        assert!(
+            rms(&err) < 0.25 * rms(&fd),
+            "{hz} Hz: {} vs finite differences {}",
+            rms(&err),
+            rms(&fd)
+        );
         // Noise-free the smoothing bias is small.
         let clean = Differentiator::for_window(&t, 2.0).derivative(&t, &y);
         let bias: Vec<f64> = clean.iter().zip(&dy).map(|(a, b)| a - b).collect();
