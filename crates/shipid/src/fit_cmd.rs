@@ -20,6 +20,8 @@ pub struct FitArgs<'a> {
     pub solver: Solver,
     pub out: &'a Path,
     pub json: bool,
+    /// After fitting, validate the model on every recording of the data set (trained on or not).
+    pub validate: bool,
 }
 
 /// How many of the largest VIFs the report lists per DOF.
@@ -104,9 +106,16 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
             );
         }
     }
-    Ok(if all_solved {
+    let mut outcome = if all_solved {
         Outcome::Ok
     } else {
         Outcome::SomeFailed
-    })
+    };
+    if a.validate {
+        let spec = a.out.to_string_lossy();
+        if crate::validate_cmd::run(&spec, a.dataset, a.json)? == Outcome::SomeFailed {
+            outcome = Outcome::SomeFailed;
+        }
+    }
+    Ok(outcome)
 }

@@ -5,6 +5,12 @@
 //! at U0 with the rudder at zero; the first execute is at [`T_EXECUTE_S`]. RK4 with dt = 0.05 s, written
 //! at 10 Hz, midship, project signs.
 //!
+//! # Concealed effects (`--effect KIND:key=value,...`, repeatable)
+//! Physical effects of `shipid_sim::effects` (current, wind, rudder lag, asymmetry, shallow water) are
+//! applied in the simulation and mentioned nowhere in the written data set: the recordings are what a
+//! test of a ship under that effect would record (over ground for a current). This is how the
+//! discrepancy diagnosis is proven on data where the effect is concealed.
+//!
 //! # Noise model (`--noise SEED`)
 //! Independent zero-mean Gaussian white noise on every recorded channel, with standard deviations fixed
 //! in Froude-invariant terms so that the same seed gives the same primed noise at any scale
@@ -17,6 +23,7 @@ use rand::rngs::StdRng;
 use rand_distr::{Distribution, Normal};
 use shipid_io::dataset::{DatasetFile, Origin, entry_for};
 use shipid_io::{Manoeuvre, Recording, Ship, Side};
+use shipid_sim::effects::{Effect, simulate_with_effects};
 use shipid_sim::{
     MmgModel, SimOptions, SimStatus, State, controller_for, kvlcc2_added_mass, kvlcc2_ship,
 };
@@ -126,8 +133,23 @@ pub struct Generated {
     pub recordings: Vec<Recording>,
 }
 
+/// Parse `--effect` arguments (`current:speed=0.05,from=120`, …).
+pub fn parse_effects(args: &[String]) -> Result<Vec<Effect>, CliError> {
+    args.iter()
+        .map(|a| {
+            a.parse::<Effect>()
+                .map_err(|e| crate::bad_input(format!("--effect `{a}`: {e}")))
+        })
+        .collect()
+}
+
 /// Simulate the default manoeuvres with the MMG reference.
 pub fn generate(noise_seed: Option<u64>) -> Result<Generated, CliError> {
+    generate_with(noise_seed, &[])
+}
+
+/// Simulate the default manoeuvres with the MMG reference under concealed `effects`.
+pub fn generate_with(noise_seed: Option<u64>, effects: &[Effect]) -> Result<Generated, CliError> {
     let model = MmgModel::kvlcc2();
     let ship = kvlcc2_ship();
     let mut entries = Vec::new();
@@ -137,13 +159,24 @@ pub fn generate(noise_seed: Option<u64>) -> Result<Generated, CliError> {
         let mut controller = controller_for(&m, T_EXECUTE_S).map_err(failed)?;
         let options =
             SimOptions::new(standard_duration_s(&m, &ship)).with_step(DT_S, SAMPLE_INTERVAL_S);
-        let out = shipid_sim::simulate(
-            &model,
-            controller.as_mut(),
-            State::approach(ship.u0),
-            &options,
-        )
-        .map_err(failed)?;
+        let out = if effects.is_empty() {
+            shipid_sim::simulate(
+                &model,
+                controller.as_mut(),
+                State::approach(ship.u0),
+                &options,
+            )
+            .map_err(failed)?
+        } else {
+            simulate_with_effects(
+                &model,
+                effects,
+                controller.as_mut(),
+                State::approach(ship.u0),
+                &options,
+            )
+            .map_err(|e| crate::bad_input(format!("--effect: {e}")))?
+        };
         if let SimStatus::Diverged { t_s, reason } = out.status {
             return Err(failed(anyhow::anyhow!(
                 "the MMG reference diverged in {file} at {t_s} s: {reason}"

@@ -27,6 +27,9 @@ enum Command {
         /// Add seeded Gaussian measurement noise (README: noise model).
         #[arg(long, value_name = "SEED")]
         noise: Option<u64>,
+        /// Apply a physical effect, concealed (e.g. `current:speed=0.05,from=120`); repeatable.
+        #[arg(long, value_name = "KIND:KEY=VALUE,...")]
+        effect: Vec<String>,
     },
     /// Import recordings of another layout through a mapping file.
     Import {
@@ -83,6 +86,9 @@ enum Command {
         out: PathBuf,
         #[arg(long)]
         json: bool,
+        /// Then validate the model on every recording of the data set.
+        #[arg(long)]
+        validate: bool,
     },
     /// Validate a model on a data set: replayed-rudder RMSEs and closed-loop manoeuvre metrics.
     Validate {
@@ -118,8 +124,9 @@ enum Command {
 
 fn run(cli: Cli) -> Result<Outcome, CliError> {
     match cli.command {
-        Command::Generate { out, noise } => {
-            let g = shipid::generate::generate(noise)?;
+        Command::Generate { out, noise, effect } => {
+            let effects = shipid::generate::parse_effects(&effect)?;
+            let g = shipid::generate::generate_with(noise, &effects)?;
             let recs: Vec<_> = g.recordings.iter().collect();
             shipid_io::write::write_dataset(
                 &out,
@@ -155,6 +162,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             solver,
             out,
             json,
+            validate,
         } => {
             let window = match (overshoots, window) {
                 (Some(_), Some(_)) => {
@@ -189,6 +197,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                 solver,
                 out: &out,
                 json,
+                validate,
             })
         }
         Command::Metrics { dataset, json } => shipid::metrics_cmd::run(&dataset, json),
