@@ -20,7 +20,7 @@ use std::time::Instant;
 use serde_json::{Value, json};
 use shipid::fit::{WindowSpec, training_samples};
 use shipid_estimators::faer::{self, Mat};
-use shipid_estimators::{Bounds, Estimator, Solver, column_scales, fit};
+use shipid_estimators::{Bounds, Estimator, Solver, column_scales, fit, objective};
 use shipid_io::Dataset;
 use shipid_model::{CoefficientSet, Dof, PrimeInertia, Samples, design};
 
@@ -324,8 +324,29 @@ fn median(mut v: Vec<f64>) -> f64 {
     }
 }
 
-/// Median wall time of the whole `fit` call after one warm-up, repeated at least
-/// `min_repeats` times and for at least `min_time_s` seconds.
+/// Wall times of `run` after one warm-up, repeated at least `min_repeats` times and for
+/// at least `min_time_s` seconds.
+fn repeat<T>(args: &Args, run: impl Fn() -> T) -> Vec<f64> {
+    let mut times = Vec::new();
+    let started = Instant::now();
+    while times.len() < args.min_repeats || started.elapsed().as_secs_f64() < args.min_time_s {
+        let t = Instant::now();
+        let out = run();
+        times.push(t.elapsed().as_secs_f64());
+        std::hint::black_box(out);
+    }
+    times
+}
+
+fn timing(times: Vec<f64>) -> Value {
+    json!({
+        "time_s": median(times.clone()),
+        "time_min_s": times.iter().copied().fold(f64::INFINITY, f64::min),
+        "repeats": times.len(),
+    })
+}
+
+/// Median wall time of the whole `fit` call, and the fit.
 fn time_case(pb: &Problem, case: &str, bounded: bool, solver: Solver, args: &Args) -> Value {
     let est = pb.estimator(case);
     let bounds = bounded.then_some(&pb.bounds);
@@ -334,24 +355,27 @@ fn time_case(pb: &Problem, case: &str, bounded: bool, solver: Solver, args: &Arg
         Ok(f) => f,
         Err(e) => return json!({"error": e.to_string()}),
     };
-    let mut times = Vec::new();
-    let started = Instant::now();
-    while times.len() < args.min_repeats || started.elapsed().as_secs_f64() < args.min_time_s {
-        let t = Instant::now();
-        let f = run();
-        times.push(t.elapsed().as_secs_f64());
-        std::hint::black_box(f.ok());
-    }
-    json!({
-        "time_s": median(times.clone()),
-        "time_min_s": times.iter().copied().fold(f64::INFINITY, f64::min),
-        "repeats": times.len(),
+    let mut out = timing(repeat(args, || run().ok()));
+    let extra = json!({
         "objective": first.objective,
         "status": format!("{:?}", first.status),
         "iterations": first.iterations,
         "condition_number": first.condition_number,
         "coefficients": first.coefficients,
-    })
+    });
+    if let (Some(m), Value::Object(extra)) = (out.as_object_mut(), extra) {
+        m.extend(extra);
+    }
+    out
+}
+
+/// The part of a fit that any solver pays through this API: validating Φ and y, the column
+/// scales and scaled copy, and evaluating J once (`shipid_estimators::objective`).
+fn time_api_floor(pb: &Problem, args: &Args) -> Value {
+    let beta = vec![0.0; pb.phi.ncols()];
+    timing(repeat(args, || {
+        objective(pb.phi.as_ref(), &pb.y, &Estimator::Lsq, &beta).ok()
+    }))
 }
 
 fn main() {
@@ -372,6 +396,20 @@ fn run() -> Result<(), String> {
     }
     let mut records = Vec::new();
     for pb in &problems {
+        let mut rec = json!({
+            "id": pb.id(),
+            "set": pb.set,
+            "training_set": pb.training_set,
+            "dof": pb.dof.to_string(),
+            "n": pb.phi.nrows(),
+            "p": pb.phi.ncols(),
+            "case": "api_floor",
+            "solver": "objective_call",
+        });
+        if let (Some(m), Value::Object(extra)) = (rec.as_object_mut(), time_api_floor(pb, &args)) {
+            m.extend(extra);
+        }
+        records.push(rec);
         for (case, bounded) in CASES {
             for solver in [Solver::Fast, Solver::Qp] {
                 let r = time_case(pb, case, bounded, solver, &args);
@@ -405,7 +443,6 @@ fn run() -> Result<(), String> {
         }
     }
     let text = serde_json::to_string_pretty(&json!({
-        "rustc": option_env!("RUSTC_VERSION").unwrap_or("see `rustc --version`"),
         "threads": 1,
         "min_repeats": args.min_repeats,
         "min_time_s": args.min_time_s,

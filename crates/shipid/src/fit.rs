@@ -155,11 +155,9 @@ pub fn window_range(
                 side,
             } = r.manoeuvre
             else {
-                return Err(bad_input(format!(
-                    "{}: --overshoots needs a zig-zag, this is a {} recording",
-                    r.file,
-                    r.manoeuvre.kind()
-                )));
+                // Truncation is a zig-zag notion; other manoeuvres of a combination (a turning circle
+                // stacked with a zig-zag, paper 000 §3.5) are used whole.
+                return Ok(0..rec.len());
             };
             let ev = zigzag_events(rec, rudder_deg, check_deg, side, &ds.ship);
             let have = ev.as_ref().map_or(0, |e| e.overshoots.len());
@@ -235,6 +233,13 @@ pub fn training_samples(
             ds.path.display()
         )));
     }
+    if matches!(window, WindowSpec::Overshoots(_))
+        && !chosen.iter().any(|r| matches!(r.manoeuvre, Manoeuvre::ZigZag { .. }))
+    {
+        return Err(bad_input(
+            "--overshoots truncates zig-zags, and none of the training recordings is one",
+        ));
+    }
     let scale = PrimeScale::of(&ds.ship);
     let mut samples = Samples::default();
     let mut windows = Vec::new();
@@ -255,8 +260,8 @@ pub fn training_samples(
             recording: r.file.clone(),
             t_start_s: rec.t[0],
             t_end_s: *rec.t.last().unwrap_or(&rec.t[0]),
-            overshoots: match window {
-                WindowSpec::Overshoots(n) => Some(n),
+            overshoots: match (window, r.manoeuvre) {
+                (WindowSpec::Overshoots(n), Manoeuvre::ZigZag { .. }) => Some(n),
                 _ => None,
             },
             accelerations: if estimated {

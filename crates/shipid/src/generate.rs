@@ -84,7 +84,7 @@ impl NoiseModel {
 }
 
 /// FNV-1a: a fixed, platform-independent hash to derive per-recording seeds.
-fn fnv1a(s: &str) -> u64 {
+pub fn fnv1a(s: &str) -> u64 {
     s.bytes().fold(0xcbf29ce484222325, |h, b| {
         (h ^ b as u64).wrapping_mul(0x100000001b3)
     })

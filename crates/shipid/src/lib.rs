@@ -7,8 +7,11 @@ pub mod fit_cmd;
 pub mod generate;
 pub mod import;
 pub mod metrics_cmd;
+pub mod runner;
 pub mod simulate_cmd;
 pub mod spec;
+pub mod study_cmd;
+pub mod study;
 pub mod validate;
 pub mod validate_cmd;
 

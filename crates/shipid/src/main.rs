@@ -90,6 +90,38 @@ enum Command {
         #[arg(long)]
         validate: bool,
     },
+    /// Run a study: its grid of cases in parallel, result tables under results/<study>/.
+    Run {
+        study: PathBuf,
+        /// Parallel cases (default: all cores).
+        #[arg(long)]
+        jobs: Option<usize>,
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Rerun finished cases too.
+        #[arg(long)]
+        force: bool,
+    },
+    /// Print a comparison table of a study's summary (markdown).
+    Table {
+        study: PathBuf,
+        /// ROWS,COLS,VALUE columns of the summary table.
+        #[arg(long, default_value = "window,test,mrae")]
+        pivot: String,
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Rerun a study and compare its tables with a stored reference.
+    Check {
+        study: PathBuf,
+        #[arg(long)]
+        reference: PathBuf,
+        /// Store the fresh tables as the new reference.
+        #[arg(long)]
+        bless: bool,
+        #[arg(long)]
+        jobs: Option<usize>,
+    },
     /// Validate a model on a data set: replayed-rudder RMSEs and closed-loop manoeuvre metrics.
     Validate {
         /// A model file or `mmg:kvlcc2`.
@@ -216,12 +248,29 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             }
             (None, None) => Err(shipid::bad_input("give --manoeuvre or --replay")),
         },
+        Command::Run {
+            study,
+            jobs,
+            out,
+            force,
+        } => shipid::study_cmd::run(&study, out.as_deref(), jobs.unwrap_or_else(default_jobs), force),
+        Command::Table { study, pivot, out } => shipid::study_cmd::table(&study, out.as_deref(), &pivot),
+        Command::Check {
+            study,
+            reference,
+            bless,
+            jobs,
+        } => shipid::study_cmd::check(&study, &reference, bless, jobs.unwrap_or_else(default_jobs)),
         Command::Validate {
             model,
             dataset,
             json,
         } => shipid::validate_cmd::run(&model, &dataset, json),
     }
+}
+
+fn default_jobs() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
 }
 
 fn parse_window(text: &str) -> Result<shipid::fit::WindowSpec, CliError> {

@@ -1,0 +1,294 @@
+#!/usr/bin/env python3
+"""Fit the designs exported by `fit_bench --export` with paper 000's Python stack.
+
+Solves the SAME objectives as shipid_estimators (see designs/manifest.json), on the
+column-scaled design Z = Phi diag(s)^-1 (s_j = RMS of column j, gamma = s * beta):
+
+  lsq, bounded_lsq  J = (1/2n)||Z g - y||^2              (bounded: lower*s <= g <= upper*s)
+  ridge             J = (1/2n)||Z g - y||^2 + (lambda/2)||g||^2
+  lasso             J = (1/2n)||Z g - y||^2 + alpha ||g||_1
+  svr               J = (1/2)||g||^2 + C sum_i max(0, |y_i - (Z g)_i| - epsilon)
+
+with
+  * the specialised route: numpy lstsq and scikit-learn LinearRegression (lsq), SciPy
+    lsq_linear (bounded_lsq), scikit-learn Ridge(alpha = n*lambda) and Lasso(alpha)
+    (fit_intercept=False), scikit-learn LinearSVR (epsilon-insensitive loss, C, epsilon);
+    all with their default tolerances, plus Lasso with tol=1e-8 (the default 1e-4 stops
+    short of the optimum on these designs);
+  * CVXPY with its default solver choice for all five (as paper 000 did; OSQP for these
+    QPs), and CVXPY with Clarabel (interior point, tighter).
+
+Every timed call starts from Phi (the column scaling is inside the timing, as it is inside
+shipid_estimators::fit) and CVXPY problems are built inside the timing (a fit builds its
+problem). Median wall time of repeats after one warm-up, single thread. J is evaluated at
+the returned coefficients with the exported scales, by the same formula as the Rust side.
+
+Usage: python_fit.py [--designs DIR] [--out FILE] [--min-repeats N] [--min-time S]
+                     [--max-time S] [--only SUBSTRING] [--skip-cvxpy-svr]
+"""
+
+import os
+
+# One thread everywhere, before numpy is imported.
+for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
+           "VECLIB_MAXIMUM_THREADS", "NUMEXPR_NUM_THREADS", "BLIS_NUM_THREADS",
+           "RAYON_NUM_THREADS"):
+    os.environ[_v] = "1"
+
+import argparse  # noqa: E402
+import json  # noqa: E402
+import platform  # noqa: E402
+import statistics  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+import warnings  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+import scipy  # noqa: E402
+import scipy.optimize  # noqa: E402
+import sklearn  # noqa: E402
+from sklearn.exceptions import ConvergenceWarning  # noqa: E402
+from sklearn.linear_model import Lasso, LinearRegression, Ridge  # noqa: E402
+from sklearn.svm import LinearSVR  # noqa: E402
+import cvxpy as cp  # noqa: E402
+from threadpoolctl import threadpool_info, threadpool_limits  # noqa: E402
+
+
+def load(designs, pb):
+    phi = np.loadtxt(designs / pb["phi"], delimiter=",", skiprows=1, ndmin=2)
+    y = np.loadtxt(designs / pb["y"], delimiter=",", skiprows=1)
+    cols = np.genfromtxt(designs / pb["columns"], delimiter=",", names=True,
+                         dtype=None, encoding="utf-8")
+    scale = np.asarray(cols["scale"], dtype=float)
+    lower = np.asarray(cols["lower"], dtype=float)
+    upper = np.asarray(cols["upper"], dtype=float)
+    return phi, y, scale, lower, upper
+
+
+def objective(case, phi, y, scale, hp, beta):
+    """J at unscaled beta, as shipid_estimators::objective computes it."""
+    n = len(y)
+    inv = np.where(scale > 0, 1.0 / np.where(scale > 0, scale, 1.0), 0.0)
+    z = phi * inv
+    g = beta * scale
+    r = y - z @ g
+    if case in ("lsq", "bounded_lsq"):
+        return 0.5 * np.dot(r, r) / n
+    if case == "ridge":
+        return 0.5 * np.dot(r, r) / n + 0.5 * hp["lambda"] * np.dot(g, g)
+    if case == "lasso":
+        return 0.5 * np.dot(r, r) / n + hp["alpha"] * np.abs(g).sum()
+    if case == "svr":
+        return 0.5 * np.dot(g, g) + hp["c"] * np.maximum(np.abs(r) - hp["epsilon"], 0.0).sum()
+    raise ValueError(case)
+
+
+def scaled(phi):
+    s = np.sqrt(np.mean(phi * phi, axis=0))
+    s = np.where(s > 0, s, 1.0)
+    return phi * (1.0 / s), s
+
+
+# --- the specialised Python route -------------------------------------------------------
+
+def numpy_lstsq(phi, y, lower, upper, hp):
+    z, s = scaled(phi)
+    g = np.linalg.lstsq(z, y, rcond=None)[0]
+    return g / s, {}
+
+
+def sklearn_linear_regression(phi, y, lower, upper, hp):
+    z, s = scaled(phi)
+    m = LinearRegression(fit_intercept=False).fit(z, y)
+    return m.coef_ / s, {}
+
+
+def scipy_lsq_linear(phi, y, lower, upper, hp):
+    z, s = scaled(phi)
+    res = scipy.optimize.lsq_linear(z, y, bounds=(lower * s, upper * s))
+    return res.x / s, {"status": int(res.status), "iterations": int(res.nit)}
+
+
+def sklearn_ridge(phi, y, lower, upper, hp):
+    z, s = scaled(phi)
+    m = Ridge(alpha=len(y) * hp["lambda"], fit_intercept=False).fit(z, y)
+    return m.coef_ / s, {"solver": m.solver}
+
+
+def sklearn_lasso(phi, y, lower, upper, hp):
+    z, s = scaled(phi)
+    m = Lasso(alpha=hp["alpha"], fit_intercept=False).fit(z, y)
+    return m.coef_ / s, {"iterations": int(m.n_iter_), "converged": int(m.n_iter_) < m.max_iter}
+
+
+def sklearn_lasso_tight(phi, y, lower, upper, hp):
+    """Lasso run to a tight duality gap, to show the objective it converges to."""
+    z, s = scaled(phi)
+    m = Lasso(alpha=hp["alpha"], fit_intercept=False, tol=1e-8, max_iter=10**6).fit(z, y)
+    return m.coef_ / s, {"iterations": int(m.n_iter_), "converged": int(m.n_iter_) < m.max_iter}
+
+
+def sklearn_linear_svr(phi, y, lower, upper, hp):
+    z, s = scaled(phi)
+    m = LinearSVR(C=hp["c"], epsilon=hp["epsilon"], fit_intercept=False,
+                  loss="epsilon_insensitive", dual=True).fit(z, y)
+    return m.coef_ / s, {"iterations": int(m.n_iter_), "converged": int(m.n_iter_) < m.max_iter}
+
+
+# --- CVXPY, default solver --------------------------------------------------------------
+
+def cvxpy_fit(case, solver=None):
+    def solve(phi, y, lower, upper, hp):
+        z, s = scaled(phi)
+        n, p = z.shape
+        g = cp.Variable(p)
+        r = z @ g - y
+        cons = []
+        if case == "lsq":
+            obj = cp.sum_squares(r) / (2 * n)
+        elif case == "bounded_lsq":
+            obj = cp.sum_squares(r) / (2 * n)
+            lo, hi = lower * s, upper * s
+            fl, fh = np.isfinite(lo), np.isfinite(hi)
+            if fl.any():
+                cons.append(g[np.flatnonzero(fl)] >= lo[fl])
+            if fh.any():
+                cons.append(g[np.flatnonzero(fh)] <= hi[fh])
+        elif case == "ridge":
+            obj = cp.sum_squares(r) / (2 * n) + 0.5 * hp["lambda"] * cp.sum_squares(g)
+        elif case == "lasso":
+            obj = cp.sum_squares(r) / (2 * n) + hp["alpha"] * cp.norm1(g)
+        elif case == "svr":
+            obj = 0.5 * cp.sum_squares(g) + hp["c"] * cp.sum(cp.pos(cp.abs(r) - hp["epsilon"]))
+        else:
+            raise ValueError(case)
+        prob = cp.Problem(cp.Minimize(obj), cons)
+        prob.solve(solver=solver)
+        st = prob.solver_stats
+        return np.asarray(g.value) / s, {
+            "status": prob.status,
+            "solver": st.solver_name,
+            "solver_time_s": st.solve_time,
+            "iterations": st.num_iters,
+        }
+    return solve
+
+
+# "cvxpy" is CVXPY's default solver choice (OSQP for these QPs in CVXPY 1.9, as in the
+# CVXPY 1.1-1.3 of paper 000's time); "cvxpy clarabel" forces its interior-point solver,
+# which reaches the optimum far more tightly than OSQP's default tolerances.
+METHODS = {
+    "lsq": [("numpy.linalg.lstsq", numpy_lstsq),
+            ("sklearn LinearRegression", sklearn_linear_regression)],
+    "bounded_lsq": [("scipy lsq_linear", scipy_lsq_linear)],
+    "ridge": [("sklearn Ridge", sklearn_ridge)],
+    "lasso": [("sklearn Lasso", sklearn_lasso), ("sklearn Lasso tol=1e-8", sklearn_lasso_tight)],
+    "svr": [("sklearn LinearSVR", sklearn_linear_svr)],
+}
+for _case, _m in METHODS.items():
+    _m.append(("cvxpy", cvxpy_fit(_case)))
+    _m.append(("cvxpy clarabel", cvxpy_fit(_case, cp.CLARABEL)))
+
+
+def timed(fn, args, min_repeats, min_time, max_time):
+    """Warm-up (its result is returned), then repeats until min_repeats and min_time are
+    reached, or max_time has passed after at least one repeat."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        t = time.perf_counter()
+        beta, info = fn(*args)
+        first = time.perf_counter() - t
+    info = dict(info)
+    msgs = sorted({f"{w.category.__name__}: {str(w.message)[:120]}" for w in caught
+                   if issubclass(w.category, (ConvergenceWarning, UserWarning, RuntimeWarning))})
+    if msgs:
+        info["warnings"] = msgs
+    times = []
+    start = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        while True:
+            elapsed = time.perf_counter() - start
+            if times and (elapsed >= max_time
+                          or (len(times) >= min_repeats and elapsed >= min_time)):
+                break
+            if not times and first > max_time:
+                times.append(first)  # too slow to repeat: the warm-up is the measurement
+                break
+            t = time.perf_counter()
+            fn(*args)
+            times.append(time.perf_counter() - t)
+    return beta, info, times
+
+
+def versions():
+    import importlib.metadata as md
+    v = {"python": sys.version.split()[0], "platform": platform.platform(),
+         "processor": platform.processor() or platform.machine()}
+    for pkg in ("numpy", "scipy", "scikit-learn", "cvxpy", "clarabel", "osqp", "scs",
+                "ecos", "highspy", "threadpoolctl"):
+        try:
+            v[pkg] = md.version(pkg)
+        except md.PackageNotFoundError:
+            pass
+    v["blas"] = [{k: i.get(k) for k in ("internal_api", "version", "num_threads")}
+                 for i in threadpool_info()]
+    v["cvxpy_installed_solvers"] = cp.installed_solvers()
+    return v
+
+
+def main():
+    here = Path(__file__).resolve().parent
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--designs", type=Path, default=here / "designs")
+    ap.add_argument("--out", type=Path, default=here / "results_python.json")
+    ap.add_argument("--min-repeats", type=int, default=5)
+    ap.add_argument("--min-time", type=float, default=0.5)
+    ap.add_argument("--max-time", type=float, default=20.0,
+                    help="stop repeating a method after this many seconds (>= 1 repeat)")
+    ap.add_argument("--only", default="", help="only problems whose id contains this")
+    ap.add_argument("--skip-cvxpy-svr", action="store_true")
+    a = ap.parse_args()
+
+    manifest = json.loads((a.designs / "manifest.json").read_text())
+    cases = [c["case"] for c in manifest["cases"]]
+    records = []
+    with threadpool_limits(limits=1):
+        for pb in manifest["problems"]:
+            if a.only not in pb["id"]:
+                continue
+            phi, y, scale, lower, upper = load(a.designs, pb)
+            hp = {k: pb[k] for k in ("lambda", "alpha", "c", "epsilon")}
+            for case in cases:
+                lo, hi = (lower, upper) if case == "bounded_lsq" else (
+                    np.full_like(lower, -np.inf), np.full_like(upper, np.inf))
+                for name, fn in METHODS[case]:
+                    if a.skip_cvxpy_svr and case == "svr" and name.startswith("cvxpy"):
+                        continue
+                    try:
+                        beta, info, times = timed(fn, (phi, y, lo, hi, hp),
+                                                  a.min_repeats, a.min_time, a.max_time)
+                        j = float(objective(case, phi, y, scale, hp, beta))
+                        rec = {"time_s": statistics.median(times), "time_min_s": min(times),
+                               "repeats": len(times), "objective": j,
+                               "coefficients": beta.tolist(), **info}
+                    except Exception as e:  # a failed solve is a result too
+                        rec = {"error": f"{type(e).__name__}: {e}"}
+                    rec = {"id": pb["id"], "set": pb["set"], "training_set": pb["training_set"],
+                           "dof": pb["dof"], "n": pb["n"], "p": pb["p"], "case": case,
+                           "method": name, **rec}
+                    records.append(rec)
+                    print(f"{pb['id']:>28} {case:>11} {name:>24}: "
+                          f"{rec.get('time_s', float('nan')):.3e} s  J={rec.get('objective')}"
+                          f"  {rec.get('solver', '')} {rec.get('warnings', '')}",
+                          file=sys.stderr, flush=True)
+            a.out.write_text(json.dumps({"versions": versions(), "records": records}, indent=1))
+    a.out.write_text(json.dumps({"versions": versions(), "min_repeats": a.min_repeats,
+                                 "min_time_s": a.min_time, "max_time_s": a.max_time,
+                                 "records": records}, indent=1))
+    print(f"wrote {a.out}", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()

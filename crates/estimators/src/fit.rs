@@ -1,0 +1,179 @@
+//! The `fit` entry point, the objective evaluator and the status logic shared by both
+//! solver families.
+
+use faer::{Mat, MatRef};
+
+use crate::error::EstimatorError;
+use crate::fast::{self, Solution};
+use crate::linalg::{condition_from_singular_values, singular_values, sym_eig_extremes};
+use crate::problem::{Problem, validate_design};
+use crate::qp;
+use crate::types::{Bounds, Estimator, Fit, ILL_CONDITIONED_THRESHOLD, Solver, Status};
+
+/// Fits one degree of freedom: `y ≈ Φβ` with the given estimator, optional bounds on the
+/// unscaled coefficients, and solver family.
+///
+/// Errors are returned only for invalid input (empty design, length mismatches, NaN or
+/// infinite values, invalid bounds or hyper-parameters); how the solve went is in
+/// [`Fit::status`].
+pub fn fit(
+    design: MatRef<'_, f64>,
+    y: &[f64],
+    estimator: &Estimator,
+    bounds: Option<&Bounds>,
+    solver: Solver,
+) -> Result<Fit, EstimatorError> {
+    estimator.validate()?;
+    let pb = Problem::new(design, y)?;
+    if let Some(b) = bounds {
+        b.validate(pb.p)?;
+    }
+    fit_problem(&pb, estimator, bounds, solver)
+}
+
+/// `fit` on an already validated problem (inputs, estimator and bounds checked).
+pub(crate) fn fit_problem(
+    pb: &Problem,
+    estimator: &Estimator,
+    bounds: Option<&Bounds>,
+    solver: Solver,
+) -> Result<Fit, EstimatorError> {
+    let (lo, hi) = pb.scaled_bounds(bounds);
+    let sol = if pb.q() == 0 {
+        Solution {
+            gamma: Vec::new(),
+            status: Status::Ok,
+            iterations: 0,
+        }
+    } else {
+        match solver {
+            Solver::Fast => fast::solve(pb, estimator, &lo, &hi)?,
+            Solver::Qp => qp::solve(pb, estimator, &lo, &hi)?,
+        }
+    };
+    let coefficients = pb.unscale(&sol.gamma, bounds);
+    let objective = pb.objective(estimator, &coefficients);
+    let condition_number = effective_condition(pb, estimator, &sol.gamma, &lo, &hi)?;
+    let status = match (sol.status, condition_number) {
+        (Status::Ok, Some(k)) if k.is_nan() || k > ILL_CONDITIONED_THRESHOLD => {
+            Status::IllConditioned {
+                condition_number: k,
+            }
+        }
+        (s, _) => s,
+    };
+    Ok(Fit {
+        coefficients,
+        objective,
+        status,
+        iterations: sol.iterations,
+        solver,
+        estimator: *estimator,
+        condition_number,
+        zero_columns: pb.zero_columns.clone(),
+    })
+}
+
+/// Condition number the status is judged on (see [`Fit::condition_number`]).
+fn effective_condition(
+    pb: &Problem,
+    estimator: &Estimator,
+    gamma: &[f64],
+    lo: &[f64],
+    hi: &[f64],
+) -> Result<Option<f64>, EstimatorError> {
+    let (lambda, lasso) = match *estimator {
+        Estimator::Svr { .. } => return Ok(None),
+        Estimator::Ridge { lambda } => (lambda, false),
+        Estimator::Lasso { alpha } => (0.0, alpha > 0.0),
+        Estimator::Lsq | Estimator::BoundedLsq => (0.0, false),
+    };
+    let gmax = gamma.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    // Interior-point solutions approach bounds and zeros only to within the solver
+    // tolerance, hence the relative margin.
+    let free: Vec<usize> = (0..gamma.len())
+        .filter(|&j| {
+            let at = |b: f64| b.is_finite() && (gamma[j] - b).abs() <= 1e-8 * gmax.max(b.abs());
+            let zero = lasso && gamma[j].abs() <= 1e-8 * gmax;
+            !(at(lo[j]) || at(hi[j]) || zero)
+        })
+        .collect();
+    if free.is_empty() {
+        return Ok(Some(1.0));
+    }
+    let k = free.len();
+    if lambda > 0.0 || lasso || !pb.has_ls() {
+        // The Gram eigenvalues resolve κ(Z_F) reliably up to about 1e4; beyond that the
+        // singular values of the least-squares factor decide.
+        let (emin, emax) = if k == pb.q() {
+            pb.gram_extremes()?
+        } else {
+            let g = &pb.gram().g;
+            let gff = Mat::<f64>::from_fn(k, k, |r, t| g[(free[r], free[t])]);
+            sym_eig_extremes(gff.as_ref())?
+        };
+        if emin > 1e-8 * emax {
+            return Ok(Some(((emax + lambda) / (emin + lambda)).sqrt()));
+        }
+    }
+    let ls = pb.any_ls();
+    let af = Mat::<f64>::from_fn(ls.a.nrows(), k, |i, t| ls.a[(i, free[t])]);
+    let s = singular_values(af.as_ref())?;
+    if lambda == 0.0 {
+        return Ok(Some(condition_from_singular_values(&s, k)));
+    }
+    let n = pb.n as f64;
+    let smax = s.first().copied().unwrap_or(0.0);
+    let smin = if s.len() < k { 0.0 } else { s[s.len() - 1] };
+    Ok(Some(
+        ((smax * smax / n + lambda) / (smin * smin / n + lambda)).sqrt(),
+    ))
+}
+
+/// The documented objective of `estimator` (see [`Estimator`]) at the unscaled
+/// coefficients `beta`, whatever their origin. Bounds are constraints, not part of it.
+pub fn objective(
+    design: MatRef<'_, f64>,
+    y: &[f64],
+    estimator: &Estimator,
+    beta: &[f64],
+) -> Result<f64, EstimatorError> {
+    estimator.validate()?;
+    let pb = Problem::new(design, y)?;
+    check_coefficients(beta, pb.p)?;
+    Ok(pb.objective(estimator, beta))
+}
+
+/// `Φβ`.
+pub fn predict(design: MatRef<'_, f64>, beta: &[f64]) -> Result<Vec<f64>, EstimatorError> {
+    validate_design(design)?;
+    check_coefficients(beta, design.ncols())?;
+    let mut out = vec![0.0; design.nrows()];
+    for (j, &b) in beta.iter().enumerate() {
+        if b != 0.0 {
+            for (o, &x) in out.iter_mut().zip(design.col(j).iter()) {
+                *o += b * x;
+            }
+        }
+    }
+    Ok(out)
+}
+
+pub(crate) fn check_coefficients(beta: &[f64], p: usize) -> Result<(), EstimatorError> {
+    if beta.len() != p {
+        return Err(EstimatorError::LengthMismatch {
+            what: "coefficients (columns of the design)",
+            expected: p,
+            got: beta.len(),
+        });
+    }
+    if let Some((row, &value)) = beta.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(EstimatorError::NonFinite {
+            what: "coefficients",
+            row,
+            column: None,
+            value,
+        });
+    }
+    Ok(())
+}

@@ -1,0 +1,276 @@
+//! `shipid run STUDY.toml`: run a study's cases in parallel and keep every case's outcome.
+//!
+//! Each case writes `cases/<id>/config.toml` (its resolved configuration and the tool version),
+//! `model.toml` and `result.json`, atomically. A rerun reuses every case whose `result.json` exists for
+//! the same configuration (resume); `--force` reruns all. A case that fails or diverges is a status in
+//! its result, never a crash. Results are collected in the study's case order, so the output does not
+//! depend on the number of threads (except the measured fit times).
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use shipid_estimators::{Solver, Status};
+use shipid_io::write::write_atomic;
+use shipid_sim::{AbkowitzDynamics, Metrics, SimStatus};
+
+use crate::fit::{fit_dataset, load_set};
+use crate::study::{Case, Study};
+use crate::validate::validate_recording;
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DofSummary {
+    pub dof: String,
+    pub status: String,
+    pub residual_rms: f64,
+    pub condition_number: Option<f64>,
+    pub scaled_condition_number: Option<f64>,
+    pub hyper_parameter: Option<f64>,
+    pub objective: f64,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TermValue {
+    pub dof: String,
+    pub term: String,
+    pub value: Option<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TestRow {
+    pub test: String,
+    pub kind: String,
+    /// Closed-loop manoeuvre: "ok" or "diverged" ("free" recordings have none: "replay-only").
+    pub status: String,
+    pub diverged_at_s: Option<f64>,
+    pub replay_status: String,
+    pub position_rmse_over_l: f64,
+    pub heading_rmse_deg: f64,
+    pub u_rmse_m_s: f64,
+    pub v_rmse_m_s: f64,
+    pub r_rmse_deg_s: f64,
+    pub recorded: Metrics,
+    pub predicted: Option<Metrics>,
+    pub relative_error: std::collections::BTreeMap<String, f64>,
+    pub mrae: Option<f64>,
+}
+
+/// What one case produced.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CaseResult {
+    pub case_id: String,
+    /// ok, ill-conditioned, solver-failed or fit-failed (the fit could not be made: `message` says why).
+    pub status: String,
+    pub message: Option<String>,
+    pub fit_time_s: Option<f64>,
+    pub samples: usize,
+    pub dofs: Vec<DofSummary>,
+    pub coefficients: Vec<TermValue>,
+    pub vif: Vec<TermValue>,
+    pub tests: Vec<TestRow>,
+}
+
+impl CaseResult {
+    /// True when the fit failed or any test diverged.
+    pub fn failed(&self) -> bool {
+        !(self.status == "ok" || self.status == "ill-conditioned") || self.tests.iter().any(|t| t.status == "diverged")
+    }
+}
+
+fn status_word(s: &Status) -> &'static str {
+    match s {
+        Status::Ok => "ok",
+        Status::IllConditioned { .. } => "ill-conditioned",
+        Status::ReducedAccuracy | Status::MaxIterations | Status::SolverFailed(_) => "solver-failed",
+    }
+}
+
+/// The configuration stored beside a case's results.
+#[derive(Debug, Serialize)]
+struct StoredConfig<'a> {
+    shipid_version: &'static str,
+    study: &'a str,
+    dataset: String,
+    tests: &'a [String],
+    case: &'a Case,
+}
+
+/// Run one case: fit, then validate on every test recording.
+pub fn run_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
+    let failed = |msg: String| CaseResult {
+        case_id: case.id.clone(),
+        status: "fit-failed".into(),
+        message: Some(msg),
+        fit_time_s: None,
+        samples: 0,
+        dofs: vec![],
+        coefficients: vec![],
+        vif: vec![],
+        tests: vec![],
+    };
+    let set = match load_set(&resolve_set(study, &case.set)) {
+        Ok(s) => s,
+        Err(e) => return (failed(e.to_string()), None),
+    };
+    let solver = if case.solver == "qp" { Solver::Qp } else { Solver::Fast };
+    let out = match fit_dataset(&study.dataset, set, &case.estimator, &case.training, case.window, solver) {
+        Ok(o) => o,
+        Err(e) => return (failed(e.to_string()), None),
+    };
+    let worst = out
+        .dofs
+        .iter()
+        .map(|d| status_word(&d.fit.status))
+        .max_by_key(|w| match *w {
+            "ok" => 0,
+            "ill-conditioned" => 1,
+            _ => 2,
+        })
+        .unwrap_or("ok");
+    let model = AbkowitzDynamics(out.model.clone());
+    let tests = study
+        .tests
+        .iter()
+        .filter_map(|f| study.dataset.recording(f))
+        .map(|r| {
+            let v = validate_recording(&model, r, &study.dataset.ship);
+            let (status, diverged_at_s, recorded, predicted, relative_error, mrae) = match v.manoeuvre {
+                Some(m) => {
+                    let (st, at) = match m.status {
+                        SimStatus::Ok => ("ok".to_string(), None),
+                        SimStatus::Diverged { t_s, .. } => ("diverged".to_string(), Some(t_s)),
+                    };
+                    (st, at, m.recorded, m.predicted, m.relative_error, m.mrae)
+                }
+                None => ("replay-only".into(), None, Metrics::default(), None, Default::default(), None),
+            };
+            TestRow {
+                test: r.file.clone(),
+                kind: v.kind.into(),
+                status,
+                diverged_at_s,
+                replay_status: match v.replay.status {
+                    SimStatus::Ok => "ok".into(),
+                    SimStatus::Diverged { .. } => "diverged".into(),
+                },
+                position_rmse_over_l: v.replay.position_rmse_over_l,
+                heading_rmse_deg: v.replay.heading_rmse_deg,
+                u_rmse_m_s: v.replay.u_rmse_m_s,
+                v_rmse_m_s: v.replay.v_rmse_m_s,
+                r_rmse_deg_s: v.replay.r_rmse_deg_s,
+                recorded,
+                predicted,
+                relative_error,
+                mrae,
+            }
+        })
+        .collect();
+    let mut coefficients = Vec::new();
+    let mut vif = Vec::new();
+    for d in &out.dofs {
+        for (j, name) in d.names.iter().enumerate() {
+            let term = name.split_once('_').map_or(name.as_str(), |(_, t)| t).to_string();
+            coefficients.push(TermValue { dof: d.dof.to_string(), term: term.clone(), value: d.fit.coefficients.get(j).copied() });
+            vif.push(TermValue { dof: d.dof.to_string(), term, value: d.vif.get(j).copied().flatten() });
+        }
+    }
+    let model_text = toml::to_string(&out.file).ok();
+    let result = CaseResult {
+        case_id: case.id.clone(),
+        status: worst.into(),
+        message: None,
+        fit_time_s: Some(out.fit_time_s),
+        samples: out.samples,
+        dofs: out
+            .dofs
+            .iter()
+            .map(|d| DofSummary {
+                dof: d.dof.to_string(),
+                status: status_word(&d.fit.status).into(),
+                residual_rms: d.residual_rms,
+                condition_number: d.condition_number,
+                scaled_condition_number: d.scaled_condition_number,
+                hyper_parameter: d.tuning.as_ref().map(|t| t.best),
+                objective: d.fit.objective,
+            })
+            .collect(),
+        coefficients,
+        vif,
+        tests,
+    };
+    (result, model_text)
+}
+
+/// A set named in a study: shipped name, or a path relative to the study file.
+pub fn resolve_set(study: &Study, set: &str) -> String {
+    if shipid_model::CoefficientSet::builtin(set).is_some() {
+        return set.to_string();
+    }
+    study.path.parent().unwrap_or(Path::new(".")).join(set).display().to_string()
+}
+
+/// Where a study's results go by default: `results/<name>/`.
+pub fn default_out(study: &Study) -> PathBuf {
+    PathBuf::from("results").join(&study.name)
+}
+
+/// Run (or resume) every case; results in case order.
+pub fn run_study(study: &Study, out: &Path, jobs: usize, force: bool, progress: bool) -> std::io::Result<Vec<CaseResult>> {
+    // faer would otherwise spread each small factorisation over all threads while rayon already runs
+    // one case per thread.
+    faer::set_global_parallelism(faer::Par::Seq);
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs.max(1)).build().map_err(std::io::Error::other)?;
+    let bar = if progress { ProgressBar::new(study.cases.len() as u64) } else { ProgressBar::hidden() };
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} cases  {msg}  elapsed {elapsed} eta {eta}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let failed = AtomicUsize::new(0);
+    let results: Vec<std::io::Result<CaseResult>> = pool.install(|| {
+        study
+            .cases
+            .par_iter()
+            .map(|case| {
+                let dir = out.join("cases").join(&case.id);
+                let config = toml::to_string(&StoredConfig {
+                    shipid_version: env!("CARGO_PKG_VERSION"),
+                    study: &study.name,
+                    dataset: study.dataset_path.display().to_string(),
+                    tests: &study.tests,
+                    case,
+                })
+                .map_err(std::io::Error::other)?;
+                let result_path = dir.join("result.json");
+                let reuse = !force
+                    && std::fs::read_to_string(dir.join("config.toml")).is_ok_and(|c| c == config)
+                    && result_path.is_file();
+                let result = match reuse
+                    .then(|| std::fs::read(&result_path).ok().and_then(|b| serde_json::from_slice::<CaseResult>(&b).ok()))
+                    .flatten()
+                {
+                    Some(r) => r,
+                    None => {
+                        let (r, model) = run_case(study, case);
+                        write_atomic(&dir.join("config.toml"), config.as_bytes())?;
+                        if let Some(m) = model {
+                            write_atomic(&dir.join("model.toml"), m.as_bytes())?;
+                        }
+                        // Written last: its presence marks the case as finished.
+                        write_atomic(&result_path, serde_json::to_string_pretty(&r).map_err(std::io::Error::other)?.as_bytes())?;
+                        r
+                    }
+                };
+                if result.failed() {
+                    failed.fetch_add(1, Ordering::Relaxed);
+                }
+                bar.set_message(format!("{} failed", failed.load(Ordering::Relaxed)));
+                bar.inc(1);
+                Ok(result)
+            })
+            .collect()
+    });
+    bar.finish();
+    results.into_iter().collect()
+}

@@ -1,0 +1,137 @@
+//! Study files and the runner: bad study files are named errors (exit 2), an interrupted run resumes
+//! without redoing or losing finished cases, a diverging case is a status row, output does not depend
+//! on the number of threads.
+
+mod common;
+
+use std::path::Path;
+
+use shipid::study::load_study;
+use shipid::study_cmd::run_and_write;
+use shipid_tables::Table;
+
+const FIXTURES: &str = "crates/shipid/tests/fixtures/studies";
+
+fn check_bad(name: &str, expected: &str) {
+    let path = format!("{FIXTURES}/{name}");
+    let out = common::shipid(&["run", &path, "--out", "/tmp/shipid-never-written"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{name}: {err}");
+    assert_eq!(err.trim(), format!("error: {path}{expected}"), "{name}");
+}
+
+#[test]
+fn bad_study_files_name_the_file_and_key() {
+    check_bad(
+        "unknown_key.toml",
+        ":2:1: key `colour`: unknown field `colour`, expected one of `name`, `description`, `dataset`, `sets`, `training`, `estimator`, `test`, `check`",
+    );
+    check_bad(
+        "unknown_estimator.toml",
+        ": key `estimator[0].name`: unknown estimator `neural-net` (lsq, bounded-lsq, ridge, lasso, svr)",
+    );
+    check_bad("empty_grid.toml", ": key `sets`: the grid is empty: no coefficient set");
+    check_bad(
+        "missing_recording.toml",
+        ": key `training.recordings[0][0]`: recording `zz99_99_ps.csv` is not in crates/shipid/tests/fixtures/studies/../../../../../data/kvlcc2-mmg/dataset.toml",
+    );
+    check_bad(
+        "too_many_overshoots.toml",
+        ": key `training.overshoots`: 30 overshoots requested but `zz35_35_ps.csv` has 13",
+    );
+    check_bad(
+        "ridge_without_lambda.toml",
+        ": key `estimator[0].lambda`: the grid is empty: give lambda values or tune = true",
+    );
+    check_bad(
+        "unknown_set.toml",
+        ": key `sets[0]`: unknown coefficient set `reduced33` (not one of reduced32, full68, chen2021 and no such file)",
+    );
+    check_bad(
+        "missing_dataset.toml",
+        ": key `dataset`: data set `crates/shipid/tests/fixtures/studies/nowhere/dataset.toml` not found",
+    );
+}
+
+fn small_study() -> shipid::study::Study {
+    load_study(&common::root().join(FIXTURES).join("small.toml")).unwrap()
+}
+
+fn result_files(dir: &Path) -> Vec<(String, std::time::SystemTime, Vec<u8>)> {
+    let mut v: Vec<_> = std::fs::read_dir(dir.join("cases"))
+        .unwrap()
+        .map(|e| {
+            let p = e.unwrap().path().join("result.json");
+            (p.display().to_string(), p.metadata().unwrap().modified().unwrap(), std::fs::read(&p).unwrap())
+        })
+        .collect();
+    v.sort();
+    v
+}
+
+fn without_timing(t: &Table) -> Table {
+    Table { columns: t.columns.iter().filter(|(n, _)| n != "fit_time_s").cloned().collect() }
+}
+
+#[test]
+fn an_interrupted_study_resumes_without_redoing_or_losing_cases() {
+    let study = small_study();
+    assert_eq!(study.cases.len(), 3);
+    let dir = tempfile::tempdir().unwrap();
+    let first = run_and_write(&study, dir.path(), 2, false, false).unwrap();
+    let first_summary = Table::read_csv(&dir.path().join("summary.csv")).unwrap();
+    let before = result_files(dir.path());
+    // Interrupt: the last case never finished (no result.json, a half-written temporary file instead).
+    let victim = dir.path().join("cases").join(&study.cases[2].id);
+    std::fs::remove_file(victim.join("result.json")).unwrap();
+    std::fs::write(victim.join("result.json.tmp"), b"{\"case_id\": \"trunc").unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(20));
+    let second = run_and_write(&study, dir.path(), 2, false, false).unwrap();
+    let after = result_files(dir.path());
+    assert_eq!(after.len(), 3, "the unfinished case was completed");
+    for (b, a) in before.iter().zip(&after).take(2) {
+        assert_eq!(b.1, a.1, "{} was not rewritten", b.0);
+    }
+    assert_eq!(first[2].tests, second[2].tests, "the redone case gives the same results");
+    assert_eq!(
+        without_timing(&first_summary),
+        without_timing(&Table::read_csv(&dir.path().join("summary.csv")).unwrap()),
+        "tables complete after the resume"
+    );
+}
+
+#[test]
+fn output_does_not_depend_on_the_number_of_jobs() {
+    let study = small_study();
+    let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    run_and_write(&study, a.path(), 1, false, false).unwrap();
+    run_and_write(&study, b.path(), 2, false, false).unwrap();
+    for stem in ["summary", "coefficients", "diagnostics"] {
+        let ta = Table::read_csv(&a.path().join(format!("{stem}.csv"))).unwrap();
+        let tb = Table::read_csv(&b.path().join(format!("{stem}.csv"))).unwrap();
+        assert_eq!(without_timing(&ta), without_timing(&tb), "{stem}");
+    }
+}
+
+#[test]
+fn a_diverging_case_is_a_status_row_and_exit_code_1() {
+    // Paper 000 Tab. 7: trained on one overshoot only, the reduced set cannot predict the turning
+    // circle; on our data that simulation leaves the physical bounds.
+    let dir = tempfile::tempdir().unwrap();
+    let study = dir.path().join("one_os.toml");
+    let text = std::fs::read_to_string(common::root().join(FIXTURES).join("small.toml"))
+        .unwrap()
+        .replace("name = \"small\"", "name = \"one_os\"")
+        .replace("overshoots = [3, 4, 5]", "overshoots = [1]")
+        .replace("recordings = [\"zz20_20_ps.csv\", \"tc35_sb.csv\"]", "recordings = [\"tc35_ps.csv\", \"tc35_sb.csv\"]")
+        .replace("../../../../../data", &common::root().join("data").display().to_string());
+    std::fs::write(&study, text).unwrap();
+    let out_dir = dir.path().join("out");
+    let out = common::shipid(&["run", study.to_str().unwrap(), "--out", out_dir.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1), "{}", String::from_utf8_lossy(&out.stderr));
+    let t = Table::read_csv(&out_dir.join("summary.csv")).unwrap();
+    let status: Vec<String> = (0..t.rows()).map(|i| t.column("status").unwrap().cell(i)).collect();
+    assert!(status.iter().any(|s| s == "diverged"), "statuses {status:?}");
+    let at = t.column("diverged_at_s").unwrap();
+    assert!((0..t.rows()).any(|i| !at.cell(i).is_empty()), "the divergence time is kept");
+}
