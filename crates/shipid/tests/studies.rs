@@ -135,3 +135,24 @@ fn a_diverging_case_is_a_status_row_and_exit_code_1() {
     let at = t.column("diverged_at_s").unwrap();
     assert!((0..t.rows()).any(|i| !at.cell(i).is_empty()), "the divergence time is kept");
 }
+
+#[test]
+fn check_reports_a_changed_number_and_exits_1() {
+    let dir = tempfile::tempdir().unwrap();
+    let reference = dir.path().join("reference");
+    let study = format!("{FIXTURES}/small.toml");
+    let bless = common::shipid(&["check", &study, "--reference", reference.to_str().unwrap(), "--bless"]);
+    assert!(bless.status.success(), "{}", String::from_utf8_lossy(&bless.stderr));
+    let same = common::shipid(&["check", &study, "--reference", reference.to_str().unwrap()]);
+    assert!(same.status.success(), "a fresh run matches its own reference");
+    // Tamper with one stored metric: the check must name it.
+    let path = reference.join("summary.csv");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let t = Table::read_csv(&path).unwrap();
+    let stored = t.column("mrae").unwrap().cell(0);
+    std::fs::write(&path, text.replacen(&stored, "0.5", 1)).unwrap();
+    let changed = common::shipid(&["check", &study, "--reference", reference.to_str().unwrap()]);
+    assert_eq!(changed.status.code(), Some(1));
+    let out = String::from_utf8_lossy(&changed.stdout);
+    assert!(out.contains(&format!("summary: row 1: `mrae` = {stored}, reference 0.5")), "{out}");
+}
