@@ -48,11 +48,14 @@ fn froude_scaling_keeps_primed_values() {
     assert!((model.time_prime(10.0) - full.time_prime(10.0 * lambda.sqrt())).abs() < 1e-12);
 }
 
+/// A scaling function of the prime system.
+type Scaling = fn(&PrimeScale, f64) -> f64;
+
 proptest! {
     #[test]
     fn every_scaling_round_trips(x in -1e6f64..1e6, l in 1.0f64..400.0, u in 0.1f64..15.0) {
         let s = PrimeScale { lpp_m: l, u0_m_s: u, rho_kg_m3: 1025.0 };
-        let pairs: [(fn(&PrimeScale, f64) -> f64, fn(&PrimeScale, f64) -> f64); 10] = [
+        let pairs: [(Scaling, Scaling); 10] = [
             (PrimeScale::velocity_prime, PrimeScale::velocity_from_prime),
             (PrimeScale::yaw_rate_prime, PrimeScale::yaw_rate_from_prime),
             (PrimeScale::time_prime, PrimeScale::time_from_prime),

@@ -234,7 +234,9 @@ pub fn training_samples(
         )));
     }
     if matches!(window, WindowSpec::Overshoots(_))
-        && !chosen.iter().any(|r| matches!(r.manoeuvre, Manoeuvre::ZigZag { .. }))
+        && !chosen
+            .iter()
+            .any(|r| matches!(r.manoeuvre, Manoeuvre::ZigZag { .. }))
     {
         return Err(bad_input(
             "--overshoots truncates zig-zags, and none of the training recordings is one",

@@ -10,8 +10,8 @@ pub mod metrics_cmd;
 pub mod runner;
 pub mod simulate_cmd;
 pub mod spec;
-pub mod study_cmd;
 pub mod study;
+pub mod study_cmd;
 pub mod validate;
 pub mod validate_cmd;
 

@@ -253,8 +253,15 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             jobs,
             out,
             force,
-        } => shipid::study_cmd::run(&study, out.as_deref(), jobs.unwrap_or_else(default_jobs), force),
-        Command::Table { study, pivot, out } => shipid::study_cmd::table(&study, out.as_deref(), &pivot),
+        } => shipid::study_cmd::run(
+            &study,
+            out.as_deref(),
+            jobs.unwrap_or_else(default_jobs),
+            force,
+        ),
+        Command::Table { study, pivot, out } => {
+            shipid::study_cmd::table(&study, out.as_deref(), &pivot)
+        }
         Command::Check {
             study,
             reference,

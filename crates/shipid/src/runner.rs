@@ -75,7 +75,8 @@ pub struct CaseResult {
 impl CaseResult {
     /// True when the fit failed or any test diverged.
     pub fn failed(&self) -> bool {
-        !(self.status == "ok" || self.status == "ill-conditioned") || self.tests.iter().any(|t| t.status == "diverged")
+        !(self.status == "ok" || self.status == "ill-conditioned")
+            || self.tests.iter().any(|t| t.status == "diverged")
     }
 }
 
@@ -83,7 +84,9 @@ fn status_word(s: &Status) -> &'static str {
     match s {
         Status::Ok => "ok",
         Status::IllConditioned { .. } => "ill-conditioned",
-        Status::ReducedAccuracy | Status::MaxIterations | Status::SolverFailed(_) => "solver-failed",
+        Status::ReducedAccuracy | Status::MaxIterations | Status::SolverFailed(_) => {
+            "solver-failed"
+        }
     }
 }
 
@@ -114,8 +117,19 @@ pub fn run_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
         Ok(s) => s,
         Err(e) => return (failed(e.to_string()), None),
     };
-    let solver = if case.solver == "qp" { Solver::Qp } else { Solver::Fast };
-    let out = match fit_dataset(&study.dataset, set, &case.estimator, &case.training, case.window, solver) {
+    let solver = if case.solver == "qp" {
+        Solver::Qp
+    } else {
+        Solver::Fast
+    };
+    let out = match fit_dataset(
+        &study.dataset,
+        set,
+        &case.estimator,
+        &case.training,
+        case.window,
+        solver,
+    ) {
         Ok(o) => o,
         Err(e) => return (failed(e.to_string()), None),
     };
@@ -136,16 +150,24 @@ pub fn run_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
         .filter_map(|f| study.dataset.recording(f))
         .map(|r| {
             let v = validate_recording(&model, r, &study.dataset.ship);
-            let (status, diverged_at_s, recorded, predicted, relative_error, mrae) = match v.manoeuvre {
-                Some(m) => {
-                    let (st, at) = match m.status {
-                        SimStatus::Ok => ("ok".to_string(), None),
-                        SimStatus::Diverged { t_s, .. } => ("diverged".to_string(), Some(t_s)),
-                    };
-                    (st, at, m.recorded, m.predicted, m.relative_error, m.mrae)
-                }
-                None => ("replay-only".into(), None, Metrics::default(), None, Default::default(), None),
-            };
+            let (status, diverged_at_s, recorded, predicted, relative_error, mrae) =
+                match v.manoeuvre {
+                    Some(m) => {
+                        let (st, at) = match m.status {
+                            SimStatus::Ok => ("ok".to_string(), None),
+                            SimStatus::Diverged { t_s, .. } => ("diverged".to_string(), Some(t_s)),
+                        };
+                        (st, at, m.recorded, m.predicted, m.relative_error, m.mrae)
+                    }
+                    None => (
+                        "replay-only".into(),
+                        None,
+                        Metrics::default(),
+                        None,
+                        Default::default(),
+                        None,
+                    ),
+                };
             TestRow {
                 test: r.file.clone(),
                 kind: v.kind.into(),
@@ -171,9 +193,20 @@ pub fn run_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
     let mut vif = Vec::new();
     for d in &out.dofs {
         for (j, name) in d.names.iter().enumerate() {
-            let term = name.split_once('_').map_or(name.as_str(), |(_, t)| t).to_string();
-            coefficients.push(TermValue { dof: d.dof.to_string(), term: term.clone(), value: d.fit.coefficients.get(j).copied() });
-            vif.push(TermValue { dof: d.dof.to_string(), term, value: d.vif.get(j).copied().flatten() });
+            let term = name
+                .split_once('_')
+                .map_or(name.as_str(), |(_, t)| t)
+                .to_string();
+            coefficients.push(TermValue {
+                dof: d.dof.to_string(),
+                term: term.clone(),
+                value: d.fit.coefficients.get(j).copied(),
+            });
+            vif.push(TermValue {
+                dof: d.dof.to_string(),
+                term,
+                value: d.vif.get(j).copied().flatten(),
+            });
         }
     }
     let model_text = toml::to_string(&out.file).ok();
@@ -208,7 +241,13 @@ pub fn resolve_set(study: &Study, set: &str) -> String {
     if shipid_model::CoefficientSet::builtin(set).is_some() {
         return set.to_string();
     }
-    study.path.parent().unwrap_or(Path::new(".")).join(set).display().to_string()
+    study
+        .path
+        .parent()
+        .unwrap_or(Path::new("."))
+        .join(set)
+        .display()
+        .to_string()
 }
 
 /// Where a study's results go by default: `results/<name>/`.
@@ -217,15 +256,30 @@ pub fn default_out(study: &Study) -> PathBuf {
 }
 
 /// Run (or resume) every case; results in case order.
-pub fn run_study(study: &Study, out: &Path, jobs: usize, force: bool, progress: bool) -> std::io::Result<Vec<CaseResult>> {
+pub fn run_study(
+    study: &Study,
+    out: &Path,
+    jobs: usize,
+    force: bool,
+    progress: bool,
+) -> std::io::Result<Vec<CaseResult>> {
     // faer would otherwise spread each small factorisation over all threads while rayon already runs
     // one case per thread.
     faer::set_global_parallelism(faer::Par::Seq);
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs.max(1)).build().map_err(std::io::Error::other)?;
-    let bar = if progress { ProgressBar::new(study.cases.len() as u64) } else { ProgressBar::hidden() };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs.max(1))
+        .build()
+        .map_err(std::io::Error::other)?;
+    let bar = if progress {
+        ProgressBar::new(study.cases.len() as u64)
+    } else {
+        ProgressBar::hidden()
+    };
     bar.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} cases  {msg}  elapsed {elapsed} eta {eta}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        ProgressStyle::with_template(
+            "{bar:40} {pos}/{len} cases  {msg}  elapsed {elapsed} eta {eta}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let failed = AtomicUsize::new(0);
     let results: Vec<std::io::Result<CaseResult>> = pool.install(|| {
@@ -247,7 +301,11 @@ pub fn run_study(study: &Study, out: &Path, jobs: usize, force: bool, progress: 
                     && std::fs::read_to_string(dir.join("config.toml")).is_ok_and(|c| c == config)
                     && result_path.is_file();
                 let result = match reuse
-                    .then(|| std::fs::read(&result_path).ok().and_then(|b| serde_json::from_slice::<CaseResult>(&b).ok()))
+                    .then(|| {
+                        std::fs::read(&result_path)
+                            .ok()
+                            .and_then(|b| serde_json::from_slice::<CaseResult>(&b).ok())
+                    })
                     .flatten()
                 {
                     Some(r) => r,
@@ -258,7 +316,12 @@ pub fn run_study(study: &Study, out: &Path, jobs: usize, force: bool, progress: 
                             write_atomic(&dir.join("model.toml"), m.as_bytes())?;
                         }
                         // Written last: its presence marks the case as finished.
-                        write_atomic(&result_path, serde_json::to_string_pretty(&r).map_err(std::io::Error::other)?.as_bytes())?;
+                        write_atomic(
+                            &result_path,
+                            serde_json::to_string_pretty(&r)
+                                .map_err(std::io::Error::other)?
+                                .as_bytes(),
+                        )?;
                         r
                     }
                 };

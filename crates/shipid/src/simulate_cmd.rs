@@ -44,7 +44,7 @@ pub fn simulate_manoeuvre(
     duration_s: Option<f64>,
 ) -> Result<SimOutput, CliError> {
     let ship = *model.ship();
-    let mut controller = controller_for(m, T_EXECUTE_S).map_err(|e| bad_input(e))?;
+    let mut controller = controller_for(m, T_EXECUTE_S).map_err(bad_input)?;
     let dt = dt_s.unwrap_or(DT_S);
     // Sample at 10 Hz when the step divides it, otherwise every step.
     let ratio = (SAMPLE_INTERVAL_S / dt).round();
@@ -61,7 +61,7 @@ pub fn simulate_manoeuvre(
         State::approach(ship.u0),
         &options,
     )
-    .map_err(|e| bad_input(e))
+    .map_err(bad_input)
 }
 
 /// The JSON of a simulated manoeuvre: `"status"` and the metric keys, or the divergence instead.

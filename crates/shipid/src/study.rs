@@ -153,12 +153,26 @@ pub fn load_study(path: &Path) -> Result<Study, InputError> {
     let text = std::fs::read_to_string(path).map_err(|e| InputError::read(path, &e))?;
     let raw: RawStudy = toml::from_str(&text).map_err(|e| InputError::toml(path, &text, &e))?;
     let key = |k: &str, msg: String| InputError::key(path, k, msg);
-    if raw.name.is_empty() || !raw.name.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_') {
-        return Err(key("name", format!("\"{}\" must be a non-empty word of letters, digits, - and _", raw.name)));
+    if raw.name.is_empty()
+        || !raw
+            .name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+    {
+        return Err(key(
+            "name",
+            format!(
+                "\"{}\" must be a non-empty word of letters, digits, - and _",
+                raw.name
+            ),
+        ));
     }
     let dataset_path = path.parent().unwrap_or(Path::new(".")).join(&raw.dataset);
     if !dataset_path.is_file() {
-        return Err(key("dataset", format!("data set `{}` not found", dataset_path.display())));
+        return Err(key(
+            "dataset",
+            format!("data set `{}` not found", dataset_path.display()),
+        ));
     }
     let dataset = Dataset::load(&dataset_path)?;
     if raw.sets.is_empty() {
@@ -169,16 +183,25 @@ pub fn load_study(path: &Path) -> Result<Study, InputError> {
         if CoefficientSet::builtin(s).is_none() && !as_path.is_file() {
             return Err(key(
                 &format!("sets[{i}]"),
-                format!("unknown coefficient set `{s}` (not one of {} and no such file)", CoefficientSet::builtin_names().join(", ")),
+                format!(
+                    "unknown coefficient set `{s}` (not one of {} and no such file)",
+                    CoefficientSet::builtin_names().join(", ")
+                ),
             ));
         }
     }
     if raw.training.recordings.is_empty() {
-        return Err(key("training.recordings", "the grid is empty: no training combination".into()));
+        return Err(key(
+            "training.recordings",
+            "the grid is empty: no training combination".into(),
+        ));
     }
     for (i, combo) in raw.training.recordings.iter().enumerate() {
         if combo.is_empty() {
-            return Err(key(&format!("training.recordings[{i}]"), "empty combination".into()));
+            return Err(key(
+                &format!("training.recordings[{i}]"),
+                "empty combination".into(),
+            ));
         }
         for (j, f) in combo.iter().enumerate() {
             if dataset.recording(f).is_none() {
@@ -191,7 +214,10 @@ pub fn load_study(path: &Path) -> Result<Study, InputError> {
     }
     let windows: Vec<WindowSpec> = match (&raw.training.overshoots, &raw.training.windows) {
         (Some(_), Some(_)) => {
-            return Err(key("training.windows", "give overshoots or windows, not both".into()));
+            return Err(key(
+                "training.windows",
+                "give overshoots or windows, not both".into(),
+            ));
         }
         (Some(o), None) => {
             let list: Vec<u32> = match o {
@@ -199,21 +225,33 @@ pub fn load_study(path: &Path) -> Result<Study, InputError> {
                 OvershootSpec::Range { from, to } => (*from..=*to).collect(),
             };
             if list.is_empty() || list.contains(&0) {
-                return Err(key("training.overshoots", "needs overshoot counts of 1 or more".into()));
+                return Err(key(
+                    "training.overshoots",
+                    "needs overshoot counts of 1 or more".into(),
+                ));
             }
             check_overshoots(path, &dataset, &raw.training.recordings, &list)?;
             list.into_iter().map(WindowSpec::Overshoots).collect()
         }
         (None, Some(w)) => {
             if w.is_empty() {
-                return Err(key("training.windows", "the grid is empty: no window".into()));
+                return Err(key(
+                    "training.windows",
+                    "the grid is empty: no window".into(),
+                ));
             }
             w.iter()
                 .map(|[a, b]| {
                     if a.is_finite() && b.is_finite() && b > a {
-                        Ok(WindowSpec::Time { start_s: *a, end_s: *b })
+                        Ok(WindowSpec::Time {
+                            start_s: *a,
+                            end_s: *b,
+                        })
                     } else {
-                        Err(key("training.windows", format!("[{a}, {b}] is not a time window")))
+                        Err(key(
+                            "training.windows",
+                            format!("[{a}, {b}] is not a time window"),
+                        ))
                     }
                 })
                 .collect::<Result<_, _>>()?
@@ -228,15 +266,40 @@ pub fn load_study(path: &Path) -> Result<Study, InputError> {
         let k = |f: &str| format!("estimator[{i}].{f}");
         let solver = e.solver.clone().unwrap_or_else(|| "fast".into());
         if solver != "fast" && solver != "qp" {
-            return Err(key(&k("solver"), format!("unknown solver `{solver}` (fast or qp)")));
+            return Err(key(
+                &k("solver"),
+                format!("unknown solver `{solver}` (fast or qp)"),
+            ));
         }
-        let base = EstimatorSpec { epsilon: e.epsilon, tune: e.tune, ..EstimatorSpec::named(&e.name) };
+        let base = EstimatorSpec {
+            epsilon: e.epsilon,
+            tune: e.tune,
+            ..EstimatorSpec::named(&e.name)
+        };
         let grid = |v: &Option<OneOrMany>| v.as_ref().map(OneOrMany::values).unwrap_or_default();
         let expanded: Vec<EstimatorSpec> = match e.name.as_str() {
             "lsq" | "bounded-lsq" => vec![base.clone()],
-            "ridge" if !e.tune => grid(&e.lambda).into_iter().map(|l| EstimatorSpec { lambda: Some(l), ..base.clone() }).collect(),
-            "lasso" if !e.tune => grid(&e.alpha).into_iter().map(|a| EstimatorSpec { alpha: Some(a), ..base.clone() }).collect(),
-            "svr" if !e.tune => grid(&e.c).into_iter().map(|c| EstimatorSpec { c: Some(c), ..base.clone() }).collect(),
+            "ridge" if !e.tune => grid(&e.lambda)
+                .into_iter()
+                .map(|l| EstimatorSpec {
+                    lambda: Some(l),
+                    ..base.clone()
+                })
+                .collect(),
+            "lasso" if !e.tune => grid(&e.alpha)
+                .into_iter()
+                .map(|a| EstimatorSpec {
+                    alpha: Some(a),
+                    ..base.clone()
+                })
+                .collect(),
+            "svr" if !e.tune => grid(&e.c)
+                .into_iter()
+                .map(|c| EstimatorSpec {
+                    c: Some(c),
+                    ..base.clone()
+                })
+                .collect(),
             "ridge" | "lasso" | "svr" => vec![base.clone()],
             other => {
                 return Err(key(
@@ -251,20 +314,34 @@ pub fn load_study(path: &Path) -> Result<Study, InputError> {
                 "lasso" => "alpha",
                 _ => "c",
             };
-            return Err(key(&k(flag), format!("the grid is empty: give {flag} values or tune = true")));
+            return Err(key(
+                &k(flag),
+                format!("the grid is empty: give {flag} values or tune = true"),
+            ));
         }
         for spec in expanded {
-            spec.validate().map_err(|err| key(&k("name"), err.to_string()))?;
+            spec.validate()
+                .map_err(|err| key(&k("name"), err.to_string()))?;
             estimators.push((spec, solver.clone()));
         }
     }
     let tests = match &raw.test.recordings {
-        TestRecordings::Word(w) if w == "all" => dataset.recordings.iter().map(|r| r.file.clone()).collect(),
-        TestRecordings::Word(w) => return Err(key("test.recordings", format!("\"{w}\": expected \"all\" or a list of files"))),
+        TestRecordings::Word(w) if w == "all" => {
+            dataset.recordings.iter().map(|r| r.file.clone()).collect()
+        }
+        TestRecordings::Word(w) => {
+            return Err(key(
+                "test.recordings",
+                format!("\"{w}\": expected \"all\" or a list of files"),
+            ));
+        }
         TestRecordings::List(l) => {
             for (i, f) in l.iter().enumerate() {
                 if dataset.recording(f).is_none() {
-                    return Err(key(&format!("test.recordings[{i}]"), format!("recording `{f}` is not in {}", dataset_path.display())));
+                    return Err(key(
+                        &format!("test.recordings[{i}]"),
+                        format!("recording `{f}` is not in {}", dataset_path.display()),
+                    ));
                 }
             }
             l.clone()
@@ -292,13 +369,24 @@ pub fn load_study(path: &Path) -> Result<Study, InputError> {
     })
 }
 
-fn check_overshoots(path: &Path, ds: &Dataset, combos: &[Vec<String>], wanted: &[u32]) -> Result<(), InputError> {
+fn check_overshoots(
+    path: &Path,
+    ds: &Dataset,
+    combos: &[Vec<String>],
+    wanted: &[u32],
+) -> Result<(), InputError> {
     let max = wanted.iter().copied().max().unwrap_or(0);
     for combo in combos {
         for f in combo {
             let Some(r) = ds.recording(f) else { continue };
-            if let Manoeuvre::ZigZag { rudder_deg, check_deg, side } = r.manoeuvre {
-                let have = zigzag_events(&r.recording, rudder_deg, check_deg, side, &ds.ship).map_or(0, |e| e.overshoots.len());
+            if let Manoeuvre::ZigZag {
+                rudder_deg,
+                check_deg,
+                side,
+            } = r.manoeuvre
+            {
+                let have = zigzag_events(&r.recording, rudder_deg, check_deg, side, &ds.ship)
+                    .map_or(0, |e| e.overshoots.len());
                 if (have as u32) < max {
                     return Err(InputError::key(
                         path,
@@ -323,7 +411,10 @@ fn case(set: &str, est: &EstimatorSpec, solver: &str, combo: &[String], w: Windo
         hyper("e", est.epsilon),
         if est.tune { "-cv" } else { "" }
     );
-    let train: Vec<String> = combo.iter().map(|f| f.trim_end_matches(".csv").to_string()).collect();
+    let train: Vec<String> = combo
+        .iter()
+        .map(|f| f.trim_end_matches(".csv").to_string())
+        .collect();
     let window = match w {
         WindowSpec::Whole => "whole".to_string(),
         WindowSpec::Overshoots(n) => format!("os{n}"),
@@ -339,7 +430,16 @@ fn case(set: &str, est: &EstimatorSpec, solver: &str, combo: &[String], w: Windo
         window: w,
     };
     let hash = crate::generate::fnv1a(&serde_json::to_string(&c).unwrap_or_default());
-    let clean: String = readable.chars().map(|ch| if ch.is_ascii_alphanumeric() || "-_+.".contains(ch) { ch } else { '_' }).collect();
+    let clean: String = readable
+        .chars()
+        .map(|ch| {
+            if ch.is_ascii_alphanumeric() || "-_+.".contains(ch) {
+                ch
+            } else {
+                '_'
+            }
+        })
+        .collect();
     c.id = format!("{clean}-{:08x}", hash as u32);
     c
 }

@@ -21,7 +21,9 @@ const METRIC_KEYS: [&str; 8] = [
 ];
 
 fn case_columns(t: &mut Table, rows: &[(&Case, &CaseResult)]) {
-    let text = |f: &dyn Fn(&Case, &CaseResult) -> String| rows.iter().map(|(c, r)| f(c, r)).collect::<Vec<_>>();
+    let text = |f: &dyn Fn(&Case, &CaseResult) -> String| {
+        rows.iter().map(|(c, r)| f(c, r)).collect::<Vec<_>>()
+    };
     t.push_text("case", text(&|c, _| c.id.clone()));
     t.push_text("set", text(&|c, _| c.set.clone()));
     t.push_text("estimator", text(&|c, _| c.estimator.name.clone()));
@@ -35,7 +37,9 @@ fn case_columns(t: &mut Table, rows: &[(&Case, &CaseResult)]) {
             crate::fit::WindowSpec::Time { start_s, end_s } => format!("{start_s}-{end_s} s"),
         }),
     );
-    let num = |f: &dyn Fn(&Case, &CaseResult) -> Option<f64>| rows.iter().map(|(c, r)| f(c, r)).collect::<Vec<_>>();
+    let num = |f: &dyn Fn(&Case, &CaseResult) -> Option<f64>| {
+        rows.iter().map(|(c, r)| f(c, r)).collect::<Vec<_>>()
+    };
     t.push_num(
         "overshoots",
         num(&|c, _| match c.window {
@@ -48,7 +52,12 @@ fn case_columns(t: &mut Table, rows: &[(&Case, &CaseResult)]) {
         t.push_num(
             &format!("hyper_{key}"),
             num(&|c, r| {
-                r.dofs.get(dof).and_then(|d| d.hyper_parameter).or(c.estimator.lambda).or(c.estimator.alpha).or(c.estimator.c)
+                r.dofs
+                    .get(dof)
+                    .and_then(|d| d.hyper_parameter)
+                    .or(c.estimator.lambda)
+                    .or(c.estimator.alpha)
+                    .or(c.estimator.c)
             }),
         );
     }
@@ -70,22 +79,40 @@ pub fn summary_table(study: &Study, results: &[CaseResult]) -> Table {
     let mut t = Table::default();
     let pairs: Vec<(&Case, &CaseResult)> = rows.iter().map(|(c, r, _)| (*c, *r)).collect();
     case_columns(&mut t, &pairs);
-    let text = |f: &dyn Fn(&crate::runner::TestRow) -> String| rows.iter().map(|(_, _, x)| x.map(f).unwrap_or_default()).collect();
-    let num = |f: &dyn Fn(&crate::runner::TestRow) -> Option<f64>| rows.iter().map(|(_, _, x)| x.and_then(f)).collect();
+    let text = |f: &dyn Fn(&crate::runner::TestRow) -> String| {
+        rows.iter()
+            .map(|(_, _, x)| x.map(f).unwrap_or_default())
+            .collect()
+    };
+    let num = |f: &dyn Fn(&crate::runner::TestRow) -> Option<f64>| {
+        rows.iter().map(|(_, _, x)| x.and_then(f)).collect()
+    };
     t.push_text("test", text(&|x| x.test.clone()));
     t.push_text("kind", text(&|x| x.kind.clone()));
     t.push_text("status", text(&|x| x.status.clone()));
     t.push_num("diverged_at_s", num(&|x| x.diverged_at_s));
     t.push_text("replay_status", text(&|x| x.replay_status.clone()));
-    t.push_num("position_rmse_over_l", num(&|x| Some(x.position_rmse_over_l)));
+    t.push_num(
+        "position_rmse_over_l",
+        num(&|x| Some(x.position_rmse_over_l)),
+    );
     t.push_num("heading_rmse_deg", num(&|x| Some(x.heading_rmse_deg)));
     t.push_num("u_rmse_m_s", num(&|x| Some(x.u_rmse_m_s)));
     t.push_num("v_rmse_m_s", num(&|x| Some(x.v_rmse_m_s)));
     t.push_num("r_rmse_deg_s", num(&|x| Some(x.r_rmse_deg_s)));
     for (i, key) in METRIC_KEYS.iter().enumerate() {
-        t.push_num(&format!("{key}_recorded"), num(&|x| x.recorded.entries()[i].1));
-        t.push_num(&format!("{key}_predicted"), num(&|x| x.predicted.and_then(|p| p.entries()[i].1)));
-        t.push_num(&format!("{key}_rel_error"), num(&|x| x.relative_error.get(*key).copied()));
+        t.push_num(
+            &format!("{key}_recorded"),
+            num(&|x| x.recorded.entries()[i].1),
+        );
+        t.push_num(
+            &format!("{key}_predicted"),
+            num(&|x| x.predicted.and_then(|p| p.entries()[i].1)),
+        );
+        t.push_num(
+            &format!("{key}_rel_error"),
+            num(&|x| x.relative_error.get(*key).copied()),
+        );
     }
     t.push_num("mrae", num(&|x| x.mrae));
     t
@@ -93,18 +120,41 @@ pub fn summary_table(study: &Study, results: &[CaseResult]) -> Table {
 
 /// Long format: case, DOF, term, value.
 pub fn coefficients_table(study: &Study, results: &[CaseResult]) -> Table {
-    long_table(study, results, |r| r.coefficients.iter().map(|c| (c.dof.clone(), c.term.clone(), "coefficient".into(), c.value)).collect())
+    long_table(study, results, |r| {
+        r.coefficients
+            .iter()
+            .map(|c| (c.dof.clone(), c.term.clone(), "coefficient".into(), c.value))
+            .collect()
+    })
 }
 
 /// Long format: VIF per term, condition numbers and residual RMS per DOF.
 pub fn diagnostics_table(study: &Study, results: &[CaseResult]) -> Table {
     long_table(study, results, |r| {
-        let mut v: Vec<(String, String, String, Option<f64>)> =
-            r.vif.iter().map(|c| (c.dof.clone(), c.term.clone(), "vif".into(), c.value)).collect();
+        let mut v: Vec<(String, String, String, Option<f64>)> = r
+            .vif
+            .iter()
+            .map(|c| (c.dof.clone(), c.term.clone(), "vif".into(), c.value))
+            .collect();
         for d in &r.dofs {
-            v.push((d.dof.clone(), String::new(), "condition_number".into(), d.condition_number));
-            v.push((d.dof.clone(), String::new(), "scaled_condition_number".into(), d.scaled_condition_number));
-            v.push((d.dof.clone(), String::new(), "residual_rms".into(), Some(d.residual_rms)));
+            v.push((
+                d.dof.clone(),
+                String::new(),
+                "condition_number".into(),
+                d.condition_number,
+            ));
+            v.push((
+                d.dof.clone(),
+                String::new(),
+                "scaled_condition_number".into(),
+                d.scaled_condition_number,
+            ));
+            v.push((
+                d.dof.clone(),
+                String::new(),
+                "residual_rms".into(),
+                Some(d.residual_rms),
+            ));
         }
         v
     })
@@ -112,7 +162,11 @@ pub fn diagnostics_table(study: &Study, results: &[CaseResult]) -> Table {
 
 type LongRow = (String, String, String, Option<f64>);
 
-fn long_table(study: &Study, results: &[CaseResult], rows_of: impl Fn(&CaseResult) -> Vec<LongRow>) -> Table {
+fn long_table(
+    study: &Study,
+    results: &[CaseResult],
+    rows_of: impl Fn(&CaseResult) -> Vec<LongRow>,
+) -> Table {
     let mut pairs = Vec::new();
     let mut long = Vec::new();
     for (c, r) in study.cases.iter().zip(results) {
@@ -131,17 +185,36 @@ fn long_table(study: &Study, results: &[CaseResult], rows_of: impl Fn(&CaseResul
 }
 
 /// Run a study and write its tables; returns the results.
-pub fn run_and_write(study: &Study, out: &Path, jobs: usize, force: bool, progress: bool) -> Result<Vec<CaseResult>, CliError> {
+pub fn run_and_write(
+    study: &Study,
+    out: &Path,
+    jobs: usize,
+    force: bool,
+    progress: bool,
+) -> Result<Vec<CaseResult>, CliError> {
     let results = run_study(study, out, jobs, force, progress).map_err(failed)?;
-    summary_table(study, &results).write(out, "summary").map_err(failed)?;
-    coefficients_table(study, &results).write(out, "coefficients").map_err(failed)?;
-    diagnostics_table(study, &results).write(out, "diagnostics").map_err(failed)?;
+    summary_table(study, &results)
+        .write(out, "summary")
+        .map_err(failed)?;
+    coefficients_table(study, &results)
+        .write(out, "coefficients")
+        .map_err(failed)?;
+    diagnostics_table(study, &results)
+        .write(out, "diagnostics")
+        .map_err(failed)?;
     Ok(results)
 }
 
-pub fn run(study_path: &Path, out: Option<&Path>, jobs: usize, force: bool) -> Result<Outcome, CliError> {
+pub fn run(
+    study_path: &Path,
+    out: Option<&Path>,
+    jobs: usize,
+    force: bool,
+) -> Result<Outcome, CliError> {
     let study = load_study(study_path)?;
-    let out = out.map(PathBuf::from).unwrap_or_else(|| default_out(&study));
+    let out = out
+        .map(PathBuf::from)
+        .unwrap_or_else(|| default_out(&study));
     let started = std::time::Instant::now();
     let results = run_and_write(&study, &out, jobs, force, true)?;
     let n_failed = results.iter().filter(|r| r.failed()).count();
@@ -153,25 +226,43 @@ pub fn run(study_path: &Path, out: Option<&Path>, jobs: usize, force: bool) -> R
         started.elapsed().as_secs_f64(),
         out.display()
     );
-    Ok(if n_failed > 0 { Outcome::SomeFailed } else { Outcome::Ok })
+    Ok(if n_failed > 0 {
+        Outcome::SomeFailed
+    } else {
+        Outcome::Ok
+    })
 }
 
 /// `shipid table STUDY.toml [--pivot ROWS,COLS,VALUE]`: a markdown comparison table from `summary.csv`.
 pub fn table(study_path: &Path, out: Option<&Path>, pivot: &str) -> Result<Outcome, CliError> {
     let study = load_study(study_path)?;
-    let dir = out.map(PathBuf::from).unwrap_or_else(|| default_out(&study));
+    let dir = out
+        .map(PathBuf::from)
+        .unwrap_or_else(|| default_out(&study));
     let path = dir.join("summary.csv");
     if !path.is_file() {
-        return Err(bad_input(format!("{} not found: run `shipid run {}` first", path.display(), study_path.display())));
+        return Err(bad_input(format!(
+            "{} not found: run `shipid run {}` first",
+            path.display(),
+            study_path.display()
+        )));
     }
     let parts: Vec<&str> = pivot.split(',').map(str::trim).collect();
     let [rows, cols, value] = parts.as_slice() else {
-        return Err(bad_input(format!("--pivot `{pivot}`: expected ROWS,COLS,VALUE, e.g. window,test,mrae")));
+        return Err(bad_input(format!(
+            "--pivot `{pivot}`: expected ROWS,COLS,VALUE, e.g. window,test,mrae"
+        )));
     };
     let t = Table::read_csv(&path).map_err(failed)?;
     let percent = value.ends_with("mrae") || value.ends_with("rel_error");
     let md = t
-        .pivot_markdown(rows, cols, value, |x| if percent { format!("{:.1} %", 100.0 * x) } else { format!("{x:.4}") })
+        .pivot_markdown(rows, cols, value, |x| {
+            if percent {
+                format!("{:.1} %", 100.0 * x)
+            } else {
+                format!("{x:.4}")
+            }
+        })
         .map_err(|e| bad_input(format!("--pivot: {e} in {}", path.display())))?;
     println!("{md}");
     Ok(Outcome::Ok)
@@ -179,15 +270,30 @@ pub fn table(study_path: &Path, out: Option<&Path>, pivot: &str) -> Result<Outco
 
 /// Tolerances of `shipid check`: timings are ignored, everything else is compared to 1e-8 absolute plus
 /// 1e-5 relative unless the study's `[check]` table says otherwise.
-pub const DEFAULT_TOLERANCE: Tolerance = Tolerance { abs: 1e-8, rel: 1e-5 };
+pub const DEFAULT_TOLERANCE: Tolerance = Tolerance {
+    abs: 1e-8,
+    rel: 1e-5,
+};
 
-pub fn check(study_path: &Path, reference: &Path, bless: bool, jobs: usize) -> Result<Outcome, CliError> {
+pub fn check(
+    study_path: &Path,
+    reference: &Path,
+    bless: bool,
+    jobs: usize,
+) -> Result<Outcome, CliError> {
     let study = load_study(study_path)?;
     let fresh_dir = tempfile_dir(&study)?;
     let results = run_and_write(&study, &fresh_dir, jobs, true, false)?;
-    let mut per_column: BTreeMap<String, Option<Tolerance>> = BTreeMap::from([("fit_time_s".to_string(), None)]);
+    let mut per_column: BTreeMap<String, Option<Tolerance>> =
+        BTreeMap::from([("fit_time_s".to_string(), None)]);
     for (k, t) in &study.check {
-        per_column.insert(k.clone(), Some(Tolerance { abs: t.abs, rel: t.rel }));
+        per_column.insert(
+            k.clone(),
+            Some(Tolerance {
+                abs: t.abs,
+                rel: t.rel,
+            }),
+        );
     }
     if bless {
         std::fs::create_dir_all(reference).map_err(failed)?;
@@ -197,7 +303,12 @@ pub fn check(study_path: &Path, reference: &Path, bless: bool, jobs: usize) -> R
                 std::fs::copy(fresh_dir.join(&name), reference.join(&name)).map_err(failed)?;
             }
         }
-        eprintln!("blessed {} as the reference of {} ({} cases)", reference.display(), study.name, results.len());
+        eprintln!(
+            "blessed {} as the reference of {} ({} cases)",
+            reference.display(),
+            study.name,
+            results.len()
+        );
         let _ = std::fs::remove_dir_all(&fresh_dir);
         return Ok(Outcome::Ok);
     }
@@ -205,15 +316,27 @@ pub fn check(study_path: &Path, reference: &Path, bless: bool, jobs: usize) -> R
     for stem in ["summary", "coefficients"] {
         let reference_path = reference.join(format!("{stem}.csv"));
         if !reference_path.is_file() {
-            return Err(bad_input(format!("{} not found (create it with --bless)", reference_path.display())));
+            return Err(bad_input(format!(
+                "{} not found (create it with --bless)",
+                reference_path.display()
+            )));
         }
         let r = Table::read_csv(&reference_path).map_err(failed)?;
         let f = Table::read_csv(&fresh_dir.join(format!("{stem}.csv"))).map_err(failed)?;
-        all.extend(compare(&f, &r, &per_column, DEFAULT_TOLERANCE).into_iter().map(|d| format!("{stem}: {d}")));
+        all.extend(
+            compare(&f, &r, &per_column, DEFAULT_TOLERANCE)
+                .into_iter()
+                .map(|d| format!("{stem}: {d}")),
+        );
     }
     let _ = std::fs::remove_dir_all(&fresh_dir);
     if all.is_empty() {
-        eprintln!("{}: {} cases match the reference {}", study.name, results.len(), reference.display());
+        eprintln!(
+            "{}: {} cases match the reference {}",
+            study.name,
+            results.len(),
+            reference.display()
+        );
         Ok(Outcome::Ok)
     } else {
         for d in all.iter().take(50) {
@@ -222,13 +345,22 @@ pub fn check(study_path: &Path, reference: &Path, bless: bool, jobs: usize) -> R
         if all.len() > 50 {
             println!("… and {} more differences", all.len() - 50);
         }
-        eprintln!("{}: {} differences from the reference {}", study.name, all.len(), reference.display());
+        eprintln!(
+            "{}: {} differences from the reference {}",
+            study.name,
+            all.len(),
+            reference.display()
+        );
         Ok(Outcome::SomeFailed)
     }
 }
 
 fn tempfile_dir(study: &Study) -> Result<PathBuf, CliError> {
-    let dir = std::env::temp_dir().join(format!("shipid-check-{}-{}", study.name, std::process::id()));
+    let dir = std::env::temp_dir().join(format!(
+        "shipid-check-{}-{}",
+        study.name,
+        std::process::id()
+    ));
     std::fs::create_dir_all(&dir).map_err(failed)?;
     Ok(dir)
 }

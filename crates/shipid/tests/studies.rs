@@ -30,7 +30,10 @@ fn bad_study_files_name_the_file_and_key() {
         "unknown_estimator.toml",
         ": key `estimator[0].name`: unknown estimator `neural-net` (lsq, bounded-lsq, ridge, lasso, svr)",
     );
-    check_bad("empty_grid.toml", ": key `sets`: the grid is empty: no coefficient set");
+    check_bad(
+        "empty_grid.toml",
+        ": key `sets`: the grid is empty: no coefficient set",
+    );
     check_bad(
         "missing_recording.toml",
         ": key `training.recordings[0][0]`: recording `zz99_99_ps.csv` is not in crates/shipid/tests/fixtures/studies/../../../../../data/kvlcc2-mmg/dataset.toml",
@@ -62,7 +65,11 @@ fn result_files(dir: &Path) -> Vec<(String, std::time::SystemTime, Vec<u8>)> {
         .unwrap()
         .map(|e| {
             let p = e.unwrap().path().join("result.json");
-            (p.display().to_string(), p.metadata().unwrap().modified().unwrap(), std::fs::read(&p).unwrap())
+            (
+                p.display().to_string(),
+                p.metadata().unwrap().modified().unwrap(),
+                std::fs::read(&p).unwrap(),
+            )
         })
         .collect();
     v.sort();
@@ -70,7 +77,14 @@ fn result_files(dir: &Path) -> Vec<(String, std::time::SystemTime, Vec<u8>)> {
 }
 
 fn without_timing(t: &Table) -> Table {
-    Table { columns: t.columns.iter().filter(|(n, _)| n != "fit_time_s").cloned().collect() }
+    Table {
+        columns: t
+            .columns
+            .iter()
+            .filter(|(n, _)| n != "fit_time_s")
+            .cloned()
+            .collect(),
+    }
 }
 
 #[test]
@@ -92,7 +106,10 @@ fn an_interrupted_study_resumes_without_redoing_or_losing_cases() {
     for (b, a) in before.iter().zip(&after).take(2) {
         assert_eq!(b.1, a.1, "{} was not rewritten", b.0);
     }
-    assert_eq!(first[2].tests, second[2].tests, "the redone case gives the same results");
+    assert_eq!(
+        first[2].tests, second[2].tests,
+        "the redone case gives the same results"
+    );
     assert_eq!(
         without_timing(&first_summary),
         without_timing(&Table::read_csv(&dir.path().join("summary.csv")).unwrap()),
@@ -123,17 +140,41 @@ fn a_diverging_case_is_a_status_row_and_exit_code_1() {
         .unwrap()
         .replace("name = \"small\"", "name = \"one_os\"")
         .replace("overshoots = [3, 4, 5]", "overshoots = [1]")
-        .replace("recordings = [\"zz20_20_ps.csv\", \"tc35_sb.csv\"]", "recordings = [\"tc35_ps.csv\", \"tc35_sb.csv\"]")
-        .replace("../../../../../data", &common::root().join("data").display().to_string());
+        .replace(
+            "recordings = [\"zz20_20_ps.csv\", \"tc35_sb.csv\"]",
+            "recordings = [\"tc35_ps.csv\", \"tc35_sb.csv\"]",
+        )
+        .replace(
+            "../../../../../data",
+            &common::root().join("data").display().to_string(),
+        );
     std::fs::write(&study, text).unwrap();
     let out_dir = dir.path().join("out");
-    let out = common::shipid(&["run", study.to_str().unwrap(), "--out", out_dir.to_str().unwrap()]);
-    assert_eq!(out.status.code(), Some(1), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = common::shipid(&[
+        "run",
+        study.to_str().unwrap(),
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let t = Table::read_csv(&out_dir.join("summary.csv")).unwrap();
-    let status: Vec<String> = (0..t.rows()).map(|i| t.column("status").unwrap().cell(i)).collect();
-    assert!(status.iter().any(|s| s == "diverged"), "statuses {status:?}");
+    let status: Vec<String> = (0..t.rows())
+        .map(|i| t.column("status").unwrap().cell(i))
+        .collect();
+    assert!(
+        status.iter().any(|s| s == "diverged"),
+        "statuses {status:?}"
+    );
     let at = t.column("diverged_at_s").unwrap();
-    assert!((0..t.rows()).any(|i| !at.cell(i).is_empty()), "the divergence time is kept");
+    assert!(
+        (0..t.rows()).any(|i| !at.cell(i).is_empty()),
+        "the divergence time is kept"
+    );
 }
 
 #[test]
@@ -141,10 +182,23 @@ fn check_reports_a_changed_number_and_exits_1() {
     let dir = tempfile::tempdir().unwrap();
     let reference = dir.path().join("reference");
     let study = format!("{FIXTURES}/small.toml");
-    let bless = common::shipid(&["check", &study, "--reference", reference.to_str().unwrap(), "--bless"]);
-    assert!(bless.status.success(), "{}", String::from_utf8_lossy(&bless.stderr));
+    let bless = common::shipid(&[
+        "check",
+        &study,
+        "--reference",
+        reference.to_str().unwrap(),
+        "--bless",
+    ]);
+    assert!(
+        bless.status.success(),
+        "{}",
+        String::from_utf8_lossy(&bless.stderr)
+    );
     let same = common::shipid(&["check", &study, "--reference", reference.to_str().unwrap()]);
-    assert!(same.status.success(), "a fresh run matches its own reference");
+    assert!(
+        same.status.success(),
+        "a fresh run matches its own reference"
+    );
     // Tamper with one stored metric: the check must name it.
     let path = reference.join("summary.csv");
     let text = std::fs::read_to_string(&path).unwrap();
@@ -154,5 +208,8 @@ fn check_reports_a_changed_number_and_exits_1() {
     let changed = common::shipid(&["check", &study, "--reference", reference.to_str().unwrap()]);
     assert_eq!(changed.status.code(), Some(1));
     let out = String::from_utf8_lossy(&changed.stdout);
-    assert!(out.contains(&format!("summary: row 1: `mrae` = {stored}, reference 0.5")), "{out}");
+    assert!(
+        out.contains(&format!("summary: row 1: `mrae` = {stored}, reference 0.5")),
+        "{out}"
+    );
 }
