@@ -31,7 +31,12 @@ impl Column {
     /// The cell as text (numbers in shortest round-trip form, missing as "").
     pub fn cell(&self, i: usize) -> String {
         match self {
-            Column::Num(v) => v.get(i).copied().flatten().map(|x| format!("{x}")).unwrap_or_default(),
+            Column::Num(v) => v
+                .get(i)
+                .copied()
+                .flatten()
+                .map(|x| format!("{x}"))
+                .unwrap_or_default(),
             Column::Text(v) => v.get(i).cloned().unwrap_or_default(),
         }
     }
@@ -94,7 +99,8 @@ impl Table {
                 Column::Text(v) => PlColumn::new(name.as_str().into(), v.as_slice()),
             })
             .collect();
-        DataFrame::new_infer_height(cols).map_err(|e| TableError::Polars("building the table".into(), e))
+        DataFrame::new_infer_height(cols)
+            .map_err(|e| TableError::Polars("building the table".into(), e))
     }
 
     /// Write `dir/stem.csv` and `dir/stem.parquet`, each atomically.
@@ -107,12 +113,17 @@ impl Table {
         let pq_tmp = pq_path.with_extension("parquet.tmp");
         let name = |p: &Path| p.display().to_string();
         {
-            let mut f = std::fs::File::create(&csv_tmp).map_err(|e| TableError::Io(name(&csv_tmp), e))?;
-            CsvWriter::new(&mut f).finish(&mut df).map_err(|e| TableError::Polars(name(&csv_path), e))?;
+            let mut f =
+                std::fs::File::create(&csv_tmp).map_err(|e| TableError::Io(name(&csv_tmp), e))?;
+            CsvWriter::new(&mut f)
+                .finish(&mut df)
+                .map_err(|e| TableError::Polars(name(&csv_path), e))?;
         }
         {
             let f = std::fs::File::create(&pq_tmp).map_err(|e| TableError::Io(name(&pq_tmp), e))?;
-            ParquetWriter::new(f).finish(&mut df).map_err(|e| TableError::Polars(name(&pq_path), e))?;
+            ParquetWriter::new(f)
+                .finish(&mut df)
+                .map_err(|e| TableError::Polars(name(&pq_path), e))?;
         }
         std::fs::rename(&csv_tmp, &csv_path).map_err(|e| TableError::Io(name(&csv_path), e))?;
         std::fs::rename(&pq_tmp, &pq_path).map_err(|e| TableError::Io(name(&pq_path), e))?;
@@ -123,7 +134,12 @@ impl Table {
     pub fn read_csv(path: &Path) -> Result<Table, TableError> {
         let name = path.display().to_string();
         let mut r = csv::Reader::from_path(path).map_err(|e| TableError::Csv(name.clone(), e))?;
-        let headers: Vec<String> = r.headers().map_err(|e| TableError::Csv(name.clone(), e))?.iter().map(String::from).collect();
+        let headers: Vec<String> = r
+            .headers()
+            .map_err(|e| TableError::Csv(name.clone(), e))?
+            .iter()
+            .map(String::from)
+            .collect();
         let mut raw: Vec<Vec<String>> = vec![Vec::new(); headers.len()];
         for rec in r.records() {
             let rec = rec.map_err(|e| TableError::Csv(name.clone(), e))?;
@@ -135,7 +151,9 @@ impl Table {
             .into_iter()
             .zip(raw)
             .map(|(h, cells)| {
-                let numeric = cells.iter().all(|c| c.is_empty() || c.parse::<f64>().is_ok())
+                let numeric = cells
+                    .iter()
+                    .all(|c| c.is_empty() || c.parse::<f64>().is_ok())
                     && cells.iter().any(|c| !c.is_empty());
                 let col = if numeric {
                     Column::Num(cells.iter().map(|c| c.parse::<f64>().ok()).collect())
@@ -150,7 +168,13 @@ impl Table {
 
     /// Markdown pivot: one row per distinct value of `rows`, one column per distinct value of `cols`,
     /// cells `value` (formatted with `fmt`), in order of first appearance.
-    pub fn pivot_markdown(&self, rows: &str, cols: &str, value: &str, fmt: impl Fn(f64) -> String) -> Result<String, TableError> {
+    pub fn pivot_markdown(
+        &self,
+        rows: &str,
+        cols: &str,
+        value: &str,
+        fmt: impl Fn(f64) -> String,
+    ) -> Result<String, TableError> {
         let get = |n: &str| self.column(n).ok_or_else(|| TableError::NoColumn(n.into()));
         let (rc, cc, vc) = (get(rows)?, get(cols)?, get(value)?);
         let mut row_keys: Vec<String> = Vec::new();
@@ -173,7 +197,15 @@ impl Table {
         let mut out = format!("| {rows} | {} |\n", col_keys.join(" | "));
         out.push_str(&format!("|---|{}\n", "---|".repeat(col_keys.len())));
         for r in &row_keys {
-            let line: Vec<String> = col_keys.iter().map(|c| cells.get(&(r.clone(), c.clone())).cloned().unwrap_or_default()).collect();
+            let line: Vec<String> = col_keys
+                .iter()
+                .map(|c| {
+                    cells
+                        .get(&(r.clone(), c.clone()))
+                        .cloned()
+                        .unwrap_or_default()
+                })
+                .collect();
             out.push_str(&format!("| {r} | {} |\n", line.join(" | ")));
         }
         Ok(out)
@@ -198,7 +230,11 @@ pub fn compare(
 ) -> Vec<String> {
     let mut diffs = Vec::new();
     if fresh.rows() != reference.rows() {
-        diffs.push(format!("{} rows, reference has {}", fresh.rows(), reference.rows()));
+        diffs.push(format!(
+            "{} rows, reference has {}",
+            fresh.rows(),
+            reference.rows()
+        ));
         return diffs;
     }
     for (name, rcol) in &reference.columns {
@@ -214,7 +250,9 @@ pub fn compare(
         for i in 0..reference.rows() {
             let (f, r) = (fcol.cell(i), rcol.cell(i));
             let same = match (f.parse::<f64>(), r.parse::<f64>()) {
-                (Ok(a), Ok(b)) => (a - b).abs() <= tol.abs + tol.rel * b.abs() || (a.is_nan() && b.is_nan()),
+                (Ok(a), Ok(b)) => {
+                    (a - b).abs() <= tol.abs + tol.rel * b.abs() || (a.is_nan() && b.is_nan())
+                }
                 _ => f == r,
             };
             if !same {
@@ -250,16 +288,33 @@ mod tests {
     fn compare_uses_tolerances_and_reports_each_difference() {
         let mut fresh = sample();
         fresh.columns[2].1 = Column::Num(vec![Some(0.1 + 1e-9), Some(0.3), Some(0.26)]);
-        let tol = BTreeMap::from([("mrae".to_string(), Some(Tolerance { abs: 1e-6, rel: 0.0 }))]);
+        let tol = BTreeMap::from([(
+            "mrae".to_string(),
+            Some(Tolerance {
+                abs: 1e-6,
+                rel: 0.0,
+            }),
+        )]);
         let d = compare(&fresh, &sample(), &tol, Tolerance { abs: 0.0, rel: 0.0 });
-        assert_eq!(d, vec!["row 2: `mrae` = 0.3, reference ".to_string(), "row 3: `mrae` = 0.26, reference 0.25".to_string()]);
+        assert_eq!(
+            d,
+            vec![
+                "row 2: `mrae` = 0.3, reference ".to_string(),
+                "row 3: `mrae` = 0.26, reference 0.25".to_string()
+            ]
+        );
         let ignore = BTreeMap::from([("mrae".to_string(), None)]);
         assert!(compare(&fresh, &sample(), &ignore, Tolerance { abs: 0.0, rel: 0.0 }).is_empty());
     }
 
     #[test]
     fn pivot_in_order_of_appearance() {
-        let md = sample().pivot_markdown("case", "test", "mrae", |x| format!("{:.0}%", 100.0 * x)).unwrap();
-        assert_eq!(md, "| case | zz | tc |\n|---|---|---|\n| a | 10% | – |\n| b | 25% |  |\n");
+        let md = sample()
+            .pivot_markdown("case", "test", "mrae", |x| format!("{:.0}%", 100.0 * x))
+            .unwrap();
+        assert_eq!(
+            md,
+            "| case | zz | tc |\n|---|---|---|\n| a | 10% | – |\n| b | 25% |  |\n"
+        );
     }
 }
