@@ -11,6 +11,11 @@
 //!    Newton steps (`∇²F_μ = I + (C/μ) Z_QᵀZ_Q` over the band samples Q; a box-QP step by
 //!    the active-set method when bounds are present) with Armijo backtracking, warm
 //!    started from the previous stage. Cost per step: O(nq + |Q|q²).
+//! 0. **Merging duplicates.** Exact duplicate samples `(zᵢ, yᵢ)` (stacked records at
+//!    rest repeat one row hundreds of times) are merged into one sample of weight equal
+//!    to their multiplicity, `C Σ wᵢ h(rᵢ)`; otherwise they all sit on the tube's edge
+//!    together, the margin set exceeds q and the exact finish cannot apply until the
+//!    smoothing is far smaller (this halves the Newton steps on such designs).
 //! 3. **Exact finish.** The band samples of a small-μ solution are the candidate margin
 //!    set M (|r| = ε at the optimum), the samples beyond it the set O of points outside
 //!    the tube, the coordinates at a bound the set B. With these sets the KKT conditions
@@ -38,8 +43,55 @@ const MAX_STAGES: usize = 40;
 const MAX_NEWTON_PER_STAGE: usize = 60;
 const GAP_TOLERANCE: f64 = 1e-10;
 
+/// The samples with exact duplicates `(zᵢ, yᵢ)` merged into one sample of weight equal to
+/// their multiplicity (designs stacked from records at rest repeat the same row many
+/// times; merged, a margin set never exceeds q samples for that reason alone).
+struct Data {
+    z: Tall,
+    y: Vec<f64>,
+    /// Multiplicities.
+    w: Vec<f64>,
+    n: usize,
+}
+
+impl Data {
+    fn new(pb: &Problem) -> Self {
+        let (n, q) = (pb.n, pb.q());
+        let mut first: std::collections::HashMap<Vec<u64>, usize> =
+            std::collections::HashMap::with_capacity(n);
+        let mut keep: Vec<usize> = Vec::with_capacity(n);
+        let mut w: Vec<f64> = Vec::with_capacity(n);
+        for i in 0..n {
+            let mut key: Vec<u64> = (0..q).map(|j| col(&pb.z, j)[i].to_bits()).collect();
+            key.push(pb.y[i].to_bits());
+            match first.entry(key) {
+                std::collections::hash_map::Entry::Occupied(e) => w[*e.get()] += 1.0,
+                std::collections::hash_map::Entry::Vacant(e) => {
+                    e.insert(keep.len());
+                    keep.push(i);
+                    w.push(1.0);
+                }
+            }
+        }
+        let m = keep.len();
+        let mut z = Tall::zeros(m, q);
+        for j in 0..q {
+            let src = col(&pb.z, j);
+            for (d, &i) in z.col_mut(j).iter_mut().zip(&keep) {
+                *d = src[i];
+            }
+        }
+        let y = keep.iter().map(|&i| pb.y[i]).collect();
+        Data { z, y, w, n: m }
+    }
+
+    fn q(&self) -> usize {
+        self.z.ncols()
+    }
+}
+
 struct Smoothed<'a> {
-    pb: &'a Problem,
+    pb: &'a Data,
     c: f64,
     eps: f64,
     mu: f64,
@@ -53,33 +105,34 @@ impl Smoothed<'_> {
     /// `(F_μ, F)` in one pass.
     fn values(&self, gamma: &[f64], r: &[f64]) -> (f64, f64) {
         let (mut smooth, mut hinge) = (0.0, 0.0);
-        for &ri in r {
+        for (&ri, &wi) in r.iter().zip(&self.pb.w) {
             let a = ri.abs() - self.eps;
             if a > 0.0 {
-                hinge += a;
-                smooth += if a < self.mu {
-                    0.5 * a * a / self.mu
-                } else {
-                    a - 0.5 * self.mu
-                };
+                hinge += wi * a;
+                smooth += wi
+                    * if a < self.mu {
+                        0.5 * a * a / self.mu
+                    } else {
+                        a - 0.5 * self.mu
+                    };
             }
         }
         let reg = 0.5 * gamma.iter().map(|g| g * g).sum::<f64>();
         (reg + self.c * smooth, reg + self.c * hinge)
     }
 
-    /// Weights `h'_μ(rᵢ)` ∈ [−1, 1] and the band samples Q.
+    /// Weights `wᵢ h'_μ(rᵢ)` and the band samples Q.
     fn derivatives(&self, r: &[f64]) -> (Vec<f64>, Vec<usize>) {
         let mut w = vec![0.0; r.len()];
         let mut band = Vec::new();
-        for (i, &ri) in r.iter().enumerate() {
+        for (i, (&ri, &wi)) in r.iter().zip(&self.pb.w).enumerate() {
             let a = ri.abs() - self.eps;
             if a > 0.0 {
                 if a < self.mu {
-                    w[i] = ri.signum() * a / self.mu;
+                    w[i] = wi * ri.signum() * a / self.mu;
                     band.push(i);
                 } else {
-                    w[i] = ri.signum();
+                    w[i] = wi * ri.signum();
                 }
             }
         }
@@ -104,17 +157,18 @@ impl Smoothed<'_> {
         let gd: f64 = gamma.iter().zip(d).map(|(a, b)| a * b).sum();
         let dd: f64 = d.iter().map(|v| v * v).sum();
         let (c, eps, mu) = (self.c, self.eps, self.mu);
+        let wts = &self.pb.w;
         let slope = |t: f64| -> (f64, f64) {
             let (mut s1, mut s2) = (0.0, 0.0);
-            for (&ri, &ai) in r.iter().zip(zd) {
+            for ((&ri, &ai), &wi) in r.iter().zip(zd).zip(wts) {
                 let rt = ri - t * ai;
                 let a = rt.abs() - eps;
                 if a > 0.0 {
                     if a < mu {
-                        s1 += ai * rt.signum() * a / mu;
-                        s2 += ai * ai / mu;
+                        s1 += wi * ai * rt.signum() * a / mu;
+                        s2 += wi * ai * ai / mu;
                     } else {
-                        s1 += ai * rt.signum();
+                        s1 += wi * ai * rt.signum();
                     }
                 }
             }
@@ -180,13 +234,17 @@ impl Smoothed<'_> {
     }
 }
 
-fn true_objective(gamma: &[f64], r: &[f64], c: f64, eps: f64) -> f64 {
+fn true_objective(gamma: &[f64], r: &[f64], wts: &[f64], c: f64, eps: f64) -> f64 {
     0.5 * gamma.iter().map(|g| g * g).sum::<f64>()
-        + c * r.iter().map(|v| (v.abs() - eps).max(0.0)).sum::<f64>()
+        + c * r
+            .iter()
+            .zip(wts)
+            .map(|(v, w)| w * (v.abs() - eps).max(0.0))
+            .sum::<f64>()
 }
 
-/// `I + (C/μ) Z_QᵀZ_Q`.
-fn hessian(z: &Tall, band: &[usize], weight: f64) -> Mat<f64> {
+/// `I + (C/μ) Z_QᵀW_QZ_Q`.
+fn hessian(z: &Tall, wts: &[f64], band: &[usize], weight: f64) -> Mat<f64> {
     let q = z.ncols();
     let mut h = if band.is_empty() {
         Mat::<f64>::zeros(q, q)
@@ -195,7 +253,11 @@ fn hessian(z: &Tall, band: &[usize], weight: f64) -> Mat<f64> {
         for j in 0..q {
             let src = col(z, j);
             for (d, &i) in zq.col_mut(j).iter_mut().zip(band) {
-                *d = src[i];
+                *d = if wts[i] == 1.0 {
+                    src[i]
+                } else {
+                    wts[i].sqrt() * src[i]
+                };
             }
         }
         gram(zq.as_ref())
@@ -229,7 +291,7 @@ fn newton_stage(s: &Smoothed<'_>, gamma: &mut [f64], lo: &[f64], hi: &[f64]) -> 
         let (w, band) = s.derivatives(&r);
         let ztw = zt_v(&pb.z, &w);
         let g: Vec<f64> = (0..q).map(|j| gamma[j] - s.c * ztw[j]).collect();
-        let h = hessian(&pb.z, &band, s.c / s.mu);
+        let h = hessian(&pb.z, &pb.w, &band, s.c / s.mu);
         // `target` is kept so that a full step lands exactly on the bounds it reaches,
         // which the exact finish relies on to recognise bound-held coordinates.
         let (d, target): (Vec<f64>, Option<Vec<f64>>) = if unbounded {
@@ -312,7 +374,7 @@ fn newton_stage(s: &Smoothed<'_>, gamma: &mut [f64], lo: &[f64], hi: &[f64]) -> 
 #[derive(Clone, Copy, PartialEq)]
 enum Side {
     Inside,
-    /// On the tube's edge, `r = ε·s`, with multiplier `θ·s ∈ [0, C]`.
+    /// On the tube's edge, `r = ε·s`, with multiplier `θ·s ∈ [0, C w]`.
     Margin(f64),
     /// Outside, `r·s > ε`, contributing `C s zᵢ` to γ.
     Outside(f64),
@@ -339,6 +401,7 @@ fn exact_finish(
 ) -> Option<Vec<f64>> {
     let pb = s.pb;
     let (z, y, n, q) = (&pb.z, &pb.y, pb.n, pb.q());
+    let wts = &pb.w;
     let (c, eps) = (s.c, s.eps);
     let mut side: Vec<Side> = r
         .iter()
@@ -371,7 +434,14 @@ fn exact_finish(
         }
         let out_sign: Vec<f64> = side
             .iter()
-            .map(|sd| if let Side::Outside(v) = sd { *v } else { 0.0 })
+            .zip(wts)
+            .map(|(sd, wi)| {
+                if let Side::Outside(v) = sd {
+                    v * wi
+                } else {
+                    0.0
+                }
+            })
             .collect();
         let g_out: Vec<f64> = zt_v(z, &out_sign).into_iter().map(|v| c * v).collect();
         let mut new_gamma: Vec<f64> = (0..q).map(|j| held[j].unwrap_or(g_out[j])).collect();
@@ -413,10 +483,11 @@ fn exact_finish(
         for (k, &i) in margin.iter().enumerate() {
             let Side::Margin(si) = side[i] else { continue };
             let w = si * theta[k];
+            let cap = c * wts[i];
             let v = if w < -tol_w {
                 -w
-            } else if w > c + tol_w {
-                w - c
+            } else if w > cap + tol_w {
+                w - cap
             } else {
                 0.0
             };
@@ -502,13 +573,13 @@ fn exact_finish(
 }
 
 pub(crate) fn solve(
-    pb: &Problem,
+    problem: &Problem,
     c: f64,
     eps: f64,
     lo: &[f64],
     hi: &[f64],
 ) -> Result<Solution, EstimatorError> {
-    let q = pb.q();
+    let q = problem.q();
     let mut gamma: Vec<f64> = (0..q).map(|j| 0.0f64.clamp(lo[j], hi[j])).collect();
     if c == 0.0 {
         // Only ½‖γ‖² remains.
@@ -518,8 +589,10 @@ pub(crate) fn solve(
             iterations: 0,
         });
     }
-    let n = pb.n as f64;
-    let rms_y = (pb.y.iter().map(|v| v * v).sum::<f64>() / n).sqrt();
+    let data = Data::new(problem);
+    let pb = &data;
+    let n = problem.n as f64;
+    let rms_y = (problem.y.iter().map(|v| v * v).sum::<f64>() / n).sqrt();
     let mut scale = eps.max(rms_y);
     if scale == 0.0 {
         scale = 1.0;
@@ -531,11 +604,12 @@ pub(crate) fn solve(
         let (st, decrement) = newton_stage(&s, &mut gamma, lo, hi);
         iterations += st;
         let r = residual(&pb.z, &pb.y, &gamma);
-        let f_true = true_objective(&gamma, &r, c, eps);
+        let f_true = true_objective(&gamma, &r, &pb.w, c, eps);
+
         let f_smooth = s.value(&gamma, &r);
         if let Some(candidate) = exact_finish(&s, &gamma, &r, lo, hi, scale) {
             let rc = residual(&pb.z, &pb.y, &candidate);
-            let fc = true_objective(&candidate, &rc, c, eps);
+            let fc = true_objective(&candidate, &rc, &pb.w, c, eps);
             if fc <= f_true * (1.0 + 1e-12) + f64::MIN_POSITIVE {
                 return Ok(Solution {
                     gamma: candidate,
