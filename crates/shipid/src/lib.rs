@@ -7,6 +7,7 @@ pub mod fit_cmd;
 pub mod generate;
 pub mod import;
 pub mod metrics_cmd;
+pub mod plot;
 pub mod runner;
 pub mod simulate_cmd;
 pub mod spec;

@@ -111,6 +111,13 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Redraw the figures (SVG) of an existing study run into <out>/figures/ (no refitting).
+    Plot {
+        study: PathBuf,
+        /// The run's output directory (default results/<study>/).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Rerun a study and compare its tables with a stored reference.
     Check {
         study: PathBuf,
@@ -262,6 +269,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
         Command::Table { study, pivot, out } => {
             shipid::study_cmd::table(&study, out.as_deref(), &pivot)
         }
+        Command::Plot { study, out } => shipid::plot::run(&study, out.as_deref()),
         Command::Check {
             study,
             reference,

@@ -202,6 +202,10 @@ pub fn run_and_write(
     diagnostics_table(study, &results)
         .write(out, "diagnostics")
         .map_err(failed)?;
+    // Figures are a convenience: one that cannot be drawn is a warning, never a failed run.
+    for w in crate::plot::write_figures(study, out).warnings {
+        eprintln!("warning: {w}");
+    }
     Ok(results)
 }
 
