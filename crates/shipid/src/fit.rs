@@ -126,6 +126,17 @@ pub enum WindowSpec {
     },
 }
 
+impl WindowSpec {
+    /// Short label for tables and legends: "whole", "4 OS", "0-120 s".
+    pub fn label(self) -> String {
+        match self {
+            WindowSpec::Whole => "whole".into(),
+            WindowSpec::Overshoots(n) => format!("{n} OS"),
+            WindowSpec::Time { start_s, end_s } => format!("{start_s}-{end_s} s"),
+        }
+    }
+}
+
 /// The sample range of a recording for a window, and the overshoot count when truncated by overshoots.
 pub fn window_range(
     r: &DatasetRecording,

@@ -20,19 +20,16 @@ use std::path::{Path, PathBuf};
 use anyhow::{Result, anyhow};
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
-use shipid_io::{DatasetRecording, Manoeuvre, Recording, Ship};
+use shipid_io::{DatasetRecording, Recording};
 use shipid_model::design::contributions;
 use shipid_model::{AbkowitzModel, Dof, ModelFile, PrimeInertia, design};
-use shipid_sim::metrics::first_execute;
-use shipid_sim::{
-    AbkowitzDynamics, Dynamics, SimOptions, SimOutput, SimStatus, State, controller_for,
-};
+use shipid_sim::{AbkowitzDynamics, SimStatus};
 use shipid_tables::Table;
 
 use crate::fit::{WindowSpec, training_samples};
 use crate::runner::default_out;
 use crate::study::{Case, Study, load_study};
-use crate::validate::{DT_OVER_L_OVER_U0, replay};
+use crate::validate::replay;
 use crate::{CliError, Outcome, bad_input};
 
 const FONT: &str = "sans-serif";
@@ -62,44 +59,7 @@ pub struct FigureReport {
     pub warnings: Vec<String>,
 }
 
-/// The recording's standard manoeuvre re-simulated in closed loop exactly as
-/// [`crate::validate::compare_manoeuvre`] does (controller from the manoeuvre, first execute at the
-/// recorded time, RK4 step 0.05 s·(L/U0)/(7/1.179), times from 0 at the record's start); `None` for a
-/// free recording. A simulation that cannot start is a divergence at 0 s with no samples.
-pub fn closed_loop(model: &dyn Dynamics, r: &DatasetRecording, ship: &Ship) -> Option<SimOutput> {
-    let rec = &r.recording;
-    let (rudder, side) = match r.manoeuvre {
-        Manoeuvre::ZigZag {
-            rudder_deg, side, ..
-        }
-        | Manoeuvre::Turning { rudder_deg, side } => (rudder_deg, side),
-        Manoeuvre::Free => return None,
-    };
-    if rec.is_empty() {
-        return None;
-    }
-    let t0 = rec.t[0];
-    let t_exec = first_execute(rec, rudder, side, ship).map_or(0.0, |f| (f.t_s - t0).max(0.0));
-    let dt = DT_OVER_L_OVER_U0 * ship.lpp / ship.u0;
-    let opts = SimOptions::new(rec.t[rec.len() - 1] - t0).with_step(dt, dt);
-    let initial = State {
-        u: rec.u[0],
-        v: rec.v[0],
-        r: rec.r[0],
-        x0: rec.x0[0],
-        y0: rec.y0[0],
-        psi: rec.psi[0],
-    };
-    let failed = |reason: String| SimOutput {
-        recording: Recording::default(),
-        status: SimStatus::Diverged { t_s: 0.0, reason },
-    };
-    Some(match controller_for(&r.manoeuvre, t_exec) {
-        Ok(mut c) => shipid_sim::simulate(model, c.as_mut(), initial, &opts)
-            .unwrap_or_else(|e| failed(format!("cannot simulate: {e}"))),
-        Err(e) => failed(format!("no controller: {e}")),
-    })
-}
+pub use crate::validate::closed_loop;
 
 /// (DOF, term, set, estimator) of a convergence line.
 type LineKey = (String, String, String, String);
@@ -108,14 +68,6 @@ type LineKey = (String, String, String, String);
 struct CaseData<'a> {
     case: &'a Case,
     model: Option<AbkowitzModel>,
-}
-
-fn window_label(w: WindowSpec) -> String {
-    match w {
-        WindowSpec::Whole => "whole".into(),
-        WindowSpec::Overshoots(n) => format!("{n} OS"),
-        WindowSpec::Time { start_s, end_s } => format!("{start_s}-{end_s} s"),
-    }
 }
 
 /// Legend of a case: set, estimator (with its fixed hyper-parameter), window.
@@ -132,7 +84,13 @@ fn case_label(c: &Case) -> String {
     } else {
         String::new()
     };
-    format!("{} {}{} {}", c.set, e.name, hyper, window_label(c.window))
+    format!(
+        "{} {}{} {}",
+        c.set,
+        e.name,
+        hyper,
+        WindowSpec::label(c.window)
+    )
 }
 
 fn load_cases<'a>(study: &'a Study, out: &Path) -> Vec<CaseData<'a>> {

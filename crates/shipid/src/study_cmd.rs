@@ -29,14 +29,7 @@ fn case_columns(t: &mut Table, rows: &[(&Case, &CaseResult)]) {
     t.push_text("estimator", text(&|c, _| c.estimator.name.clone()));
     t.push_text("solver", text(&|c, _| c.solver.clone()));
     t.push_text("training", text(&|c, _| c.training.join("+")));
-    t.push_text(
-        "window",
-        text(&|c, _| match c.window {
-            crate::fit::WindowSpec::Whole => "whole".into(),
-            crate::fit::WindowSpec::Overshoots(n) => format!("{n} OS"),
-            crate::fit::WindowSpec::Time { start_s, end_s } => format!("{start_s}-{end_s} s"),
-        }),
-    );
+    t.push_text("window", text(&|c, _| c.window.label()));
     let num = |f: &dyn Fn(&Case, &CaseResult) -> Option<f64>| {
         rows.iter().map(|(c, r)| f(c, r)).collect::<Vec<_>>()
     };

@@ -146,12 +146,11 @@ pub fn replay_errors(sim: &SimOutput, rec: &Recording, ship: &Ship) -> ReplayErr
     }
 }
 
-/// Re-simulate the recording's standard manoeuvre in closed loop and compare its metrics.
-pub fn compare_manoeuvre(
-    model: &dyn Dynamics,
-    r: &DatasetRecording,
-    ship: &Ship,
-) -> Option<MetricComparison> {
+/// The recording's standard manoeuvre re-simulated in closed loop from its initial state: controller
+/// from the manoeuvre, first execute where the recorded rudder started to move (the metric's execute is
+/// interpolated on the rudder signal), times from 0 at the record's start. `None` for a free recording.
+/// A simulation that cannot start is a divergence at 0 s with no samples.
+pub fn closed_loop(model: &dyn Dynamics, r: &DatasetRecording, ship: &Ship) -> Option<SimOutput> {
     let rec = &r.recording;
     let (rudder, side) = match r.manoeuvre {
         Manoeuvre::ZigZag {
@@ -160,12 +159,12 @@ pub fn compare_manoeuvre(
         | Manoeuvre::Turning { rudder_deg, side } => (rudder_deg, side),
         Manoeuvre::Free => return None,
     };
-    let recorded = metrics(rec, &r.manoeuvre, ship);
+    if rec.is_empty() {
+        return None;
+    }
     let t0 = rec.t[0];
-    // The controller starts the rudder at its execute time; the metric's execute is interpolated on the
-    // rudder signal, so start the controller where the recorded rudder started to move.
     let t_exec = first_execute(rec, rudder, side, ship).map_or(0.0, |f| (f.t_s - t0).max(0.0));
-    let sim = match controller_for(&r.manoeuvre, t_exec) {
+    Some(match controller_for(&r.manoeuvre, t_exec) {
         Ok(mut c) => shipid_sim::simulate(
             model,
             c.as_mut(),
@@ -174,7 +173,17 @@ pub fn compare_manoeuvre(
         )
         .unwrap_or_else(|e| failed_output(format!("cannot simulate: {e}"))),
         Err(e) => failed_output(format!("no controller: {e}")),
-    };
+    })
+}
+
+/// Re-simulate the recording's standard manoeuvre in closed loop and compare its metrics.
+pub fn compare_manoeuvre(
+    model: &dyn Dynamics,
+    r: &DatasetRecording,
+    ship: &Ship,
+) -> Option<MetricComparison> {
+    let sim = closed_loop(model, r, ship)?;
+    let recorded = metrics(&r.recording, &r.manoeuvre, ship);
     let predicted =
         matches!(sim.status, SimStatus::Ok).then(|| metrics(&sim.recording, &r.manoeuvre, ship));
     let mut relative_error = std::collections::BTreeMap::new();
