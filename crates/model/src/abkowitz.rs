@@ -186,6 +186,35 @@ pub struct ModelFile {
     pub training: Vec<TrainingWindow>,
     /// Coefficients per DOF: name → value (prime system I, U0 of the ship, midship, δ + to starboard).
     pub coefficients: BTreeMap<String, BTreeMap<String, f64>>,
+    /// Physical effects that are part of the model (found by `shipid diagnose`); every simulation of the
+    /// model applies them.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub effects: Vec<EffectEntry>,
+}
+
+/// A physical effect that is part of a model, with where it came from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EffectEntry {
+    /// The effect in the syntax of `shipid generate --effect` (`current:speed=0.05,from_deg=120`; SI
+    /// units, directions in degrees clockwise from north, the direction the flow comes from).
+    pub effect: String,
+    /// Where the parameters come from (e.g. the diagnosis that fitted them, and on which recordings).
+    pub source: String,
+    /// One-standard-error uncertainty per parameter key, when known.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub standard_error: BTreeMap<String, f64>,
+}
+
+/// A model file that is another model plus effects: used when the base is not itself a model file
+/// (`base = "mmg:kvlcc2"`), or to keep a base file untouched (`base = "path/to/model.toml"`, relative to
+/// this file).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AugmentedModelFile {
+    pub shipid_version: String,
+    pub base: String,
+    pub effects: Vec<EffectEntry>,
 }
 
 impl ModelFile {
@@ -214,6 +243,7 @@ impl ModelFile {
             estimator,
             training,
             coefficients,
+            effects: Vec::new(),
         }
     }
 

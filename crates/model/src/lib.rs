@@ -11,6 +11,9 @@ pub mod abkowitz;
 pub mod design;
 pub mod set;
 
-pub use abkowitz::{AbkowitzModel, EstimatorInfo, ModelError, ModelFile, TrainingWindow};
+pub use abkowitz::{
+    AbkowitzModel, AugmentedModelFile, EffectEntry, EstimatorInfo, ModelError, ModelFile,
+    TrainingWindow,
+};
 pub use design::{Design, PrimeInertia, Samples, design};
 pub use set::{CoefficientSet, Dof, Known, Monomial, SetError, SetFile};

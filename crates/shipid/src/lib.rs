@@ -2,6 +2,9 @@
 //! returns an [`Outcome`] or a [`CliError`]; `main` turns them into output and exit codes
 //! (0 all ok, 1 some case failed, 2 bad input).
 
+pub mod bench_diagnose;
+pub mod diagnose;
+pub mod diagnose_cmd;
 pub mod fit;
 pub mod fit_cmd;
 pub mod generate;

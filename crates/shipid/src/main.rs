@@ -129,6 +129,37 @@ enum Command {
         #[arg(long)]
         jobs: Option<usize>,
     },
+    /// Diagnose why a model and recordings it did not see differ: locate the mismatch, name the
+    /// physical effect left out, fit it, show the held-out fit improve (DATA.md diagnosis report).
+    Diagnose {
+        /// A model file or `mmg:kvlcc2`.
+        model: String,
+        dataset: PathBuf,
+        /// Write the JSON report here.
+        #[arg(long, value_name = "REPORT.json")]
+        json: Option<PathBuf>,
+        /// Write before/after figures into this directory.
+        #[arg(long, value_name = "DIR")]
+        plots: Option<PathBuf>,
+        /// Write the model with the found effect here (default: beside the report, `.model.toml`).
+        #[arg(long, value_name = "MODEL.toml")]
+        model_out: Option<PathBuf>,
+    },
+    /// Benchmark the diagnosis on generated data with concealed effects (confusion matrix, fit
+    /// improvements, recovered parameters) written to `--out`.
+    BenchDiagnose {
+        /// Base model (default: full68 LSQ fitted on the clean embedded data).
+        #[arg(long)]
+        base: Option<String>,
+        #[arg(long, default_value = "results/diagnose")]
+        out: PathBuf,
+        /// Noise seeds per effect and magnitude.
+        #[arg(long, default_value_t = 3)]
+        seeds: u64,
+        /// Effect-free control cases.
+        #[arg(long, default_value_t = 12)]
+        controls: u64,
+    },
     /// Validate a model on a data set: replayed-rudder RMSEs and closed-loop manoeuvre metrics.
     Validate {
         /// A model file or `mmg:kvlcc2`.
@@ -281,6 +312,25 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             dataset,
             json,
         } => shipid::validate_cmd::run(&model, &dataset, json),
+        Command::BenchDiagnose {
+            base,
+            out,
+            seeds,
+            controls,
+        } => shipid::bench_diagnose::run(base.as_deref(), &out, seeds, controls),
+        Command::Diagnose {
+            model,
+            dataset,
+            json,
+            plots,
+            model_out,
+        } => shipid::diagnose_cmd::run(
+            &model,
+            &dataset,
+            json.as_deref(),
+            plots.as_deref(),
+            model_out.as_deref(),
+        ),
     }
 }
 

@@ -5,21 +5,57 @@ use std::path::Path;
 use serde_json::{Map, Value, json};
 use shipid_io::Manoeuvre;
 use shipid_io::write::{recording_csv, write_atomic};
-use shipid_model::ModelFile;
+use shipid_model::{AugmentedModelFile, EffectEntry, ModelFile};
 use shipid_sim::{
-    AbkowitzDynamics, Dynamics, MmgModel, SimOptions, SimOutput, SimStatus, State, controller_for,
-    metrics,
+    AbkowitzDynamics, Dynamics, Effect, MmgModel, SimOptions, SimOutput, SimStatus, State,
+    WithEffects, controller_for, metrics,
 };
 
 use crate::generate::{DT_S, SAMPLE_INTERVAL_S, T_EXECUTE_S, standard_duration_s};
 use crate::spec::parse_manoeuvre;
 use crate::{CliError, Outcome, bad_input, failed};
 
-/// A model named on the command line: `mmg:kvlcc2` (the reference) or a model file written by
-/// `shipid fit`.
+/// A model named on the command line: `mmg:kvlcc2` (the reference), a model file written by `shipid fit`,
+/// or an augmented model file (`base = …` plus effects) written by `shipid diagnose`. Effects in the
+/// file are applied around the model, so every simulation includes them.
 pub fn load_model(spec: &str) -> Result<Box<dyn Dynamics + Send + Sync>, CliError> {
+    let (base, effects) = load_model_parts(spec)?;
+    if effects.is_empty() {
+        return Ok(base);
+    }
+    let wrapped =
+        WithEffects::new(base, &effects).map_err(|e| bad_input(format!("{spec}: effects: {e}")))?;
+    Ok(Box::new(wrapped))
+}
+
+/// The model without its effects, and its effects (see [`load_model`]).
+pub fn load_model_parts(
+    spec: &str,
+) -> Result<(Box<dyn Dynamics + Send + Sync>, Vec<Effect>), CliError> {
+    load_parts(spec, 0)
+}
+
+fn parse_entries(path: &Path, entries: &[EffectEntry]) -> Result<Vec<Effect>, CliError> {
+    entries
+        .iter()
+        .enumerate()
+        .map(|(i, e)| {
+            e.effect.parse::<Effect>().map_err(|err| {
+                bad_input(format!(
+                    "{}: key `effects[{i}].effect`: {err}",
+                    path.display()
+                ))
+            })
+        })
+        .collect()
+}
+
+fn load_parts(
+    spec: &str,
+    depth: usize,
+) -> Result<(Box<dyn Dynamics + Send + Sync>, Vec<Effect>), CliError> {
     if spec == "mmg:kvlcc2" {
-        return Ok(Box::new(MmgModel::kvlcc2()));
+        return Ok((Box::new(MmgModel::kvlcc2()), Vec::new()));
     }
     let path = Path::new(spec);
     if spec.starts_with("mmg:") || !path.is_file() {
@@ -28,12 +64,41 @@ pub fn load_model(spec: &str) -> Result<Box<dyn Dynamics + Send + Sync>, CliErro
         )));
     }
     let text = std::fs::read_to_string(path).map_err(|e| shipid_io::InputError::read(path, &e))?;
+    let is_augmented = toml::from_str::<toml::Table>(&text)
+        .map(|t| t.contains_key("base"))
+        .unwrap_or(false);
+    if is_augmented {
+        let file: AugmentedModelFile =
+            toml::from_str(&text).map_err(|e| shipid_io::InputError::toml(path, &text, &e))?;
+        if depth > 4 {
+            return Err(bad_input(format!(
+                "{}: key `base`: too many nested augmented model files",
+                path.display()
+            )));
+        }
+        let base_spec = if file.base.starts_with("mmg:") {
+            file.base.clone()
+        } else {
+            path.parent()
+                .unwrap_or(Path::new("."))
+                .join(&file.base)
+                .display()
+                .to_string()
+        };
+        let (base, mut effects) = load_parts(&base_spec, depth + 1)?;
+        for e in parse_entries(path, &file.effects)? {
+            effects.retain(|x| x.kind() != e.kind());
+            effects.push(e);
+        }
+        return Ok((base, effects));
+    }
     let file: ModelFile =
         toml::from_str(&text).map_err(|e| shipid_io::InputError::toml(path, &text, &e))?;
     let model = file
         .to_model()
         .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
-    Ok(Box::new(AbkowitzDynamics(model)))
+    let effects = parse_entries(path, &file.effects)?;
+    Ok((Box::new(AbkowitzDynamics(model)), effects))
 }
 
 /// Simulate a standard manoeuvre from a steady approach at U0.
@@ -58,7 +123,7 @@ pub fn simulate_manoeuvre(
     shipid_sim::simulate(
         model,
         controller.as_mut(),
-        State::approach(ship.u0),
+        model.over_ground(&State::approach(ship.u0)),
         &options,
     )
     .map_err(bad_input)

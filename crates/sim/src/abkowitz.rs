@@ -4,7 +4,7 @@
 use shipid_io::{AddedMass, Ship};
 use shipid_model::AbkowitzModel;
 
-use crate::dynamics::{Dynamics, DynamicsError, State};
+use crate::dynamics::{Dynamics, DynamicsError, LinearHullDerivatives, State};
 
 /// Wraps an identified model for simulation.
 #[derive(Debug, Clone)]
@@ -23,5 +23,19 @@ impl Dynamics for AbkowitzDynamics {
 
     fn added_mass(&self) -> &AddedMass {
         &self.0.added_mass
+    }
+
+    /// Y_v, Y_r, N_v, N_r of the polynomial converted from the prime system I (½ρL²U0², ½ρL³U0²) to the
+    /// MMG normalisation (½ρLdU², ½ρL²dU²): both multiply by L/d. `None` when the set lacks one.
+    fn linear_hull_derivatives(&self) -> Option<LinearHullDerivatives> {
+        let m = &self.0;
+        let l_over_d = m.ship.lpp / m.ship.draft;
+        let c = |name: &str| m.coefficient(name).map(|x| x * l_over_d);
+        Some(LinearHullDerivatives {
+            y_v: c("Y_v")?,
+            y_r: c("Y_r")?,
+            n_v: c("N_v")?,
+            n_r: c("N_r")?,
+        })
     }
 }

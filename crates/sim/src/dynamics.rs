@@ -123,6 +123,19 @@ pub trait Dynamics {
     fn linear_hull_derivatives(&self) -> Option<LinearHullDerivatives> {
         None
     }
+
+    /// The filter between the recorded and the acting rudder that is part of this model (a steering-gear
+    /// lag or a neutral offset found by `shipid diagnose`); a fresh one per simulation. `None`: the
+    /// recorded rudder acts as it is.
+    fn model_rudder_filter(&self) -> Option<Box<dyn crate::sim::RudderFilter>> {
+        None
+    }
+
+    /// The over-ground state of a ship moving through the water with `through_water` (they differ when
+    /// the model includes a current).
+    fn over_ground(&self, through_water: &State) -> State {
+        *through_water
+    }
 }
 
 impl<T: Dynamics + ?Sized> Dynamics for &T {
@@ -141,6 +154,12 @@ impl<T: Dynamics + ?Sized> Dynamics for &T {
     fn linear_hull_derivatives(&self) -> Option<LinearHullDerivatives> {
         (**self).linear_hull_derivatives()
     }
+    fn model_rudder_filter(&self) -> Option<Box<dyn crate::sim::RudderFilter>> {
+        (**self).model_rudder_filter()
+    }
+    fn over_ground(&self, through_water: &State) -> State {
+        (**self).over_ground(through_water)
+    }
 }
 
 impl<T: Dynamics + ?Sized> Dynamics for Box<T> {
@@ -158,6 +177,12 @@ impl<T: Dynamics + ?Sized> Dynamics for Box<T> {
     }
     fn linear_hull_derivatives(&self) -> Option<LinearHullDerivatives> {
         (**self).linear_hull_derivatives()
+    }
+    fn model_rudder_filter(&self) -> Option<Box<dyn crate::sim::RudderFilter>> {
+        (**self).model_rudder_filter()
+    }
+    fn over_ground(&self, through_water: &State) -> State {
+        (**self).over_ground(through_water)
     }
 }
 

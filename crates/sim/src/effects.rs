@@ -153,6 +153,10 @@ pub struct Asymmetry {
 pub struct ShallowWater {
     /// Water depth ÷ draft h/T [-], > 1.
     pub depth_over_draft: f64,
+    /// Growth factor of the yaw derivatives Y'_r, N'_r and of J_z when it differs from the sway factor
+    /// f(h/T) (shallow-water corrections grow sway and yaw terms by different amounts, e.g. the
+    /// exponents of Tang et al. 2020); `None`: the single factor for all. `shipid diagnose` fits both.
+    pub yaw_factor: Option<f64>,
 }
 
 impl ShallowWater {
@@ -302,7 +306,11 @@ impl Effect {
                 ("y0", a.y0_n),
                 ("n0", a.n0_nm),
             ],
-            Effect::ShallowWater(s) => vec![("h_over_t", s.depth_over_draft)],
+            Effect::ShallowWater(s) => {
+                let mut p = vec![("h_over_t", s.depth_over_draft)];
+                p.extend(s.yaw_factor.map(|f| ("f_yaw", f)));
+                p
+            }
         }
     }
 
@@ -363,13 +371,25 @@ impl Effect {
                 check(e, "y0", a.y0_n, true, "must be finite [N]")?;
                 check(e, "n0", a.n0_nm, true, "must be finite [N m]")
             }
-            Effect::ShallowWater(s) => check(
-                e,
-                "h_over_t",
-                s.depth_over_draft,
-                s.depth_over_draft > 1.0,
-                "depth must exceed the draft (h/T > 1)",
-            ),
+            Effect::ShallowWater(s) => {
+                check(
+                    e,
+                    "h_over_t",
+                    s.depth_over_draft,
+                    s.depth_over_draft > 1.0,
+                    "depth must exceed the draft (h/T > 1)",
+                )?;
+                match s.yaw_factor {
+                    Some(f) => check(
+                        e,
+                        "f_yaw",
+                        f,
+                        (0.5..=5.0).contains(&f),
+                        "must be a growth factor between 0.5 and 5",
+                    ),
+                    None => Ok(()),
+                }
+            }
         }
     }
 }
@@ -396,7 +416,10 @@ fn keys(effect: &'static str) -> &'static [(&'static str, &'static [&'static str
             ("y0", &["y0_n"], false),
             ("n0", &["n0_nm"], false),
         ],
-        "shallow_water" => &[("h_over_t", &["depth_over_draft"], true)],
+        "shallow_water" => &[
+            ("h_over_t", &["depth_over_draft"], true),
+            ("f_yaw", &["yaw_factor"], false),
+        ],
         _ => &[],
     }
 }
@@ -407,7 +430,7 @@ fn known_keys(effect: &'static str) -> &'static str {
         "wind" => "speed, from (or from_deg), af, al",
         "rudder_lag" => "tau, delay",
         "asymmetry" => "offset, y0, n0",
-        _ => "h_over_t",
+        _ => "h_over_t, f_yaw",
     }
 }
 
@@ -490,6 +513,7 @@ impl FromStr for Effect {
             }),
             _ => Effect::ShallowWater(ShallowWater {
                 depth_over_draft: get(0),
+                yaw_factor: values[1],
             }),
         };
         parsed.validate()?;
@@ -518,8 +542,9 @@ pub struct WithEffects<D> {
     current: Option<[f64; 2]>,
     wind: Option<Wind>,
     constant_force: [f64; 3],
-    /// Shallow-water growth factor and the deep-water linear derivatives it scales.
-    shallow: Option<(f64, LinearHullDerivatives)>,
+    /// Shallow-water growth factors [sway (Y'_v, N'_v, m_y), yaw (Y'_r, N'_r, J_z)] and the deep-water
+    /// linear derivatives they scale.
+    shallow: Option<([f64; 2], LinearHullDerivatives)>,
     mass: MassMatrix,
     mass_effective: MassMatrix,
     added_mass: AddedMass,
@@ -561,14 +586,15 @@ impl<D: Dynamics> WithEffects<D> {
                 }
                 Effect::ShallowWater(s) => {
                     let f = s.factor();
+                    let f_yaw = s.yaw_factor.unwrap_or(f);
                     let lin = w
                         .inner
                         .linear_hull_derivatives()
                         .unwrap_or_else(|| clarke_linear_derivatives(&ship));
                     w.added_mass.Y_vdot *= f;
-                    w.added_mass.N_rdot *= f;
+                    w.added_mass.N_rdot *= f_yaw;
                     w.mass_effective = MassMatrix::new(&ship, &w.added_mass);
-                    w.shallow = Some((f, lin));
+                    w.shallow = Some(([f, f_yaw], lin));
                 }
             }
         }
@@ -627,13 +653,14 @@ impl<D: Dynamics> Dynamics for WithEffects<D> {
             let fw = wind.force(ship, s);
             (0..3).for_each(|i| force[i] += fw[i]);
         }
-        if let Some((f, lin)) = &self.shallow {
+        if let Some(([f_v, f_r], lin)) = &self.shallow {
             // Linear MMG hull terms ½ρLdU² Y'_v v/U = ½ρLd U Y'_v v etc., with the water-relative speed.
             let speed = water.speed();
-            let q = 0.5 * ship.rho * ship.lpp * ship.draft * speed * (f - 1.0);
+            let q = 0.5 * ship.rho * ship.lpp * ship.draft * speed;
+            let (qv, qr) = (q * (f_v - 1.0), q * (f_r - 1.0));
             let r_l = water.r * ship.lpp;
-            force[1] += q * (lin.y_v * water.v + lin.y_r * r_l);
-            force[2] += q * ship.lpp * (lin.n_v * water.v + lin.n_r * r_l);
+            force[1] += qv * lin.y_v * water.v + qr * lin.y_r * r_l;
+            force[2] += ship.lpp * (qv * lin.n_v * water.v + qr * lin.n_r * r_l);
         }
         if force != [0.0; 3] || self.shallow.is_some() {
             // (M + ΔM) a' = M a + ΔF: the model's own forces are M a.
@@ -664,14 +691,23 @@ impl<D: Dynamics> Dynamics for WithEffects<D> {
         self.inner.propeller_rate_hz()
     }
 
+    fn model_rudder_filter(&self) -> Option<Box<dyn RudderFilter>> {
+        (self.lag.is_some() || self.rudder_offset_rad != 0.0)
+            .then(|| Box::new(self.rudder_filter()) as Box<dyn RudderFilter>)
+    }
+
+    fn over_ground(&self, through_water: &State) -> State {
+        WithEffects::over_ground(self, through_water)
+    }
+
     fn linear_hull_derivatives(&self) -> Option<LinearHullDerivatives> {
         let lin = self.inner.linear_hull_derivatives();
         match &self.shallow {
-            Some((f, deep)) => Some(LinearHullDerivatives {
-                y_v: f * deep.y_v,
-                y_r: f * deep.y_r,
-                n_v: f * deep.n_v,
-                n_r: f * deep.n_r,
+            Some(([f_v, f_r], deep)) => Some(LinearHullDerivatives {
+                y_v: f_v * deep.y_v,
+                y_r: f_r * deep.y_r,
+                n_v: f_v * deep.n_v,
+                n_r: f_r * deep.n_r,
             }),
             None => lin,
         }
@@ -816,7 +852,8 @@ mod tests {
         assert_eq!(
             "shallow_water:h_over_t=1.5".parse::<Effect>().unwrap(),
             Effect::ShallowWater(ShallowWater {
-                depth_over_draft: 1.5
+                depth_over_draft: 1.5,
+                yaw_factor: None,
             })
         );
     }
@@ -905,6 +942,7 @@ mod tests {
         let f = |h: f64| {
             ShallowWater {
                 depth_over_draft: h,
+                yaw_factor: None,
             }
             .factor()
         };

@@ -191,14 +191,18 @@ impl RudderFilter for NoFilter {
     }
 }
 
-/// Simulate `model` from `initial` under `controller` (see [`simulate_filtered`]).
+/// Simulate `model` from `initial` under `controller` (see [`simulate_filtered`]), through the model's own
+/// rudder filter when it has one ([`Dynamics::model_rudder_filter`]).
 pub fn simulate(
     model: &dyn Dynamics,
     controller: &mut dyn RudderController,
     initial: State,
     options: &SimOptions,
 ) -> Result<SimOutput, SimError> {
-    simulate_filtered(model, controller, &mut NoFilter, initial, options)
+    match model.model_rudder_filter() {
+        Some(mut filter) => simulate_filtered(model, controller, filter.as_mut(), initial, options),
+        None => simulate_filtered(model, controller, &mut NoFilter, initial, options),
+    }
 }
 
 /// Moves `from` towards `to` by at most `max_step`.

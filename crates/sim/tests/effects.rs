@@ -242,6 +242,7 @@ fn shallow_water_widens_the_turn_and_reduces_overshoots() {
     let shallow = |h| {
         Effect::ShallowWater(ShallowWater {
             depth_over_draft: h,
+            yaw_factor: None,
         })
     };
     let deep_tc = metrics(&run(&m, &[], TC35, 400.0).recording, &TC35, &ship);
@@ -291,6 +292,7 @@ fn effects_compose_and_reject_duplicates() {
     ));
     let bad = Effect::ShallowWater(ShallowWater {
         depth_over_draft: 0.9,
+        yaw_factor: None,
     });
     assert!(matches!(
         WithEffects::new(&m, &[bad]),

@@ -1,0 +1,311 @@
+//! `shipid diagnose MODEL DATASET [--json REPORT.json] [--plots DIR] [--model-out FILE]`: I/O around
+//! [`crate::diagnose`].
+
+use std::path::{Path, PathBuf};
+
+use plotters::prelude::*;
+use shipid_io::Dataset;
+use shipid_io::write::write_atomic;
+use shipid_model::{AugmentedModelFile, EffectEntry, ModelFile};
+use shipid_sim::{Dynamics, Effect, WithEffects};
+
+use crate::diagnose::{DiagnoseInput, DiagnoseOptions, Report, diagnose, model_level};
+use crate::simulate_cmd::load_model_parts;
+use crate::{CliError, Outcome, bad_input, failed};
+
+/// The model's own level: segment replays on the recordings it was trained on, when the model file names
+/// a data set that can still be read (paths as written by `shipid fit`, tried as given and relative to
+/// the model file).
+fn own_level(
+    model_spec: &str,
+    input: &DiagnoseInput,
+    opts: &DiagnoseOptions,
+) -> Option<(f64, String)> {
+    let path = Path::new(model_spec);
+    let text = std::fs::read_to_string(path).ok()?;
+    let file: ModelFile = toml::from_str(&text).ok()?;
+    let first = file.training.first()?;
+    let candidates = [
+        PathBuf::from(&first.dataset),
+        path.parent()?.join(&first.dataset),
+    ];
+    let ds_path = candidates.iter().find(|p| p.is_file())?;
+    let used: Vec<String> = file.training.iter().map(|w| w.recording.clone()).collect();
+    let ds = Dataset::load_filtered(ds_path, |f| used.iter().any(|u| u == f)).ok()?;
+    let level = model_level(input, &ds, opts);
+    level
+        .is_finite()
+        .then(|| (level, ds_path.display().to_string()))
+}
+
+pub fn run(
+    model_spec: &str,
+    dataset: &Path,
+    json_out: Option<&Path>,
+    plots: Option<&Path>,
+    model_out: Option<&Path>,
+) -> Result<Outcome, CliError> {
+    let (base, base_effects) = load_model_parts(model_spec)?;
+    let ds = Dataset::load(dataset)?;
+    let opts = DiagnoseOptions::default();
+    let mut input = DiagnoseInput {
+        base: base.as_ref(),
+        base_effects: &base_effects,
+        model_level_over_l: None,
+    };
+    let level = own_level(model_spec, &input, &opts);
+    input.model_level_over_l = level.as_ref().map(|l| l.0);
+    let report = diagnose(&input, &ds, &opts).ok_or_else(|| {
+        bad_input(format!(
+            "{}: no recording with at least 20 samples to diagnose",
+            dataset.display()
+        ))
+    })?;
+    print_summary(
+        &report,
+        model_spec,
+        dataset,
+        level.as_ref().map(|l| l.1.as_str()),
+    );
+    if let Some(p) = json_out {
+        let text = serde_json::to_string_pretty(&report).map_err(failed)?;
+        write_atomic(p, text.as_bytes()).map_err(failed)?;
+        println!("report: {}", p.display());
+    }
+    let augmented_path = model_out
+        .map(Path::to_path_buf)
+        .or_else(|| json_out.map(|p| p.with_extension("model.toml")));
+    if !report.effects.is_empty() {
+        match &augmented_path {
+            Some(p) => {
+                write_augmented(model_spec, &report, dataset, p)?;
+                println!("augmented model: {}", p.display());
+            }
+            None => println!("(give --model-out FILE to write the augmented model)"),
+        }
+    }
+    if let Some(dir) = plots {
+        let effects: Vec<Effect> = report
+            .effects
+            .iter()
+            .filter_map(|e| e.parse().ok())
+            .collect();
+        let mut all = base_effects.clone();
+        all.retain(|b| !effects.iter().any(|e| e.kind() == b.kind()));
+        all.extend(effects);
+        let before = WithEffects::new(base.as_ref(), &base_effects).map_err(failed)?;
+        let after = WithEffects::new(base.as_ref(), &all).map_err(failed)?;
+        std::fs::create_dir_all(dir).map_err(failed)?;
+        for r in &ds.recordings {
+            let path = dir.join(format!("{}-tracks.svg", r.file.trim_end_matches(".csv")));
+            track_figure(
+                &path,
+                &r.file,
+                &r.recording,
+                &before,
+                &after,
+                report.horizon_s,
+            )
+            .map_err(|e| failed(anyhow::anyhow!("{}: {e}", path.display())))?;
+        }
+        println!("figures: {}", dir.display());
+    }
+    Ok(Outcome::Ok)
+}
+
+fn print_summary(r: &Report, model: &str, dataset: &Path, level_from: Option<&str>) {
+    println!("diagnosis of {model} on {}", dataset.display());
+    println!("verdict: {}", r.verdict);
+    println!("  {}", r.explanation);
+    if let Some(from) = level_from {
+        println!(
+            "  model's own level (training data {from}): {:.4} L",
+            r.model_level_position_rmse_over_l.unwrap_or(f64::NAN)
+        );
+    }
+    println!(
+        "  held-out position RMSE over {:.0} s segments: {:.4} L before, {:.4} L after (noise floor {:.4} L)",
+        r.horizon_s,
+        r.fit_before.position_rmse_over_l,
+        r.fit_after.position_rmse_over_l,
+        r.noise_floor_position_rmse_over_l
+    );
+    for e in &r.effects {
+        println!("  effect: {e}");
+    }
+    for (k, v) in &r.standard_errors {
+        println!("    ± {k} {v:.4}");
+    }
+    println!(
+        "  {:<16} {:>6} {:>10} {:>9} {:>8}",
+        "candidate", "params", "held-out/L", "explains", "accepted"
+    );
+    for c in &r.candidates {
+        println!(
+            "  {:<16} {:>6} {:>10.4} {:>8.0}% {:>8}",
+            c.effect,
+            c.n_parameters,
+            c.held_out_position_rmse_over_l,
+            100.0 * c.explains,
+            if c.accepted { "yes" } else { "no" }
+        );
+    }
+    if !r.located.is_empty() {
+        println!("  mismatch located (equation-error residual, mean ÷ noise scale):");
+        for l in r.located.iter().take(6) {
+            println!(
+                "    {:<16} {:<5} {:>7.1}–{:<7.1} s {:+.2}",
+                l.recording, l.dof, l.t_start, l.t_end, l.mean_residual_over_noise
+            );
+        }
+    }
+}
+
+fn entries(r: &Report, dataset: &Path) -> Vec<EffectEntry> {
+    r.effects
+        .iter()
+        .map(|e| {
+            let kind = e.split(':').next().unwrap_or("");
+            let multi = r.effects.len() > 1;
+            EffectEntry {
+                effect: e.clone(),
+                source: format!(
+                    "shipid {} diagnose on {} (fitted on all its recordings, equation error)",
+                    env!("CARGO_PKG_VERSION"),
+                    dataset.display()
+                ),
+                standard_error: r
+                    .standard_errors
+                    .iter()
+                    .filter_map(|(k, v)| match k.split_once('.') {
+                        Some((kk, key)) if multi && kk == kind => Some((key.to_string(), *v)),
+                        None if !multi => Some((k.clone(), *v)),
+                        _ => None,
+                    })
+                    .collect(),
+            }
+        })
+        .collect()
+}
+
+/// The model with the found effects: a copy of the model file with `[[effects]]` when the base is a
+/// model file, otherwise a `base = "mmg:…"` file.
+fn write_augmented(
+    model_spec: &str,
+    r: &Report,
+    dataset: &Path,
+    out: &Path,
+) -> Result<(), CliError> {
+    let new = entries(r, dataset);
+    let text = match std::fs::read_to_string(model_spec)
+        .ok()
+        .and_then(|t| toml::from_str::<ModelFile>(&t).ok())
+    {
+        Some(mut file) => {
+            file.effects.retain(|b| {
+                !new.iter()
+                    .any(|n| n.effect.split(':').next() == b.effect.split(':').next())
+            });
+            file.effects.extend(new);
+            toml::to_string(&file).map_err(failed)?
+        }
+        None => {
+            let base = if model_spec.starts_with("mmg:") {
+                model_spec.to_string()
+            } else {
+                std::path::absolute(model_spec)
+                    .map(|p| p.display().to_string())
+                    .unwrap_or_else(|_| model_spec.to_string())
+            };
+            toml::to_string(&AugmentedModelFile {
+                shipid_version: env!("CARGO_PKG_VERSION").into(),
+                base,
+                effects: new,
+            })
+            .map_err(failed)?
+        }
+    };
+    if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent).map_err(failed)?;
+    }
+    write_atomic(out, text.as_bytes()).map_err(failed)
+}
+
+/// Track of a recording with the segment replays of the model before and after the diagnosis.
+fn track_figure(
+    path: &Path,
+    name: &str,
+    rec: &shipid_io::Recording,
+    before: &dyn Dynamics,
+    after: &dyn Dynamics,
+    horizon_s: f64,
+) -> anyhow::Result<()> {
+    let b = crate::diagnose::segment_tracks(before, rec, horizon_s);
+    let a = crate::diagnose::segment_tracks(after, rec, horizon_s);
+    let l = before.ship().lpp;
+    let pts = |x: &[f64], y: &[f64]| -> Vec<(f64, f64)> {
+        x.iter().zip(y).map(|(n, e)| (e / l, n / l)).collect()
+    };
+    let mut xs: Vec<f64> = rec.y0.iter().map(|v| v / l).collect();
+    let mut ys: Vec<f64> = rec.x0.iter().map(|v| v / l).collect();
+    for s in b.iter().chain(&a) {
+        xs.extend(s.1.iter().map(|v| v / l));
+        ys.extend(s.0.iter().map(|v| v / l));
+    }
+    let range = |v: &[f64]| {
+        let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let pad = 0.05 * (hi - lo).max(1.0);
+        (lo - pad, hi + pad)
+    };
+    let (x0, x1) = range(&xs);
+    let (y0, y1) = range(&ys);
+    let root = SVGBackend::new(path, (900, 800)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            format!("{name}: recorded track and {horizon_s:.0} s segment replays"),
+            ("sans-serif", 20),
+        )
+        .margin(15)
+        .x_label_area_size(40)
+        .y_label_area_size(50)
+        .build_cartesian_2d(x0..x1, y0..y1)?;
+    chart
+        .configure_mesh()
+        .x_desc("east y0 / L")
+        .y_desc("north x0 / L")
+        .draw()?;
+    chart
+        .draw_series(LineSeries::new(
+            pts(&rec.x0, &rec.y0),
+            BLACK.stroke_width(2),
+        ))?
+        .label("recorded")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
+    let red = RGBColor(214, 39, 40);
+    let blue = RGBColor(31, 119, 180);
+    for (i, s) in b.iter().enumerate() {
+        let series = chart.draw_series(LineSeries::new(pts(&s.0, &s.1), red.stroke_width(1)))?;
+        if i == 0 {
+            series
+                .label("model (before)")
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], red));
+        }
+    }
+    for (i, s) in a.iter().enumerate() {
+        let series = chart.draw_series(LineSeries::new(pts(&s.0, &s.1), blue.stroke_width(1)))?;
+        if i == 0 {
+            series
+                .label("model + effect (after)")
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], blue));
+        }
+    }
+    chart
+        .configure_series_labels()
+        .border_style(BLACK)
+        .background_style(WHITE.mix(0.8))
+        .draw()?;
+    root.present()?;
+    Ok(())
+}
