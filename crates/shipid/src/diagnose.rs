@@ -947,8 +947,7 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
             .collect();
         drops.sort_by(f64::total_cmp);
         let median_drop = drops.get(drops.len() / 2).copied().unwrap_or(0.0);
-        let accepted =
-            gain >= opts.min_gain && fold_ok(scores) && median_drop > 2.0 * noise_floor;
+        let accepted = gain >= opts.min_gain && fold_ok(scores) && median_drop > 2.0 * noise_floor;
         (
             name,
             k,

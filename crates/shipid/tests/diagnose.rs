@@ -1,0 +1,237 @@
+//! The discrepancy diagnosis on generated data with a concealed effect: the verdict names the effect, its
+//! parameters come back, the held-out fit improves, controls give `none`, the report has DATA.md's keys
+//! and the augmented model carries the effect into later simulations.
+
+mod common;
+
+use std::path::Path;
+
+use serde_json::Value;
+use shipid::bench_diagnose::to_dataset;
+use shipid::diagnose::{DiagnoseInput, DiagnoseOptions, Report, diagnose, model_level};
+use shipid::fit::{EstimatorSpec, WindowSpec, fit_dataset, load_set};
+use shipid::generate::generate_with;
+use shipid_estimators::Solver;
+use shipid_sim::{AbkowitzDynamics, Dynamics, Effect, MmgModel};
+
+/// The model identified from the clean default data (full68, LSQ, all six recordings) and its own level.
+fn identified() -> (AbkowitzDynamics, f64) {
+    let clean = to_dataset(generate_with(None, &[]).unwrap(), "clean");
+    let names: Vec<String> = clean.recordings.iter().map(|r| r.file.clone()).collect();
+    let fit = fit_dataset(
+        &clean,
+        load_set("full68").unwrap(),
+        &EstimatorSpec::named("lsq"),
+        &names,
+        WindowSpec::Whole,
+        Solver::Fast,
+    )
+    .unwrap();
+    let model = AbkowitzDynamics(fit.model);
+    let level = model_level(
+        &DiagnoseInput {
+            base: &model,
+            base_effects: &[],
+            model_level_over_l: None,
+        },
+        &clean,
+        &DiagnoseOptions::default(),
+    );
+    (model, level)
+}
+
+fn diagnose_concealed(
+    base: &(dyn Dynamics + Send + Sync),
+    level: Option<f64>,
+    effect: Option<&str>,
+    seed: u64,
+) -> Report {
+    let effects: Vec<Effect> = effect.iter().map(|e| e.parse().unwrap()).collect();
+    let ds = to_dataset(generate_with(Some(seed), &effects).unwrap(), "concealed");
+    diagnose(
+        &DiagnoseInput {
+            base,
+            base_effects: &[],
+            model_level_over_l: level,
+        },
+        &ds,
+        &DiagnoseOptions::default(),
+    )
+    .unwrap()
+}
+
+fn found(report: &Report) -> Effect {
+    assert_eq!(report.effects.len(), 1, "{:?}", report.effects);
+    report.effects[0].parse().unwrap()
+}
+
+/// `concealed` is diagnosed as `word` with the held-out position RMSE at least halved.
+fn check(report: &Report, word: &str) {
+    assert_eq!(report.verdict, word, "{}", report.explanation);
+    assert!(
+        report.fit_after.position_rmse_over_l < 0.5 * report.fit_before.position_rmse_over_l,
+        "before {} after {}",
+        report.fit_before.position_rmse_over_l,
+        report.fit_after.position_rmse_over_l
+    );
+}
+
+#[test]
+fn a_current_is_named_and_its_speed_and_direction_recovered() {
+    let base = MmgModel::kvlcc2();
+    let r = diagnose_concealed(&base, None, Some("current:speed=0.03,from=120"), 5);
+    check(&r, "current");
+    let Effect::Current(c) = found(&r) else {
+        panic!("not a current")
+    };
+    assert!((c.speed_m_s - 0.03).abs() < 0.003, "{c:?}");
+    assert!((c.from_deg - 120.0).abs() < 5.0, "{c:?}");
+    // The mismatch is everywhere over ground; the turning circles drift most.
+    assert!(!r.located.is_empty());
+}
+
+#[test]
+fn shallow_water_is_named_against_the_reference_model() {
+    let base = MmgModel::kvlcc2();
+    let r = diagnose_concealed(&base, None, Some("shallow_water:h_over_t=1.5"), 6);
+    check(&r, "shallow_water");
+    let Effect::ShallowWater(s) = found(&r) else {
+        panic!("not shallow water")
+    };
+    assert!((s.depth_over_draft - 1.5).abs() < 0.1, "{s:?}");
+}
+
+#[test]
+fn rudder_lag_and_a_rudder_offset_are_found_against_an_identified_model() {
+    let (base, level) = identified();
+    let r = diagnose_concealed(&base, Some(level), Some("rudder_lag:tau=1.6"), 7);
+    check(&r, "rudder_lag");
+    let Effect::RudderLag(l) = found(&r) else {
+        panic!("not a lag")
+    };
+    // Delay and time constant trade off; their sum is the phase lag a zig-zag sees.
+    assert!((l.time_constant_s + l.delay_s - 1.6).abs() < 0.3, "{l:?}");
+    let r = diagnose_concealed(&base, Some(level), Some("asymmetry:offset=-2"), 8);
+    check(&r, "asymmetry");
+    let Effect::Asymmetry(a) = found(&r) else {
+        panic!("not an asymmetry")
+    };
+    assert!((a.rudder_offset_deg + 2.0).abs() < 0.4, "{a:?}");
+}
+
+#[test]
+fn effect_free_recordings_give_none() {
+    let (base, level) = identified();
+    for seed in [11, 12] {
+        let r = diagnose_concealed(&base, Some(level), None, seed);
+        assert_eq!(r.verdict, "none", "seed {seed}: {}", r.explanation);
+        assert!(r.effects.is_empty());
+    }
+}
+
+fn write_dataset(dir: &Path, effect: &str) {
+    let out = common::shipid(&[
+        "generate",
+        "--out",
+        dir.to_str().unwrap(),
+        "--noise",
+        "3",
+        "--effect",
+        effect,
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[test]
+fn the_report_follows_data_md_and_the_augmented_model_carries_the_effect() {
+    let dir = common::root().join("target/test-diagnose-cli");
+    let _ = std::fs::remove_dir_all(&dir);
+    write_dataset(&dir, "current:speed=0.04,from=200");
+    let ds = dir.join("dataset.toml");
+    let report = dir.join("report.json");
+    let out = common::shipid(&[
+        "diagnose",
+        "mmg:kvlcc2",
+        ds.to_str().unwrap(),
+        "--json",
+        report.to_str().unwrap(),
+        "--plots",
+        dir.join("figures").to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("verdict: current"), "{stdout}");
+    let v: Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert_eq!(v["verdict"], "current");
+    let c = &v["candidates"][0];
+    for key in ["effect", "score", "parameters", "explains"] {
+        assert!(!c[key].is_null(), "candidate key {key}");
+    }
+    let cur = v["candidates"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["effect"] == "current")
+        .unwrap();
+    assert!((cur["parameters"]["speed"].as_f64().unwrap() - 0.04).abs() < 0.004);
+    assert!(!cur["parameters"]["from_deg"].is_null());
+    let l = &v["located"][0];
+    for key in ["recording", "dof", "t_start", "t_end"] {
+        assert!(!l[key].is_null(), "located key {key}");
+    }
+    let before = v["fit_before"]["position_rmse_over_l"].as_f64().unwrap();
+    let after = v["fit_after"]["position_rmse_over_l"].as_f64().unwrap();
+    assert!(after < 0.5 * before, "{before} → {after}");
+    assert!(dir.join("figures/tc35_sb-tracks.svg").is_file());
+
+    // The augmented model: a file with `base = "mmg:kvlcc2"` and the current; simulating it replays the
+    // current, so the recording is matched far better than by the base.
+    let aug = dir.join("report.model.toml");
+    let text = std::fs::read_to_string(&aug).unwrap();
+    assert!(
+        text.contains("base = \"mmg:kvlcc2\"") && text.contains("current:speed="),
+        "{text}"
+    );
+    let rmse = |model: &str| {
+        let out = common::shipid(&["validate", model, ds.to_str().unwrap(), "--json"]);
+        assert!(out.status.success());
+        let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+        v["recordings"]["tc35_ps.csv"]["replay"]["position_rmse_over_l"]
+            .as_f64()
+            .unwrap()
+    };
+    let (b, a) = (rmse("mmg:kvlcc2"), rmse(aug.to_str().unwrap()));
+    assert!(a < 0.2 * b, "base {b} augmented {a}");
+}
+
+#[test]
+fn a_bad_effect_in_a_model_file_names_the_key() {
+    let dir = common::root().join("target/test-diagnose-bad-effect");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("model.toml");
+    std::fs::write(
+        &path,
+        "shipid_version = \"0\"\nbase = \"mmg:kvlcc2\"\n[[effects]]\neffect = \"current:speed=-1,from=0\"\nsource = \"test\"\n",
+    )
+    .unwrap();
+    let out = common::shipid(&[
+        "simulate",
+        path.to_str().unwrap(),
+        "--manoeuvre",
+        "turning:35:port",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("key `effects[0].effect`") && err.contains("speed"),
+        "{err}"
+    );
+}
