@@ -1079,6 +1079,22 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
         }
     };
     let after = pooled(&after_scores);
+    let worse: Vec<&str> = prep
+        .iter()
+        .zip(before_each.iter().zip(&after_scores))
+        .filter(|(_, (b, a))| a.position_rmse() > 1.1 * b.position_rmse())
+        .map(|(p, _)| p.file.as_str())
+        .collect();
+    let explanation = if worse.is_empty() || effects.is_empty() {
+        explanation
+    } else {
+        format!(
+            "{explanation}; but it makes {} of {} recordings worse ({}), so part of the mismatch is not this effect",
+            worse.len(),
+            prep.len(),
+            worse.join(", ")
+        )
+    };
     let per_recording = prep
         .iter()
         .zip(before_each.iter().zip(&after_scores))

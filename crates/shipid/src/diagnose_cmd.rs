@@ -25,10 +25,11 @@ fn own_level(
     let text = std::fs::read_to_string(path).ok()?;
     let file: ModelFile = toml::from_str(&text).ok()?;
     let first = file.training.first()?;
-    let candidates = [
-        PathBuf::from(&first.dataset),
-        path.parent()?.join(&first.dataset),
-    ];
+    // As given (relative to the working directory of `fit`), then relative to the model file's folder
+    // and each folder above it (a model in results/ names data/… of the project root).
+    let mut candidates = vec![PathBuf::from(&first.dataset)];
+    let dir = std::path::absolute(path).ok()?;
+    candidates.extend(dir.ancestors().skip(1).map(|a| a.join(&first.dataset)));
     let ds_path = candidates.iter().find(|p| p.is_file())?;
     let used: Vec<String> = file.training.iter().map(|w| w.recording.clone()).collect();
     let ds = Dataset::load_filtered(ds_path, |f| used.iter().any(|u| u == f)).ok()?;
