@@ -380,11 +380,14 @@ fn solve_small(a: &[Vec<f64>], b: &[f64]) -> Option<Vec<f64>> {
             return None;
         }
         m.swap(col, piv);
-        for row in col + 1..n {
-            let f = m[row][col] / m[col][col];
-            for k in col..=n {
-                m[row][k] -= f * m[col][k];
-            }
+        let (upper, lower) = m.split_at_mut(col + 1);
+        let pivot_row = &upper[col];
+        for row in lower.iter_mut() {
+            let f = row[col] / pivot_row[col];
+            row.iter_mut()
+                .zip(pivot_row)
+                .skip(col)
+                .for_each(|(x, p)| *x -= f * p);
         }
     }
     let mut x = vec![0.0; n];
@@ -833,6 +836,18 @@ fn pooled(scores: &[ReplayScore]) -> ReplayScore {
     s
 }
 
+/// A candidate's held-out assessment.
+struct Assessed {
+    name: String,
+    n_parameters: usize,
+    /// Pooled held-out position RMSE ÷ L with the effect.
+    after_l: f64,
+    /// Typical relative improvement less the parsimony charge.
+    score: f64,
+    explains: f64,
+    accepted: bool,
+}
+
 /// Everything the diagnosis needs besides the data.
 pub struct DiagnoseInput<'a> {
     /// The model without its own effects.
@@ -948,34 +963,30 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
         drops.sort_by(f64::total_cmp);
         let median_drop = drops.get(drops.len() / 2).copied().unwrap_or(0.0);
         let accepted = gain >= opts.min_gain && fold_ok(scores) && median_drop > 2.0 * noise_floor;
-        (
+        Assessed {
             name,
-            k,
+            n_parameters: k,
             after_l,
-            gain - opts.parsimony * k as f64,
+            score: gain - opts.parsimony * k as f64,
             explains,
             accepted,
-        )
+        }
     };
-    let mut assessed: Vec<(
-        Vec<Family>,
-        (String, usize, f64, f64, f64, bool),
-        Vec<ReplayScore>,
-    )> = single
+    let mut assessed: Vec<(Vec<Family>, Assessed, Vec<ReplayScore>)> = single
         .iter()
         .map(|(f, s)| (vec![*f], assess(f.label().into(), f.dim(), s), s.clone()))
         .collect();
-    let rank = |a: &(String, usize, f64, f64, f64, bool)| a.3;
+    let rank = |a: &Assessed| a.score;
     let mut best: Option<usize> = assessed
         .iter()
         .enumerate()
-        .filter(|(_, a)| a.1.5)
+        .filter(|(_, a)| a.1.accepted)
         .max_by(|x, y| rank(&x.1.1).total_cmp(&rank(&y.1.1)))
         .map(|(i, _)| i);
 
     // A combination when the best single effect leaves more than half of the mismatch.
     if let Some(b) = best {
-        let (after_l, explains) = (assessed[b].1.2, assessed[b].1.4);
+        let (after_l, explains) = (assessed[b].1.after_l, assessed[b].1.explains);
         if explains < 0.5 && after_l > 3.0 * noise_floor {
             let first = assessed[b].0[0];
             let pairs: Vec<(Vec<Family>, Vec<ReplayScore>)> = Family::ALL
@@ -992,13 +1003,13 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
                 let k = fams.iter().map(|f| f.dim()).sum();
                 let mut a = assess(name, k, &s);
                 // A pair must beat the single effect clearly, on the held-out recordings.
-                a.5 = a.5 && a.2 < 0.7 * after_l;
+                a.accepted = a.accepted && a.after_l < 0.7 * after_l;
                 assessed.push((fams, a, s));
             }
             best = assessed
                 .iter()
                 .enumerate()
-                .filter(|(_, a)| a.1.5)
+                .filter(|(_, a)| a.1.accepted)
                 .max_by(|x, y| rank(&x.1.1).total_cmp(&rank(&y.1.1)))
                 .map(|(i, _)| i);
         }
@@ -1013,8 +1024,8 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
         .iter()
         .zip(&finals)
         .map(|((_, a, _), (effects, _))| Candidate {
-            effect: a.0.clone(),
-            score: a.3,
+            effect: a.name.clone(),
+            score: a.score,
             parameters: effects
                 .iter()
                 .flat_map(|e| {
@@ -1029,10 +1040,10 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
                     })
                 })
                 .collect(),
-            explains: a.4,
-            held_out_position_rmse_over_l: a.2,
-            n_parameters: a.1,
-            accepted: a.5,
+            explains: a.explains,
+            held_out_position_rmse_over_l: a.after_l,
+            n_parameters: a.n_parameters,
+            accepted: a.accepted,
         })
         .collect();
 
@@ -1050,10 +1061,10 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
                 s.clone(),
                 format!(
                     "{} explains {:.0} % of the held-out mismatch (position RMSE {:.4} L → {:.4} L, noise floor {:.4} L)",
-                    a.0,
-                    100.0 * a.4,
+                    a.name,
+                    100.0 * a.explains,
                     before_l,
-                    a.2,
+                    a.after_l,
                     noise_floor
                 ),
             )
