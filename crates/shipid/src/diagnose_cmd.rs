@@ -45,10 +45,19 @@ pub fn run(
     json_out: Option<&Path>,
     plots: Option<&Path>,
     model_out: Option<&Path>,
+    horizon_l_over_u0: f64,
 ) -> Result<Outcome, CliError> {
+    if !(horizon_l_over_u0.is_finite() && horizon_l_over_u0 > 0.5) {
+        return Err(bad_input(format!(
+            "--horizon {horizon_l_over_u0}: must be a number of L/U0 above 0.5"
+        )));
+    }
     let (base, base_effects) = load_model_parts(model_spec)?;
     let ds = Dataset::load(dataset)?;
-    let opts = DiagnoseOptions::default();
+    let opts = DiagnoseOptions {
+        horizon_l_over_u0,
+        ..DiagnoseOptions::default()
+    };
     let mut input = DiagnoseInput {
         base: base.as_ref(),
         base_effects: &base_effects,

@@ -144,6 +144,9 @@ enum Command {
         /// Write the model with the found effect here (default: beside the report, `.model.toml`).
         #[arg(long, value_name = "MODEL.toml")]
         model_out: Option<PathBuf>,
+        /// Replay segment length ÷ (L/U0).
+        #[arg(long, default_value_t = 10.0)]
+        horizon: f64,
     },
     /// Benchmark the diagnosis on generated data with concealed effects (confusion matrix, fit
     /// improvements, recovered parameters) written to `--out`.
@@ -324,12 +327,14 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             json,
             plots,
             model_out,
+            horizon,
         } => shipid::diagnose_cmd::run(
             &model,
             &dataset,
             json.as_deref(),
             plots.as_deref(),
             model_out.as_deref(),
+            horizon,
         ),
     }
 }
