@@ -858,6 +858,43 @@ pub struct DiagnoseInput<'a> {
     pub model_level_over_l: Option<f64>,
 }
 
+/// Equation-error residuals of the model (with its effects) per recording, each DOF divided by its robust
+/// scale over the data set: (file, times [s], [surge, sway, yaw]) at the thinned samples (for figures).
+pub type ResidualSeries = (String, Vec<f64>, Vec<[f64; 3]>);
+
+pub fn normalised_residuals(
+    input: &DiagnoseInput,
+    ds: &Dataset,
+    opts: &DiagnoseOptions,
+) -> Vec<ResidualSeries> {
+    let ship = *input.base.ship();
+    let prep = prepare(ds, &ship, opts);
+    let c = Composite {
+        base: input.base,
+        effects: input.base_effects.to_vec(),
+    };
+    let Some(model) = c.model() else {
+        return Vec::new();
+    };
+    let res: Vec<Vec<Option<[f64; 3]>>> = prep.iter().map(|p| residuals(&model, p)).collect();
+    let scale = robust_scale(&res);
+    prep.iter()
+        .zip(res)
+        .map(|(p, r)| {
+            let (t, e): (Vec<f64>, Vec<[f64; 3]>) = p
+                .samples
+                .iter()
+                .zip(r)
+                .filter_map(|(&i, e)| {
+                    let e = e?;
+                    Some((p.rec.t[i], std::array::from_fn(|d| e[d] / scale[d])))
+                })
+                .unzip();
+            (p.file.clone(), t, e)
+        })
+        .collect()
+}
+
 /// Segment-replay position RMSE ÷ L of a model (with effects) on a data set: the model's own level on
 /// its training data.
 pub fn model_level(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> f64 {
@@ -1192,7 +1229,11 @@ fn locate(
     scale: &[f64; 3],
     ship: &Ship,
 ) -> Vec<Located> {
-    let window_s = ship.lpp / ship.u0;
+    // Running mean over 3 L/U0; a window is located where it exceeds three standard errors of a running
+    // mean of the residual's white part (σ from first differences: the differentiated accelerations are
+    // noisy, so single samples say little), for at least one L/U0.
+    let l_over_u0 = ship.lpp / ship.u0;
+    let window_s = 3.0 * l_over_u0;
     let mut found = Vec::new();
     for (p, r) in prep.iter().zip(res) {
         let t: Vec<f64> = p.samples.iter().map(|&i| p.rec.t[i]).collect();
@@ -1201,24 +1242,31 @@ fn locate(
                 .iter()
                 .map(|e| e.map_or(0.0, |e| e[d] / scale[d]))
                 .collect();
-            // Moving mean over one L/U0.
-            let lp: Vec<f64> = (0..z.len())
+            if z.len() < 3 {
+                continue;
+            }
+            let sigma = (z.windows(2).map(|w| (w[1] - w[0]).powi(2)).sum::<f64>()
+                / (2.0 * (z.len() - 1) as f64))
+                .sqrt();
+            let (lp, limit): (Vec<f64>, Vec<f64>) = (0..z.len())
                 .map(|i| {
                     let a = t.partition_point(|&x| x < t[i] - 0.5 * window_s);
                     let b = t.partition_point(|&x| x <= t[i] + 0.5 * window_s);
-                    z[a..b].iter().sum::<f64>() / (b - a).max(1) as f64
+                    let m = (b - a).max(1) as f64;
+                    (z[a..b].iter().sum::<f64>() / m, 3.0 * sigma / m.sqrt())
                 })
-                .collect();
+                .unzip();
+            let out = |i: usize| lp[i].abs() > limit[i];
             let mut i = 0;
             while i < lp.len() {
-                if lp[i].abs() > 1.0 {
+                if out(i) {
                     let sign = lp[i].signum();
                     let j0 = i;
-                    while i < lp.len() && lp[i].abs() > 1.0 && lp[i].signum() == sign {
+                    while i < lp.len() && out(i) && lp[i].signum() == sign {
                         i += 1;
                     }
                     let (ts, te) = (t[j0], t[i - 1]);
-                    if te - ts >= window_s {
+                    if te - ts >= l_over_u0 {
                         let mean = lp[j0..i].iter().sum::<f64>() / (i - j0) as f64;
                         found.push(Located {
                             recording: p.file.clone(),
@@ -1238,7 +1286,7 @@ fn locate(
         let w = |x: &Located| (x.t_end - x.t_start) * x.mean_residual_over_noise.abs();
         w(b).total_cmp(&w(a))
     });
-    found.truncate(12);
+    found.truncate(24);
     found
 }
 

@@ -106,6 +106,17 @@ pub fn run(
         let before = WithEffects::new(base.as_ref(), &base_effects).map_err(failed)?;
         let after = WithEffects::new(base.as_ref(), &all).map_err(failed)?;
         std::fs::create_dir_all(dir).map_err(failed)?;
+        let residuals = crate::diagnose::normalised_residuals(&input, &ds, &opts);
+        for (file, t, e) in &residuals {
+            let path = dir.join(format!("{}-residuals.svg", file.trim_end_matches(".csv")));
+            let windows: Vec<&crate::diagnose::Located> = report
+                .located
+                .iter()
+                .filter(|l| &l.recording == file)
+                .collect();
+            residual_figure(&path, file, t, e, &windows)
+                .map_err(|e| failed(anyhow::anyhow!("{}: {e}", path.display())))?;
+        }
         for r in &ds.recordings {
             let path = dir.join(format!("{}-tracks.svg", r.file.trim_end_matches(".csv")));
             track_figure(
@@ -268,8 +279,19 @@ fn track_figure(
         let pad = 0.05 * (hi - lo).max(1.0);
         (lo - pad, hi + pad)
     };
-    let (x0, x1) = range(&xs);
-    let (y0, y1) = range(&ys);
+    let (mut x0, mut x1) = range(&xs);
+    let (mut y0, mut y1) = range(&ys);
+    // Equal scales on both axes (a track is a shape): widen the narrower range about its centre to the
+    // plotting area's aspect (about 835 × 715 px inside the labels).
+    let aspect = 835.0 / 715.0;
+    let (w, h) = (x1 - x0, y1 - y0);
+    if w / h < aspect {
+        let c = 0.5 * (x0 + x1);
+        (x0, x1) = (c - 0.5 * h * aspect, c + 0.5 * h * aspect);
+    } else {
+        let c = 0.5 * (y0 + y1);
+        (y0, y1) = (c - 0.5 * w / aspect, c + 0.5 * w / aspect);
+    }
     let root = SVGBackend::new(path, (900, 800)).into_drawing_area();
     root.fill(&WHITE)?;
     let mut chart = ChartBuilder::on(&root)
@@ -316,6 +338,68 @@ fn track_figure(
         .border_style(BLACK)
         .background_style(WHITE.mix(0.8))
         .draw()?;
+    root.present()?;
+    Ok(())
+}
+
+/// Equation-error residuals of one recording over time (each DOF ÷ its noise scale), with the located
+/// windows shaded.
+fn residual_figure(
+    path: &Path,
+    name: &str,
+    t: &[f64],
+    e: &[[f64; 3]],
+    windows: &[&crate::diagnose::Located],
+) -> anyhow::Result<()> {
+    let root = SVGBackend::new(path, (1000, 800)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let (t0, t1) = (
+        t.first().copied().unwrap_or(0.0),
+        t.last()
+            .copied()
+            .unwrap_or(1.0)
+            .max(t.first().copied().unwrap_or(0.0) + 1.0),
+    );
+    let panels = root.split_evenly((3, 1));
+    let dofs = ["surge", "sway", "yaw"];
+    for (d, panel) in panels.iter().enumerate() {
+        let lim = e
+            .iter()
+            .map(|x| x[d].abs())
+            .fold(1.0f64, f64::max)
+            .min(10.0);
+        let mut chart = ChartBuilder::on(panel)
+            .caption(
+                if d == 0 {
+                    format!(
+                        "{name}: equation-error residual ÷ noise scale (shaded: located mismatch)"
+                    )
+                } else {
+                    String::new()
+                },
+                ("sans-serif", 18),
+            )
+            .margin(10)
+            .x_label_area_size(30)
+            .y_label_area_size(50)
+            .build_cartesian_2d(t0..t1, -lim..lim)?;
+        chart
+            .configure_mesh()
+            .x_desc("t [s]")
+            .y_desc(dofs[d])
+            .draw()?;
+        let shade = RGBColor(255, 200, 120).mix(0.5);
+        for w in windows.iter().filter(|w| w.dof == dofs[d]) {
+            chart.draw_series(std::iter::once(Rectangle::new(
+                [(w.t_start, -lim), (w.t_end, lim)],
+                shade.filled(),
+            )))?;
+        }
+        chart.draw_series(LineSeries::new(
+            t.iter().zip(e).map(|(&t, x)| (t, x[d].clamp(-lim, lim))),
+            BLACK.stroke_width(1),
+        ))?;
+    }
     root.present()?;
     Ok(())
 }
