@@ -2,7 +2,7 @@
 
 # The main job on the embedded default data.
 main:
-    cargo run --release -p shipid -- metrics data/kvlcc2-mmg/dataset.toml
+    cargo run --release -p shipid -- fit data/kvlcc2-mmg/dataset.toml --set reduced32 --estimator lsq --recordings zz35_35_ps.csv --overshoots 4 --out results/kvlcc2-mmg-reduced32-lsq.toml --validate
 
 # The test suite (what CI runs).
 test:
@@ -10,7 +10,7 @@ test:
 
 lint:
     cargo fmt --all -- --check
-    cargo clippy --workspace --all-targets -- -D warnings
+    cargo clippy --workspace --all-targets --release -- -D warnings
 
 bench:
     cargo bench -p shipid-sim --bench mmg
@@ -20,3 +20,12 @@ generate:
 
 import-hsva:
     cargo run --release -p shipid -- import data/kvlcc2-hsva/import.toml --out data/kvlcc2-hsva/imported
+
+# The concealed-effect benchmark of `shipid diagnose` (about 5 min on 2 cores) → results/diagnose/.
+bench-diagnose:
+    cargo run --release -p shipid -- bench-diagnose --out results/diagnose
+
+# Diagnose the HSVA tests against full68 LSQ identified from the default data.
+diagnose-hsva: import-hsva
+    cargo run --release -p shipid -- fit data/kvlcc2-mmg/dataset.toml --set full68 --estimator lsq --out results/kvlcc2-mmg-full68-lsq-all.toml
+    cargo run --release -p shipid -- diagnose results/kvlcc2-mmg-full68-lsq-all.toml data/kvlcc2-hsva/imported/dataset.toml --json results/diagnose/hsva/report.json --plots results/diagnose-hsva/figures
