@@ -4,6 +4,7 @@
 
 pub mod fit;
 pub mod fit_cmd;
+pub mod fit_gp;
 pub mod generate;
 pub mod import;
 pub mod metrics_cmd;

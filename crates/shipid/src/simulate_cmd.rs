@@ -28,6 +28,9 @@ pub fn load_model(spec: &str) -> Result<Box<dyn Dynamics + Send + Sync>, CliErro
         )));
     }
     let text = std::fs::read_to_string(path).map_err(|e| shipid_io::InputError::read(path, &e))?;
+    if let Some(gp) = crate::fit_gp::load_gp_model(path, &text)? {
+        return Ok(Box::new(gp));
+    }
     let file: ModelFile =
         toml::from_str(&text).map_err(|e| shipid_io::InputError::toml(path, &text, &e))?;
     let model = file
