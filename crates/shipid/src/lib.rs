@@ -8,6 +8,7 @@ pub mod fit_gp;
 pub mod generate;
 pub mod import;
 pub mod metrics_cmd;
+pub mod paper001;
 pub mod plot;
 pub mod runner;
 pub mod simulate_cmd;
