@@ -508,8 +508,8 @@ impl Gp {
 /// (remainder < 1e−17), then the exponent k inserted into the bits.
 #[inline(always)]
 pub fn exp_non_positive(x: f64) -> f64 {
-    const LN2_HI: f64 = 6.931_471_803_691_238_164_90e-1;
-    const LN2_LO: f64 = 1.908_214_929_270_587_700_02e-10;
+    const LN2_HI: f64 = 6.931_471_803_691_238e-1;
+    const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
     // 1.5·2⁵²: adding it rounds to an integer held in the low mantissa bits.
     const SHIFTER: f64 = 6_755_399_441_055_744.0;
     let x = x.clamp(-700.0, 0.0);

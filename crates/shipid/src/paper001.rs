@@ -256,7 +256,12 @@ fn figure(path: &Path, rec: &Recording, series: &[(String, Predicted)]) -> Resul
     let panels = root.split_evenly((2, 2));
     let t0 = rec.t[0];
     let t_rec: Vec<f64> = rec.t.iter().map(|t| t - t0).collect();
-    let quantities: [(&str, fn(&Recording) -> Vec<f64>, fn(&Predicted) -> Vec<f64>); 3] = [
+    type Panel = (
+        &'static str,
+        fn(&Recording) -> Vec<f64>,
+        fn(&Predicted) -> Vec<f64>,
+    );
+    let quantities: [Panel; 3] = [
         ("u [m/s]", |r| r.u.clone(), |p| p.u.clone()),
         ("v [m/s]", |r| r.v.clone(), |p| p.v.clone()),
         (
