@@ -140,6 +140,31 @@ pub fn errors(p: &Predicted, rec: &Recording, horizon_s: f64) -> ([f64; 3], f64)
     (sq.map(|s| (s / n).sqrt()), track_max)
 }
 
+/// RMSE of the model's accelerations against the estimated ones of the recording, state and rudder taken
+/// from the recording at every sample (one-step, no integration): [u̇ m/s², v̇ m/s², ṙ rad/s²].
+pub fn one_step_rmse(model: &dyn Dynamics, rec: &Recording, ship: &shipid_io::Ship) -> [f64; 3] {
+    let (acc, _) = shipid_io::deriv::accelerations_or_estimate(rec, ship);
+    let mut sq = [0.0; 3];
+    let mut n = 0usize;
+    for i in 0..rec.len() {
+        let s = State {
+            u: rec.u[i],
+            v: rec.v[i],
+            r: rec.r[i],
+            x0: rec.x0[i],
+            y0: rec.y0[i],
+            psi: rec.psi[i],
+        };
+        if let Ok(a) = model.accelerations(&s, rec.delta[i]) {
+            sq[0] += (a[0] - acc.u_dot[i]).powi(2);
+            sq[1] += (a[1] - acc.v_dot[i]).powi(2);
+            sq[2] += (a[2] - acc.r_dot[i]).powi(2);
+            n += 1;
+        }
+    }
+    sq.map(|x| (x / n.max(1) as f64).sqrt())
+}
+
 struct Row {
     model: String,
     integration: &'static str,
@@ -174,6 +199,7 @@ pub fn run(dataset: &Path, out: &Path, similarity: f64) -> Result<String> {
     let param = AbkowitzDynamics(param.model);
     let gp_name = format!("sparse GP ({} points, d_gen {similarity})", report.kept);
     let mut rows = Vec::new();
+    let mut one_step = Vec::new();
     let mut figure_series = Vec::new();
     for (name, model, paper) in [
         (
@@ -187,6 +213,7 @@ pub fn run(dataset: &Path, out: &Path, similarity: f64) -> Result<String> {
             "0.58 / 0.39 / 7.65 / 3.21",
         ),
     ] {
+        one_step.push((name.to_string(), one_step_rmse(model, rec, &ds.ship)));
         let started = Instant::now();
         let sim = replay(model, rec);
         let rk4_s = started.elapsed().as_secs_f64();
@@ -235,6 +262,18 @@ pub fn run(dataset: &Path, out: &Path, similarity: f64) -> Result<String> {
             r.track_max_m,
             r.predict_s,
             r.paper
+        ));
+    }
+    md.push_str(
+        "\nOne-step accelerations on the validation run (recorded state and rudder, no integration), RMSE against the estimated accelerations:\n\n\
+         | model | u̇ [10⁻³ m/s²] | v̇ [10⁻³ m/s²] | ṙ [10⁻³ °/s²] |\n|---|---|---|---|\n",
+    );
+    for (name, e) in &one_step {
+        md.push_str(&format!(
+            "| {name} | {:.3} | {:.3} | {:.3} |\n",
+            1e3 * e[0],
+            1e3 * e[1],
+            1e3 * e[2].to_degrees()
         ));
     }
     std::fs::create_dir_all(out)?;
