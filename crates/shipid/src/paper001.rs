@@ -5,7 +5,8 @@
 //! Two integrations of the same models: RK4 at 0.05 s (shipid's `simulate`/`validate`) and explicit
 //! Euler at the 20 Hz sampling instants with the rudder of the current sample (paper 001 §2.1).
 //! Writes `tab6.md` (RMSE of u, v [10⁻² m/s], r [10⁻² °/s] over the run, maximum track error over the
-//! first 100 s, times) and `hsva_25_5.svg` (u, v, r and track, recorded vs predicted).
+//! first 100 s, times, and the one-step acceleration RMSE without integration) and `hsva_25_5.svg`
+//! (u, v, r and track, recorded vs predicted).
 
 use std::path::Path;
 use std::time::Instant;
