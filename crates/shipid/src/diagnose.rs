@@ -144,9 +144,9 @@ impl Family {
             Family::Current => vec![vec![0.0, 0.0]],
             Family::Wind => {
                 let mut s = Vec::new();
-                for speed in [1.0, 3.0] {
-                    for k in 0..8 {
-                        let a = k as f64 * std::f64::consts::FRAC_PI_4;
+                for speed in [1.0, 2.5, 5.0] {
+                    for k in 0..12 {
+                        let a = k as f64 * std::f64::consts::PI / 6.0;
                         s.push(vec![speed * a.cos(), speed * a.sin()]);
                     }
                 }
@@ -508,7 +508,7 @@ fn fit_families(
         lo.extend(l);
         hi.extend(h);
     }
-    // Starts: the product of each family's starts is small (wind has 16, the others 1–2).
+    // Starts: the product of each family's starts is small (wind has 36, the others 1–2).
     let mut starts: Vec<Vec<f64>> = vec![vec![]];
     for f in families {
         starts = starts
@@ -529,7 +529,7 @@ fn fit_families(
         };
         weighted_residual(&c, prep, idx, scale)
     };
-    // Several starts: rank them by their cost, refine the best two.
+    // Several starts: rank them by their cost, refine the best three.
     let mut ranked: Vec<(f64, Vec<f64>)> = starts
         .into_iter()
         .map(|s| (objective(&s).iter().map(|x| x * x).sum::<f64>(), s))
@@ -537,7 +537,7 @@ fn fit_families(
     ranked.sort_by(|a, b| a.0.total_cmp(&b.0));
     let best = ranked
         .iter()
-        .take(2)
+        .take(3)
         .map(|(_, s)| levenberg_marquardt(&objective, s, &lo, &hi))
         .min_by(|a, b| a.cost.total_cmp(&b.cost))
         .expect("at least one start");

@@ -52,9 +52,12 @@ enum Command {
         /// reduced32, full68, chen2021 or a set file.
         #[arg(long, default_value = "reduced32")]
         set: String,
-        /// lsq, bounded-lsq, ridge, lasso or svr.
+        /// lsq, bounded-lsq, ridge, lasso, svr, or sparse-gp (paper 001; --set does not apply).
         #[arg(long, default_value = "lsq")]
         estimator: String,
+        /// sparse-gp: similarity threshold d_gen in (0, 1] of the sparsification (default 0.96).
+        #[arg(long, value_name = "D")]
+        similarity: Option<f64>,
         /// Ridge λ (on the column-scaled design, least-squares term as a mean).
         #[arg(long)]
         lambda: Option<f64>,
@@ -224,6 +227,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             dataset,
             set,
             estimator,
+            similarity,
             lambda,
             alpha,
             c,
@@ -245,6 +249,22 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                 (None, Some(w)) => parse_window(&w)?,
                 (None, None) => shipid::fit::WindowSpec::Whole,
             };
+            if estimator == "sparse-gp" {
+                return shipid::fit_gp::run(
+                    &dataset,
+                    &recordings,
+                    window,
+                    similarity,
+                    &out,
+                    json,
+                    validate,
+                );
+            }
+            if similarity.is_some() {
+                return Err(shipid::bad_input(
+                    "--similarity applies to --estimator sparse-gp only",
+                ));
+            }
             let solver = match solver.as_str() {
                 "qp" => shipid_estimators::Solver::Qp,
                 "fast" => shipid_estimators::Solver::Fast,

@@ -92,6 +92,9 @@ fn load_parts(
         }
         return Ok((base, effects));
     }
+    if let Some(gp) = crate::fit_gp::load_gp_model(path, &text)? {
+        return Ok((Box::new(gp), Vec::new()));
+    }
     let file: ModelFile =
         toml::from_str(&text).map_err(|e| shipid_io::InputError::toml(path, &text, &e))?;
     let model = file

@@ -10,6 +10,7 @@
 //! - [`metrics`]: IMO metrics (overshoots, t_a, t_check, advance, transfer, tactical and steady diameter)
 //!   of any recording, measured or simulated.
 //! - [`abkowitz`]: an identified Abkowitz model ([`shipid_model::AbkowitzModel`]) as a [`Dynamics`].
+//! - [`gp`]: a sparse Gaussian-process acceleration model (paper 001) as a [`Dynamics`], and its model file.
 //! - [`effects`]: physical effects left out of a model (current, wind, rudder lag, asymmetry, shallow
 //!   water), applied around any [`Dynamics`] without changing the simulation loop.
 //!
@@ -40,6 +41,7 @@ pub mod abkowitz;
 pub mod control;
 pub mod dynamics;
 pub mod effects;
+pub mod gp;
 pub mod metrics;
 pub mod mmg;
 pub mod sim;
@@ -50,6 +52,10 @@ pub use control::{
 };
 pub use dynamics::{Dynamics, DynamicsError, LinearHullDerivatives, MassMatrix, State};
 pub use effects::{Effect, EffectError, EffectParseError, WithEffects, simulate_with_effects};
+pub use gp::{
+    GP_INPUTS, GP_KIND, GP_OUTPUTS, GpDynamics, GpModelError, GpModelFile, GpOutputFile,
+    SparsificationInfo,
+};
 pub use metrics::{Metrics, metrics};
 pub use mmg::{MmgError, MmgModel, MmgParameters, kvlcc2_added_mass, kvlcc2_ship};
 pub use sim::{
