@@ -6,6 +6,7 @@ pub mod fit;
 pub mod fit_cmd;
 pub mod generate;
 pub mod import;
+pub mod inverse_cmd;
 pub mod metrics_cmd;
 pub mod plot;
 pub mod runner;
