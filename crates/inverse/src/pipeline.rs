@@ -344,3 +344,132 @@ pub fn nearest(db: &SimulationDatabase, model: &InverseModel, q: &MotionIndexes)
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .unwrap_or((0, f64::NAN))
 }
+
+/// Weights refined by re-simulation (see [`refine`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Refined {
+    /// Mode weights, within ±3 σ.
+    pub weights: Vec<f64>,
+    /// Indexes simulated with them.
+    pub indexes: MotionIndexes,
+    /// Mean squared standardised feature mismatch (the objective).
+    pub objective: f64,
+    /// Simulations spent.
+    pub evaluations: usize,
+}
+
+/// Mean squared mismatch of the network features of `q` and `given`, each in units of the training
+/// standard deviation of that feature.
+pub fn mismatch(model: &InverseModel, q: &MotionIndexes, given: &MotionIndexes) -> f64 {
+    let (a, b) = (q.features(), given.features());
+    (0..N_INDEXES)
+        .map(|i| ((a[i] - b[i]) / model.input.std[i]).powi(2))
+        .sum::<f64>()
+        / N_INDEXES as f64
+}
+
+/// Not in paper 003: a Nelder–Mead search over the mode weights (in units of σ_i, clipped to ±3σ) that
+/// minimises [`mismatch`] of re-simulated indexes, started from each of `starts` in turn (e.g. the
+/// network's clipped prediction and the nearest database ship) with `max_evals` simulations each. It
+/// turns the network's answer into one that is consistent with the simulator; the best result over the
+/// starts is returned, `None` when no start simulates.
+pub fn refine(
+    target: &TargetShip,
+    modes: &VariationModes,
+    model: &InverseModel,
+    given: &MotionIndexes,
+    starts: &[Vec<f64>],
+    settings: &SimSettings,
+    max_evals: usize,
+) -> Option<Refined> {
+    let k = starts.first()?.len();
+    let sigma = &modes.weight_std[..k];
+    let lim = WEIGHT_RANGE_STD;
+    let to_x = |z: &[f64]| -> Vec<f64> {
+        z.iter()
+            .zip(sigma)
+            .map(|(zi, s)| zi.clamp(-lim, lim) * s)
+            .collect()
+    };
+    let mut evaluations = 0usize;
+    let mut best: Option<Refined> = None;
+    let mut eval = |z: &[f64], best: &mut Option<Refined>| -> f64 {
+        evaluations += 1;
+        let x = to_x(z);
+        match simulate_weights(target, modes, &x, settings) {
+            Ok(q) => {
+                let j = mismatch(model, &q, given);
+                if best.as_ref().is_none_or(|b| j < b.objective) {
+                    *best = Some(Refined {
+                        weights: x,
+                        indexes: q,
+                        objective: j,
+                        evaluations: 0,
+                    });
+                }
+                j
+            }
+            Err(_) => f64::INFINITY,
+        }
+    };
+    for start in starts {
+        let z0: Vec<f64> = start.iter().zip(sigma).map(|(x, s)| x / s).collect();
+        // Initial simplex: the start and a step of 0.5 σ along each mode (towards the inside).
+        let mut simplex: Vec<(Vec<f64>, f64)> = Vec::with_capacity(k + 1);
+        let f0 = eval(&z0, &mut best);
+        simplex.push((z0.clone(), f0));
+        for i in 0..k {
+            let mut z = z0.clone();
+            z[i] += if z[i] > 0.0 { -0.5 } else { 0.5 };
+            let f = eval(&z, &mut best);
+            simplex.push((z, f));
+        }
+        let mut used = k + 1;
+        while used < max_evals {
+            simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+            if (simplex[k].1 - simplex[0].1).abs() < 1e-6 && simplex[0].1.is_finite() {
+                break;
+            }
+            let centroid: Vec<f64> = (0..k)
+                .map(|d| simplex[..k].iter().map(|p| p.0[d]).sum::<f64>() / k as f64)
+                .collect();
+            let along = |t: f64| -> Vec<f64> {
+                centroid
+                    .iter()
+                    .zip(&simplex[k].0)
+                    .map(|(c, w)| (c + t * (c - w)).clamp(-lim, lim))
+                    .collect()
+            };
+            let zr = along(1.0);
+            let fr = eval(&zr, &mut best);
+            used += 1;
+            if fr < simplex[0].1 {
+                let ze = along(2.0);
+                let fe = eval(&ze, &mut best);
+                used += 1;
+                simplex[k] = if fe < fr { (ze, fe) } else { (zr, fr) };
+            } else if fr < simplex[k - 1].1 {
+                simplex[k] = (zr, fr);
+            } else {
+                let zc = along(-0.5);
+                let fc = eval(&zc, &mut best);
+                used += 1;
+                if fc < simplex[k].1 {
+                    simplex[k] = (zc, fc);
+                } else {
+                    let z_best = simplex[0].0.clone();
+                    for p in simplex.iter_mut().skip(1) {
+                        p.0 =
+                            p.0.iter()
+                                .zip(&z_best)
+                                .map(|(a, b)| b + 0.5 * (a - b))
+                                .collect();
+                        p.1 = eval(&p.0, &mut best);
+                        used += 1;
+                    }
+                }
+            }
+        }
+    }
+    best.map(|b| Refined { evaluations, ..b })
+}

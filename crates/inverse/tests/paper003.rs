@@ -164,6 +164,32 @@ fn step_is_converged() {
 }
 
 #[test]
+fn step_is_converged_for_generated_ships() {
+    let target = kvlcc2();
+    let modes = VariationModes::new(&ships().ship).expect("SVD");
+    let s = SimSettings::default();
+    let fine = SimSettings {
+        dt_prime: s.dt_prime / 4.0,
+        ..s
+    };
+    let mut checked = 0;
+    for x in sample_weights(&modes, 6, 12, 99) {
+        let model = match modes.generate(&x).ok().and_then(|c| target.model(&c)) {
+            Some(m) => m,
+            None => continue,
+        };
+        let (Ok(a), Ok(b)) = (motion_indexes(&model, &s), motion_indexes(&model, &fine)) else {
+            continue;
+        };
+        checked += 1;
+        for (p, q) in a.0.iter().zip(b.0) {
+            close("generated ship, index at dt vs dt/4", *p, q, 5e-3);
+        }
+    }
+    assert!(checked >= 6, "only {checked} samples simulated");
+}
+
+#[test]
 fn speed_at_540_is_steady() {
     // U_final is taken at 540° of heading change; a turn continued to 1080° changes it by < 0.5 %.
     let m = yasukawa_full_scale(&kvlcc2());

@@ -21,7 +21,7 @@ use shipid_inverse::indexes::{
 use shipid_inverse::mlp::TrainOptions;
 use shipid_inverse::modes::VariationModes;
 use shipid_inverse::pipeline::{
-    InverseModel, SimulationDatabase, build_database, clip_weights, held_out, nearest,
+    InverseModel, SimulationDatabase, build_database, clip_weights, held_out, nearest, refine,
     sample_weights,
 };
 use shipid_inverse::target::{TargetShip, TargetsFile};
@@ -38,6 +38,8 @@ pub struct InverseArgs<'a> {
     pub modes: Option<usize>,
     pub out: &'a Path,
     pub max_resim: usize,
+    /// Simulations per start of the refinement (0: network only, as in the paper).
+    pub refine_evals: usize,
 }
 
 fn read_toml<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, CliError> {
@@ -194,7 +196,7 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
                 .join(", ")
         );
         let mut csv = String::from("motion,index,given,obtained,relative_error\n");
-        let mut figures: Vec<(String, MotionIndexes, Option<Manoeuvres>)> = Vec::new();
+        let mut figures: Vec<MotionFigure> = Vec::new();
         let _ = writeln!(
             md,
             "| motion | | {} | mean |rel. err.| |",
@@ -249,7 +251,12 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
                             m.name, INDEX_LABELS[i], given.0[i], q.0[i], rel[i]
                         );
                     }
-                    figures.push((m.name.clone(), given, Some(man)));
+                    figures.push(MotionFigure {
+                        name: m.name.clone(),
+                        given,
+                        network: Some(man),
+                        refined: None,
+                    });
                 }
                 Err(why) => {
                     outcome = Outcome::SomeFailed;
@@ -257,7 +264,12 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
                     for i in 0..N_INDEXES {
                         let _ = writeln!(csv, "{},{},{},,", m.name, INDEX_LABELS[i], given.0[i]);
                     }
-                    figures.push((m.name.clone(), given, None));
+                    figures.push(MotionFigure {
+                        name: m.name.clone(),
+                        given,
+                        network: None,
+                        refined: None,
+                    });
                 }
             }
             let sigma = |x: &[f64]| {
@@ -287,6 +299,53 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
                 row(&nq.0).join(" | "),
                 100.0 * nmean
             );
+            if a.refine_evals > 0 {
+                let starts = [x.clone(), db.samples[near].weights.clone()];
+                let refined = refine(
+                    target,
+                    &modes,
+                    &model,
+                    &given,
+                    &starts,
+                    &settings,
+                    a.refine_evals,
+                );
+                match refined.and_then(|r| resim(&r.weights).ok().map(|(man, _)| (r, man))) {
+                    Some((r, man)) => {
+                        let (rel, mean) = err_row(&r.indexes);
+                        let _ = writeln!(
+                            md,
+                            "| | refined ({} simulations) | {} | |",
+                            r.evaluations,
+                            row(&r.indexes.0).join(" | ")
+                        );
+                        let _ = writeln!(
+                            md,
+                            "| | refined error | {} | {:.1} % |",
+                            rel.iter()
+                                .map(|r| format!("{:+.1} %", 100.0 * r))
+                                .collect::<Vec<_>>()
+                                .join(" | "),
+                            100.0 * mean
+                        );
+                        let _ = writeln!(md, "| | refined weights x/σ | {} | |", sigma(&r.weights));
+                        for i in 0..N_INDEXES {
+                            let _ = writeln!(
+                                csv,
+                                "{} refined,{},{},{},{}",
+                                m.name, INDEX_LABELS[i], given.0[i], r.indexes.0[i], rel[i]
+                            );
+                        }
+                        if let Some(f) = figures.last_mut() {
+                            f.refined = Some(man);
+                        }
+                    }
+                    None => {
+                        outcome = Outcome::SomeFailed;
+                        let _ = writeln!(md, "| | refined | failed: no start simulates | |");
+                    }
+                }
+            }
         }
         print!("{md}");
         let dir = a.out.join(slug(&target.name));
@@ -390,18 +449,26 @@ fn write_modes(out: &Path, modes: &VariationModes) -> Result<()> {
 
 /// Fig. 6/7: per motion, the ±35° tracks with the given advance/tactical diameter (dashed), and the two
 /// zig-zag headings with the given peak heading and its time (dashed).
-fn motions_figure(
-    path: &PathBuf,
-    target: &TargetShip,
-    figures: &[(String, MotionIndexes, Option<Manoeuvres>)],
-) -> Result<()> {
+struct MotionFigure {
+    name: String,
+    given: MotionIndexes,
+    /// Simulated with the network's (clipped) weights: paper 003's result.
+    network: Option<Manoeuvres>,
+    /// Simulated with the refined weights.
+    refined: Option<Manoeuvres>,
+}
+
+const REFINED_COLOUR: RGBColor = RGBColor(31, 119, 180);
+
+fn motions_figure(path: &PathBuf, target: &TargetShip, figures: &[MotionFigure]) -> Result<()> {
     let rows = figures.len().max(1);
     let root = SVGBackend::new(path, (1500, 420 * rows as u32)).into_drawing_area();
     root.fill(&WHITE)?;
     let l = target.lpp_m;
     let tl = target.lpp_m / target.u0_m_s;
-    for (area_row, (name, q, man)) in root.split_evenly((rows, 3)).chunks(3).zip(figures) {
-        let q = q.0;
+    for (area_row, f) in root.split_evenly((rows, 3)).chunks(3).zip(figures) {
+        let (name, q) = (&f.name, f.given.0);
+        let sims = [(&f.network, RED), (&f.refined, REFINED_COLOUR)];
         // Turning tracks: x = lateral / L, y = advance / L.
         let mut c = ChartBuilder::on(&area_row[0])
             .caption(
@@ -416,7 +483,7 @@ fn motions_figure(
             .x_desc("y0 / L")
             .y_desc("x0 / L")
             .draw()?;
-        if let Some(m) = man {
+        for (m, colour) in sims.iter().filter_map(|(m, c)| m.as_ref().map(|m| (m, c))) {
             for rec in [&m.turn_p35, &m.turn_m35] {
                 let end = rec
                     .psi
@@ -425,7 +492,7 @@ fn motions_figure(
                     .unwrap_or(rec.len());
                 c.draw_series(LineSeries::new(
                     (0..end).map(|i| (rec.y0[i] / l, rec.x0[i] / l)),
-                    RED.stroke_width(2),
+                    colour.stroke_width(2),
                 ))?;
             }
         }
@@ -464,7 +531,7 @@ fn motions_figure(
                 .x_desc("t U0 / L")
                 .y_desc("ψ, δ [deg]")
                 .draw()?;
-            if let Some(m) = man {
+            for (m, colour) in sims.iter().filter_map(|(m, c)| m.as_ref().map(|m| (m, c))) {
                 let rec = if side > 0.0 {
                     &m.zigzag_p20
                 } else {
@@ -475,7 +542,7 @@ fn motions_figure(
                         .iter()
                         .zip(&rec.psi)
                         .map(|(t, p)| (t / tl, (p - rec.psi[0]).to_degrees())),
-                    RED.stroke_width(2),
+                    colour.stroke_width(2),
                 ))?;
                 c.draw_series(LineSeries::new(
                     rec.t
@@ -520,12 +587,17 @@ pub fn bench(
     let settings = SimSettings::default();
     let threads = rayon::current_num_threads();
     println!(
-        "| target | ships | manoeuvres | threads | usable | dropped | wall time [s] | ms per ship |\n|---|---|---|---|---|---|---|---|"
+        "| target | ships | manoeuvres | threads | usable | dropped | wall time [s] | ms per ship | load average before |\n|---|---|---|---|---|---|---|---|---|"
     );
     for _ in 0..repeats.max(1) {
+        // Other processes share the cores; the 1-minute load average says how much.
+        let load = std::fs::read_to_string("/proc/loadavg")
+            .ok()
+            .and_then(|t| t.split_whitespace().next().map(str::to_string))
+            .unwrap_or_else(|| "n/a".into());
         let (db, secs) = build(target, &modes, n_modes, samples, seed, &settings)?;
         println!(
-            "| {} | {} | {} | {} | {} | {} | {:.2} | {:.2} |",
+            "| {} | {} | {} | {} | {} | {} | {:.2} | {:.2} | {load} |",
             target.name,
             samples,
             4 * samples,

@@ -177,6 +177,9 @@ enum Command {
         /// Held-out test samples to re-simulate with their predicted weights.
         #[arg(long, default_value_t = 200)]
         resimulate: usize,
+        /// Simulations per start of the Nelder–Mead refinement of the network's answer (0: off).
+        #[arg(long, default_value_t = 150)]
+        refine_evals: usize,
         #[arg(long, default_value = "results/paper003")]
         out: PathBuf,
     },
@@ -322,6 +325,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             seed,
             modes,
             resimulate,
+            refine_evals,
             out,
         } => shipid::inverse_cmd::run(&shipid::inverse_cmd::InverseArgs {
             targets: &targets,
@@ -331,6 +335,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             modes,
             out: &out,
             max_resim: resimulate,
+            refine_evals,
         }),
         Command::InverseBench {
             targets,
