@@ -2,9 +2,13 @@
 //!
 //! Eq. 12 itself was lost in the text extraction; the nine indexes are read from the headers and values
 //! of Tab. 3 and Tab. 5 ([`INDEX_KEYS`]):
-//! 1. A_D,+35 / L, 2. D_T,+35 / L, 3. U_final / U_initial of the +35° turn, 4. A_D,−35 / L,
-//! 5. D_T,−35 / L (signed: negative, to port), 6. ψ_peak / ψ_check at the first overshoot of the +20/20
-//! zig-zag (Tab. 3 "32.3567/20"), 7. the time of that peak from the first execute × U0/L,
+//! 1. A_D,+35 / L,
+//! 2. D_T,+35 / L,
+//! 3. U_final / U_initial of the +35° turn,
+//! 4. A_D,−35 / L,
+//! 5. D_T,−35 / L (signed: negative, to port),
+//! 6. ψ_peak / ψ_check at the first overshoot of the +20/20 zig-zag (Tab. 3 "32.3567/20"),
+//! 7. the time of that peak from the first execute × U0/L,
 //! 8. ψ_peak / ψ_check at the first overshoot of the −20/−20 zig-zag ("−40/−20" = 2),
 //! 9. the time of the second overshoot peak of the −20/−20 zig-zag from the first execute × U0/L
 //!    (Tab. 3 gives t2 U/L = 11.05 against t1 U/L = 4.06: a second overshoot, not the first of the

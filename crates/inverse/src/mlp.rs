@@ -239,15 +239,14 @@ mod tests {
         let mut g = vec![0.0; net.n_params()];
         net.gradient(&xs, &ys, &idx, &mut g);
         let h = 1e-6;
-        for p in 0..net.n_params() {
+        for (p, gp) in g.iter().enumerate() {
             let (mut plus, mut minus) = (net.clone(), net.clone());
             plus.params[p] += h;
             minus.params[p] -= h;
             let fd = (plus.mse(&xs, &ys) - minus.mse(&xs, &ys)) / (2.0 * h);
             assert!(
-                (fd - g[p]).abs() <= 1e-7 * (1.0 + fd.abs()),
-                "parameter {p}: backprop {} vs finite difference {fd}",
-                g[p]
+                (fd - gp).abs() <= 1e-7 * (1.0 + fd.abs()),
+                "parameter {p}: backprop {gp} vs finite difference {fd}"
             );
         }
     }

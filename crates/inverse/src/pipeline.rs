@@ -295,8 +295,8 @@ pub fn held_out(
     for (i, r) in resim.iter().enumerate() {
         if let Some(q) = r {
             ok += 1;
-            for j in 0..N_INDEXES {
-                sum[j] += ((q.0[j] - test[i].indexes.0[j]) / test[i].indexes.0[j]).abs();
+            for (acc, (got, want)) in sum.iter_mut().zip(q.0.iter().zip(test[i].indexes.0)) {
+                *acc += ((got - want) / want).abs();
             }
         }
     }

@@ -140,8 +140,8 @@ fn yasukawa_kvlcc2_at_full_scale_is_close_to_table3() {
         motion_indexes(&yasukawa_full_scale(&target), &SimSettings::default()).expect("simulates");
     let given = target.motion[0].indexes().expect("valid");
     let tol = [0.05, 0.05, 0.10, 0.05, 0.05, 0.02, 0.06, 0.07, 0.12];
-    for i in 0..9 {
-        close(&format!("index {i}"), q.0[i], given.0[i], tol[i]);
+    for (i, t) in tol.iter().enumerate() {
+        close(&format!("index {i}"), q.0[i], given.0[i], *t);
     }
 }
 

@@ -244,11 +244,11 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
                             .join(" | "),
                         100.0 * mean
                     );
-                    for i in 0..N_INDEXES {
+                    for (i, label) in INDEX_LABELS.iter().enumerate() {
                         let _ = writeln!(
                             csv,
                             "{},{},{},{},{}",
-                            m.name, INDEX_LABELS[i], given.0[i], q.0[i], rel[i]
+                            m.name, label, given.0[i], q.0[i], rel[i]
                         );
                     }
                     figures.push(MotionFigure {
@@ -261,8 +261,8 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
                 Err(why) => {
                     outcome = Outcome::SomeFailed;
                     let _ = writeln!(md, "| | obtained | failed: {why} | |");
-                    for i in 0..N_INDEXES {
-                        let _ = writeln!(csv, "{},{},{},,", m.name, INDEX_LABELS[i], given.0[i]);
+                    for (i, label) in INDEX_LABELS.iter().enumerate() {
+                        let _ = writeln!(csv, "{},{},{},,", m.name, label, given.0[i]);
                     }
                     figures.push(MotionFigure {
                         name: m.name.clone(),
@@ -329,11 +329,11 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
                             100.0 * mean
                         );
                         let _ = writeln!(md, "| | refined weights x/σ | {} | |", sigma(&r.weights));
-                        for i in 0..N_INDEXES {
+                        for (i, label) in INDEX_LABELS.iter().enumerate() {
                             let _ = writeln!(
                                 csv,
                                 "{} refined,{},{},{},{}",
-                                m.name, INDEX_LABELS[i], given.0[i], r.indexes.0[i], rel[i]
+                                m.name, label, given.0[i], r.indexes.0[i], rel[i]
                             );
                         }
                         if let Some(f) = figures.last_mut() {
