@@ -152,13 +152,14 @@ impl Default for SimSettings {
         SimSettings {
             dt_prime: 0.05,
             zigzag_duration_prime: 20.0,
-            turn_chunk_prime: 10.0,
+            turn_chunk_prime: 5.0,
             turn_max_prime: 120.0,
         }
     }
 }
 
-/// The four simulated manoeuvres (midship tracks, SI, DATA.md conventions).
+/// The four simulated manoeuvres (midship tracks, SI, DATA.md conventions). The +35° turn runs to
+/// [`FINAL_SPEED_HEADING_DEG`], the −35° turn to [`PORT_TURN_STOP_DEG`] (rounded up to a chunk).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Manoeuvres {
     pub turn_p35: Recording,
@@ -231,9 +232,13 @@ fn append(into: &mut Recording, rec: &Recording, t_offset_s: f64, skip_first: bo
     into.delta.extend_from_slice(&rec.delta[from..]);
 }
 
+/// Heading change [deg] at which the −35° turn stops: it only needs the tactical diameter at 180°.
+pub const PORT_TURN_STOP_DEG: f64 = 190.0;
+
 fn turning(
     model: &dyn Dynamics,
     side: Side,
+    stop_deg: f64,
     s: &SimSettings,
     name: &'static str,
 ) -> Result<Recording, IndexFailure> {
@@ -268,14 +273,14 @@ fn turning(
         append(&mut all, rec, t0, !first);
         let last = rec.len() - 1;
         let turned = side.sign() * (all.psi[all.psi.len() - 1] - all.psi[0]);
-        if turned >= FINAL_SPEED_HEADING_DEG.to_radians() {
+        if turned >= stop_deg.to_radians() {
             return Ok(all);
         }
         t0 = all.t[all.t.len() - 1];
         if t0 >= s.turn_max_prime * tl {
             return Err(IndexFailure::Missing {
                 manoeuvre: name,
-                what: "540° heading change",
+                what: "final heading change",
             });
         }
         state = State {
@@ -324,8 +329,14 @@ pub fn simulate_manoeuvres(
     s: &SimSettings,
 ) -> Result<Manoeuvres, IndexFailure> {
     Ok(Manoeuvres {
-        turn_p35: turning(model, Side::Starboard, s, "turn +35")?,
-        turn_m35: turning(model, Side::Port, s, "turn -35")?,
+        turn_p35: turning(
+            model,
+            Side::Starboard,
+            FINAL_SPEED_HEADING_DEG,
+            s,
+            "turn +35",
+        )?,
+        turn_m35: turning(model, Side::Port, PORT_TURN_STOP_DEG, s, "turn -35")?,
         zigzag_p20: zigzag(model, Side::Starboard, s, "zig-zag +20/20")?,
         zigzag_m20: zigzag(model, Side::Port, s, "zig-zag -20/-20")?,
     })

@@ -587,7 +587,7 @@ pub fn bench(
     let settings = SimSettings::default();
     let threads = rayon::current_num_threads();
     println!(
-        "| target | ships | manoeuvres | threads | usable | dropped | wall time [s] | ms per ship | load average before |\n|---|---|---|---|---|---|---|---|---|"
+        "| target | ships | manoeuvres | threads | usable | dropped | wall time [s] | ms per ship | CPU time [s] | load average before |\n|---|---|---|---|---|---|---|---|---|---|"
     );
     for _ in 0..repeats.max(1) {
         // Other processes share the cores; the 1-minute load average says how much.
@@ -595,9 +595,14 @@ pub fn bench(
             .ok()
             .and_then(|t| t.split_whitespace().next().map(str::to_string))
             .unwrap_or_else(|| "n/a".into());
+        let cpu0 = process_cpu_s();
         let (db, secs) = build(target, &modes, n_modes, samples, seed, &settings)?;
+        let cpu = match (cpu0, process_cpu_s()) {
+            (Some(a), Some(b)) => format!("{:.1}", b - a),
+            _ => "n/a".into(),
+        };
         println!(
-            "| {} | {} | {} | {} | {} | {} | {:.2} | {:.2} | {load} |",
+            "| {} | {} | {} | {} | {} | {} | {:.2} | {:.2} | {cpu} | {load} |",
             target.name,
             samples,
             4 * samples,
@@ -609,4 +614,15 @@ pub fn bench(
         );
     }
     Ok(Outcome::Ok)
+}
+
+/// User + system CPU time of this process [s] from /proc/self/stat (Linux; clock ticks of 1/100 s, the
+/// kernel's USER_HZ), or `None` elsewhere. Less sensitive than wall time to other jobs on the cores.
+fn process_cpu_s() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    let after = &stat[stat.rfind(')')? + 1..];
+    let f: Vec<&str> = after.split_whitespace().collect();
+    let utime: f64 = f.get(11)?.parse().ok()?;
+    let stime: f64 = f.get(12)?.parse().ok()?;
+    Some((utime + stime) / 100.0)
 }
