@@ -115,7 +115,7 @@ pub fn schoenherr_cf(reynolds: f64) -> f64 {
 
 /// Straight-run resistance R'_0 = R_0 / (½ρ L d U0²) from Schoenherr friction, the form factor of
 /// Watanabe (1 + k, k = −0.095 + 25.6 C_B / ((L/B)² √(B/d))) and Denny–Mumford's wetted surface
-/// S = 1.7 L d + ∇/d. No correlation allowance. KVLCC2 full scale gives 0.0071 (the model-scale
+/// S = 1.7 L d + ∇/d. No correlation allowance. KVLCC2 full scale gives 0.0073 (the model-scale
 /// value of Yasukawa & Yoshimura is 0.022: friction falls with the Reynolds number).
 pub fn resistance_prime(lpp_m: f64, beam_m: f64, draft_m: f64, cb: f64, u0_m_s: f64) -> f64 {
     let re = u0_m_s * lpp_m / NU_SEA_M2_S;
