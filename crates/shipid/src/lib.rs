@@ -10,6 +10,7 @@ pub mod fit_cmd;
 pub mod fit_gp;
 pub mod generate;
 pub mod import;
+pub mod inverse_cmd;
 pub mod metrics_cmd;
 pub mod paper001;
 pub mod plot;

@@ -196,6 +196,43 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Paper 003: hydrodynamics of a ship from its motion indexes (SVD modes, simulated database, MLP).
+    Inverse {
+        /// Targets file (ship particulars and motion indexes), e.g. data/paper003/targets.toml.
+        targets: PathBuf,
+        /// The hydrodynamic database (paper 003 Tab. 1).
+        #[arg(long, default_value = "data/paper003/ships.toml")]
+        ships: PathBuf,
+        /// Simulated ships per target (paper 003: 2603 for KVLCC2).
+        #[arg(long, default_value_t = 2603)]
+        samples: usize,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Number of modes (default: the fewest reaching 95 % of the variation).
+        #[arg(long)]
+        modes: Option<usize>,
+        /// Held-out test samples to re-simulate with their predicted weights.
+        #[arg(long, default_value_t = 200)]
+        resimulate: usize,
+        /// Simulations per start of the Nelder–Mead refinement of the network's answer (0: off).
+        #[arg(long, default_value_t = 150)]
+        refine_evals: usize,
+        #[arg(long, default_value = "results/paper003")]
+        out: PathBuf,
+    },
+    /// Time the build of paper 003's simulation database (first target of the file).
+    InverseBench {
+        #[arg(default_value = "data/paper003/targets.toml")]
+        targets: PathBuf,
+        #[arg(long, default_value = "data/paper003/ships.toml")]
+        ships: PathBuf,
+        #[arg(long, default_value_t = 2603)]
+        samples: usize,
+        #[arg(long, default_value_t = 3)]
+        repeats: usize,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
 }
 
 fn run(cli: Cli) -> Result<Outcome, CliError> {
@@ -356,6 +393,32 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             model_out.as_deref(),
             horizon,
         ),
+        Command::Inverse {
+            targets,
+            ships,
+            samples,
+            seed,
+            modes,
+            resimulate,
+            refine_evals,
+            out,
+        } => shipid::inverse_cmd::run(&shipid::inverse_cmd::InverseArgs {
+            targets: &targets,
+            ships: &ships,
+            samples,
+            seed,
+            modes,
+            out: &out,
+            max_resim: resimulate,
+            refine_evals,
+        }),
+        Command::InverseBench {
+            targets,
+            ships,
+            samples,
+            repeats,
+            seed,
+        } => shipid::inverse_cmd::bench(&targets, &ships, samples, repeats, seed),
     }
 }
 

@@ -1,0 +1,214 @@
+//! The hydrodynamic database of paper 003 Tab. 1 (`data/paper003/ships.toml`) and the map from a ship's
+//! coefficients to its hull-force behaviour vector h (paper 003 eqs. 3, 6, 7).
+//!
+//! Conventions of the database (Yoshimura's MMG database form): drift β [rad] positive when v' < 0, i.e.
+//! β ≈ −v/U, r' = r L/U positive to starboard. The hull polynomials carry the Munk added-mass terms, so the
+//! "hull force" here is X'* = X'_H + R'_0 + m'_y v'_G r', Y'* = Y'_H − m'_x u' r', N'* = N'_H, with
+//!
+//! ```text
+//! X'* = X'_ββ β² + (X'_βr − m'_y) β r' + (X'_rr + x'_G m'_y) r'² + X'_ββββ β⁴
+//! Y'* = Y'_β β + (Y'_r − m'_x) r' + Y'_βββ β³ + Y'_ββr β² r' + Y'_βrr β r'² + Y'_rrr r'³
+//! N'* = N'_β β + N'_r r' + N'_βββ β³ + N'_ββr β² r' + N'_βrr β r'² + N'_rrr r'³
+//! ```
+//! (forces ÷ ½ρLdU², moment ÷ ½ρL²dU²). Everything is linear in the 24 coefficients
+//! ([`Coefficients`]), which is what lets a mode of h be mapped back to coefficients exactly.
+
+use serde::Deserialize;
+
+use crate::error::InverseError;
+
+/// Number of hull derivatives (4 in X, 6 in Y, 6 in N).
+pub const N_HULL: usize = 16;
+/// Number of interaction coefficients (1 − t_R, a_H, x'_H, ε, κ, γ_R+, γ_R−, l'_R).
+pub const N_INTERACTION: usize = 8;
+/// All coefficients of one ship.
+pub const N_COEF: usize = N_HULL + N_INTERACTION;
+/// How often the interaction coefficients are repeated in h (paper 003 §2.2: "10 times").
+pub const INTERACTION_REPEAT: usize = 10;
+
+/// Names of the 24 coefficients in [`Coefficients`] order (the ships.toml keys).
+pub const COEF_NAMES: [&str; N_COEF] = [
+    "x_bb",
+    "x_br_minus_my",
+    "x_rr_plus_xg_my",
+    "x_bbbb",
+    "y_b",
+    "y_r_minus_mx",
+    "y_bbb",
+    "y_bbr",
+    "y_brr",
+    "y_rrr",
+    "n_b",
+    "n_r",
+    "n_bbb",
+    "n_bbr",
+    "n_brr",
+    "n_rrr",
+    "one_minus_t_r",
+    "a_h",
+    "x_h",
+    "epsilon",
+    "kappa",
+    "gamma_r_pos",
+    "gamma_r_neg",
+    "l_r",
+];
+
+/// One ship of paper 003 Tab. 1, as stored in `ships.toml` (see its header for units and ambiguities).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DatabaseShip {
+    pub id: String,
+    pub l_over_b: f64,
+    pub b_over_d: f64,
+    pub cb: f64,
+    pub xg_over_l_percent: f64,
+    pub dp_over_d: f64,
+    pub ar_over_ld_percent: f64,
+    pub dp_over_h: f64,
+    pub x_bb: f64,
+    pub x_br_minus_my: f64,
+    pub x_rr_plus_xg_my: f64,
+    pub x_bbbb: f64,
+    pub y_b: f64,
+    pub y_r_minus_mx: f64,
+    pub y_bbb: f64,
+    pub y_bbr: f64,
+    pub y_brr: f64,
+    pub y_rrr: f64,
+    pub n_b: f64,
+    pub n_r: f64,
+    pub n_bbb: f64,
+    pub n_bbr: f64,
+    pub n_brr: f64,
+    pub n_rrr: f64,
+    pub one_minus_t_r: f64,
+    pub a_h: f64,
+    pub x_h: f64,
+    pub epsilon: f64,
+    pub kappa: f64,
+    pub gamma_r_pos: f64,
+    pub gamma_r_neg: f64,
+    pub l_r: f64,
+}
+
+/// The file layout of `ships.toml`: `[[ship]]` tables.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ShipsFile {
+    pub ship: Vec<DatabaseShip>,
+}
+
+/// The 24 database coefficients of one ship in [`COEF_NAMES`] order (database conventions, see the
+/// module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Coefficients(pub [f64; N_COEF]);
+
+impl DatabaseShip {
+    /// The ship's coefficients.
+    pub fn coefficients(&self) -> Coefficients {
+        Coefficients([
+            self.x_bb,
+            self.x_br_minus_my,
+            self.x_rr_plus_xg_my,
+            self.x_bbbb,
+            self.y_b,
+            self.y_r_minus_mx,
+            self.y_bbb,
+            self.y_bbr,
+            self.y_brr,
+            self.y_rrr,
+            self.n_b,
+            self.n_r,
+            self.n_bbb,
+            self.n_bbr,
+            self.n_brr,
+            self.n_rrr,
+            self.one_minus_t_r,
+            self.a_h,
+            self.x_h,
+            self.epsilon,
+            self.kappa,
+            self.gamma_r_pos,
+            self.gamma_r_neg,
+            self.l_r,
+        ])
+    }
+}
+
+/// The (β, r') sampling grid of paper 003 §3: β = −20, −15, …, 20° and r' = −0.8, −0.6, …, 0.8.
+pub fn grid() -> Vec<(f64, f64)> {
+    let mut g = Vec::with_capacity(81);
+    for i in 0..9 {
+        let beta = (-20.0 + 5.0 * i as f64).to_radians();
+        for j in 0..9 {
+            let r = -0.8 + 0.2 * j as f64;
+            g.push((beta, r));
+        }
+    }
+    g
+}
+
+/// Length of the behaviour vector h: 3 × 81 forces + 10 × 8 interaction coefficients = 323.
+pub fn behaviour_len() -> usize {
+    3 * 81 + INTERACTION_REPEAT * N_INTERACTION
+}
+
+/// Hull forces [X'*, Y'*, N'*] of `c` at drift `beta_rad` and yaw rate `r_prime` (module docs).
+pub fn hull_forces(c: &Coefficients, beta_rad: f64, r_prime: f64) -> [f64; 3] {
+    let k = &c.0;
+    let (b, r) = (beta_rad, r_prime);
+    let x = k[0] * b * b + k[1] * b * r + k[2] * r * r + k[3] * b.powi(4);
+    let odd = |o: usize| {
+        k[o] * b
+            + k[o + 1] * r
+            + k[o + 2] * b.powi(3)
+            + k[o + 3] * b * b * r
+            + k[o + 4] * b * r * r
+            + k[o + 5] * r.powi(3)
+    };
+    [x, odd(4), odd(10)]
+}
+
+/// Behaviour vector h of paper 003 eq. 7: X'* on the grid, then Y'*, then N'*, then the interaction
+/// coefficients repeated [`INTERACTION_REPEAT`] times.
+pub fn behaviour(c: &Coefficients) -> Vec<f64> {
+    let g = grid();
+    let mut h = Vec::with_capacity(behaviour_len());
+    for dof in 0..3 {
+        for &(b, r) in &g {
+            h.push(hull_forces(c, b, r)[dof]);
+        }
+    }
+    for _ in 0..INTERACTION_REPEAT {
+        h.extend_from_slice(&c.0[N_HULL..]);
+    }
+    h
+}
+
+/// Checks a database: at least two ships, all values finite, unique ids.
+pub fn validate(ships: &[DatabaseShip]) -> Result<(), InverseError> {
+    if ships.len() < 2 {
+        return Err(InverseError::Database(format!(
+            "{} ships; the SVD of variations needs at least 2",
+            ships.len()
+        )));
+    }
+    for (i, s) in ships.iter().enumerate() {
+        if ships[..i].iter().any(|o| o.id == s.id) {
+            return Err(InverseError::Database(format!(
+                "duplicate ship id {}",
+                s.id
+            )));
+        }
+        for (name, v) in COEF_NAMES.iter().zip(s.coefficients().0) {
+            if !v.is_finite() {
+                return Err(InverseError::Database(format!(
+                    "ship {}: {name} = {v} is not finite",
+                    s.id
+                )));
+            }
+        }
+    }
+    Ok(())
+}

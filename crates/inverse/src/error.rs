@@ -1,0 +1,40 @@
+//! Typed errors of the inverse-identification core.
+
+use thiserror::Error;
+
+/// Why an inverse-identification step could not be carried out.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum InverseError {
+    /// The hydrodynamic database is unusable (too few ships, a non-finite value…).
+    #[error("hydrodynamic database: {0}")]
+    Database(String),
+    /// A target ship particular is missing or out of range; `key` names the TOML key.
+    #[error("target {target}: {key} = {value}: {reason}")]
+    Target {
+        target: String,
+        key: &'static str,
+        value: f64,
+        reason: &'static str,
+    },
+    /// A motion index is non-finite or has the wrong sign for its logarithm.
+    #[error("motion {motion}: index {key} = {value}: {reason}")]
+    Index {
+        motion: String,
+        key: &'static str,
+        value: f64,
+        reason: &'static str,
+    },
+    /// The SVD of the variation matrix failed.
+    #[error("SVD of the hydrodynamic variation matrix failed: {0}")]
+    Svd(String),
+    /// A request that does not fit the modes or the network (wrong number of weights…).
+    #[error("invalid request: {0}")]
+    Invalid(String),
+    /// Too few simulations gave all indexes to train a network.
+    #[error("only {valid} of {total} simulated samples are usable; at least {needed} are needed")]
+    TooFewSamples {
+        valid: usize,
+        total: usize,
+        needed: usize,
+    },
+}
