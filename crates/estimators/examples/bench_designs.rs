@@ -98,11 +98,12 @@ fn run() -> Result<(), String> {
         let med = times.first().copied().unwrap_or(f64::NAN);
         total += med;
         let mut line = format!(
-            "{:28} n={n:5} p={q:2} fast {:8.3} ms it={:4} J={:.12e} {:?}",
+            "{:28} n={n:5} p={q:2} fast {:8.3} ms it={:4} J={:.12e} κ={:.1e} {:?}",
             s("id"),
             med * 1e3,
             first.iterations,
             first.objective,
+            first.condition_number.unwrap_or(f64::NAN),
             first.status
         );
         if with_qp {
