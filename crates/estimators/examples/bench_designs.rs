@@ -1,7 +1,10 @@
 //! Times `Solver::Fast` (and optionally `Solver::Qp`) of one estimator on the designs
 //! exported by `fit_bench --export DIR` (bench/designs), without the polars-heavy shipid
-//! crate: a quick loop for solver work. Prints one line per design: median time (ms),
-//! objective, and with `--qp` the relative objective difference to the QP.
+//! crate: a quick loop for solver work. Prints one line per design: the fastest of the
+//! repeats (ms; the least disturbed one on a shared machine), iterations, objective,
+//! condition number and status, and with `--qp` the relative objective difference to the
+//! QP. CASE is svr (default), ridge, lasso or lsq, unbounded. The figures of record come
+//! from `bench/run.sh`.
 //!
 //! ```text
 //! cargo run --release -p shipid-estimators --example bench_designs -- DIR [CASE] [--qp] [--repeats N]
@@ -94,13 +97,12 @@ fn run() -> Result<(), String> {
             })
             .collect();
         times.sort_by(f64::total_cmp);
-        // The minimum: the least disturbed repeat on a shared machine.
-        let med = times.first().copied().unwrap_or(f64::NAN);
-        total += med;
+        let best = times.first().copied().unwrap_or(f64::NAN);
+        total += best;
         let mut line = format!(
             "{:28} n={n:5} p={q:2} fast {:8.3} ms it={:4} J={:.12e} κ={:.1e} {:?}",
             s("id"),
-            med * 1e3,
+            best * 1e3,
             first.iterations,
             first.objective,
             first.condition_number.unwrap_or(f64::NAN),
