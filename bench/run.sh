@@ -41,8 +41,10 @@ state() {
 if [ -z "${SKIP_RUST:-}" ]; then
     state > bench/source_state.txt
     echo "load average before the Rust run: $(cut -d' ' -f1-3 /proc/loadavg)" >> bench/source_state.txt
-    cargo build --release -p shipid --example fit_bench
-    cargo run --release -q -p shipid --example fit_bench -- \
+    # The workspace test build compiles the examples with the workspace's feature set;
+    # `cargo build -p shipid` alone would unify features differently and rebuild polars.
+    cargo test --release --workspace --no-run
+    target/release/examples/fit_bench \
         --export bench/designs --out bench/results_rust.json "${RUST_REPEATS[@]}" 2> bench/fit_bench.log
     echo "load average after the Rust run: $(cut -d' ' -f1-3 /proc/loadavg)" >> bench/source_state.txt
     echo "Rust side done (log: bench/fit_bench.log)"

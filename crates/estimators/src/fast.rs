@@ -7,6 +7,8 @@
 //! * Ridge: Cholesky of `G + λI` (G = ZᵀZ/n) while `κ(G + λI) ≤ (q + λ)/λ ≤ 1e10`; below
 //!   that λ the normal equations would lose too many digits and the QR of `[R; √(nλ) I]`
 //!   is used instead.
+//! * Bounded LSQ: the semi-normal solution when it lies inside the box (then it is the
+//!   bounded minimiser too), otherwise:
 //! * Bounds and the ℓ1 penalty: the exact active-set method of [`crate::active_set`],
 //!   least-squares mode (QR of R's free columns) for bounded LSQ, Gram mode for Lasso and
 //!   bounded Ridge, with a least-squares-mode rerun when a Lasso face was singular.
@@ -118,9 +120,13 @@ fn ls_active_set(
 }
 
 fn lsq(pb: &Problem, lo: &[f64], hi: &[f64]) -> Result<Solution, EstimatorError> {
-    if is_unbounded(lo, hi)
-        && pb.n > pb.q()
+    // An unconstrained minimiser inside the box is the bounded one too (the usual case for
+    // sign bounds on these designs), so bounded LSQ tries the cheap path first as well.
+    if pb.n > pb.q()
         && let Some(x) = seminormal_lsq(pb)?
+        && x.iter()
+            .zip(lo.iter().zip(hi))
+            .all(|(v, (l, h))| l <= v && v <= h)
     {
         return Ok(Solution {
             gamma: x,

@@ -5,7 +5,9 @@ use faer::{Mat, MatRef};
 
 use crate::error::EstimatorError;
 use crate::fast::{self, Solution};
-use crate::linalg::{condition_from_singular_values, singular_values, sym_eig_extremes};
+use crate::linalg::{
+    condition_from_singular_values, singular_values, sym_eig_extremes, sym_eig_min_vector,
+};
 use crate::problem::{Problem, validate_design};
 use crate::qp;
 use crate::types::{Bounds, Estimator, Fit, ILL_CONDITIONED_THRESHOLD, Solver, Status};
@@ -103,8 +105,9 @@ fn effective_condition(
     }
     let k = free.len();
     if lambda > 0.0 || lasso || !pb.has_ls() {
-        // The Gram eigenvalues resolve κ(Z_F) reliably up to about 1e4; beyond that the
-        // singular values of the least-squares factor decide.
+        // The Gram eigenvalues resolve κ(Z_F) reliably up to about 1e4, a Rayleigh quotient
+        // on Z_F up to 1e6; beyond that the singular values of the least-squares factor
+        // decide.
         let (emin, emax) = if k == pb.q() {
             pb.gram_extremes()?
         } else {
@@ -114,6 +117,25 @@ fn effective_condition(
         };
         if emin > 1e-8 * emax {
             return Ok(Some(((emax + lambda) / (emin + lambda)).sqrt()));
+        }
+        if emin > 1e-12 * emax {
+            // κ(Z_F) up to 1e6 without a QR and an SVD of the design (which cost more than
+            // the least-squares solve itself): the Gram's smallest eigenvalue carries an
+            // absolute error of about ε·λ_max, but the Rayleigh quotient ‖Z_F v‖²/n of its
+            // eigenvector v, evaluated on Z_F itself, is accurate to about (ε·κ(G))²
+            // relative, since v's error is orthogonal to v to first order.
+            let g = &pb.gram().g;
+            let gff = Mat::<f64>::from_fn(k, k, |r, t| g[(free[r], free[t])]);
+            let (_, emax, v) = sym_eig_min_vector(gff.as_ref())?;
+            let mut zv = vec![0.0; pb.n];
+            for (t, &j) in free.iter().enumerate() {
+                let vt = v[t];
+                for (o, &x) in zv.iter_mut().zip(pb.z.col(j)) {
+                    *o += vt * x;
+                }
+            }
+            let rq = zv.iter().map(|x| x * x).sum::<f64>() / pb.n as f64;
+            return Ok(Some(((emax + lambda) / (rq + lambda)).sqrt()));
         }
     }
     let ls = pb.any_ls();

@@ -322,6 +322,22 @@ pub(crate) fn condition_from_singular_values(s: &[f64], ncols: usize) -> f64 {
 }
 
 /// Extreme eigenvalues (min, max) of a symmetric matrix (read from the lower triangle).
+/// Extreme eigenvalues (min, max) of a symmetric matrix and a unit eigenvector of the
+/// smallest.
+pub(crate) fn sym_eig_min_vector(
+    a: MatRef<'_, f64>,
+) -> Result<(f64, f64, Vec<f64>), EstimatorError> {
+    let k = a.nrows();
+    if k == 0 {
+        return Ok((0.0, 0.0, Vec::new()));
+    }
+    let evd = a.self_adjoint_eigen(faer::Side::Lower)?;
+    let s = evd.S().column_vector();
+    // Eigenvalues come sorted in nondecreasing order.
+    let v = (0..k).map(|i| evd.U()[(i, 0)]).collect();
+    Ok((s[0], s[k - 1], v))
+}
+
 pub(crate) fn sym_eig_extremes(a: MatRef<'_, f64>) -> Result<(f64, f64), EstimatorError> {
     if a.nrows() == 0 {
         return Ok((0.0, 0.0));

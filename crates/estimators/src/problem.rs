@@ -64,28 +64,40 @@ fn check_finite_column(c: &[f64], j: usize) -> Result<(), EstimatorError> {
     })
 }
 
-/// Root mean square. Squares are summed directly when the largest magnitude keeps them
-/// far from overflow and underflow (the usual case, and four independent sums
-/// vectorise), otherwise after division by that magnitude.
+/// Root mean square: [`rms_fast`] when it applies, otherwise after division by the
+/// largest magnitude (far from overflow and underflow).
 fn rms(c: &[f64]) -> f64 {
+    if let Some(v) = rms_fast(c) {
+        return v;
+    }
     let m = c.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     if m == 0.0 {
         return 0.0;
     }
     let n = c.len() as f64;
-    if (1e-100..=1e100).contains(&m) {
-        let mut acc = [0.0f64; 4];
-        let chunks = c.chunks_exact(4);
-        let tail: f64 = chunks.remainder().iter().map(|v| v * v).sum();
-        for ch in chunks {
-            for (a, v) in acc.iter_mut().zip(ch) {
-                *a += v * v;
-            }
-        }
-        return (((acc[0] + acc[1]) + (acc[2] + acc[3]) + tail) / n).sqrt();
-    }
     let s: f64 = c.iter().map(|v| (v / m) * (v / m)).sum();
     m * (s / n).sqrt()
+}
+
+/// Root mean square in one pass, `None` unless the sum of squares is finite and far from
+/// underflow and overflow (then every value is finite too, since NaN and ±∞ propagate
+/// into the sum; the caller falls back to the checked, rescaled [`rms`]). This is the
+/// common case, and one pass instead of three (finite check, maximum, sum) is a visible
+/// share of a least-squares fit.
+fn rms_fast(c: &[f64]) -> Option<f64> {
+    let mut acc = [0.0f64; 8];
+    let chunks = c.chunks_exact(8);
+    let tail: f64 = chunks.remainder().iter().map(|v| v * v).sum();
+    for ch in chunks {
+        for (a, v) in acc.iter_mut().zip(ch) {
+            *a += v * v;
+        }
+    }
+    let s =
+        ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7])) + tail;
+    // Squares of values below 1e-150 may underflow unnoticed, and a sum above 1e290 is
+    // close to overflow: both go through the rescaled path.
+    (s.is_finite() && (1e-150..=1e290).contains(&s)).then(|| (s / c.len() as f64).sqrt())
 }
 
 /// Root mean square of every column: the column scales `s_j` of the documented objectives.
@@ -149,8 +161,14 @@ impl Problem {
         let mut scales = vec![0.0; p];
         for (j, scale) in scales.iter_mut().enumerate() {
             let c = col_of(design, j);
-            check_finite_column(&c, j)?;
-            *scale = rms(&c);
+            // A finite sum of squares proves the column finite; otherwise find the bad value.
+            *scale = match rms_fast(&c) {
+                Some(v) => v,
+                None => {
+                    check_finite_column(&c, j)?;
+                    rms(&c)
+                }
+            };
         }
         let active: Vec<usize> = (0..p).filter(|&j| scales[j] > 0.0).collect();
         let zero_columns: Vec<usize> = (0..p).filter(|&j| scales[j] == 0.0).collect();

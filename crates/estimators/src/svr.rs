@@ -158,9 +158,54 @@ impl Smoothed<'_> {
         let dd: f64 = d.iter().map(|v| v * v).sum();
         let (c, eps, mu) = (self.c, self.eps, self.mu);
         let wts = &self.pb.w;
-        let slope = |t: f64| -> (f64, f64) {
-            let (mut s1, mut s2) = (0.0, 0.0);
-            for ((&ri, &ai), &wi) in r.iter().zip(zd).zip(wts) {
+        // Samples whose residual stays in one linear region of h'_μ over the whole bracket
+        // contribute `k0 + k1·t` to Σ wᵢaᵢh'_μ and `kh` to its slope; once a bracket is
+        // known they are folded into these sums and only the others are visited again
+        // (most samples, after the first few trials).
+        let mut active: Vec<u32> = (0..r.len() as u32)
+            .filter(|&i| zd[i as usize] != 0.0)
+            .collect();
+        let (mut k0, mut k1, mut kh) = (0.0, 0.0, 0.0);
+        // Region of a residual value: 0 inside, ±1 band, ±2 outside.
+        let region = |v: f64| -> i8 {
+            let a = v.abs() - eps;
+            let s = if v < 0.0 { -1 } else { 1 };
+            if a <= 0.0 {
+                0
+            } else if a < mu {
+                s
+            } else {
+                2 * s
+            }
+        };
+        let fold =
+            |active: &mut Vec<u32>, lo: f64, hi: f64, k0: &mut f64, k1: &mut f64, kh: &mut f64| {
+                active.retain(|&iu| {
+                    let i = iu as usize;
+                    let (ri, ai, wi) = (r[i], zd[i], wts[i]);
+                    let g = region(ri - lo * ai);
+                    if g != region(ri - hi * ai) {
+                        return true;
+                    }
+                    match g {
+                        0 => {}
+                        1 | -1 => {
+                            // w a (r − t a − sε)/μ
+                            let sf = f64::from(g);
+                            *k0 += wi * ai * (ri - sf * eps) / mu;
+                            *k1 -= wi * ai * ai / mu;
+                            *kh += wi * ai * ai / mu;
+                        }
+                        _ => *k0 += wi * ai * f64::from(g / 2),
+                    }
+                    false
+                });
+            };
+        let slope = |t: f64, active: &[u32], k0: f64, k1: f64, kh: f64| -> (f64, f64) {
+            let (mut s1, mut s2) = (k0 + k1 * t, kh);
+            for &iu in active {
+                let i = iu as usize;
+                let (ri, ai, wi) = (r[i], zd[i], wts[i]);
                 let rt = ri - t * ai;
                 let a = rt.abs() - eps;
                 if a > 0.0 {
@@ -185,8 +230,13 @@ impl Smoothed<'_> {
         let (mut hi, mut ghi) = (f64::NAN, f64::NAN);
         let mut t = 1.0f64.min(t_max);
         let mut side = 0i32;
+        let mut folded = (f64::NAN, f64::NAN);
         for _ in 0..60 {
-            let (g1, h1) = slope(t);
+            if !hi.is_nan() && (lo, hi) != folded {
+                fold(&mut active, lo, hi, &mut k0, &mut k1, &mut kh);
+                folded = (lo, hi);
+            }
+            let (g1, h1) = slope(t, &active, k0, k1, kh);
             // Slope down by ten orders of magnitude: φ(t) is within ~1e-20·|φ'(0)|·t of
             // its minimum along d.
             if g1.abs() <= 1e-10 * d0.abs() {
@@ -243,16 +293,34 @@ fn true_objective(gamma: &[f64], r: &[f64], wts: &[f64], c: f64, eps: f64) -> f6
             .sum::<f64>()
 }
 
-/// `I + (C/μ) Z_QᵀW_QZ_Q`.
-fn hessian(z: &Tall, wts: &[f64], band: &[usize], weight: f64) -> Mat<f64> {
-    let q = z.ncols();
-    let mut h = if band.is_empty() {
-        Mat::<f64>::zeros(q, q)
-    } else {
-        let mut zq = Tall::zeros(band.len(), q);
+/// `Σ_{i∈Q} wᵢ zᵢzᵢᵀ` over the band samples Q, kept up to date between Newton steps:
+/// consecutive bands share most samples, so adding the entering and removing the leaving
+/// samples' outer products costs far less than the Gram of the whole band (which
+/// dominated a Newton step when the band holds thousands of samples).
+struct BandGram {
+    member: Vec<bool>,
+    g: Mat<f64>,
+    valid: bool,
+}
+
+impl BandGram {
+    fn new(n: usize, q: usize) -> Self {
+        BandGram {
+            member: vec![false; n],
+            g: Mat::zeros(q, q),
+            valid: false,
+        }
+    }
+
+    fn weighted_gram(z: &Tall, wts: &[f64], rows: &[usize]) -> Mat<f64> {
+        let q = z.ncols();
+        if rows.is_empty() {
+            return Mat::zeros(q, q);
+        }
+        let mut zq = Tall::zeros(rows.len(), q);
         for j in 0..q {
             let src = col(z, j);
-            for (d, &i) in zq.col_mut(j).iter_mut().zip(band) {
+            for (d, &i) in zq.col_mut(j).iter_mut().zip(rows) {
                 *d = if wts[i] == 1.0 {
                     src[i]
                 } else {
@@ -261,14 +329,43 @@ fn hessian(z: &Tall, wts: &[f64], band: &[usize], weight: f64) -> Mat<f64> {
             }
         }
         gram(zq.as_ref())
-    };
-    for j in 0..q {
-        for i in 0..q {
-            h[(i, j)] *= weight;
-        }
-        h[(j, j)] += 1.0;
     }
-    h
+
+    fn update(&mut self, z: &Tall, wts: &[f64], band: &[usize]) {
+        let mut entering = Vec::new();
+        let mut in_new = vec![false; self.member.len()];
+        for &i in band {
+            in_new[i] = true;
+            if !self.member[i] {
+                entering.push(i);
+            }
+        }
+        let leaving: Vec<usize> = (0..self.member.len())
+            .filter(|&i| self.member[i] && !in_new[i])
+            .collect();
+        if !self.valid || entering.len() + leaving.len() >= band.len() {
+            self.g = Self::weighted_gram(z, wts, band);
+            self.valid = true;
+        } else {
+            let plus = Self::weighted_gram(z, wts, &entering);
+            let minus = Self::weighted_gram(z, wts, &leaving);
+            let q = z.ncols();
+            for j in 0..q {
+                for i in 0..q {
+                    self.g[(i, j)] += plus[(i, j)] - minus[(i, j)];
+                }
+            }
+        }
+        self.member = in_new;
+    }
+
+    /// `I + weight·Σ_Q wᵢ zᵢzᵢᵀ`.
+    fn hessian(&self, weight: f64) -> Mat<f64> {
+        let q = self.g.nrows();
+        Mat::<f64>::from_fn(q, q, |i, j| {
+            weight * self.g[(i, j)] + if i == j { 1.0 } else { 0.0 }
+        })
+    }
 }
 
 /// Minimises `F_μ` from `gamma` (in place). Returns the number of Newton steps.
@@ -278,7 +375,13 @@ fn hessian(z: &Tall, wts: &[f64], band: &[usize], weight: f64) -> Mat<f64> {
 /// A stage stops once the decrement is below a thousandth of the smoothing gap
 /// `F(γ) − F_μ(γ)`: solving `F_μ` more exactly than it approximates F is wasted work for
 /// an intermediate μ, and for the final μ the two together certify the result.
-fn newton_stage(s: &Smoothed<'_>, gamma: &mut [f64], lo: &[f64], hi: &[f64]) -> (usize, f64) {
+fn newton_stage(
+    s: &Smoothed<'_>,
+    gamma: &mut [f64],
+    lo: &[f64],
+    hi: &[f64],
+    band_gram: &mut BandGram,
+) -> (usize, f64) {
     let pb = s.pb;
     let q = pb.q();
     let unbounded = is_unbounded(lo, hi);
@@ -291,7 +394,8 @@ fn newton_stage(s: &Smoothed<'_>, gamma: &mut [f64], lo: &[f64], hi: &[f64]) -> 
         let (w, band) = s.derivatives(&r);
         let ztw = zt_v(&pb.z, &w);
         let g: Vec<f64> = (0..q).map(|j| gamma[j] - s.c * ztw[j]).collect();
-        let h = hessian(&pb.z, &pb.w, &band, s.c / s.mu);
+        band_gram.update(&pb.z, &pb.w, &band);
+        let h = band_gram.hessian(s.c / s.mu);
         // `target` is kept so that a full step lands exactly on the bounds it reaches,
         // which the exact finish relies on to recognise bound-held coordinates.
         let (d, target): (Vec<f64>, Option<Vec<f64>>) = if unbounded {
@@ -599,9 +703,10 @@ pub(crate) fn solve(
     }
     let mut mu = scale;
     let mut iterations = 0;
+    let mut band_gram = BandGram::new(pb.n, q);
     for _ in 0..MAX_STAGES {
         let s = Smoothed { pb, c, eps, mu };
-        let (st, decrement) = newton_stage(&s, &mut gamma, lo, hi);
+        let (st, decrement) = newton_stage(&s, &mut gamma, lo, hi, &mut band_gram);
         iterations += st;
         let r = residual(&pb.z, &pb.y, &gamma);
         let f_true = true_objective(&gamma, &r, &pb.w, c, eps);
