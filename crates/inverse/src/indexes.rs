@@ -283,14 +283,7 @@ fn turning(
                 what: "final heading change",
             });
         }
-        state = State {
-            u: rec.u[last],
-            v: rec.v[last],
-            r: rec.r[last],
-            x0: rec.x0[last],
-            y0: rec.y0[last],
-            psi: rec.psi[last],
-        };
+        state = State::of_recording(rec, last);
         delta0 = rec.delta[last];
     }
 }

@@ -254,17 +254,6 @@ pub fn prepare(ds: &Dataset, ship: &Ship, opts: &DiagnoseOptions) -> Vec<Prepare
         .collect()
 }
 
-fn state_at(rec: &Recording, i: usize) -> State {
-    State {
-        u: rec.u[i],
-        v: rec.v[i],
-        r: rec.r[i],
-        x0: rec.x0[i],
-        y0: rec.y0[i],
-        psi: rec.psi[i],
-    }
-}
-
 /// The acting rudder for the recorded one through `filter`, at the recording's samples.
 fn filtered_rudder(filter: &mut dyn RudderFilter, rec: &Recording) -> Vec<f64> {
     let (t, d) = (&rec.t, &rec.delta);
@@ -288,7 +277,9 @@ fn residuals(model: &dyn Dynamics, p: &Prepared) -> Vec<Option<[f64; 3]>> {
     p.samples
         .iter()
         .map(|&i| {
-            let a = model.accelerations(&state_at(&p.rec, i), delta[i]).ok()?;
+            let a = model
+                .accelerations(&State::of_recording(&p.rec, i), delta[i])
+                .ok()?;
             let rec = [p.acc.u_dot[i], p.acc.v_dot[i], p.acc.r_dot[i]];
             let e = [rec[0] - a[0], rec[1] - a[1], rec[2] - a[2]];
             e.iter().all(|x| x.is_finite()).then_some(e)

@@ -63,14 +63,7 @@ impl Predicted {
 /// Explicit Euler at the recording's sample instants with its rudder (paper 001's integration).
 pub fn euler_replay(model: &dyn Dynamics, rec: &Recording) -> Predicted {
     let t0 = rec.t[0];
-    let mut s = State {
-        u: rec.u[0],
-        v: rec.v[0],
-        r: rec.r[0],
-        x0: rec.x0[0],
-        y0: rec.y0[0],
-        psi: rec.psi[0],
-    };
+    let mut s = State::of_recording(rec, 0);
     let mut p = Predicted {
         t: vec![],
         u: vec![],
@@ -148,14 +141,7 @@ pub fn one_step_rmse(model: &dyn Dynamics, rec: &Recording, ship: &shipid_io::Sh
     let mut sq = [0.0; 3];
     let mut n = 0usize;
     for i in 0..rec.len() {
-        let s = State {
-            u: rec.u[i],
-            v: rec.v[i],
-            r: rec.r[i],
-            x0: rec.x0[i],
-            y0: rec.y0[i],
-            psi: rec.psi[i],
-        };
+        let s = State::of_recording(rec, i);
         if let Ok(a) = model.accelerations(&s, rec.delta[i]) {
             sq[0] += (a[0] - acc.u_dot[i]).powi(2);
             sq[1] += (a[1] - acc.v_dot[i]).powi(2);

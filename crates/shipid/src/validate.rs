@@ -68,14 +68,7 @@ impl RecordingValidation {
 }
 
 fn initial_state(rec: &Recording) -> State {
-    State {
-        u: rec.u[0],
-        v: rec.v[0],
-        r: rec.r[0],
-        x0: rec.x0[0],
-        y0: rec.y0[0],
-        psi: rec.psi[0],
-    }
+    State::of_recording(rec, 0)
 }
 
 fn options(ship: &Ship, duration_s: f64) -> SimOptions {

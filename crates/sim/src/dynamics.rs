@@ -26,6 +26,18 @@ pub struct State {
 }
 
 impl State {
+    /// The recorded state at sample `i` (panics if `i` is out of range: callers index their own samples).
+    pub fn of_recording(rec: &shipid_io::Recording, i: usize) -> State {
+        State {
+            u: rec.u[i],
+            v: rec.v[i],
+            r: rec.r[i],
+            x0: rec.x0[i],
+            y0: rec.y0[i],
+            psi: rec.psi[i],
+        }
+    }
+
     /// Straight steady approach at `u_m_s` along north from the origin.
     pub fn approach(u_m_s: f64) -> State {
         State {
