@@ -268,26 +268,44 @@ pub fn training_samples(
             r_dot: acc.r_dot[range.clone()].to_vec(),
         };
         samples.push(&rec, &acc, &scale, g);
-        windows.push(TrainingWindow {
-            dataset: ds.path.display().to_string(),
-            recording: r.file.clone(),
-            t_start_s: rec.t[0],
-            t_end_s: *rec.t.last().unwrap_or(&rec.t[0]),
-            overshoots: match (window, r.manoeuvre) {
-                (WindowSpec::Overshoots(n), Manoeuvre::ZigZag { .. }) => Some(n),
-                _ => None,
-            },
-            accelerations: if estimated {
-                format!(
-                    "estimated: local cubic least squares (Savitzky–Golay), window {:.3} L/U0",
-                    shipid_io::deriv::WINDOW_FRACTION_OF_L_OVER_U0
-                )
-            } else {
-                "recorded".into()
-            },
-        });
+        windows.push(training_window(
+            ds,
+            r,
+            window,
+            (rec.t[0], *rec.t.last().unwrap_or(&rec.t[0])),
+            estimated,
+        ));
     }
     Ok((samples, windows))
+}
+
+/// The model file's record of one training recording: its window [s] and how its accelerations were
+/// obtained (shared by the Abkowitz and the sparse-GP fits).
+pub fn training_window(
+    ds: &Dataset,
+    r: &DatasetRecording,
+    window: WindowSpec,
+    (t_start_s, t_end_s): (f64, f64),
+    estimated: bool,
+) -> TrainingWindow {
+    TrainingWindow {
+        dataset: ds.path.display().to_string(),
+        recording: r.file.clone(),
+        t_start_s,
+        t_end_s,
+        overshoots: match (window, r.manoeuvre) {
+            (WindowSpec::Overshoots(n), Manoeuvre::ZigZag { .. }) => Some(n),
+            _ => None,
+        },
+        accelerations: if estimated {
+            format!(
+                "estimated: local cubic least squares (Savitzky–Golay), window {:.3} L/U0",
+                shipid_io::deriv::WINDOW_FRACTION_OF_L_OVER_U0
+            )
+        } else {
+            "recorded".into()
+        },
+    }
 }
 
 /// Fit a set with an estimator on a data set.

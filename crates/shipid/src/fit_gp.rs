@@ -11,13 +11,12 @@ use std::time::Instant;
 use serde::Serialize;
 use shipid_gp::{Gp, Points, Similarity, TrainOptions, half_ranges, sparsify};
 use shipid_io::deriv::accelerations_or_estimate;
-use shipid_io::{Dataset, DatasetRecording, Manoeuvre};
-use shipid_model::TrainingWindow;
+use shipid_io::{Dataset, DatasetRecording};
 use shipid_sim::{
     GP_INPUTS, GP_KIND, GP_OUTPUTS, GpDynamics, GpModelFile, GpOutputFile, SparsificationInfo,
 };
 
-use crate::fit::{WindowSpec, window_range};
+use crate::fit::{WindowSpec, training_window, window_range};
 use crate::{CliError, bad_input};
 
 /// Default similarity threshold d_gen. On the HSVA 15/5+20/5+30/5+35/5 training data (15 444 samples)
@@ -100,24 +99,16 @@ pub fn fit_gp_dataset(
             targets[1].push(acc.v_dot[i]);
             targets[2].push(acc.r_dot[i]);
         }
-        windows.push(TrainingWindow {
-            dataset: ds.path.display().to_string(),
-            recording: r.file.clone(),
-            t_start_s: rec.t[range.start],
-            t_end_s: rec.t[range.end.saturating_sub(1).max(range.start)],
-            overshoots: match (window, r.manoeuvre) {
-                (WindowSpec::Overshoots(n), Manoeuvre::ZigZag { .. }) => Some(n),
-                _ => None,
-            },
-            accelerations: if estimated {
-                format!(
-                    "estimated: local cubic least squares (Savitzky–Golay), window {:.3} L/U0",
-                    shipid_io::deriv::WINDOW_FRACTION_OF_L_OVER_U0
-                )
-            } else {
-                "recorded".into()
-            },
-        });
+        windows.push(training_window(
+            ds,
+            r,
+            window,
+            (
+                rec.t[range.start],
+                rec.t[range.end.saturating_sub(1).max(range.start)],
+            ),
+            estimated,
+        ));
     }
     let all = Points::new(GP_INPUTS.len(), inputs)
         .map_err(|e| bad_input(format!("training inputs: {e}")))?;

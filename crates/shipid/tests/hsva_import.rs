@@ -11,21 +11,8 @@ fn hsva_overshoots_match_the_source_listing() {
         return;
     };
     let out = tempfile::tempdir().unwrap();
-    let out_dir = out.path().to_str().unwrap();
-    let imported = common::shipid(&[
-        "import",
-        "data/kvlcc2-hsva/import.toml",
-        "--out",
-        out_dir,
-        "--source",
-        dir.to_str().unwrap(),
-    ]);
-    assert!(
-        imported.status.success(),
-        "{}",
-        String::from_utf8_lossy(&imported.stderr)
-    );
-    let ds = format!("{out_dir}/dataset.toml");
+    let ds = common::import_hsva(&dir, out.path());
+    let ds = ds.to_str().unwrap().to_string();
     let m = common::shipid(&["metrics", &ds, "--json"]);
     assert!(m.status.success(), "{}", String::from_utf8_lossy(&m.stderr));
     let v: Value = serde_json::from_slice(&m.stdout).unwrap();

@@ -27,28 +27,16 @@ fn hsva_tab5_row3_and_gp_surge_advantage() {
         return;
     };
     let tmp = tempfile::tempdir().unwrap();
+    let ds = common::import_hsva(&dir, tmp.path());
+    let ds = ds.to_str().unwrap();
     let out = tmp.path().to_str().unwrap();
-    let imported = common::shipid(&[
-        "import",
-        "data/kvlcc2-hsva/import.toml",
-        "--out",
-        out,
-        "--source",
-        dir.to_str().unwrap(),
-    ]);
-    assert!(
-        imported.status.success(),
-        "{}",
-        String::from_utf8_lossy(&imported.stderr)
-    );
-    let ds = format!("{out}/dataset.toml");
     let param = format!("{out}/chen.toml");
     let gp = format!("{out}/gp.toml");
     for args in [
         vec!["--set", "chen2021", "--estimator", "lsq", "--out", &param],
         vec!["--estimator", "sparse-gp", "--out", &gp],
     ] {
-        let mut all = vec!["fit", &ds, "--recordings", TRAINING];
+        let mut all = vec!["fit", ds, "--recordings", TRAINING];
         all.extend(args);
         let fit = common::shipid(&all);
         assert!(
@@ -57,11 +45,11 @@ fn hsva_tab5_row3_and_gp_surge_advantage() {
             String::from_utf8_lossy(&fit.stderr)
         );
     }
-    let (u, v, r) = replay_25_5(&param, &ds);
+    let (u, v, r) = replay_25_5(&param, ds);
     assert!((u - 0.58).abs() < 0.05, "u RMSE {u} vs paper 0.58");
     assert!((v - 0.39).abs() < 0.05, "v RMSE {v} vs paper 0.39");
     assert!((r - 7.65).abs() < 0.5, "r RMSE {r} vs paper 7.65");
-    let (u_gp, _, _) = replay_25_5(&gp, &ds);
+    let (u_gp, _, _) = replay_25_5(&gp, ds);
     assert!(
         u_gp < u,
         "GP surge RMSE {u_gp} not below the parametric {u}"

@@ -33,3 +33,21 @@ pub fn shared_hsva(test: &str) -> Option<PathBuf> {
     );
     None
 }
+
+/// Import the HSVA recordings of `source` with the project's mapping into `out`; the data set path.
+pub fn import_hsva(source: &Path, out: &Path) -> PathBuf {
+    let imported = shipid(&[
+        "import",
+        "data/kvlcc2-hsva/import.toml",
+        "--out",
+        out.to_str().unwrap(),
+        "--source",
+        source.to_str().unwrap(),
+    ]);
+    assert!(
+        imported.status.success(),
+        "{}",
+        String::from_utf8_lossy(&imported.stderr)
+    );
+    out.join("dataset.toml")
+}
