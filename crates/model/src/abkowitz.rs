@@ -156,6 +156,26 @@ pub struct EstimatorInfo {
     /// True when the hyper-parameters were chosen by cross-validation.
     #[serde(default)]
     pub tuned: bool,
+    /// Set when the estimator's coefficients were then refined in the output-error sense
+    /// (`shipid fit --refine`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub refinement: Option<Refinement>,
+}
+
+/// What an output-error refinement did to the estimator's coefficients.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Refinement {
+    pub method: String,
+    /// Replay segment length ÷ (L/U0).
+    pub horizon_l_over_u0: f64,
+    pub iterations: usize,
+    /// Segment-replay position RMSE ÷ L on the training windows before and after.
+    pub before_position_rmse_over_l: f64,
+    pub after_position_rmse_over_l: f64,
+    /// Segment-replay heading RMSE [deg] on the training windows before and after.
+    pub before_heading_rmse_deg: f64,
+    pub after_heading_rmse_deg: f64,
 }
 
 /// One training recording and the window of it that was used.

@@ -13,7 +13,7 @@ pub mod set;
 
 pub use abkowitz::{
     AbkowitzModel, AugmentedModelFile, EffectEntry, EstimatorInfo, ModelError, ModelFile,
-    TrainingWindow,
+    Refinement, TrainingWindow,
 };
 pub use design::{Design, PrimeInertia, Samples, design};
 pub use set::{CoefficientSet, Dof, Known, Monomial, SetError, SetFile};

@@ -354,7 +354,7 @@ struct FitResult {
     std_err: Vec<f64>,
 }
 
-fn solve_small(a: &[Vec<f64>], b: &[f64]) -> Option<Vec<f64>> {
+pub(crate) fn solve_small(a: &[Vec<f64>], b: &[f64]) -> Option<Vec<f64>> {
     let n = b.len();
     let mut m: Vec<Vec<f64>> = a
         .iter()
@@ -572,7 +572,7 @@ fn mean_around(x: &[f64], i: usize, half: usize) -> f64 {
 }
 
 /// Segment boundaries of a recording for the horizon.
-fn segments(rec: &Recording, horizon_s: f64) -> Vec<(usize, usize)> {
+pub(crate) fn segments(rec: &Recording, horizon_s: f64) -> Vec<(usize, usize)> {
     let mut out = Vec::new();
     let mut a = 0;
     let n = rec.len();
@@ -589,7 +589,12 @@ fn segments(rec: &Recording, horizon_s: f64) -> Vec<(usize, usize)> {
 }
 
 /// Replay one segment; returns the simulated recording (possibly cut short) and status.
-fn replay_segment(model: &dyn Dynamics, rec: &Recording, a: usize, b: usize) -> (Recording, bool) {
+pub(crate) fn replay_segment(
+    model: &dyn Dynamics,
+    rec: &Recording,
+    a: usize,
+    b: usize,
+) -> (Recording, bool) {
     let half = 5;
     let t0 = rec.t[a];
     let t: Vec<f64> = rec.t[a..b].iter().map(|x| x - t0).collect();

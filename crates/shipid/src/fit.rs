@@ -13,13 +13,14 @@ use shipid_estimators::{
     scaled_condition_number, tune, vif,
 };
 use shipid_io::deriv::accelerations_or_estimate;
-use shipid_io::{Dataset, DatasetRecording, Manoeuvre, PrimeScale};
+use shipid_io::{Accelerations, Dataset, DatasetRecording, Manoeuvre, PrimeScale, Recording};
 use shipid_model::{
     AbkowitzModel, CoefficientSet, Dof, EstimatorInfo, ModelFile, PrimeInertia, Samples, SetFile,
     TrainingWindow, design,
 };
 use shipid_sim::metrics::zigzag_events;
 
+use crate::output_error::{RefineOptions, refine_output_error};
 use crate::{CliError, bad_input};
 
 /// A set by shipped name or by path to a set file.
@@ -51,6 +52,10 @@ pub struct EstimatorSpec {
     pub epsilon: Option<f64>,
     /// Choose the hyper-parameter by blocked cross-validation.
     pub tune: bool,
+    /// Then refine all coefficients in the output-error sense ([`crate::output_error`]). Not serialised
+    /// when off, so the ids of study cases stay as they were.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub refine: bool,
 }
 
 /// ε of the SVR when it is not given: 1 % of the RMS of the DOF's target (the ε-tube then ignores only
@@ -68,6 +73,7 @@ impl EstimatorSpec {
             c: None,
             epsilon: None,
             tune: false,
+            refine: false,
         }
     }
 
@@ -381,6 +387,27 @@ pub fn fit_dataset(
         },
         hyper,
         tuned: spec.tune,
+        refinement: None,
+    };
+    let (model, info) = if spec.refine {
+        let recs: Vec<Recording> = windows
+            .iter()
+            .filter_map(|w| {
+                let r = &ds.recording(&w.recording)?.recording;
+                let lo = r.t.partition_point(|&t| t < w.t_start_s);
+                let hi = r.t.partition_point(|&t| t <= w.t_end_s);
+                Some(slice_recording(r, lo..hi))
+            })
+            .collect();
+        let (refined, how) = refine_output_error(&model, &recs, &RefineOptions::default())
+            .map_err(|e| bad_input(format!("--refine: {e}")))?;
+        let info = EstimatorInfo {
+            refinement: Some(how),
+            ..info
+        };
+        (refined, info)
+    } else {
+        (model, info)
     };
     let file = ModelFile::from_model(&model, info, windows);
     Ok(FitOutput {
@@ -430,6 +457,27 @@ fn hyper_of(e: &Estimator) -> Vec<(&'static str, f64)> {
         Estimator::Ridge { lambda } => vec![("lambda", lambda)],
         Estimator::Lasso { alpha } => vec![("alpha", alpha)],
         Estimator::Svr { c, epsilon } => vec![("c", c), ("epsilon", epsilon)],
+    }
+}
+
+/// Samples `range` of a recording.
+pub fn slice_recording(r: &Recording, range: std::ops::Range<usize>) -> Recording {
+    let cut = |x: &[f64]| x[range.clone()].to_vec();
+    Recording {
+        t: cut(&r.t),
+        x0: cut(&r.x0),
+        y0: cut(&r.y0),
+        psi: cut(&r.psi),
+        u: cut(&r.u),
+        v: cut(&r.v),
+        r: cut(&r.r),
+        delta: cut(&r.delta),
+        n: r.n.as_deref().map(cut),
+        accelerations: r.accelerations.as_ref().map(|a| Accelerations {
+            u_dot: cut(&a.u_dot),
+            v_dot: cut(&a.v_dot),
+            r_dot: cut(&a.r_dot),
+        }),
     }
 }
 

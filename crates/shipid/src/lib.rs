@@ -12,6 +12,7 @@ pub mod generate;
 pub mod import;
 pub mod inverse_cmd;
 pub mod metrics_cmd;
+pub mod output_error;
 pub mod paper001;
 pub mod plot;
 pub mod runner;

@@ -73,6 +73,10 @@ enum Command {
         /// Choose the hyper-parameter by blocked cross-validation.
         #[arg(long)]
         tune: bool,
+        /// Then refine all coefficients so that segment replays of the training windows (10 L/U0,
+        /// restarted from the recorded state) match the recorded track and heading (output error).
+        #[arg(long)]
+        refine: bool,
         /// Training recordings (comma separated file names; default all).
         #[arg(long, value_delimiter = ',')]
         recordings: Vec<String>,
@@ -270,6 +274,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             c,
             epsilon,
             tune,
+            refine,
             recordings,
             overshoots,
             window,
@@ -321,6 +326,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                     c,
                     epsilon,
                     tune,
+                    refine,
                 },
                 recordings,
                 window,

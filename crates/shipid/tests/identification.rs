@@ -218,3 +218,58 @@ fn asking_for_more_overshoots_than_the_record_has_is_bad_input() {
         "{err}"
     );
 }
+
+/// `--refine`: the output-error refinement lowers the segment-replay error on the training window
+/// without giving up the force fit (the equation error stays within a factor of the LSQ one), and the
+/// model file records what it did.
+#[test]
+fn output_error_refinement_lowers_the_replay_error_and_keeps_the_force_fit() {
+    let ds = embedded();
+    let fit = |refine: bool| {
+        fit_dataset(
+            &ds,
+            load_set("reduced32").unwrap(),
+            &EstimatorSpec {
+                refine,
+                ..EstimatorSpec::named("lsq")
+            },
+            &["zz35_35_ps.csv".to_string()],
+            WindowSpec::Overshoots(4),
+            Solver::Fast,
+        )
+        .unwrap()
+    };
+    let lsq = fit(false);
+    let refined = fit(true);
+    assert!(lsq.file.estimator.refinement.is_none());
+    let how = refined.file.estimator.refinement.clone().unwrap();
+    assert!(
+        how.after_position_rmse_over_l < 0.8 * how.before_position_rmse_over_l,
+        "{how:?}"
+    );
+    assert!(
+        how.after_heading_rmse_deg < how.before_heading_rmse_deg,
+        "{how:?}"
+    );
+    // The file round-trips with the refinement and rebuilds the refined coefficients.
+    let text = toml::to_string(&refined.file).unwrap();
+    let back: shipid_model::ModelFile = toml::from_str(&text).unwrap();
+    assert_eq!(back.to_model().unwrap(), refined.model);
+    assert_eq!(back.estimator.refinement, Some(how));
+    // Equation error of the refined model on the training data: within 3× the LSQ optimum per DOF.
+    let rec = &ds.recording("zz35_35_ps.csv").unwrap().recording;
+    let acc = rec.accelerations.as_ref().unwrap();
+    let ee = |m: &shipid_model::AbkowitzModel| -> [f64; 3] {
+        let mut s = [0.0; 3];
+        for i in (0..rec.len()).step_by(5) {
+            let a = m.accelerations(rec.u[i], rec.v[i], rec.r[i], rec.delta[i]);
+            let r = [acc.u_dot[i], acc.v_dot[i], acc.r_dot[i]];
+            (0..3).for_each(|d| s[d] += (a[d] - r[d]).powi(2));
+        }
+        s
+    };
+    let (e0, e1) = (ee(&lsq.model), ee(&refined.model));
+    for d in 0..3 {
+        assert!(e1[d] < 9.0 * e0[d], "DOF {d}: {} vs {}", e1[d], e0[d]);
+    }
+}
