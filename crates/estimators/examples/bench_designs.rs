@@ -41,6 +41,9 @@ fn main() {
 }
 
 fn run() -> Result<(), String> {
+    // One core, as in `fit_bench` and the Python side; faer's default thread pool spins
+    // waiting threads that would inflate the sub-millisecond fits measured here.
+    shipid_estimators::faer::set_global_parallelism(shipid_estimators::faer::Par::Seq);
     let args: Vec<String> = std::env::args().skip(1).collect();
     let dir = Path::new(
         args.first()

@@ -3,12 +3,15 @@
 
 use faer::{Mat, MatRef};
 
+use crate::direct;
 use crate::error::EstimatorError;
 use crate::fast::{self, Solution};
+use crate::kernels;
+use crate::linalg::col_of;
 use crate::linalg::{
     condition_from_singular_values, singular_values, sym_eig_extremes, sym_eig_min_vector,
 };
-use crate::problem::{Problem, validate_design};
+use crate::problem::{Problem, column_scales, validate_design, validate_problem_data};
 use crate::qp;
 use crate::types::{Bounds, Estimator, Fit, ILL_CONDITIONED_THRESHOLD, Solver, Status};
 
@@ -26,11 +29,69 @@ pub fn fit(
     solver: Solver,
 ) -> Result<Fit, EstimatorError> {
     estimator.validate()?;
+    if solver == Solver::Fast
+        && matches!(
+            estimator,
+            Estimator::Lsq
+                | Estimator::BoundedLsq
+                | Estimator::Ridge { lambda: 0.0 }
+                | Estimator::Lasso { alpha: 0.0 }
+        )
+        && let Some(result) = direct::try_lsq(design, y, estimator, bounds)
+    {
+        return result;
+    }
     let pb = Problem::new(design, y)?;
     if let Some(b) = bounds {
         b.validate(pb.p)?;
     }
-    fit_problem(&pb, estimator, bounds, solver)
+    let mut f = fit_problem(&pb, estimator, bounds, solver)?;
+    if !matches!(estimator, Estimator::Svr { .. }) {
+        // The same evaluation as `objective()`, so that the two agree to the last bit
+        // whichever path produced the fit.
+        f.objective = ls_objective(design, y, estimator, &f.coefficients, &pb.scales);
+    }
+    Ok(f)
+}
+
+/// `(1/2n)‖y − Φβ‖²` on the raw design, by the same kernel as the direct LSQ path.
+pub(crate) fn half_mse_raw(design: MatRef<'_, f64>, y: &[f64], beta: &[f64]) -> f64 {
+    let columns: Vec<std::borrow::Cow<'_, [f64]>> =
+        (0..design.ncols()).map(|j| col_of(design, j)).collect();
+    let cols: Vec<&[f64]> = columns.iter().map(|c| c.as_ref()).collect();
+    let (rr, _) = kernels::residual_norms(&cols, y, beta, None);
+    0.5 * rr / y.len() as f64
+}
+
+/// The objective of a least-squares-family estimator at the unscaled `beta`, penalties on
+/// `γ_j = s_j β_j`.
+fn ls_objective(
+    design: MatRef<'_, f64>,
+    y: &[f64],
+    estimator: &Estimator,
+    beta: &[f64],
+    scales: &[f64],
+) -> f64 {
+    let half_mse = half_mse_raw(design, y, beta);
+    let gamma = beta.iter().zip(scales).map(|(b, s)| b * s);
+    match *estimator {
+        Estimator::Ridge { lambda } => half_mse + 0.5 * lambda * gamma.map(|g| g * g).sum::<f64>(),
+        Estimator::Lasso { alpha } => half_mse + alpha * gamma.map(|g| g.abs()).sum::<f64>(),
+        _ => half_mse,
+    }
+}
+
+/// The solver's status, turned into `IllConditioned` when the effective condition number
+/// exceeds [`ILL_CONDITIONED_THRESHOLD`] (or is NaN).
+pub(crate) fn status_from(status: Status, condition_number: Option<f64>) -> Status {
+    match (status, condition_number) {
+        (Status::Ok, Some(k)) if k.is_nan() || k > ILL_CONDITIONED_THRESHOLD => {
+            Status::IllConditioned {
+                condition_number: k,
+            }
+        }
+        (s, _) => s,
+    }
 }
 
 /// `fit` on an already validated problem (inputs, estimator and bounds checked).
@@ -56,14 +117,7 @@ pub(crate) fn fit_problem(
     let coefficients = pb.unscale(&sol.gamma, bounds);
     let objective = pb.objective(estimator, &coefficients);
     let condition_number = effective_condition(pb, estimator, &sol.gamma, &lo, &hi)?;
-    let status = match (sol.status, condition_number) {
-        (Status::Ok, Some(k)) if k.is_nan() || k > ILL_CONDITIONED_THRESHOLD => {
-            Status::IllConditioned {
-                condition_number: k,
-            }
-        }
-        (s, _) => s,
-    };
+    let status = status_from(sol.status, condition_number);
     Ok(Fit {
         coefficients,
         objective,
@@ -161,9 +215,18 @@ pub fn objective(
     beta: &[f64],
 ) -> Result<f64, EstimatorError> {
     estimator.validate()?;
-    let pb = Problem::new(design, y)?;
-    check_coefficients(beta, pb.p)?;
-    Ok(pb.objective(estimator, beta))
+    if let Estimator::Svr { .. } = estimator {
+        let pb = Problem::new(design, y)?;
+        check_coefficients(beta, pb.p)?;
+        return Ok(pb.objective(estimator, beta));
+    }
+    validate_problem_data(design, y)?;
+    check_coefficients(beta, design.ncols())?;
+    let scales = match estimator {
+        Estimator::Ridge { .. } | Estimator::Lasso { .. } => column_scales(design)?,
+        _ => Vec::new(),
+    };
+    Ok(ls_objective(design, y, estimator, beta, &scales))
 }
 
 /// `Φβ`.

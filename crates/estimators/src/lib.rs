@@ -87,12 +87,15 @@
 
 mod active_set;
 mod diagnostics;
+mod direct;
 mod error;
 mod fast;
 mod fit;
+mod kernels;
 mod linalg;
 mod problem;
 mod qp;
+mod small_eig;
 mod svr;
 mod tuning;
 mod types;

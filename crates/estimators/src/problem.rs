@@ -100,6 +100,37 @@ fn rms_fast(c: &[f64]) -> Option<f64> {
     (s.is_finite() && (1e-150..=1e290).contains(&s)).then(|| (s / c.len() as f64).sqrt())
 }
 
+/// The checks of [`Problem::new`] in its order (shape, target, then design columns), for
+/// callers that need no scaled copy.
+pub(crate) fn validate_problem_data(
+    design: MatRef<'_, f64>,
+    y: &[f64],
+) -> Result<(), EstimatorError> {
+    let (n, p) = (design.nrows(), design.ncols());
+    if n == 0 || p == 0 {
+        return Err(EstimatorError::EmptyDesign { rows: n, cols: p });
+    }
+    if y.len() != n {
+        return Err(EstimatorError::LengthMismatch {
+            what: "target y (rows of the design)",
+            expected: n,
+            got: y.len(),
+        });
+    }
+    if let Some((row, &value)) = y.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(EstimatorError::NonFinite {
+            what: "target y",
+            row,
+            column: None,
+            value,
+        });
+    }
+    for j in 0..p {
+        check_finite_column(&col_of(design, j), j)?;
+    }
+    Ok(())
+}
+
 /// Root mean square of every column: the column scales `s_j` of the documented objectives.
 pub fn column_scales(design: MatRef<'_, f64>) -> Result<Vec<f64>, EstimatorError> {
     validate_design(design)?;

@@ -47,6 +47,51 @@ fn lsq_recovers_coefficients_of_the_full_set() {
     assert!(err <= 1e-9, "max error {err:e}");
 }
 
+/// κ(Z) between 1e4 and 1e5: the direct LSQ path (normal equations from the raw design's
+/// cross products, one refinement step, κ from a Rayleigh quotient) must agree with the
+/// QR-based reference in J, coefficients and condition number.
+#[test]
+fn direct_lsq_matches_the_reference_at_kappa_near_its_limit() {
+    let base = reduced_design(1000);
+    let sig = signals(1000, 0.3);
+    for sliver in [4e-3, 8e-3] {
+        let phi = Mat::<f64>::from_fn(1000, 10, |i, j| {
+            if j < 9 {
+                base[(i, j)]
+            } else {
+                base[(i, 0)] + sliver * sig[i][0] * sig[i][3]
+            }
+        });
+        let kappa = scaled_condition_number(phi.as_ref()).unwrap();
+        assert!(kappa > 1e4 && kappa < 1e5, "{kappa:e}");
+        let mut beta = sway_like_coefficients(9);
+        beta.push(0.2);
+        let y = target(&phi, &beta, 0.01, 3);
+        let fast = fit(phi.as_ref(), &y, &Estimator::Lsq, None, Solver::Fast).unwrap();
+        let qp = fit(phi.as_ref(), &y, &Estimator::Lsq, None, Solver::Qp).unwrap();
+        assert_eq!(fast.status, Status::Ok);
+        assert!(rel_diff(fast.condition_number.unwrap(), kappa) < 1e-6);
+        assert!(
+            rel_diff(fast.objective, qp.objective) < 1e-9,
+            "{} vs {}",
+            fast.objective,
+            qp.objective
+        );
+        // Scaled coefficients as accurate as a QR solution: κ ε relative, with margin.
+        let s = column_scales(phi.as_ref()).unwrap();
+        let gmax = (0..10)
+            .map(|j| (qp.coefficients[j] * s[j]).abs())
+            .fold(0.0, f64::max);
+        for j in 0..10 {
+            let d = (fast.coefficients[j] - qp.coefficients[j]).abs() * s[j];
+            assert!(
+                d <= 1e-5 * gmax,
+                "column {j}: {d:e} (QP stops at its own tolerance)"
+            );
+        }
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 12, ..ProptestConfig::default() })]
 

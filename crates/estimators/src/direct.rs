@@ -1,0 +1,156 @@
+//! The direct path of `Solver::Fast` for LSQ and bounded LSQ on well-conditioned designs:
+//! three passes over the raw design Φ and O(p³) work on p × p matrices, with no scaled copy
+//! of Φ.
+//!
+//! 1. One fused pass forms the cross products of `[Φ y]`. Their diagonal holds the column
+//!    sums of squares, i.e. the column scales `s_j`, and proves every value finite (NaN
+//!    and ±∞ propagate into a sum of squares) — the same test as the general path's
+//!    [`crate::problem`] uses, so no separate validation pass is needed.
+//! 2. `G = ZᵀZ/n = S⁻¹ΦᵀΦS⁻¹/n` and `b = Zᵀy/n` by scaling the cross products
+//!    symmetrically: the same documented scaled problem as the general path, without
+//!    forming Z.
+//! 3. Extreme eigenvalues of G ([`crate::small_eig`]); the path applies when κ(Z) ≤ 1e5, the
+//!    general path's own limit for the semi-normal equations, and when G has a Cholesky
+//!    factor.
+//! 4. Corrected semi-normal equations (Björck 1987): `Gγ₁ = b`, then one refinement step
+//!    on the explicit residual (second pass: `r = y − Φβ₁` and `Φᵀr` together), which
+//!    squares the κ²ε error of the normal equations away.
+//! 5. Third pass: the explicit final residual for J = ‖y − Φβ‖²/2n and, when κ(Z) is above
+//!    1e4 (where the Gram eigenvalue alone is not accurate to 1e-6), the Rayleigh quotient
+//!    `‖Zv‖²/n` of the smallest eigenvector, as in [`crate::fit`]'s condition number.
+//!
+//! Anything else — zero columns, n ≤ p, values whose squares leave the safe range, worse
+//! conditioning, a solution on or outside a bound — returns `None`, and the caller runs
+//! the general path, which handles (and reports) every such case. Correctness never
+//! depends on this path; it only decides how fast the common case is.
+
+use faer::{Mat, MatRef};
+
+use crate::error::EstimatorError;
+use crate::fit::status_from;
+use crate::kernels;
+use crate::linalg::{cholesky, cholesky_solve, col_of};
+use crate::small_eig::Tridiagonal;
+use crate::types::{Bounds, Estimator, Fit, Solver};
+
+/// Below this κ(G) = κ(Z)² the Gram eigenvalues give κ(Z) to better than 1e-6 (the
+/// threshold of [`crate::fit`]'s condition number).
+const GRAM_EIGENVALUES_SUFFICE: f64 = 1e8;
+/// κ(G) limit of the semi-normal equations (κ(Z) ≤ 1e5), as in `fast::seminormal_lsq`.
+const SEMINORMAL_LIMIT: f64 = 1e10;
+
+/// The direct LSQ fit, or `None` when the general path must decide. Called after the
+/// estimator has been validated; bounds are validated here once the data are known to be
+/// valid, so that errors come in the same order as on the general path.
+pub(crate) fn try_lsq(
+    design: MatRef<'_, f64>,
+    y: &[f64],
+    estimator: &Estimator,
+    bounds: Option<&Bounds>,
+) -> Option<Result<Fit, EstimatorError>> {
+    let (n, p) = (design.nrows(), design.ncols());
+    if p == 0 || n <= p || y.len() != n {
+        return None;
+    }
+    let columns: Vec<std::borrow::Cow<'_, [f64]>> = (0..p).map(|j| col_of(design, j)).collect();
+    let mut all: Vec<&[f64]> = columns.iter().map(|c| c.as_ref()).collect();
+    all.push(y);
+    let m = p + 1;
+    let cross = kernels::cross_products(&all, n);
+    let phi = &all[..p];
+    // Every column sum of squares finite and far from underflow and overflow (then every
+    // value is finite, and so is every cross product); y only needs to be finite.
+    let safe = |v: f64| v.is_finite() && (1e-150..=1e290).contains(&v);
+    if !(0..p).all(|j| safe(cross[j * m + j])) {
+        return None;
+    }
+    let yy = cross[p * m + p];
+    if !(yy.is_finite() && yy <= 1e290) {
+        return None;
+    }
+    if let Some(b) = bounds
+        && let Err(e) = b.validate(p)
+    {
+        return Some(Err(e));
+    }
+    let nf = n as f64;
+    let scales: Vec<f64> = (0..p).map(|j| (cross[j * m + j] / nf).sqrt()).collect();
+    // 1/√(ΦⱼᵀΦⱼ) = 1/(√n s_j): G_ij = (ΦᵢᵀΦⱼ)/(n s_i s_j).
+    let inv_root: Vec<f64> = (0..p).map(|j| 1.0 / cross[j * m + j].sqrt()).collect();
+    let mut g = vec![0.0; p * p];
+    for i in 0..p {
+        for j in i..p {
+            let v = cross[i * m + j] * inv_root[i] * inv_root[j];
+            g[i * p + j] = v;
+            g[j * p + i] = v;
+        }
+    }
+    let inv_root_n = 1.0 / nf.sqrt();
+    let b: Vec<f64> = (0..p)
+        .map(|j| cross[j * m + p] * inv_root[j] * inv_root_n)
+        .collect();
+
+    let tri = Tridiagonal::new(&g, p);
+    let (emin, emax) = tri.extremes();
+    // NaN fails the test too.
+    if emin.partial_cmp(&(emax / SEMINORMAL_LIMIT)) != Some(std::cmp::Ordering::Greater) {
+        return None;
+    }
+    let gm = Mat::<f64>::from_fn(p, p, |i, j| g[i * p + j]);
+    let l = cholesky(gm.as_ref(), 0.0)?;
+    let mut gamma = b;
+    cholesky_solve(&l, &mut gamma);
+    let beta1: Vec<f64> = gamma.iter().zip(&scales).map(|(x, s)| x / s).collect();
+    let grad = kernels::gradient(phi, y, &beta1);
+    // Zᵀr/n = S⁻¹Φᵀr/n.
+    let mut dx: Vec<f64> = grad
+        .iter()
+        .zip(&inv_root)
+        .map(|(v, ir)| v * ir * inv_root_n)
+        .collect();
+    cholesky_solve(&l, &mut dx);
+    for (x, d) in gamma.iter_mut().zip(&dx) {
+        *x += d;
+    }
+    if gamma.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+
+    // A coordinate on (within the status logic's margin of) or beyond a bound belongs to
+    // the active-set solver and to the effective condition number of the free columns.
+    if let Some(bd) = bounds {
+        let gmax = gamma.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        for j in 0..p {
+            let (lo, hi) = (bd.lower[j] * scales[j], bd.upper[j] * scales[j]);
+            let near = |bound: f64| {
+                bound.is_finite() && (gamma[j] - bound).abs() <= 1e-8 * gmax.max(bound.abs())
+            };
+            if !(lo < gamma[j] && gamma[j] < hi) || near(lo) || near(hi) {
+                return None;
+            }
+        }
+    }
+    let beta: Vec<f64> = gamma.iter().zip(&scales).map(|(x, s)| x / s).collect();
+
+    let (rr, kappa) = if emin > emax / GRAM_EIGENVALUES_SUFFICE {
+        let (rr, _) = kernels::residual_norms(phi, y, &beta, None);
+        (rr, (emax / emin).sqrt())
+    } else {
+        // ‖Zv‖²/n on Z itself is accurate to about (ε κ(G))² relative, the Gram's λ_min
+        // only to ε κ(G).
+        let v = tri.eigenvector(emin)?;
+        let w: Vec<f64> = v.iter().zip(&scales).map(|(x, s)| x / s).collect();
+        let (rr, uu) = kernels::residual_norms(phi, y, &beta, Some(&w));
+        (rr, (emax / (uu / nf)).sqrt())
+    };
+    Some(Ok(Fit {
+        coefficients: beta,
+        objective: 0.5 * rr / nf,
+        status: status_from(crate::types::Status::Ok, Some(kappa)),
+        iterations: 2,
+        solver: Solver::Fast,
+        estimator: *estimator,
+        condition_number: Some(kappa),
+        zero_columns: Vec::new(),
+    }))
+}
