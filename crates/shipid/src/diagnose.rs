@@ -239,8 +239,7 @@ pub fn prepare(ds: &Dataset, ship: &Ship, opts: &DiagnoseOptions) -> Vec<Prepare
         .map(|r| {
             let (acc, _) = accelerations_or_estimate(&r.recording, ship);
             let n = r.recording.len();
-            // Skip the ends, where a differentiator is one-sided.
-            let margin = (n / 50).max(5).min(n / 4);
+            let margin = differentiator_margin(n);
             let usable = n - 2 * margin;
             let stride = usable.div_ceil(opts.max_samples_per_recording).max(1);
             let samples = (margin..n - margin).step_by(stride).collect();
@@ -252,6 +251,12 @@ pub fn prepare(ds: &Dataset, ship: &Ship, opts: &DiagnoseOptions) -> Vec<Prepare
             }
         })
         .collect()
+}
+
+/// Samples left out at each end of a recording of `n` samples for equation errors: there a
+/// differentiator is one-sided.
+pub(crate) fn differentiator_margin(n: usize) -> usize {
+    (n / 50).max(5).min(n / 4)
 }
 
 /// The acting rudder for the recorded one through `filter`, at the recording's samples.
@@ -466,7 +471,7 @@ fn levenberg_marquardt(
     }
 }
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 

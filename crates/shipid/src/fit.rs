@@ -13,7 +13,7 @@ use shipid_estimators::{
     scaled_condition_number, tune, vif,
 };
 use shipid_io::deriv::accelerations_or_estimate;
-use shipid_io::{Accelerations, Dataset, DatasetRecording, Manoeuvre, PrimeScale, Recording};
+use shipid_io::{Dataset, DatasetRecording, Manoeuvre, PrimeScale, Recording};
 use shipid_model::{
     AbkowitzModel, CoefficientSet, Dof, EstimatorInfo, ModelFile, PrimeInertia, Samples, SetFile,
     TrainingWindow, design,
@@ -396,7 +396,7 @@ pub fn fit_dataset(
                 let r = &ds.recording(&w.recording)?.recording;
                 let lo = r.t.partition_point(|&t| t < w.t_start_s);
                 let hi = r.t.partition_point(|&t| t <= w.t_end_s);
-                Some(slice_recording(r, lo..hi))
+                Some(r.slice(lo..hi))
             })
             .collect();
         let (refined, how) = refine_output_error(&model, &recs, &RefineOptions::default())
@@ -457,27 +457,6 @@ fn hyper_of(e: &Estimator) -> Vec<(&'static str, f64)> {
         Estimator::Ridge { lambda } => vec![("lambda", lambda)],
         Estimator::Lasso { alpha } => vec![("alpha", alpha)],
         Estimator::Svr { c, epsilon } => vec![("c", c), ("epsilon", epsilon)],
-    }
-}
-
-/// Samples `range` of a recording.
-pub fn slice_recording(r: &Recording, range: std::ops::Range<usize>) -> Recording {
-    let cut = |x: &[f64]| x[range.clone()].to_vec();
-    Recording {
-        t: cut(&r.t),
-        x0: cut(&r.x0),
-        y0: cut(&r.y0),
-        psi: cut(&r.psi),
-        u: cut(&r.u),
-        v: cut(&r.v),
-        r: cut(&r.r),
-        delta: cut(&r.delta),
-        n: r.n.as_deref().map(cut),
-        accelerations: r.accelerations.as_ref().map(|a| Accelerations {
-            u_dot: cut(&a.u_dot),
-            v_dot: cut(&a.v_dot),
-            r_dot: cut(&a.r_dot),
-        }),
     }
 }
 

@@ -22,7 +22,7 @@ use shipid_io::{PrimeScale, Recording, deriv::accelerations_or_estimate};
 use shipid_model::{AbkowitzModel, Refinement};
 use shipid_sim::AbkowitzDynamics;
 
-use crate::diagnose::{replay_segment, segments, solve_small};
+use crate::diagnose::{differentiator_margin, dot, replay_segment, segments, solve_small};
 use crate::validate::interp;
 
 /// Tunables of the refinement.
@@ -187,11 +187,15 @@ pub fn refine_output_error(
     if recordings.iter().all(|r| segments(r, horizon_s).is_empty()) {
         return Err(RefineError::NoSegments);
     }
+    // One thinning per recording for the compared replay samples, the equation errors and the scales.
+    let stride: Vec<usize> = recordings
+        .iter()
+        .map(|r| r.len().div_ceil(opts.max_samples_per_recording).max(1))
+        .collect();
     // Scales of the parameters from the training states.
     let s = PrimeScale::of(&ship);
     let mut states = Vec::new();
-    for rec in recordings {
-        let step = rec.len().div_ceil(opts.max_samples_per_recording).max(1);
+    for (rec, &step) in recordings.iter().zip(&stride) {
         for i in (0..rec.len()).step_by(step) {
             states.push((
                 s.delta_u_prime(rec.u[i]),
@@ -222,18 +226,12 @@ pub fn refine_output_error(
             }
         }
     }
-    let stride = recordings
-        .iter()
-        .map(|r| r.len().div_ceil(opts.max_samples_per_recording).max(1))
-        .collect();
     let mut ee = Vec::new();
     for (k, rec) in recordings.iter().enumerate() {
         let (acc, _) = accelerations_or_estimate(rec, &ship);
         let n = rec.len();
-        // Skip the ends, where a differentiator is one-sided.
-        let margin = (n / 50).max(5).min(n / 4);
-        let step = n.div_ceil(opts.max_samples_per_recording).max(1);
-        for i in (margin..n.saturating_sub(margin)).step_by(step) {
+        let margin = differentiator_margin(n);
+        for i in (margin..n.saturating_sub(margin)).step_by(stride[k]) {
             ee.push((k, i, [acc.u_dot[i], acc.v_dot[i], acc.r_dot[i]]));
         }
     }
@@ -322,8 +320,4 @@ pub fn refine_output_error(
             after_heading_rmse_deg: after_psi,
         },
     ))
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
