@@ -106,6 +106,18 @@ pub(crate) fn validate_problem_data(
     design: MatRef<'_, f64>,
     y: &[f64],
 ) -> Result<(), EstimatorError> {
+    let (_, p) = check_shape_and_target(design, y)?;
+    for j in 0..p {
+        check_finite_column(&col_of(design, j), j)?;
+    }
+    Ok(())
+}
+
+/// The shape and target checks every problem starts with; returns (n, p).
+fn check_shape_and_target(
+    design: MatRef<'_, f64>,
+    y: &[f64],
+) -> Result<(usize, usize), EstimatorError> {
     let (n, p) = (design.nrows(), design.ncols());
     if n == 0 || p == 0 {
         return Err(EstimatorError::EmptyDesign { rows: n, cols: p });
@@ -125,10 +137,7 @@ pub(crate) fn validate_problem_data(
             value,
         });
     }
-    for j in 0..p {
-        check_finite_column(&col_of(design, j), j)?;
-    }
-    Ok(())
+    Ok((n, p))
 }
 
 /// Root mean square of every column: the column scales `s_j` of the documented objectives.
@@ -170,25 +179,7 @@ pub(crate) struct Problem {
 
 impl Problem {
     pub(crate) fn new(design: MatRef<'_, f64>, y: &[f64]) -> Result<Self, EstimatorError> {
-        let (n, p) = (design.nrows(), design.ncols());
-        if n == 0 || p == 0 {
-            return Err(EstimatorError::EmptyDesign { rows: n, cols: p });
-        }
-        if y.len() != n {
-            return Err(EstimatorError::LengthMismatch {
-                what: "target y (rows of the design)",
-                expected: n,
-                got: y.len(),
-            });
-        }
-        if let Some((row, &value)) = y.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return Err(EstimatorError::NonFinite {
-                what: "target y",
-                row,
-                column: None,
-                value,
-            });
-        }
+        let (n, p) = check_shape_and_target(design, y)?;
         let mut scales = vec![0.0; p];
         for (j, scale) in scales.iter_mut().enumerate() {
             let c = col_of(design, j);
