@@ -158,7 +158,7 @@ enum Command {
     /// Benchmark the diagnosis on generated data with concealed effects (confusion matrix, fit
     /// improvements, recovered parameters) written to `--out`.
     BenchDiagnose {
-        /// Base model (default: full68 LSQ fitted on the clean embedded data).
+        /// Base model (default: full68 LSQ fitted on the clean embedded data and refined in the output-error sense, as `shipid fit --refine`).
         #[arg(long)]
         base: Option<String>,
         #[arg(long, default_value = "results/diagnose")]
