@@ -138,11 +138,16 @@ fn print_summary(r: &Report, model: &str, dataset: &Path, level_from: Option<&st
     println!("diagnosis of {model} on {}", dataset.display());
     println!("verdict: {}", r.verdict);
     println!("  {}", r.explanation);
-    if let Some(from) = level_from {
-        println!(
+    match level_from {
+        Some(from) => println!(
             "  model's own level (training data {from}): {:.4} L",
             r.model_level_position_rmse_over_l.unwrap_or(f64::NAN)
-        );
+        ),
+        // Without its own level an identified model's error counts as a real mismatch: say so.
+        None if model.starts_with("mmg:") => {}
+        None => println!(
+            "  model's own level: unknown (the model file names no training data set that can be read from here); the mismatch is judged against the noise alone"
+        ),
     }
     println!(
         "  held-out position RMSE over {:.0} s segments: {:.4} L before, {:.4} L after (noise floor {:.4} L)",

@@ -213,7 +213,8 @@ pub struct FitOutput {
     pub model: AbkowitzModel,
     pub file: ModelFile,
     pub dofs: Vec<DofReport>,
-    /// Wall time of the estimator solves including tuning [s] (not loading or building Φ).
+    /// Wall time of the estimator solves including tuning and the output-error refinement [s] (not
+    /// loading or building Φ).
     pub fit_time_s: f64,
     pub samples: usize,
 }
@@ -399,8 +400,10 @@ pub fn fit_dataset(
                 Some(r.slice(lo..hi))
             })
             .collect();
+        let started = Instant::now();
         let (refined, how) = refine_output_error(&model, &recs, &RefineOptions::default())
             .map_err(|e| bad_input(format!("--refine: {e}")))?;
+        fit_time_s += started.elapsed().as_secs_f64();
         let info = EstimatorInfo {
             refinement: Some(how),
             ..info

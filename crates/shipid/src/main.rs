@@ -450,6 +450,13 @@ fn parse_window(text: &str) -> Result<shipid::fit::WindowSpec, CliError> {
 }
 
 fn main() -> ExitCode {
+    // Rust ignores SIGPIPE, so printing the report into `| head` would panic on the closed pipe;
+    // the default action ends the process quietly, as for any other command-line tool.
+    #[cfg(unix)]
+    // SAFETY: called first thing in main, before any thread exists; SIG_DFL is a valid handler.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     match run(cli) {
         Ok(Outcome::Ok) => ExitCode::SUCCESS,

@@ -200,7 +200,8 @@ pub fn run_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
             coefficients.push(TermValue {
                 dof: d.dof.to_string(),
                 term: term.clone(),
-                value: d.fit.coefficients.get(j).copied(),
+                // The model's (after `refine`, the refined ones), not the estimator's.
+                value: out.model.coefficients[d.dof.index()].get(j).copied(),
             });
             vif.push(TermValue {
                 dof: d.dof.to_string(),

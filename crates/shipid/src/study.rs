@@ -14,6 +14,7 @@
 //! [[estimator]]
 //! name = "ridge"
 //! lambda = [1e-6, 1e-4]                         # one case per value; or tune = true
+//! refine = true                                 # then refine in the output-error sense (default false)
 //! [test]
 //! recordings = "all"                            # or a list of files
 //! [check]                                       # tolerances of `shipid check`, per summary column
@@ -79,6 +80,9 @@ pub struct RawEstimator {
     pub epsilon: Option<f64>,
     #[serde(default)]
     pub tune: bool,
+    /// Refine the estimator's coefficients in the output-error sense (`shipid fit --refine`).
+    #[serde(default)]
+    pub refine: bool,
     /// "fast" (default) or "qp".
     #[serde(default)]
     pub solver: Option<String>,
@@ -274,6 +278,7 @@ pub fn load_study(path: &Path) -> Result<Study, InputError> {
         let base = EstimatorSpec {
             epsilon: e.epsilon,
             tune: e.tune,
+            refine: e.refine,
             ..EstimatorSpec::named(&e.name)
         };
         let grid = |v: &Option<OneOrMany>| v.as_ref().map(OneOrMany::values).unwrap_or_default();
@@ -403,13 +408,14 @@ fn check_overshoots(
 fn case(set: &str, est: &EstimatorSpec, solver: &str, combo: &[String], w: WindowSpec) -> Case {
     let hyper = |name: &str, v: Option<f64>| v.map(|x| format!("-{name}{x:e}")).unwrap_or_default();
     let est_part = format!(
-        "{}{}{}{}{}{}",
+        "{}{}{}{}{}{}{}",
         est.name,
         hyper("l", est.lambda),
         hyper("a", est.alpha),
         hyper("c", est.c),
         hyper("e", est.epsilon),
-        if est.tune { "-cv" } else { "" }
+        if est.tune { "-cv" } else { "" },
+        if est.refine { "-oe" } else { "" }
     );
     let train: Vec<String> = combo
         .iter()
