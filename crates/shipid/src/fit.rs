@@ -219,12 +219,12 @@ pub struct FitOutput {
     pub samples: usize,
 }
 
-/// The training samples of the chosen recordings and window, and the windows used.
-pub fn training_samples(
-    ds: &Dataset,
+/// The named recordings of `ds` (all of them when `recordings` is empty); a name the data set does not
+/// have is bad input that lists the names it has.
+pub(crate) fn chosen_recordings<'a>(
+    ds: &'a Dataset,
     recordings: &[String],
-    window: WindowSpec,
-) -> Result<(Samples, Vec<TrainingWindow>), CliError> {
+) -> Result<Vec<&'a DatasetRecording>, CliError> {
     let chosen: Vec<&DatasetRecording> = if recordings.is_empty() {
         ds.recordings.iter().collect()
     } else {
@@ -251,6 +251,16 @@ pub fn training_samples(
             ds.path.display()
         )));
     }
+    Ok(chosen)
+}
+
+/// The training samples of the chosen recordings and window, and the windows used.
+pub fn training_samples(
+    ds: &Dataset,
+    recordings: &[String],
+    window: WindowSpec,
+) -> Result<(Samples, Vec<TrainingWindow>), CliError> {
+    let chosen = chosen_recordings(ds, recordings)?;
     if matches!(window, WindowSpec::Overshoots(_))
         && !chosen
             .iter()

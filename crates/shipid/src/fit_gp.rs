@@ -10,8 +10,8 @@ use std::time::Instant;
 
 use serde::Serialize;
 use shipid_gp::{Gp, Points, Similarity, TrainOptions, half_ranges, sparsify};
+use shipid_io::Dataset;
 use shipid_io::deriv::accelerations_or_estimate;
-use shipid_io::{Dataset, DatasetRecording};
 use shipid_sim::{
     GP_INPUTS, GP_KIND, GP_OUTPUTS, GpDynamics, GpModelFile, GpOutputFile, SparsificationInfo,
 };
@@ -47,32 +47,6 @@ pub struct GpOutputReport {
     pub target_rms: f64,
 }
 
-/// The chosen recordings (all when the list is empty).
-fn chosen<'a>(
-    ds: &'a Dataset,
-    recordings: &[String],
-) -> Result<Vec<&'a DatasetRecording>, CliError> {
-    let out: Vec<&DatasetRecording> = if recordings.is_empty() {
-        ds.recordings.iter().collect()
-    } else {
-        recordings
-            .iter()
-            .map(|f| {
-                ds.recording(f).ok_or_else(|| {
-                    bad_input(format!("recording `{f}` is not in {}", ds.path.display()))
-                })
-            })
-            .collect::<Result<_, _>>()?
-    };
-    if out.is_empty() {
-        return Err(bad_input(format!(
-            "{} has no recordings",
-            ds.path.display()
-        )));
-    }
-    Ok(out)
-}
-
 /// Fit the sparse-GP model.
 pub fn fit_gp_dataset(
     ds: &Dataset,
@@ -88,7 +62,7 @@ pub fn fit_gp_dataset(
     let mut inputs = Vec::new();
     let mut targets: [Vec<f64>; 3] = Default::default();
     let mut windows = Vec::new();
-    for r in chosen(ds, recordings)? {
+    for r in crate::fit::chosen_recordings(ds, recordings)? {
         let range = window_range(r, ds, window)?;
         // Accelerations on the whole record, then windowed (no end effects of the differentiator at the cut).
         let (acc, estimated) = accelerations_or_estimate(&r.recording, &ds.ship);

@@ -102,20 +102,9 @@ fn forces_figure(figures: &Path) -> String {
 #[test]
 fn a_diverged_prediction_is_drawn_and_labelled() {
     let dir = tempfile::tempdir().unwrap();
-    let study_path = dir.path().join("one_os.toml");
-    let text = std::fs::read_to_string(common::root().join(FIXTURES).join("small.toml"))
-        .unwrap()
-        .replace("name = \"small\"", "name = \"one_os\"")
-        .replace("overshoots = [3, 4, 5]", "overshoots = [1]")
-        .replace(
-            "recordings = [\"zz20_20_ps.csv\", \"tc35_sb.csv\"]",
-            "recordings = [\"tc35_ps.csv\"]",
-        )
-        .replace(
-            "../../../../../data",
-            &common::root().join("data").display().to_string(),
-        );
-    std::fs::write(&study_path, text).unwrap();
+    let study_path = common::root()
+        .join(FIXTURES)
+        .join("one_overshoot_diverges.toml");
     let study = load_study(&study_path).unwrap();
     let out = dir.path().join("out");
     let results = run_and_write(&study, &out, 2, false, false).unwrap();

@@ -132,23 +132,10 @@ fn output_does_not_depend_on_the_number_of_jobs() {
 
 #[test]
 fn a_diverging_case_is_a_status_row_and_exit_code_1() {
-    // Paper 000 Tab. 7: trained on one overshoot only, the reduced set cannot predict the turning
-    // circle; on our data that simulation leaves the physical bounds.
     let dir = tempfile::tempdir().unwrap();
-    let study = dir.path().join("one_os.toml");
-    let text = std::fs::read_to_string(common::root().join(FIXTURES).join("small.toml"))
-        .unwrap()
-        .replace("name = \"small\"", "name = \"one_os\"")
-        .replace("overshoots = [3, 4, 5]", "overshoots = [1]")
-        .replace(
-            "recordings = [\"zz20_20_ps.csv\", \"tc35_sb.csv\"]",
-            "recordings = [\"tc35_ps.csv\", \"tc35_sb.csv\"]",
-        )
-        .replace(
-            "../../../../../data",
-            &common::root().join("data").display().to_string(),
-        );
-    std::fs::write(&study, text).unwrap();
+    let study = common::root()
+        .join(FIXTURES)
+        .join("one_overshoot_diverges.toml");
     let out_dir = dir.path().join("out");
     let out = common::shipid(&[
         "run",
