@@ -1058,16 +1058,61 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
         .max_by(|x, y| rank(&x.1.1).total_cmp(&rank(&y.1.1)))
         .map(|(i, _)| i);
 
-    // A combination when the best single effect leaves more than half of the mismatch.
-    if let Some(b) = best {
-        let (after_l, explains) = (assessed[b].1.after_l, assessed[b].1.explains);
-        if explains < 0.5 && after_l > 3.0 * noise_floor {
-            let first = assessed[b].0[0];
-            let pairs: Vec<(Vec<Family>, Vec<ReplayScore>)> = Family::ALL
-                .par_iter()
-                .filter(|&&f| f != first && f.word() != first.word())
-                .map(|&f| {
-                    let fams = vec![first, f];
+    let model_level = input.model_level_over_l;
+    let real_threshold = model_level.unwrap_or(0.0) * opts.real_mismatch_factor
+        + 3.0 * noise_floor
+        + REPLAY_RESOLUTION_OVER_L;
+
+    // A combination when one effect alone leaves a real mismatch: pairs with the winner when it leaves
+    // more than half of the mismatch; and when no single effect is accepted although the mismatch is
+    // real, pairs among the three best singles (two concealed effects can each explain too little
+    // alone to pass, e.g. a current with a rudder lag).
+    let by_score = |assessed: &[(Vec<Family>, Assessed, Vec<ReplayScore>)]| {
+        let mut order: Vec<usize> = (0..assessed.len()).collect();
+        order.sort_by(|&x, &y| rank(&assessed[y].1).total_cmp(&rank(&assessed[x].1)));
+        order
+    };
+    let pair_plan: Option<(Vec<Vec<Family>>, f64)> = match best {
+        Some(b) => {
+            let (after_l, explains) = (assessed[b].1.after_l, assessed[b].1.explains);
+            (explains < 0.5 && after_l > 3.0 * noise_floor).then(|| {
+                let first = assessed[b].0[0];
+                let pairs = Family::ALL
+                    .iter()
+                    .filter(|&&f| f != first && f.word() != first.word())
+                    .map(|&f| vec![first, f])
+                    .collect();
+                (pairs, after_l)
+            })
+        }
+        None if before_l > real_threshold => {
+            let top: Vec<Family> = by_score(&assessed)
+                .into_iter()
+                .map(|i| assessed[i].0[0])
+                .take(3)
+                .collect();
+            // The best single with every other effect (its partner may make things worse alone, as a
+            // wind beside a current does), and the second and third best together.
+            let mut pairs: Vec<Vec<Family>> = Family::ALL
+                .iter()
+                .filter(|&&f| f.word() != top[0].word())
+                .map(|&f| vec![top[0], f])
+                .collect();
+            if top.len() == 3 && top[1].word() != top[2].word() {
+                pairs.push(vec![top[1], top[2]]);
+            }
+            let best_single_after = by_score(&assessed)
+                .first()
+                .map_or(before_l, |&i| assessed[i].1.after_l);
+            Some((pairs, best_single_after))
+        }
+        None => None,
+    };
+    if let Some((pairs, after_l)) = pair_plan {
+        {
+            let pairs: Vec<(Vec<Family>, Vec<ReplayScore>)> = pairs
+                .into_par_iter()
+                .map(|fams| {
                     let s = judge.cross(&fams);
                     (fams, s)
                 })
@@ -1121,10 +1166,6 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
         })
         .collect();
 
-    let model_level = input.model_level_over_l;
-    let real_threshold = model_level.unwrap_or(0.0) * opts.real_mismatch_factor
-        + 3.0 * noise_floor
-        + REPLAY_RESOLUTION_OVER_L;
     let (verdict, effects, std_errors, after_scores, explanation) = match best {
         Some(b) => {
             let (fams, a, s) = &assessed[b];
