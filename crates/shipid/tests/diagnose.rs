@@ -129,6 +129,45 @@ fn effect_free_recordings_give_none() {
     }
 }
 
+/// Regression: two concealed effects that each explain too little alone for the acceptance rule (the
+/// wind alone even makes the fit worse) were `unexplained`, because pairs were only tried with an
+/// accepted single effect.
+#[test]
+fn a_current_with_a_wind_is_found_as_a_pair() {
+    let base = MmgModel::kvlcc2();
+    let effects: Vec<Effect> = ["current:speed=0.02,from=45", "wind:speed=4.5,from=300"]
+        .iter()
+        .map(|e| e.parse().unwrap())
+        .collect();
+    let ds = to_dataset(generate_with(Some(1), &effects).unwrap(), "two effects");
+    let r = diagnose(
+        &DiagnoseInput {
+            base: &base,
+            base_effects: &[],
+            model_level_over_l: None,
+        },
+        &ds,
+        &DiagnoseOptions::default(),
+    )
+    .unwrap();
+    let kinds: Vec<&str> = r
+        .effects
+        .iter()
+        .map(|e| e.parse::<Effect>().unwrap().kind())
+        .collect();
+    assert!(
+        kinds.contains(&"current") && kinds.contains(&"wind"),
+        "{}: {:?}",
+        r.explanation,
+        r.effects
+    );
+    assert!(
+        r.fit_after.position_rmse_over_l < 0.2 * r.fit_before.position_rmse_over_l,
+        "{}",
+        r.explanation
+    );
+}
+
 /// Regression: segment replays started from a plain mean of the samples around the segment's start,
 /// biased wherever r and v curve and by half a window of travel at a recording's first sample, so
 /// that the MMG reference replayed on its own noise-free recordings missed them by 0.015 L and the
