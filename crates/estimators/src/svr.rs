@@ -39,9 +39,13 @@ use crate::linalg::{SmallQr, Tall, cholesky, cholesky_solve, col, gram, mat_vec,
 use crate::problem::Problem;
 use crate::types::Status;
 
+mod ipm;
+
 const MAX_STAGES: usize = 40;
 const MAX_NEWTON_PER_STAGE: usize = 60;
 const GAP_TOLERANCE: f64 = 1e-10;
+/// Primal-dual active-set corrections per exact-finish attempt from an interior-point iterate.
+const IPM_FINISH_ROUNDS: usize = 2;
 
 /// The samples with exact duplicates `(zᵢ, yᵢ)` merged into one sample of weight equal to
 /// their multiplicity (designs stacked from records at rest repeat the same row many
@@ -57,15 +61,40 @@ struct Data {
 impl Data {
     fn new(pb: &Problem) -> Self {
         let (n, q) = (pb.n, pb.q());
-        let mut first: std::collections::HashMap<Vec<u64>, usize> =
-            std::collections::HashMap::with_capacity(n);
+        // A 64-bit hash of every row's bits, accumulated column by column (Z is column
+        // major), then one map from hash to the first row with it; equal hashes are
+        // confirmed by comparing the rows. A collision of unequal rows only leaves them
+        // unmerged, which is always correct. A map keyed on the row itself allocated once
+        // per row and cost more than a Newton step on the largest designs.
+        // One multiply per value (FxHash's step) and a full mix per row at the end.
+        let step =
+            |h: u64, v: f64| (h.rotate_left(5) ^ v.to_bits()).wrapping_mul(0x517c_c1b7_2722_0a95);
+        let mut hash: Vec<u64> = pb.y.iter().map(|&v| step(0, v)).collect();
+        for j in 0..q {
+            for (h, &v) in hash.iter_mut().zip(col(&pb.z, j)) {
+                *h = step(*h, v);
+            }
+        }
+        for h in hash.iter_mut() {
+            *h = mix(*h);
+        }
+        let same_row = |a: usize, b: usize| {
+            pb.y[a].to_bits() == pb.y[b].to_bits()
+                && (0..q).all(|j| col(&pb.z, j)[a].to_bits() == col(&pb.z, j)[b].to_bits())
+        };
+        let mut first: std::collections::HashMap<u64, usize, PassThrough> =
+            std::collections::HashMap::with_capacity_and_hasher(n, PassThrough);
         let mut keep: Vec<usize> = Vec::with_capacity(n);
         let mut w: Vec<f64> = Vec::with_capacity(n);
-        for i in 0..n {
-            let mut key: Vec<u64> = (0..q).map(|j| col(&pb.z, j)[i].to_bits()).collect();
-            key.push(pb.y[i].to_bits());
-            match first.entry(key) {
-                std::collections::hash_map::Entry::Occupied(e) => w[*e.get()] += 1.0,
+        for (i, &h) in hash.iter().enumerate() {
+            match first.entry(h) {
+                std::collections::hash_map::Entry::Occupied(e) if same_row(keep[*e.get()], i) => {
+                    w[*e.get()] += 1.0;
+                }
+                std::collections::hash_map::Entry::Occupied(_) => {
+                    keep.push(i);
+                    w.push(1.0);
+                }
                 std::collections::hash_map::Entry::Vacant(e) => {
                     e.insert(keep.len());
                     keep.push(i);
@@ -74,6 +103,18 @@ impl Data {
             }
         }
         let m = keep.len();
+        if m == n {
+            return Data {
+                z: Tall::from_column_major(
+                    (0..q).flat_map(|j| col(&pb.z, j).iter().copied()).collect(),
+                    n,
+                    q,
+                ),
+                y: pb.y.clone(),
+                w,
+                n,
+            };
+        }
         let mut z = Tall::zeros(m, q);
         for j in 0..q {
             let src = col(&pb.z, j);
@@ -87,6 +128,42 @@ impl Data {
 
     fn q(&self) -> usize {
         self.z.ncols()
+    }
+}
+
+/// One round of a 64-bit finaliser (splitmix64): every input bit affects every output bit,
+/// so that rows differing in any bit of any value get unrelated hashes.
+fn mix(mut x: u64) -> u64 {
+    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    x ^ (x >> 31)
+}
+
+/// The map's keys are already well-mixed hashes; hashing them again would only cost time.
+#[derive(Clone, Copy, Default)]
+struct PassThrough;
+
+impl std::hash::BuildHasher for PassThrough {
+    type Hasher = PassThroughHasher;
+    fn build_hasher(&self) -> PassThroughHasher {
+        PassThroughHasher(0)
+    }
+}
+
+#[derive(Default)]
+struct PassThroughHasher(u64);
+
+impl std::hash::Hasher for PassThroughHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = mix(self.0 ^ u64::from(b));
+        }
+    }
+    fn write_u64(&mut self, v: u64) {
+        self.0 = v;
     }
 }
 
@@ -484,6 +561,41 @@ enum Side {
     Outside(f64),
 }
 
+/// The sets read off a smoothed solution: its band samples are the candidate margin set.
+fn sides_from_band(r: &[f64], eps: f64, mu: f64) -> Vec<Side> {
+    r.iter()
+        .map(|&ri| {
+            let a = ri.abs() - eps;
+            if a <= 0.0 {
+                Side::Inside
+            } else if a < mu {
+                Side::Margin(ri.signum())
+            } else {
+                Side::Outside(ri.signum())
+            }
+        })
+        .collect()
+}
+
+/// The sets read off an interior-point iterate: a multiplier strictly inside its range
+/// `0 < |θᵢ| < C wᵢ` marks a margin sample, one at either end a sample inside or outside.
+fn sides_from_multipliers(theta: &[f64], r: &[f64], w: &[f64], c: f64) -> Vec<Side> {
+    theta
+        .iter()
+        .zip(r.iter().zip(w))
+        .map(|(&t, (&ri, &wi))| {
+            let frac = t.abs() / (c * wi);
+            if frac <= 1e-3 {
+                Side::Inside
+            } else if frac >= 1.0 - 1e-3 {
+                Side::Outside(ri.signum())
+            } else {
+                Side::Margin(t.signum())
+            }
+        })
+        .collect()
+}
+
 /// Primal-dual active-set corrections tried per finish: enough to swap every margin
 /// sample once.
 fn max_finish_rounds(q: usize) -> usize {
@@ -498,28 +610,16 @@ fn max_finish_rounds(q: usize) -> usize {
 fn exact_finish(
     s: &Smoothed<'_>,
     gamma: &[f64],
-    r: &[f64],
+    mut side: Vec<Side>,
     lo: &[f64],
     hi: &[f64],
     scale: f64,
+    rounds: usize,
 ) -> Option<Vec<f64>> {
     let pb = s.pb;
     let (z, y, n, q) = (&pb.z, &pb.y, pb.n, pb.q());
     let wts = &pb.w;
     let (c, eps) = (s.c, s.eps);
-    let mut side: Vec<Side> = r
-        .iter()
-        .map(|&ri| {
-            let a = ri.abs() - eps;
-            if a <= 0.0 {
-                Side::Inside
-            } else if a < s.mu {
-                Side::Margin(ri.signum())
-            } else {
-                Side::Outside(ri.signum())
-            }
-        })
-        .collect();
     // Coordinates held at a bound: Some(value).
     let mut held: Vec<Option<f64>> = (0..q)
         .map(|j| (gamma[j] == lo[j] || gamma[j] == hi[j]).then_some(gamma[j]))
@@ -527,7 +627,7 @@ fn exact_finish(
     let tol_w = 1e-9 * c;
     let tol_r = 1e-9 * scale;
 
-    for _ in 0..max_finish_rounds(q) {
+    for _ in 0..rounds {
         let margin: Vec<usize> = (0..n)
             .filter(|&i| matches!(side[i], Side::Margin(_)))
             .collect();
@@ -701,8 +801,47 @@ pub(crate) fn solve(
     if scale == 0.0 {
         scale = 1.0;
     }
-    let mut mu = scale;
     let mut iterations = 0;
+    // The interior-point method first; its sets go to the exact finish (a few corrections
+    // only: the next iterate brings better sets sooner than many corrections would).
+    let s0 = Smoothed {
+        pb,
+        c,
+        eps,
+        mu: 0.0,
+    };
+    let mut finished: Option<Vec<f64>> = None;
+    let out = ipm::solve(pb, c, eps, lo, hi, scale, |it| {
+        let sides = sides_from_multipliers(&it.theta, &it.r, &pb.w, c);
+        if let Some(cand) = exact_finish(&s0, &it.gamma, sides, lo, hi, scale, IPM_FINISH_ROUNDS) {
+            let rc = residual(&pb.z, &pb.y, &cand);
+            if true_objective(&cand, &rc, &pb.w, c, eps) <= it.f * (1.0 + 1e-12) + f64::MIN_POSITIVE
+            {
+                finished = Some(cand);
+                return true;
+            }
+        }
+        it.gap <= GAP_TOLERANCE * it.f
+    });
+    iterations += out.iterations;
+    if let Some(g) = finished {
+        return Ok(Solution {
+            gamma: g,
+            status: Status::Ok,
+            iterations,
+        });
+    }
+    if out.gap <= GAP_TOLERANCE * out.f {
+        return Ok(Solution {
+            gamma: out.gamma,
+            status: Status::Ok,
+            iterations,
+        });
+    }
+    // Not certified (iteration limit, or a normal matrix that lost positive
+    // definiteness): the smoothing continuation, warm started from the last iterate.
+    gamma = out.gamma;
+    let mut mu = scale;
     let mut band_gram = BandGram::new(pb.n, q);
     for _ in 0..MAX_STAGES {
         let s = Smoothed { pb, c, eps, mu };
@@ -712,7 +851,10 @@ pub(crate) fn solve(
         let f_true = true_objective(&gamma, &r, &pb.w, c, eps);
 
         let f_smooth = s.value(&gamma, &r);
-        if let Some(candidate) = exact_finish(&s, &gamma, &r, lo, hi, scale) {
+        let sides = sides_from_band(&r, eps, mu);
+        if let Some(candidate) =
+            exact_finish(&s, &gamma, sides, lo, hi, scale, max_finish_rounds(q))
+        {
             let rc = residual(&pb.z, &pb.y, &candidate);
             let fc = true_objective(&candidate, &rc, &pb.w, c, eps);
             if fc <= f_true * (1.0 + 1e-12) + f64::MIN_POSITIVE {
