@@ -27,6 +27,9 @@
 //! `D(θ) = yᵀθ − ε‖θ‖₁ + min_{lo≤γ≤hi} (½‖γ‖² − (Zᵀθ)ᵀγ)` is a lower bound on the optimum
 //! for every θ with `|θᵢ| ≤ C wᵢ`.
 
+// The per-sample and per-bound arrays are indexed in step; index loops say that best.
+#![allow(clippy::needless_range_loop)]
+
 use crate::kernels;
 use crate::linalg::{cholesky, cholesky_solve, col, mat_vec, residual, zt_v};
 
