@@ -592,9 +592,9 @@ fn sides_from_multipliers(theta: &[f64], r: &[f64], w: &[f64], c: f64) -> Vec<Si
         .zip(r.iter().zip(w))
         .map(|(&t, (&ri, &wi))| {
             let frac = t.abs() / (c * wi);
-            if frac <= 1e-3 {
+            if frac <= ipm::MARGIN_FRACTION {
                 Side::Inside
-            } else if frac >= 1.0 - 1e-3 {
+            } else if frac >= 1.0 - ipm::MARGIN_FRACTION {
                 Side::Outside(ri.signum())
             } else {
                 Side::Margin(t.signum())

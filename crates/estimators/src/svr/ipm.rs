@@ -47,6 +47,9 @@ pub(super) struct Iterate {
 }
 
 const MAX_ITERATIONS: usize = 80;
+/// A multiplier with `MARGIN_FRACTION < |θᵢ|/(C wᵢ) < 1 − MARGIN_FRACTION` marks a margin
+/// candidate (see `sides_from_multipliers` in [`super`]).
+pub(super) const MARGIN_FRACTION: f64 = 1e-3;
 /// Fraction of the distance to the boundary a step may go.
 const STEP_FRACTION: f64 = 0.99;
 
@@ -786,7 +789,21 @@ fn solve_generic(
             break;
         }
         st.step(&cor, alpha);
-        if st.complementarity() <= 1e-6 * mu0 || it == MAX_ITERATIONS {
+        let mu_now = st.complementarity();
+        // The full check (two passes over Z, and the exact finish) only when it can
+        // succeed: the margin candidates fit the q coordinates (the finish needs that), or
+        // the complementarity — the interior point's own estimate of the duality gap — is
+        // within ten times the certificate's tolerance.
+        let worth_checking = || {
+            let candidates = (0..n)
+                .filter(|&i| {
+                    let frac = (st.l[0][i] - st.l[1][i]).abs() / (c * w[i]);
+                    frac > MARGIN_FRACTION && frac < 1.0 - MARGIN_FRACTION
+                })
+                .count();
+            candidates <= q || mu_now * st.count <= 1e-9 * primal(&st.gamma, &st.r, w, c, eps)
+        };
+        if (mu_now <= 1e-6 * mu0 && worth_checking()) || it == MAX_ITERATIONS {
             let g: Vec<f64> = (0..q).map(|j| st.gamma[j].clamp(lo[j], hi[j])).collect();
             let rr = residual(&pb.z, &pb.y, &g);
             let theta: Vec<f64> = (0..n)
