@@ -568,6 +568,12 @@ enum Side {
     Outside(f64),
 }
 
+/// A duality gap certifies an iterate only when both it and the objective are finite
+/// (`∞ ≤ ∞` would accept an overflowed iterate).
+fn certified(gap: f64, f: f64) -> bool {
+    gap.is_finite() && f.is_finite() && gap <= GAP_TOLERANCE * f
+}
+
 /// The sets read off a smoothed solution: its band samples are the candidate margin set.
 fn sides_from_band(r: &[f64], eps: f64, mu: f64) -> Vec<Side> {
     r.iter()
@@ -828,7 +834,7 @@ pub(crate) fn solve(
                 return true;
             }
         }
-        it.gap <= GAP_TOLERANCE * it.f
+        certified(it.gap, it.f)
     });
     iterations += out.iterations;
     if let Some(g) = finished {
@@ -838,7 +844,7 @@ pub(crate) fn solve(
             iterations,
         });
     }
-    if out.gap <= GAP_TOLERANCE * out.f {
+    if certified(out.gap, out.f) {
         return Ok(Solution {
             gamma: out.gamma,
             status: Status::Ok,
@@ -847,7 +853,13 @@ pub(crate) fn solve(
     }
     // Not certified (iteration limit, or a normal matrix that lost positive
     // definiteness): the smoothing continuation, warm started from the last iterate.
-    let mut sol = continuation(pb, out.gamma, c, eps, lo, hi, scale);
+    // An iterate that went non-finite (overflow on extreme data) is no warm start.
+    let start = if out.gamma.iter().all(|v| v.is_finite()) {
+        out.gamma
+    } else {
+        gamma
+    };
+    let mut sol = continuation(pb, start, c, eps, lo, hi, scale);
     sol.iterations += iterations;
     Ok(sol)
 }
@@ -890,7 +902,7 @@ fn continuation(
             }
         }
         // F(γ) − F* ≤ [F(γ) − F_μ(γ)] + [F_μ(γ) − min F_μ], the latter at most the decrement.
-        if (f_true - f_smooth) + decrement <= GAP_TOLERANCE * f_true {
+        if certified((f_true - f_smooth) + decrement, f_true) {
             return Solution {
                 gamma,
                 status: Status::Ok,
@@ -963,6 +975,15 @@ mod tests {
     #[test]
     fn continuation_and_interior_point_agree_unbounded() {
         check(&[f64::NEG_INFINITY; 5], &[f64::INFINITY; 5]);
+    }
+
+    #[test]
+    fn bounds_near_the_largest_float_do_not_overflow_the_start() {
+        // The interior point starts midway between finite bounds; lo + hi would be +∞.
+        check(
+            &[1e-3, -1e3, -1e3, -1e3, -1e3],
+            &[1.7e308, 1e3, 1e3, 1e3, 1e3],
+        );
     }
 
     #[test]

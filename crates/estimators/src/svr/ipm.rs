@@ -649,20 +649,31 @@ fn solve_generic(
     let fixed: Vec<bool> = (0..q).map(|j| lo[j] == hi[j]).collect();
     let has_lo: Vec<bool> = (0..q).map(|j| lo[j].is_finite() && !fixed[j]).collect();
     let has_hi: Vec<bool> = (0..q).map(|j| hi[j].is_finite() && !fixed[j]).collect();
-    // Start strictly inside every finite bound (midway, or one unit inside a one-sided one).
+    // Start at the point of the box nearest to 0, moved strictly inside by up to one unit
+    // (half the width for narrower boxes): far bounds leave the start at 0 (a start
+    // midway between bounds near ±f64::MAX would overflow every residual).
     let gamma: Vec<f64> = (0..q)
         .map(|j| {
             if fixed[j] {
-                lo[j]
-            } else if has_lo[j] && has_hi[j] {
-                0.5 * (lo[j] + hi[j])
-            } else if has_lo[j] {
-                lo[j].max(0.0) + if lo[j] >= 0.0 { 1.0 } else { 0.0 }
-            } else if has_hi[j] {
-                hi[j].min(0.0) - if hi[j] <= 0.0 { 1.0 } else { 0.0 }
-            } else {
-                0.0
+                return lo[j];
             }
+            // Halves first: hi − lo may overflow.
+            let margin = if has_lo[j] && has_hi[j] {
+                (0.5 * hi[j] - 0.5 * lo[j]).min(1.0)
+            } else {
+                1.0
+            };
+            let lower = if has_lo[j] {
+                lo[j] + margin
+            } else {
+                f64::NEG_INFINITY
+            };
+            let upper = if has_hi[j] {
+                hi[j] - margin
+            } else {
+                f64::INFINITY
+            };
+            0.0f64.max(lower).min(upper)
         })
         .collect();
     let r = residual(&pb.z, &pb.y, &gamma);
