@@ -54,8 +54,9 @@
 //!   of `ZᵀZ/n + λI` (QR of `[R; √(nλ)I]` for tiny λ); bounds and the ℓ1 penalty by an
 //!   exact primal active-set method in the p-dimensional space (in place of coordinate
 //!   descent, whose rate collapses at the κ(ZᵀZ) ≈ 1e8–1e12 of Abkowitz designs); SVR by
-//!   Newton steps on a smoothed ε-insensitive loss with continuation and an exact
-//!   active-set finish (`module svr`).
+//!   a primal-dual interior-point method with q × q normal equations whose iterates feed
+//!   an exact KKT finish (or are accepted on a certified duality gap), with Newton steps
+//!   on a smoothed ε-insensitive loss under continuation as the fallback (`module svr`).
 //!
 //! [`Fit::objective`] is always J evaluated at the returned coefficients, so the two
 //! solvers can be compared directly. [`Status::IllConditioned`] flags fits whose effective
