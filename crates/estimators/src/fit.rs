@@ -11,7 +11,9 @@ use crate::linalg::col_of;
 use crate::linalg::{
     condition_from_singular_values, singular_values, sym_eig_extremes, sym_eig_min_vector,
 };
-use crate::problem::{Problem, column_scales, validate_design, validate_problem_data};
+use crate::problem::{
+    Problem, check_finite, column_scales, validate_design, validate_problem_data,
+};
 use crate::qp;
 use crate::types::{Bounds, Estimator, Fit, ILL_CONDITIONED_THRESHOLD, Solver, Status};
 
@@ -252,13 +254,5 @@ pub(crate) fn check_coefficients(beta: &[f64], p: usize) -> Result<(), Estimator
             got: beta.len(),
         });
     }
-    if let Some((row, &value)) = beta.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-        return Err(EstimatorError::NonFinite {
-            what: "coefficients",
-            row,
-            column: None,
-            value,
-        });
-    }
-    Ok(())
+    check_finite("coefficients", beta)
 }

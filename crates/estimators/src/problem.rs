@@ -11,29 +11,11 @@ use crate::linalg::{
 };
 use crate::types::{Bounds, Estimator};
 
-/// Checks shape and finiteness of a design and a target.
+/// Checks shape and finiteness of a design and a target (the design's columns before the target).
 pub(crate) fn validate_data(design: MatRef<'_, f64>, y: &[f64]) -> Result<(), EstimatorError> {
-    let (n, p) = (design.nrows(), design.ncols());
-    if n == 0 || p == 0 {
-        return Err(EstimatorError::EmptyDesign { rows: n, cols: p });
-    }
-    if y.len() != n {
-        return Err(EstimatorError::LengthMismatch {
-            what: "target y (rows of the design)",
-            expected: n,
-            got: y.len(),
-        });
-    }
+    check_shape(design, y)?;
     validate_design(design)?;
-    if let Some((row, &value)) = y.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-        return Err(EstimatorError::NonFinite {
-            what: "target y",
-            row,
-            column: None,
-            value,
-        });
-    }
-    Ok(())
+    check_target(y)
 }
 
 pub(crate) fn validate_design(design: MatRef<'_, f64>) -> Result<(), EstimatorError> {
@@ -106,18 +88,13 @@ pub(crate) fn validate_problem_data(
     design: MatRef<'_, f64>,
     y: &[f64],
 ) -> Result<(), EstimatorError> {
-    let (_, p) = check_shape_and_target(design, y)?;
-    for j in 0..p {
-        check_finite_column(&col_of(design, j), j)?;
-    }
-    Ok(())
+    check_shape(design, y)?;
+    check_target(y)?;
+    validate_design(design)
 }
 
-/// The shape and target checks every problem starts with; returns (n, p).
-fn check_shape_and_target(
-    design: MatRef<'_, f64>,
-    y: &[f64],
-) -> Result<(usize, usize), EstimatorError> {
+/// A non-empty design with one target value per row; returns (n, p).
+fn check_shape(design: MatRef<'_, f64>, y: &[f64]) -> Result<(usize, usize), EstimatorError> {
     let (n, p) = (design.nrows(), design.ncols());
     if n == 0 || p == 0 {
         return Err(EstimatorError::EmptyDesign { rows: n, cols: p });
@@ -129,15 +106,25 @@ fn check_shape_and_target(
             got: y.len(),
         });
     }
-    if let Some((row, &value)) = y.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-        return Err(EstimatorError::NonFinite {
-            what: "target y",
+    Ok((n, p))
+}
+
+/// The first non-finite target value, if any, as an error.
+fn check_target(y: &[f64]) -> Result<(), EstimatorError> {
+    check_finite("target y", y)
+}
+
+/// The first non-finite entry of the vector `what`, if any, as an error.
+pub(crate) fn check_finite(what: &'static str, v: &[f64]) -> Result<(), EstimatorError> {
+    match v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+        Some((row, &value)) => Err(EstimatorError::NonFinite {
+            what,
             row,
             column: None,
             value,
-        });
+        }),
+        None => Ok(()),
     }
-    Ok((n, p))
 }
 
 /// Root mean square of every column: the column scales `s_j` of the documented objectives.
@@ -179,7 +166,8 @@ pub(crate) struct Problem {
 
 impl Problem {
     pub(crate) fn new(design: MatRef<'_, f64>, y: &[f64]) -> Result<Self, EstimatorError> {
-        let (n, p) = check_shape_and_target(design, y)?;
+        let (n, p) = check_shape(design, y)?;
+        check_target(y)?;
         let mut scales = vec![0.0; p];
         for (j, scale) in scales.iter_mut().enumerate() {
             let c = col_of(design, j);

@@ -368,15 +368,6 @@ impl Smoothed<'_> {
     }
 }
 
-fn true_objective(gamma: &[f64], r: &[f64], wts: &[f64], c: f64, eps: f64) -> f64 {
-    0.5 * gamma.iter().map(|g| g * g).sum::<f64>()
-        + c * r
-            .iter()
-            .zip(wts)
-            .map(|(v, w)| w * (v.abs() - eps).max(0.0))
-            .sum::<f64>()
-}
-
 /// `Σ_{i∈Q} wᵢ zᵢzᵢᵀ` over the band samples Q, kept up to date between Newton steps:
 /// consecutive bands share most samples, so adding the entering and removing the leaving
 /// samples' outer products costs far less than the Gram of the whole band (which
@@ -828,8 +819,7 @@ pub(crate) fn solve(
         let sides = sides_from_multipliers(&it.theta, &it.r, &pb.w, c);
         if let Some(cand) = exact_finish(&s0, &it.gamma, sides, lo, hi, scale, IPM_FINISH_ROUNDS) {
             let rc = residual(&pb.z, &pb.y, &cand);
-            if true_objective(&cand, &rc, &pb.w, c, eps) <= it.f * (1.0 + 1e-12) + f64::MIN_POSITIVE
-            {
+            if ipm::primal(&cand, &rc, &pb.w, c, eps) <= it.f * (1.0 + 1e-12) + f64::MIN_POSITIVE {
                 finished = Some(cand);
                 return true;
             }
@@ -884,7 +874,7 @@ fn continuation(
         let (st, decrement) = newton_stage(&s, &mut gamma, lo, hi, &mut band_gram);
         iterations += st;
         let r = residual(&pb.z, &pb.y, &gamma);
-        let f_true = true_objective(&gamma, &r, &pb.w, c, eps);
+        let f_true = ipm::primal(&gamma, &r, &pb.w, c, eps);
 
         let f_smooth = s.value(&gamma, &r);
         let sides = sides_from_band(&r, eps, mu);
@@ -892,7 +882,7 @@ fn continuation(
             exact_finish(&s, &gamma, sides, lo, hi, scale, max_finish_rounds(q))
         {
             let rc = residual(&pb.z, &pb.y, &candidate);
-            let fc = true_objective(&candidate, &rc, &pb.w, c, eps);
+            let fc = ipm::primal(&candidate, &rc, &pb.w, c, eps);
             if fc <= f_true * (1.0 + 1e-12) + f64::MIN_POSITIVE {
                 return Solution {
                     gamma: candidate,
@@ -962,7 +952,7 @@ mod tests {
         assert_eq!(fast.status, Status::Ok);
         let value = |g: &[f64]| {
             let r = residual(&data.z, &data.y, g);
-            true_objective(g, &r, &data.w, c, eps)
+            ipm::primal(g, &r, &data.w, c, eps)
         };
         let (fs, ff) = (value(&slow.gamma), value(&fast.gamma));
         // Both end on a certified or exact optimum of a strongly convex problem.

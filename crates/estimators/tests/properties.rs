@@ -47,21 +47,27 @@ fn lsq_recovers_coefficients_of_the_full_set() {
     assert!(err <= 1e-9, "max error {err:e}");
 }
 
+/// The reduced design (1000 samples) with a tenth column that is the first plus `sliver` times a
+/// product of two motion signals: κ(Z) in 1e4…1e5 for the slivers used here.
+fn near_collinear_design(sliver: f64, phase: f64) -> Mat<f64> {
+    let base = reduced_design(1000);
+    let sig = signals(1000, phase);
+    Mat::<f64>::from_fn(1000, 10, |i, j| {
+        if j < 9 {
+            base[(i, j)]
+        } else {
+            base[(i, 0)] + sliver * sig[i][0] * sig[i][3]
+        }
+    })
+}
+
 /// κ(Z) between 1e4 and 1e5: the direct LSQ path (normal equations from the raw design's
 /// cross products, one refinement step, κ from a Rayleigh quotient) must agree with the
 /// QR-based reference in J, coefficients and condition number.
 #[test]
 fn direct_lsq_matches_the_reference_at_kappa_near_its_limit() {
-    let base = reduced_design(1000);
-    let sig = signals(1000, 0.3);
     for sliver in [4e-3, 8e-3] {
-        let phi = Mat::<f64>::from_fn(1000, 10, |i, j| {
-            if j < 9 {
-                base[(i, j)]
-            } else {
-                base[(i, 0)] + sliver * sig[i][0] * sig[i][3]
-            }
-        });
+        let phi = near_collinear_design(sliver, 0.3);
         let kappa = scaled_condition_number(phi.as_ref()).unwrap();
         assert!(kappa > 1e4 && kappa < 1e5, "{kappa:e}");
         let mut beta = sway_like_coefficients(9);
@@ -103,15 +109,7 @@ proptest! {
         sliver in 1.5e-3f64..5e-3,
         phase in 0.0f64..1.0,
     ) {
-        let base = reduced_design(1000);
-        let sig = signals(1000, phase);
-        let phi = Mat::<f64>::from_fn(1000, 10, |i, j| {
-            if j < 9 {
-                base[(i, j)]
-            } else {
-                base[(i, 0)] + sliver * sig[i][0] * sig[i][3]
-            }
-        });
+        let phi = near_collinear_design(sliver, phase);
         let kappa = scaled_condition_number(phi.as_ref()).unwrap();
         prop_assert!(kappa > 1e4 && kappa < 1e5, "{kappa:e}");
         let mut beta = sway_like_coefficients(9);

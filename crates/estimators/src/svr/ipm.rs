@@ -53,7 +53,7 @@ pub(super) const MARGIN_FRACTION: f64 = 1e-3;
 /// Fraction of the distance to the boundary a step may go.
 const STEP_FRACTION: f64 = 0.99;
 
-/// `F(γ)` at residual r.
+/// `F(γ)` at residual r (the true, unsmoothed objective; also used by the continuation).
 pub(super) fn primal(gamma: &[f64], r: &[f64], w: &[f64], c: f64, eps: f64) -> f64 {
     0.5 * gamma.iter().map(|g| g * g).sum::<f64>()
         + c * r
