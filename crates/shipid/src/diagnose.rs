@@ -405,55 +405,30 @@ fn levenberg_marquardt(
     let clamp = |p: &mut Vec<f64>| (0..k).for_each(|j| p[j] = p[j].clamp(lo[j], hi[j]));
     let mut p = start.to_vec();
     clamp(&mut p);
-    let mut r = f(&p);
-    let cost = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>();
-    let mut c = cost(&r);
+    let r = f(&p);
+    let cost = r.iter().map(|x| x * x).sum::<f64>();
+    let mut at = LmPoint { p, r, cost };
     let mut lambda = 1e-3;
-    let mut jac = vec![vec![0.0; r.len()]; k];
+    let mut jac = vec![vec![0.0; at.r.len()]; k];
     for _ in 0..40 {
         for j in 0..k {
             let h = 1e-4 * (hi[j] - lo[j]).max(1e-12);
-            let mut q = p.clone();
+            let mut q = at.p.clone();
             // Step inwards at an upper bound.
             let step = if q[j] + h > hi[j] { -h } else { h };
             q[j] += step;
             let rq = f(&q);
-            jac[j] = rq.iter().zip(&r).map(|(a, b)| (a - b) / step).collect();
+            jac[j] = rq.iter().zip(&at.r).map(|(a, b)| (a - b) / step).collect();
         }
-        let jtj: Vec<Vec<f64>> = (0..k)
-            .map(|a| (0..k).map(|b| dot(&jac[a], &jac[b])).collect())
-            .collect();
-        let jtr: Vec<f64> = (0..k).map(|a| dot(&jac[a], &r)).collect();
-        let mut improved = false;
-        for _ in 0..8 {
-            let mut a = jtj.clone();
-            (0..k).for_each(|i| a[i][i] += lambda * jtj[i][i].max(1e-12));
-            let Some(step) = solve_small(&a, &jtr.iter().map(|x| -x).collect::<Vec<_>>()) else {
-                lambda *= 10.0;
-                continue;
-            };
-            let mut q: Vec<f64> = p.iter().zip(&step).map(|(a, b)| a + b).collect();
-            clamp(&mut q);
-            let rq = f(&q);
-            let cq = cost(&rq);
-            if cq < c {
-                let rel = (c - cq) / c.max(1e-300);
-                p = q;
-                r = rq;
-                c = cq;
-                lambda = (lambda * 0.3).max(1e-9);
-                improved = rel > 1e-7;
-                break;
-            }
-            lambda *= 10.0;
-        }
+        let improved =
+            lm_step(&jac, &mut at, &mut lambda, 8, clamp, f).is_some_and(|rel| rel > 1e-7);
         if !improved {
             break;
         }
     }
     // Covariance σ² (JᵀJ)⁻¹ at the solution, σ² from the residual.
-    let m = r.len().max(k + 1);
-    let s2 = c / (m - k) as f64;
+    let m = at.r.len().max(k + 1);
+    let s2 = at.cost / (m - k) as f64;
     let jtj: Vec<Vec<f64>> = (0..k)
         .map(|a| (0..k).map(|b| dot(&jac[a], &jac[b])).collect())
         .collect();
@@ -465,10 +440,63 @@ fn levenberg_marquardt(
         })
         .collect();
     FitResult {
-        params: p,
-        cost: c,
+        params: at.p,
+        cost: at.cost,
         std_err,
     }
+}
+
+/// Where a Levenberg–Marquardt iteration stands: parameters, residuals and their sum of squares.
+pub(crate) struct LmPoint {
+    pub p: Vec<f64>,
+    pub r: Vec<f64>,
+    pub cost: f64,
+}
+
+/// One Levenberg–Marquardt step from `at` with the Jacobian `jac` (one row per parameter): solves
+/// (JᵀJ + λ diag JᵀJ) δ = −Jᵀr, projects p + δ with `project` and moves `at` there when the cost
+/// drops (then λ ← max(0.3 λ, 1e-9)); otherwise λ grows tenfold and it tries again, at most `tries`
+/// times. Returns the relative cost decrease of the accepted step, `None` when none lowered the cost.
+/// Shared by the effect fits of the diagnosis and the output-error refinement, which differ in their
+/// Jacobians, bounds and stopping rules.
+pub(crate) fn lm_step(
+    jac: &[Vec<f64>],
+    at: &mut LmPoint,
+    lambda: &mut f64,
+    tries: usize,
+    project: impl Fn(&mut Vec<f64>),
+    residuals: impl Fn(&[f64]) -> Vec<f64>,
+) -> Option<f64> {
+    let k = jac.len();
+    let jtj: Vec<Vec<f64>> = (0..k)
+        .into_par_iter()
+        .map(|a| (0..k).map(|b| dot(&jac[a], &jac[b])).collect())
+        .collect();
+    let neg_jtr: Vec<f64> = (0..k).map(|a| -dot(&jac[a], &at.r)).collect();
+    for _ in 0..tries {
+        let mut a = jtj.clone();
+        (0..k).for_each(|i| a[i][i] += *lambda * jtj[i][i].max(1e-12));
+        let Some(step) = solve_small(&a, &neg_jtr) else {
+            *lambda *= 10.0;
+            continue;
+        };
+        let mut q: Vec<f64> = at.p.iter().zip(&step).map(|(a, b)| a + b).collect();
+        project(&mut q);
+        let rq = residuals(&q);
+        let cq = rq.iter().map(|x| x * x).sum::<f64>();
+        if cq < at.cost {
+            let rel = (at.cost - cq) / at.cost.max(1e-300);
+            *at = LmPoint {
+                p: q,
+                r: rq,
+                cost: cq,
+            };
+            *lambda = (*lambda * 0.3).max(1e-9);
+            return Some(rel);
+        }
+        *lambda *= 10.0;
+    }
+    None
 }
 
 pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {

@@ -22,7 +22,7 @@ use shipid_io::{PrimeScale, Recording, deriv::accelerations_or_estimate};
 use shipid_model::{AbkowitzModel, Refinement};
 use shipid_sim::AbkowitzDynamics;
 
-use crate::diagnose::{differentiator_margin, dot, replay_segment, segments, solve_small};
+use crate::diagnose::{LmPoint, differentiator_margin, lm_step, replay_segment, segments};
 use crate::validate::interp;
 
 /// Tunables of the refinement.
@@ -255,11 +255,11 @@ pub fn refine_output_error(
         problem.w_ee[d] = (EQUATION_ERROR_WEIGHT / 3.0 / c).sqrt();
     }
     let k = problem.free.len();
-    let cost = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>();
-    let mut p = vec![0.0; k];
-    let mut r = problem.residuals(&p);
+    let p = vec![0.0; k];
+    let r = problem.residuals(&p);
     let (before_pos, before_psi) = rmse(&oe0);
-    let mut c = cost(&r);
+    let cost = r.iter().map(|x| x * x).sum::<f64>();
+    let mut at = LmPoint { p, r, cost };
     let mut lambda = 1e-2;
     let mut iterations = 0;
     // Forward differences: the replays are deterministic, so a small step is clean.
@@ -269,43 +269,25 @@ pub fn refine_output_error(
         let jac: Vec<Vec<f64>> = (0..k)
             .into_par_iter()
             .map(|j| {
-                let mut q = p.clone();
+                let mut q = at.p.clone();
                 q[j] += h;
                 let rq = problem.residuals(&q);
-                rq.iter().zip(&r).map(|(a, b)| (a - b) / h).collect()
+                rq.iter().zip(&at.r).map(|(a, b)| (a - b) / h).collect()
             })
             .collect();
-        let jtj: Vec<Vec<f64>> = (0..k)
-            .into_par_iter()
-            .map(|a| (0..k).map(|b| dot(&jac[a], &jac[b])).collect())
-            .collect();
-        let jtr: Vec<f64> = (0..k).map(|a| -dot(&jac[a], &r)).collect();
-        let mut improved = false;
-        for _ in 0..10 {
-            let mut a = jtj.clone();
-            (0..k).for_each(|i| a[i][i] += lambda * jtj[i][i].max(1e-12));
-            let Some(step) = solve_small(&a, &jtr) else {
-                lambda *= 10.0;
-                continue;
-            };
-            let q: Vec<f64> = p.iter().zip(&step).map(|(a, b)| a + b).collect();
-            let rq = problem.residuals(&q);
-            let cq = cost(&rq);
-            if cq < c {
-                let rel = (c - cq) / c.max(1e-300);
-                p = q;
-                r = rq;
-                c = cq;
-                lambda = (lambda * 0.3).max(1e-9);
-                improved = rel > opts.tolerance;
-                break;
-            }
-            lambda *= 10.0;
-        }
-        if !improved {
+        let step = lm_step(
+            &jac,
+            &mut at,
+            &mut lambda,
+            10,
+            |_| {},
+            |q| problem.residuals(q),
+        );
+        if !step.is_some_and(|rel| rel > opts.tolerance) {
             break;
         }
     }
+    let p = at.p;
     let (after_pos, after_psi) = rmse(&problem.replay_residuals(&p));
     let model = problem.model(&p).unwrap_or_else(|| start.clone());
     Ok((
