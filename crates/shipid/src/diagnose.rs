@@ -1079,87 +1079,67 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
         .map(|(f, s)| (vec![*f], assess(f.label().into(), f.dim(), s), s.clone()))
         .collect();
     let rank = |a: &Assessed| a.score;
-    let mut best: Option<usize> = assessed
-        .iter()
-        .enumerate()
-        .filter(|(_, a)| a.1.accepted)
-        .max_by(|x, y| rank(&x.1.1).total_cmp(&rank(&y.1.1)))
-        .map(|(i, _)| i);
+    // The accepted candidate with the highest score.
+    let best_accepted = |assessed: &[(Vec<Family>, Assessed, Vec<ReplayScore>)]| {
+        assessed
+            .iter()
+            .enumerate()
+            .filter(|(_, a)| a.1.accepted)
+            .max_by(|x, y| rank(&x.1.1).total_cmp(&rank(&y.1.1)))
+            .map(|(i, _)| i)
+    };
+    let mut best = best_accepted(&assessed);
 
     let model_level = input.model_level_over_l;
     let real_threshold = model_level.unwrap_or(0.0) * opts.real_mismatch_factor
         + 3.0 * noise_floor
         + REPLAY_RESOLUTION_OVER_L;
 
-    // A combination when one effect alone leaves a real mismatch: pairs with the winner when it leaves
-    // more than half of the mismatch; and when no single effect is accepted although the mismatch is
-    // real, pairs among the three best singles (two concealed effects can each explain too little
-    // alone to pass, e.g. a current with a rudder lag).
-    let by_score = |assessed: &[(Vec<Family>, Assessed, Vec<ReplayScore>)]| {
-        let mut order: Vec<usize> = (0..assessed.len()).collect();
-        order.sort_by(|&x, &y| rank(&assessed[y].1).total_cmp(&rank(&assessed[x].1)));
-        order
-    };
-    let pair_plan: Option<(Vec<Vec<Family>>, f64)> = match best {
+    // A combination when one effect alone leaves a real mismatch: the winner paired with every other
+    // effect when it leaves more than half of the mismatch; when no single effect is accepted although
+    // the mismatch is real, the best-scoring single paired with every other (its partner may make
+    // things worse alone, as a wind beside a current does) and the second with the third (two
+    // concealed effects can each explain too little alone to pass).
+    let mut order: Vec<usize> = (0..assessed.len()).collect();
+    order.sort_by(|&x, &y| rank(&assessed[y].1).total_cmp(&rank(&assessed[x].1)));
+    let lead = match best {
         Some(b) => {
-            let (after_l, explains) = (assessed[b].1.after_l, assessed[b].1.explains);
-            (explains < 0.5 && after_l > 3.0 * noise_floor).then(|| {
-                let first = assessed[b].0[0];
-                let pairs = Family::ALL
-                    .iter()
-                    .filter(|&&f| f != first && f.word() != first.word())
-                    .map(|&f| vec![first, f])
-                    .collect();
-                (pairs, after_l)
-            })
+            let a = &assessed[b].1;
+            (a.explains < 0.5 && a.after_l > 3.0 * noise_floor).then_some((b, false))
         }
-        None if before_l > real_threshold => {
-            let top: Vec<Family> = by_score(&assessed)
-                .into_iter()
-                .map(|i| assessed[i].0[0])
-                .take(3)
-                .collect();
-            // The best single with every other effect (its partner may make things worse alone, as a
-            // wind beside a current does), and the second and third best together.
-            let mut pairs: Vec<Vec<Family>> = Family::ALL
-                .iter()
-                .filter(|&&f| f.word() != top[0].word())
-                .map(|&f| vec![top[0], f])
-                .collect();
-            if top.len() == 3 && top[1].word() != top[2].word() {
-                pairs.push(vec![top[1], top[2]]);
-            }
-            let best_single_after = by_score(&assessed)
-                .first()
-                .map_or(before_l, |&i| assessed[i].1.after_l);
-            Some((pairs, best_single_after))
-        }
+        None if before_l > real_threshold => order.first().map(|&i| (i, true)),
         None => None,
     };
-    if let Some((pairs, after_l)) = pair_plan {
-        {
-            let pairs: Vec<(Vec<Family>, Vec<ReplayScore>)> = pairs
-                .into_par_iter()
-                .map(|fams| {
-                    let s = judge.cross(&fams);
-                    (fams, s)
-                })
-                .collect();
-            for (fams, s) in pairs {
-                let name = fams.iter().map(|f| f.label()).collect::<Vec<_>>().join("+");
-                let k = fams.iter().map(|f| f.dim()).sum();
-                let mut a = assess(name, k, &s);
-                // A pair must beat the single effect clearly, on the held-out recordings.
-                a.accepted = a.accepted && a.after_l < 0.7 * after_l;
-                assessed.push((fams, a, s));
+    if let Some((lead, none_passed)) = lead {
+        let after_l = assessed[lead].1.after_l;
+        let first = assessed[lead].0[0];
+        let mut pairs: Vec<Vec<Family>> = Family::ALL
+            .iter()
+            .filter(|&&f| f.word() != first.word())
+            .map(|&f| vec![first, f])
+            .collect();
+        if let (true, [_, second, third, ..]) = (none_passed, order.as_slice()) {
+            let (f, g) = (assessed[*second].0[0], assessed[*third].0[0]);
+            if f.word() != g.word() {
+                pairs.push(vec![f, g]);
             }
-            best = assessed
-                .iter()
-                .enumerate()
-                .filter(|(_, a)| a.1.accepted)
-                .max_by(|x, y| rank(&x.1.1).total_cmp(&rank(&y.1.1)))
-                .map(|(i, _)| i);
         }
+        let pairs: Vec<(Vec<Family>, Vec<ReplayScore>)> = pairs
+            .into_par_iter()
+            .map(|fams| {
+                let s = judge.cross(&fams);
+                (fams, s)
+            })
+            .collect();
+        for (fams, s) in pairs {
+            let name = fams.iter().map(|f| f.label()).collect::<Vec<_>>().join("+");
+            let k = fams.iter().map(|f| f.dim()).sum();
+            let mut a = assess(name, k, &s);
+            // A pair must beat the single effect clearly, on the held-out recordings.
+            a.accepted = a.accepted && a.after_l < 0.7 * after_l;
+            assessed.push((fams, a, s));
+        }
+        best = best_accepted(&assessed);
     }
 
     // Final parameters on all recordings, for every candidate (reported) — the chosen one's are the model.
