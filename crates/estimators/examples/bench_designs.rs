@@ -7,7 +7,7 @@
 //! from `bench/run.sh`.
 //!
 //! ```text
-//! cargo run --release -p shipid-estimators --example bench_designs -- DIR [CASE] [--qp] [--repeats N]
+//! cargo run --release -p shipid-estimators --example bench_designs -- DIR [CASE] [--qp] [--repeats N] [--only ID_PART]
 //! ```
 
 use std::path::Path;
@@ -59,6 +59,11 @@ fn run() -> Result<(), String> {
         .position(|a| a == "--repeats")
         .and_then(|k| args.get(k + 1))
         .map_or(Ok(5), |v| v.parse().map_err(|e| format!("--repeats: {e}")))?;
+    let only = args
+        .iter()
+        .position(|a| a == "--only")
+        .and_then(|k| args.get(k + 1))
+        .cloned();
     let manifest: Value = serde_json::from_str(
         &std::fs::read_to_string(dir.join("manifest.json")).map_err(|e| e.to_string())?,
     )
@@ -69,6 +74,9 @@ fn run() -> Result<(), String> {
     let mut total = 0.0;
     for p in problems {
         let s = |k: &str| p[k].as_str().unwrap_or_default().to_string();
+        if only.as_ref().is_some_and(|o| !s("id").contains(o.as_str())) {
+            continue;
+        }
         let phi_rows = read_csv(&dir.join(s("phi")))?;
         let y: Vec<f64> = read_csv(&dir.join(s("y")))?
             .into_iter()
