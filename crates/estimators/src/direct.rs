@@ -56,7 +56,7 @@ pub(crate) fn try_lsq(
     let mut all: Vec<&[f64]> = columns.iter().map(|c| c.as_ref()).collect();
     all.push(y);
     let m = p + 1;
-    let cross = kernels::cross_products(&all, n);
+    let cross = kernels::cross_products(&all, n, None);
     let phi = &all[..p];
     // Every column sum of squares finite and far from underflow and overflow (then every
     // value is finite, and so is every cross product); y only needs to be finite.

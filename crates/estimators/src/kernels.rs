@@ -1,6 +1,7 @@
 //! Fused passes over the columns of a raw design for the direct least-squares path
 //! ([`crate::direct`]): the cross-product matrix of `[Φ y]` in one pass, and the residual
-//! `y − Φβ` with `Φᵀr` or `‖r‖²` (plus `‖Φv‖²`) in another.
+//! `y − Φβ` with `Φᵀr` or `‖r‖²` (plus `‖Φv‖²`) in another; and the products `Φᵀv`, `Φv`
+//! of the SVR interior point's iterations.
 //!
 //! At the shapes of the Abkowitz designs (n ≈ 1e3–1e4, p ≤ 22) faer's general matrix
 //! product packs both operands and its matrix-vector products visit Φ once per product;
@@ -35,6 +36,7 @@ fn lanes<const L: usize>(c: &[f64], r: usize) -> [f64; L] {
 fn cross_products_generic<const T: usize, const L: usize, const FMA: bool>(
     cols: &[&[f64]],
     n: usize,
+    root_weights: Option<&[f64]>,
 ) -> Vec<f64> {
     let m = cols.len();
     let tiles = m.div_ceil(T);
@@ -55,8 +57,17 @@ fn cross_products_generic<const T: usize, const L: usize, const FMA: bool>(
             let mut s = *s_out;
             let mut r = start;
             while r < end {
-                let av: [[f64; L]; T] = std::array::from_fn(|t| lanes::<L>(a[t], r));
+                let mut av: [[f64; L]; T] = std::array::from_fn(|t| lanes::<L>(a[t], r));
                 let bv: [[f64; L]; T] = std::array::from_fn(|t| lanes::<L>(b[t], r));
+                if let Some(rw) = root_weights {
+                    // (√wᵢ aᵢ)(√wᵢ bᵢ) = wᵢ aᵢ bᵢ: one side carries the weight.
+                    let wl = lanes::<L>(rw, r);
+                    for t in 0..T {
+                        for l in 0..L {
+                            av[t][l] *= wl[l] * wl[l];
+                        }
+                    }
+                }
                 for i in 0..T {
                     for j in 0..T {
                         for l in 0..L {
@@ -81,7 +92,8 @@ fn cross_products_generic<const T: usize, const L: usize, const FMA: bool>(
                         v += lane;
                     }
                     for r in full..n {
-                        v += cols[ci][r] * cols[cj][r];
+                        let w = root_weights.map_or(1.0, |rw| rw[r] * rw[r]);
+                        v += (cols[ci][r] * w) * cols[cj][r];
                     }
                     out[ci * m + cj] = v;
                 }
@@ -179,6 +191,66 @@ fn gradient_generic<const L: usize, const U: usize, const FMA: bool>(
     out
 }
 
+/// `Φᵀv`.
+#[inline(always)]
+fn transposed_product_generic<const L: usize, const U: usize, const FMA: bool>(
+    cols: &[&[f64]],
+    v: &[f64],
+) -> Vec<f64> {
+    let n = v.len();
+    let chunk = L * U;
+    let full = n - n % chunk;
+    let mut acc = vec![[0.0f64; L]; cols.len()];
+    let mut r0 = 0;
+    while r0 < full {
+        let vv: [[f64; L]; U] = std::array::from_fn(|u| lanes::<L>(v, r0 + u * L));
+        for (a, c) in acc.iter_mut().zip(cols) {
+            let mut s = *a;
+            for u in 0..U {
+                let x = lanes::<L>(c, r0 + u * L);
+                for l in 0..L {
+                    s[l] = madd::<FMA>(x[l], vv[u][l], s[l]);
+                }
+            }
+            *a = s;
+        }
+        r0 += chunk;
+    }
+    let mut out: Vec<f64> = acc
+        .iter()
+        .map(|a| a.iter().fold(0.0, |s, v| s + v))
+        .collect();
+    for i in full..n {
+        for (o, c) in out.iter_mut().zip(cols) {
+            *o += c[i] * v[i];
+        }
+    }
+    out
+}
+
+/// `Φv` into `out` (length n).
+#[inline(always)]
+fn combination_generic<const L: usize, const U: usize, const FMA: bool>(
+    cols: &[&[f64]],
+    v: &[f64],
+    out: &mut [f64],
+) {
+    let n = out.len();
+    let chunk = L * U;
+    let full = n - n % chunk;
+    let mut r0 = 0;
+    while r0 < full {
+        let x = combination_chunk::<L, U, FMA>(cols, v, r0);
+        for u in 0..U {
+            out[r0 + u * L..r0 + (u + 1) * L].copy_from_slice(&x[u]);
+        }
+        r0 += chunk;
+    }
+    for i in full..n {
+        out[i] = cols.iter().zip(v).map(|(c, b)| b * c[i]).sum();
+    }
+}
+
 /// `(‖y − Φβ‖², ‖Φv‖²)`, the second only when `v` is given.
 #[inline(always)]
 fn residual_norms_generic<const L: usize, const U: usize, const FMA: bool>(
@@ -254,9 +326,11 @@ macro_rules! dispatch {
 }
 
 dispatch!(
-    /// Upper triangle of `AᵀA` (entry `(i, j)`, `i ≤ j`, at `i·m + j`; the rest is 0) for
-    /// the `m` columns `cols`, each of length `n`.
-    cross_products, cross_products_generic, (cols: &[&[f64]], n: usize) -> Vec<f64>,
+    /// Upper triangle of `AᵀWA` (entry `(i, j)`, `i ≤ j`, at `i·m + j`; the rest is 0) for
+    /// the `m` columns `cols`, each of length `n`, and `W = diag(root_weights)²` (identity
+    /// without), so that a weighted Gram needs no scaled copy of A.
+    cross_products, cross_products_generic,
+    (cols: &[&[f64]], n: usize, root_weights: Option<&[f64]>) -> Vec<f64>,
     avx512: <4, 8, true>, avx2: <3, 4, true>, base: <2, 2, false>
 );
 
@@ -270,5 +344,17 @@ dispatch!(
     /// `(‖y − Φβ‖², ‖Φv‖²)` in one pass over Φ (the second 0 without `v`).
     residual_norms, residual_norms_generic,
     (cols: &[&[f64]], y: &[f64], beta: &[f64], v: Option<&[f64]>) -> (f64, f64),
+    avx512: <8, 4, true>, avx2: <4, 4, true>, base: <2, 2, false>
+);
+
+dispatch!(
+    /// `Φᵀv` in one pass over Φ.
+    transposed_product, transposed_product_generic, (cols: &[&[f64]], v: &[f64]) -> Vec<f64>,
+    avx512: <8, 4, true>, avx2: <4, 4, true>, base: <2, 2, false>
+);
+
+dispatch!(
+    /// `Φv` into `out` in one pass over Φ.
+    combination, combination_generic, (cols: &[&[f64]], v: &[f64], out: &mut [f64]) -> (),
     avx512: <8, 4, true>, avx2: <4, 4, true>, base: <2, 2, false>
 );

@@ -31,7 +31,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::kernels;
-use crate::linalg::{cholesky, cholesky_solve, col, mat_vec, residual, zt_v};
+use crate::linalg::{cholesky, cholesky_solve, col, residual, zt_v};
 
 use super::Data;
 
@@ -82,13 +82,12 @@ pub(super) fn dual(pb: &Data, theta: &[f64], eps: f64, lo: &[f64], hi: &[f64]) -
     lin + quad
 }
 
-/// A Newton direction: the per-sample parts (Δξ, Δs₁…₃, Δλ₁…₃), the coefficient part
-/// (Δγ, Δs₄,₅, Δλ₄,₅), `ZΔγ`, and the largest step that keeps s and λ positive.
+/// The coefficient part of a Newton direction (Δγ, Δs₄,₅, Δλ₄,₅), `ZΔγ`, and the largest
+/// step that keeps s and λ positive. The per-sample parts (Δξ, Δs₁…₃, Δλ₁…₃) are not
+/// stored: every pass recomputes them from `ZΔγ` and the iterate ([`At`]), which moves a
+/// third of the data that storing them (and reading them back) did.
 struct Direction {
     dg: Vec<f64>,
-    dxi: Vec<f64>,
-    ds: [Vec<f64>; 3],
-    dl: [Vec<f64>; 3],
     ds_b: [Vec<f64>; 2],
     dl_b: [Vec<f64>; 2],
     zd: Vec<f64>,
@@ -101,9 +100,6 @@ impl Direction {
     fn new(n: usize, q: usize) -> Self {
         Direction {
             dg: vec![0.0; q],
-            dxi: vec![0.0; n],
-            ds: std::array::from_fn(|_| vec![0.0; n]),
-            dl: std::array::from_fn(|_| vec![0.0; n]),
             ds_b: std::array::from_fn(|_| vec![0.0; q]),
             dl_b: std::array::from_fn(|_| vec![0.0; q]),
             zd: vec![0.0; n],
@@ -131,171 +127,500 @@ struct State<'a> {
     l: [Vec<f64>; 3],
     s_b: [Vec<f64>; 2],
     l_b: [Vec<f64>; 2],
-    // Per-iteration quantities.
+    // Per-iteration quantities: 1/s_k, 1/(D₁ + D₂ + D₃), D₁ − D₂, √dᵢ, and the vector u
+    // whose Zᵀu is the γ part of the reduced right-hand side.
     inv_s: [Vec<f64>; 3],
-    inv_l: [Vec<f64>; 3],
-    rp: [Vec<f64>; 3],
     rp_b: [Vec<f64>; 2],
     a_inv: Vec<f64>,
     b: Vec<f64>,
     root_d: Vec<f64>,
-    rhs_xi: Vec<f64>,
     u: Vec<f64>,
     count: f64,
 }
 
-// The per-sample loops are free functions of slices: as arguments, `&mut` slices carry
+/// One sample's iterate and scalings, loaded by every pass; the Newton system's
+/// per-sample algebra lives here once.
+#[derive(Clone, Copy)]
+struct At {
+    s: [f64; 3],
+    l: [f64; 3],
+    inv_s: [f64; 3],
+    xi: f64,
+    r: f64,
+    w: f64,
+    a_inv: f64,
+    b: f64,
+}
+
+impl At {
+    /// Primal residuals `rp_k` of `s₁ = ξ − r + ε`, `s₂ = ξ + r + ε`, `s₃ = ξ`.
+    #[inline(always)]
+    fn rp(&self, eps: f64) -> [f64; 3] {
+        [
+            self.xi - self.r + eps - self.s[0],
+            self.xi + self.r + eps - self.s[1],
+            self.xi - self.s[2],
+        ]
+    }
+
+    /// `(rhs_ξ, u)` for the complementarity targets `rc`: `g_k = S⁻¹ rc_k + D_k rp_k`,
+    /// `rhs_ξ = −r_dξ − (g₁ + g₂ + g₃)`, `u = (λ₁ − λ₂) − (g₁ − g₂) − (b/a) rhs_ξ`.
+    #[inline(always)]
+    fn rhs(&self, c: f64, rc: [f64; 3], rp: [f64; 3]) -> (f64, f64) {
+        let g: [f64; 3] = std::array::from_fn(|k| (rc[k] + self.l[k] * rp[k]) * self.inv_s[k]);
+        let r_dxi = c * self.w - self.l[0] - self.l[1] - self.l[2];
+        let rhs = -r_dxi - (g[0] + g[1] + g[2]);
+        let u = (self.l[0] - self.l[1]) - (g[0] - g[1]) - self.b * self.a_inv * rhs;
+        (rhs, u)
+    }
+
+    /// `(Δξ, Δs, Δλ)` from `zd = zᵢΔγ`: Δs = AΔx + rp (rows of A: (1, z), (1, −z), (1, 0)),
+    /// Δλ = −S⁻¹(rc + ΛΔs).
+    #[inline(always)]
+    fn step(&self, rc: [f64; 3], rp: [f64; 3], rhs: f64, zd: f64) -> (f64, [f64; 3], [f64; 3]) {
+        let dxi = (rhs - self.b * zd) * self.a_inv;
+        let ds = [dxi + zd + rp[0], dxi - zd + rp[1], dxi + rp[2]];
+        let dl = std::array::from_fn(|k| -(rc[k] + self.l[k] * ds[k]) * self.inv_s[k]);
+        (dxi, ds, dl)
+    }
+
+    /// The predictor's (affine-scaling) targets `s∘λ` and its `(Δs, Δλ)` from `zd_aff`.
+    #[inline(always)]
+    fn affine(&self, eps: f64, c: f64, zd_aff: f64) -> ([f64; 3], [f64; 3], [f64; 3]) {
+        let rc = [
+            self.s[0] * self.l[0],
+            self.s[1] * self.l[1],
+            self.s[2] * self.l[2],
+        ];
+        let rp = self.rp(eps);
+        let (rhs, _) = self.rhs(c, rc, rp);
+        let (_, ds, dl) = self.step(rc, rp, rhs, zd_aff);
+        (rc, ds, dl)
+    }
+
+    /// The corrector's targets `s∘λ + Δs_aff∘Δλ_aff − σμ`.
+    #[inline(always)]
+    fn corrector_targets(&self, eps: f64, c: f64, zd_aff: f64, target: f64) -> [f64; 3] {
+        let (rc, ds, dl) = self.affine(eps, c, zd_aff);
+        std::array::from_fn(|k| rc[k] + ds[k] * dl[k] - target)
+    }
+}
+
+/// Read-only per-sample arrays of an iteration, cut to length n (no bounds checks in the
+/// passes).
+#[derive(Clone, Copy)]
+struct Samples<'a> {
+    s: [&'a [f64]; 3],
+    l: [&'a [f64]; 3],
+    inv_s: [&'a [f64]; 3],
+    xi: &'a [f64],
+    r: &'a [f64],
+    w: &'a [f64],
+    a_inv: &'a [f64],
+    b: &'a [f64],
+}
+
+impl Samples<'_> {
+    #[inline(always)]
+    fn at(&self, i: usize) -> At {
+        At {
+            s: [self.s[0][i], self.s[1][i], self.s[2][i]],
+            l: [self.l[0][i], self.l[1][i], self.l[2][i]],
+            inv_s: [self.inv_s[0][i], self.inv_s[1][i], self.inv_s[2][i]],
+            xi: self.xi[i],
+            r: self.r[i],
+            w: self.w[i],
+            a_inv: self.a_inv[i],
+            b: self.b[i],
+        }
+    }
+}
+
+/// Lane-wise maximum (the NaN-aware `f64::max` does not vectorise).
+#[inline(always)]
+fn big(a: f64, b: f64) -> f64 {
+    if a > b { a } else { b }
+}
+
+/// Samples per strip: each pass computes a strip's per-sample values in a plain loop
+/// (which vectorises), parks the ones to be reduced in L1-resident buffers, and folds
+/// them into 8 lane accumulators afterwards. Reductions inside the main loop (a float
+/// sum or maximum is order-dependent) kept it scalar.
+const STRIP: usize = 64;
+
+/// `acc[l] = max(acc[l], x[8t + l])`, and the tail into lane 0.
+#[inline(always)]
+fn fold_max(x: &[f64], acc: &mut [f64; 8]) {
+    let mut chunks = x.chunks_exact(8);
+    for ch in &mut chunks {
+        for l in 0..8 {
+            acc[l] = big(ch[l], acc[l]);
+        }
+    }
+    for &v in chunks.remainder() {
+        acc[0] = big(v, acc[0]);
+    }
+}
+
+/// `acc[l] += x[8t + l]`, and the tail into lane 0.
+#[inline(always)]
+fn fold_sum(x: &[f64], acc: &mut [f64; 8]) {
+    let mut chunks = x.chunks_exact(8);
+    for ch in &mut chunks {
+        for l in 0..8 {
+            acc[l] += ch[l];
+        }
+    }
+    for &v in chunks.remainder() {
+        acc[0] += v;
+    }
+}
+
+/// The lane-wise largest fraction `num/den` (`den > 0`), compared by cross-multiplication
+/// so that no sample needs a division.
+#[inline(always)]
+fn fold_fraction(num: &[f64], den: &[f64], best: &mut ([f64; 8], [f64; 8])) {
+    let (bn, bd) = best;
+    let mut chunks = num.chunks_exact(8).zip(den.chunks_exact(8));
+    for (nc, dc) in &mut chunks {
+        for l in 0..8 {
+            let better = nc[l] * bd[l] > bn[l] * dc[l];
+            bn[l] = if better { nc[l] } else { bn[l] };
+            bd[l] = if better { dc[l] } else { bd[l] };
+        }
+    }
+    let tail = num.len() - num.len() % 8;
+    for (&nv, &dv) in num[tail..].iter().zip(&den[tail..]) {
+        if nv * bd[0] > bn[0] * dv {
+            bn[0] = nv;
+            bd[0] = dv;
+        }
+    }
+}
+
+#[inline(always)]
+fn sub(v: &[f64], start: usize, end: usize) -> &[f64] {
+    &v[start..end]
+}
+
+fn lanes_max(acc: &[f64; 8]) -> f64 {
+    acc.iter().fold(0.0f64, |m, &x| big(x, m))
+}
+
+/// Largest `num/den` over the lane pairs, 0 if none is positive.
+fn lanes_fraction(best: &([f64; 8], [f64; 8])) -> f64 {
+    (0..8).fold(0.0f64, |m, l| big(best.0[l] / best.1[l], m))
+}
+
+impl<'a> Samples<'a> {
+    /// The samples `start..start + len`.
+    #[inline(always)]
+    fn strip(&self, start: usize, len: usize) -> Samples<'a> {
+        let cut = |v: &'a [f64]| &v[start..start + len];
+        Samples {
+            s: self.s.map(cut),
+            l: self.l.map(cut),
+            inv_s: self.inv_s.map(cut),
+            xi: cut(self.xi),
+            r: cut(self.r),
+            w: cut(self.w),
+            a_inv: cut(self.a_inv),
+            b: cut(self.b),
+        }
+    }
+}
+
+// The per-sample passes are free functions of slices: as arguments, `&mut` slices carry
 // no-alias information into the inlined loop, without which the vectoriser gives up on
 // a dozen streams that might overlap.
 
+/// Pass 1: the scalings `D_k = λ_k/s_k` of the iterate, `1/(D₁ + D₂ + D₃)`, `D₁ − D₂`, `√dᵢ`
+/// with `dᵢ = (4D₁D₂ + D₃(D₁ + D₂))/(D₁ + D₂ + D₃)` (a form without cancellation, dᵢ ≥ 0), and
+/// the predictor's u (targets s∘λ). Returns `Σ s∘λ`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn prepare_samples(
     eps: f64,
+    c: f64,
     s: [&[f64]; 3],
     l: [&[f64]; 3],
     xi: &[f64],
     r: &[f64],
+    w: &[f64],
     inv_s: [&mut [f64]; 3],
-    inv_l: [&mut [f64]; 3],
-    rp: [&mut [f64]; 3],
     a_inv: &mut [f64],
     b: &mut [f64],
     root_d: &mut [f64],
-) {
+    u: &mut [f64],
+) -> f64 {
     let n = xi.len();
-    let [s1, s2, s3] = s.map(|v| &v[..n]);
-    let [l1, l2, l3] = l.map(|v| &v[..n]);
     let [is1, is2, is3] = inv_s;
-    let [il1, il2, il3] = inv_l;
-    let [rp1, rp2, rp3] = rp;
-    let (is1, is2, is3, il1, il2, il3) = (
-        &mut is1[..n],
-        &mut is2[..n],
-        &mut is3[..n],
-        &mut il1[..n],
-        &mut il2[..n],
-        &mut il3[..n],
-    );
-    let (rp1, rp2, rp3) = (&mut rp1[..n], &mut rp2[..n], &mut rp3[..n]);
-    let (a_inv, b, root_d, r) = (&mut a_inv[..n], &mut b[..n], &mut root_d[..n], &r[..n]);
-    for i in 0..n {
-        let (x1, x2, x3) = (1.0 / s1[i], 1.0 / s2[i], 1.0 / s3[i]);
-        is1[i] = x1;
-        is2[i] = x2;
-        is3[i] = x3;
-        il1[i] = 1.0 / l1[i];
-        il2[i] = 1.0 / l2[i];
-        il3[i] = 1.0 / l3[i];
-        let (d1, d2, d3) = (l1[i] * x1, l2[i] * x2, l3[i] * x3);
-        let ai = 1.0 / (d1 + d2 + d3);
-        a_inv[i] = ai;
-        b[i] = d1 - d2;
-        root_d[i] = ((4.0 * d1 * d2 + d3 * (d1 + d2)) * ai).sqrt();
-        rp1[i] = xi[i] - r[i] + eps - s1[i];
-        rp2[i] = xi[i] + r[i] + eps - s2[i];
-        rp3[i] = xi[i] - s3[i];
+    let mut acc = [0.0f64; 8];
+    let mut start = 0;
+    while start < n {
+        let len = STRIP.min(n - start);
+        let end = start + len;
+        let cut = |v| sub(v, start, end);
+        let ([s1, s2, s3], [l1, l2, l3]) = (s.map(cut), l.map(cut));
+        let (xi, r, w) = (cut(xi), cut(r), cut(w));
+        let (is1, is2, is3) = (
+            &mut is1[start..start + len],
+            &mut is2[start..start + len],
+            &mut is3[start..start + len],
+        );
+        let (a_inv, b, root_d, u) = (
+            &mut a_inv[start..start + len],
+            &mut b[start..start + len],
+            &mut root_d[start..start + len],
+            &mut u[start..start + len],
+        );
+        let mut sl = [0.0f64; STRIP];
+        let sl = &mut sl[..len];
+        for t in 0..len {
+            let x = [1.0 / s1[t], 1.0 / s2[t], 1.0 / s3[t]];
+            let (d1, d2, d3) = (l1[t] * x[0], l2[t] * x[1], l3[t] * x[2]);
+            let ai = 1.0 / (d1 + d2 + d3);
+            let at = At {
+                s: [s1[t], s2[t], s3[t]],
+                l: [l1[t], l2[t], l3[t]],
+                inv_s: x,
+                xi: xi[t],
+                r: r[t],
+                w: w[t],
+                a_inv: ai,
+                b: d1 - d2,
+            };
+            is1[t] = x[0];
+            is2[t] = x[1];
+            is3[t] = x[2];
+            a_inv[t] = ai;
+            b[t] = d1 - d2;
+            root_d[t] = ((4.0 * d1 * d2 + d3 * (d1 + d2)) * ai).sqrt();
+            let rc = [at.s[0] * at.l[0], at.s[1] * at.l[1], at.s[2] * at.l[2]];
+            let (_, ui) = at.rhs(c, rc, at.rp(eps));
+            u[t] = ui;
+            sl[t] = rc[0] + rc[1] + rc[2];
+        }
+        fold_sum(sl, &mut acc);
+        start += len;
+    }
+    acc.iter().sum()
+}
+
+/// What the predictor step decides on: the largest `−Δs/s` and `−Δλ/λ` over the samples,
+/// and the coefficients of `Σ (s + αΔs)∘(λ + αΔλ) = c₀ + c₁α + c₂α²`.
+struct AffineSummary {
+    worst: f64,
+    worst_dual: f64,
+    poly: [f64; 3],
+}
+
+/// Pass 2: the predictor's direction from `zd_aff`, summarised.
+#[inline(always)]
+fn affine_samples(v: Samples<'_>, eps: f64, c: f64, zd_aff: &[f64]) -> AffineSummary {
+    let n = v.xi.len();
+    let (mut worst, mut worst_d) = ([0.0f64; 8], [0.0f64; 8]);
+    let mut poly = [[0.0f64; 8]; 3];
+    let mut start = 0;
+    while start < n {
+        let len = STRIP.min(n - start);
+        let vs = v.strip(start, len);
+        let zd = &zd_aff[start..start + len];
+        let mut buf = [[0.0f64; STRIP]; 5];
+        let [b0, b1, b2, b3, b4] = &mut buf;
+        let (b0, b1, b2, b3, b4) = (
+            &mut b0[..len],
+            &mut b1[..len],
+            &mut b2[..len],
+            &mut b3[..len],
+            &mut b4[..len],
+        );
+        for t in 0..len {
+            let at = vs.at(t);
+            let (rc, ds, dl) = at.affine(eps, c, zd[t]);
+            let ratio: [f64; 3] = std::array::from_fn(|k| -ds[k] * at.inv_s[k]);
+            // Δλ = −λ∘(s + Δs)/s for these targets: −Δλ/λ without a division.
+            let ratio_d: [f64; 3] = std::array::from_fn(|k| (at.s[k] + ds[k]) * at.inv_s[k]);
+            b0[t] = big(big(ratio[0], ratio[1]), ratio[2]);
+            b1[t] = big(big(ratio_d[0], ratio_d[1]), ratio_d[2]);
+            b2[t] = rc[0] + rc[1] + rc[2];
+            b3[t] = (at.s[0] * dl[0] + at.l[0] * ds[0])
+                + (at.s[1] * dl[1] + at.l[1] * ds[1])
+                + (at.s[2] * dl[2] + at.l[2] * ds[2]);
+            b4[t] = ds[0] * dl[0] + ds[1] * dl[1] + ds[2] * dl[2];
+        }
+        fold_max(b0, &mut worst);
+        fold_max(b1, &mut worst_d);
+        fold_sum(b2, &mut poly[0]);
+        fold_sum(b3, &mut poly[1]);
+        fold_sum(b4, &mut poly[2]);
+        start += len;
+    }
+    AffineSummary {
+        worst: lanes_max(&worst),
+        worst_dual: lanes_max(&worst_d),
+        poly: poly.map(|p| p.iter().sum()),
     }
 }
 
-/// `rhs_ξ` and the vector u whose `Zᵀu` is the γ part of the reduced right-hand side.
+/// Pass 3: the corrector's u (targets `s∘λ + Δs_aff∘Δλ_aff − target`).
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn rhs_samples(
-    rc: [&[f64]; 3],
+fn corrector_rhs_samples(
+    v: Samples<'_>,
+    eps: f64,
     c: f64,
-    w: &[f64],
-    l: [&[f64]; 3],
-    inv_s: [&[f64]; 3],
-    rp: [&[f64]; 3],
-    b: &[f64],
-    a_inv: &[f64],
-    rhs_xi: &mut [f64],
+    zd_aff: &[f64],
+    target: f64,
     u: &mut [f64],
 ) {
-    let n = w.len();
-    let [rc1, rc2, rc3] = rc.map(|v| &v[..n]);
-    let [l1, l2, l3] = l.map(|v| &v[..n]);
-    let [is1, is2, is3] = inv_s.map(|v| &v[..n]);
-    let [rp1, rp2, rp3] = rp.map(|v| &v[..n]);
-    let (b, a_inv, rhs_xi, u) = (&b[..n], &a_inv[..n], &mut rhs_xi[..n], &mut u[..n]);
+    let n = v.xi.len();
+    let (zd_aff, u) = (&zd_aff[..n], &mut u[..n]);
     for i in 0..n {
-        let g1 = (rc1[i] + l1[i] * rp1[i]) * is1[i];
-        let g2 = (rc2[i] + l2[i] * rp2[i]) * is2[i];
-        let g3 = (rc3[i] + l3[i] * rp3[i]) * is3[i];
-        let r_dxi = c * w[i] - l1[i] - l2[i] - l3[i];
-        let rhs = -r_dxi - (g1 + g2 + g3);
-        rhs_xi[i] = rhs;
-        u[i] = (l1[i] - l2[i]) - (g1 - g2) - b[i] * a_inv[i] * rhs;
+        let at = v.at(i);
+        let rc = at.corrector_targets(eps, c, zd_aff[i], target);
+        let (_, ui) = at.rhs(c, rc, at.rp(eps));
+        u[i] = ui;
     }
 }
 
-/// Δξ, Δs, Δλ per sample from `ZΔγ`; returns the largest `−Δs/s` and `−Δλ/λ` (0 if none
-/// is negative).
+/// Pass 4: the largest `−Δs/s` and `−Δλ/λ` of the corrector's direction from `zd`.
+#[inline(always)]
+fn corrector_ratios(
+    v: Samples<'_>,
+    eps: f64,
+    c: f64,
+    zd_aff: &[f64],
+    target: f64,
+    zd: &[f64],
+) -> (f64, f64) {
+    let n = v.xi.len();
+    let mut worst = [0.0f64; 8];
+    let mut best = ([0.0f64; 8], [1.0f64; 8]);
+    let mut start = 0;
+    while start < n {
+        let len = STRIP.min(n - start);
+        let vs = v.strip(start, len);
+        let (za, zc) = (&zd_aff[start..start + len], &zd[start..start + len]);
+        let mut buf = [[0.0f64; STRIP]; 3];
+        let [b0, b1, b2] = &mut buf;
+        let (b0, b1, b2) = (&mut b0[..len], &mut b1[..len], &mut b2[..len]);
+        for t in 0..len {
+            let at = vs.at(t);
+            let rc = at.corrector_targets(eps, c, za[t], target);
+            let rp = at.rp(eps);
+            let (rhs, _) = at.rhs(c, rc, rp);
+            let (_, ds, dl) = at.step(rc, rp, rhs, zc[t]);
+            let ratio: [f64; 3] = std::array::from_fn(|k| -ds[k] * at.inv_s[k]);
+            b0[t] = big(big(ratio[0], ratio[1]), ratio[2]);
+            // The largest −Δλ_k/λ_k of the three as a fraction (λ > 0).
+            let (mut num, mut den) = (-dl[0], at.l[0]);
+            for k in 1..3 {
+                let better = -dl[k] * den > num * at.l[k];
+                num = if better { -dl[k] } else { num };
+                den = if better { at.l[k] } else { den };
+            }
+            b1[t] = num;
+            b2[t] = den;
+        }
+        fold_max(b0, &mut worst);
+        fold_fraction(b1, b2, &mut best);
+        start += len;
+    }
+    (lanes_max(&worst), lanes_fraction(&best))
+}
+
+/// Pass 5: the corrector step of length `alpha`, in place; returns the new `Σ s∘λ`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn step_samples(
-    rc: [&[f64]; 3],
-    l: [&[f64]; 3],
+    eps: f64,
+    c: f64,
     inv_s: [&[f64]; 3],
-    inv_l: [&[f64]; 3],
-    rp: [&[f64]; 3],
-    b: &[f64],
+    w: &[f64],
     a_inv: &[f64],
-    rhs_xi: &[f64],
+    b: &[f64],
+    zd_aff: &[f64],
+    target: f64,
     zd: &[f64],
-    dxi_out: &mut [f64],
-    ds_out: [&mut [f64]; 3],
-    dl_out: [&mut [f64]; 3],
-) -> (f64, f64) {
-    let n = zd.len();
-    let [rc1, rc2, rc3] = rc.map(|v| &v[..n]);
-    let [l1, l2, l3] = l.map(|v| &v[..n]);
-    let [is1, is2, is3] = inv_s.map(|v| &v[..n]);
-    let [il1, il2, il3] = inv_l.map(|v| &v[..n]);
-    let [rp1, rp2, rp3] = rp.map(|v| &v[..n]);
-    let (b, a_inv, rhs_xi, dxi_out) = (&b[..n], &a_inv[..n], &rhs_xi[..n], &mut dxi_out[..n]);
-    let [ds1o, ds2o, ds3o] = ds_out;
-    let [dl1o, dl2o, dl3o] = dl_out;
-    let (ds1o, ds2o, ds3o) = (&mut ds1o[..n], &mut ds2o[..n], &mut ds3o[..n]);
-    let (dl1o, dl2o, dl3o) = (&mut dl1o[..n], &mut dl2o[..n], &mut dl3o[..n]);
-    for i in 0..n {
-        let dxi = (rhs_xi[i] - b[i] * zd[i]) * a_inv[i];
-        dxi_out[i] = dxi;
-        let ds1 = dxi + zd[i] + rp1[i];
-        let ds2 = dxi - zd[i] + rp2[i];
-        let ds3 = dxi + rp3[i];
-        ds1o[i] = ds1;
-        ds2o[i] = ds2;
-        ds3o[i] = ds3;
-        dl1o[i] = -(rc1[i] + l1[i] * ds1) * is1[i];
-        dl2o[i] = -(rc2[i] + l2[i] * ds2) * is2[i];
-        dl3o[i] = -(rc3[i] + l3[i] * ds3) * is3[i];
+    alpha: f64,
+    s: [&mut [f64]; 3],
+    l: [&mut [f64]; 3],
+    xi: &mut [f64],
+    r: &mut [f64],
+) -> f64 {
+    let n = xi.len();
+    let [s1, s2, s3] = s;
+    let [l1, l2, l3] = l;
+    let mut acc = [0.0f64; 8];
+    let mut start = 0;
+    while start < n {
+        let len = STRIP.min(n - start);
+        let end = start + len;
+        let cut = |v| sub(v, start, end);
+        let [is1, is2, is3] = inv_s.map(cut);
+        let (w, a_inv, b, za, zc) = (cut(w), cut(a_inv), cut(b), cut(zd_aff), cut(zd));
+        let (s1, s2, s3) = (
+            &mut s1[start..end],
+            &mut s2[start..end],
+            &mut s3[start..end],
+        );
+        let (l1, l2, l3) = (
+            &mut l1[start..end],
+            &mut l2[start..end],
+            &mut l3[start..end],
+        );
+        let (xi, r) = (&mut xi[start..end], &mut r[start..end]);
+        let mut sl = [0.0f64; STRIP];
+        let sl = &mut sl[..len];
+        for t in 0..len {
+            let at = At {
+                s: [s1[t], s2[t], s3[t]],
+                l: [l1[t], l2[t], l3[t]],
+                inv_s: [is1[t], is2[t], is3[t]],
+                xi: xi[t],
+                r: r[t],
+                w: w[t],
+                a_inv: a_inv[t],
+                b: b[t],
+            };
+            let rc = at.corrector_targets(eps, c, za[t], target);
+            let rp = at.rp(eps);
+            let (rhs, _) = at.rhs(c, rc, rp);
+            let (dxi, ds, dl) = at.step(rc, rp, rhs, zc[t]);
+            xi[t] += alpha * dxi;
+            r[t] -= alpha * zc[t];
+            let sn: [f64; 3] = std::array::from_fn(|k| at.s[k] + alpha * ds[k]);
+            let ln: [f64; 3] = std::array::from_fn(|k| at.l[k] + alpha * dl[k]);
+            s1[t] = sn[0];
+            s2[t] = sn[1];
+            s3[t] = sn[2];
+            l1[t] = ln[0];
+            l2[t] = ln[1];
+            l3[t] = ln[2];
+            sl[t] = sn[0] * ln[0] + sn[1] * ln[1] + sn[2] * ln[2];
+        }
+        fold_sum(sl, &mut acc);
+        start = end;
     }
-    (
-        largest_ratio([ds1o, ds2o, ds3o], [is1, is2, is3]),
-        largest_ratio([dl1o, dl2o, dl3o], [il1, il2, il3]),
-    )
+    acc.iter().sum()
 }
 
-/// `max(0, max_{k,i} −v_k,i · inv_k,i)`, in lanes of 8 with plain comparisons (the
-/// NaN-aware `f64::max` does not vectorise).
-#[inline(always)]
-fn largest_ratio(v: [&[f64]; 3], inv: [&[f64]; 3]) -> f64 {
-    let big = |a: f64, b: f64| if a > b { a } else { b };
-    let mut lanes = [0.0f64; 8];
-    for k in 0..3 {
-        for (vc, ic) in v[k].chunks_exact(8).zip(inv[k].chunks_exact(8)) {
-            for l in 0..8 {
-                lanes[l] = big(-vc[l] * ic[l], lanes[l]);
-            }
+/// The read-only sample view of a state, borrowing its fields one by one (so that `u`
+/// stays free for a pass to write).
+macro_rules! samples {
+    ($st:expr) => {{
+        let n = $st.pb.n;
+        Samples {
+            s: [&$st.s[0][..n], &$st.s[1][..n], &$st.s[2][..n]],
+            l: [&$st.l[0][..n], &$st.l[1][..n], &$st.l[2][..n]],
+            inv_s: [&$st.inv_s[0][..n], &$st.inv_s[1][..n], &$st.inv_s[2][..n]],
+            xi: &$st.xi[..n],
+            r: &$st.r[..n],
+            w: &$st.pb.w[..n],
+            a_inv: &$st.a_inv[..n],
+            b: &$st.b[..n],
         }
-        let tail = v[k].len() - v[k].len() % 8;
-        for (x, y) in v[k][tail..].iter().zip(&inv[k][tail..]) {
-            lanes[0] = big(-x * y, lanes[0]);
-        }
-    }
-    lanes.iter().fold(0.0f64, |a, &x| big(x, a))
+    }};
 }
 
 impl State<'_> {
@@ -312,51 +637,46 @@ impl State<'_> {
         t
     }
 
-    /// Mean complementarity `sᵀλ / m`.
-    #[inline(always)]
-    fn complementarity(&self) -> f64 {
-        let n = self.pb.n;
-        let (s1, s2, s3) = (&self.s[0][..n], &self.s[1][..n], &self.s[2][..n]);
-        let (l1, l2, l3) = (&self.l[0][..n], &self.l[1][..n], &self.l[2][..n]);
-        let mut acc = [0.0f64; 8];
-        for i in 0..n {
-            acc[i % 8] += s1[i] * l1[i] + s2[i] * l2[i] + s3[i] * l3[i];
-        }
-        (acc.iter().sum::<f64>() + self.bounds_complementarity()) / self.count
+    /// The columns of Z.
+    fn cols(&self) -> Vec<&[f64]> {
+        (0..self.pb.q()).map(|j| col(&self.pb.z, j)).collect()
     }
 
-    /// Scalings `D_k = λ_k/s_k`, the eliminated-ξ coefficients and the primal residuals.
+    /// Mean complementarity `sᵀλ / m` of the starting point (the passes return their own).
+    fn complementarity(&self) -> f64 {
+        let sum: f64 = (0..3)
+            .map(|k| {
+                self.s[k]
+                    .iter()
+                    .zip(&self.l[k])
+                    .map(|(a, b)| a * b)
+                    .sum::<f64>()
+            })
+            .sum();
+        (sum + self.bounds_complementarity()) / self.count
+    }
+
+    /// Scalings, the predictor's u and the bounds' primal residuals; returns the mean
+    /// complementarity.
     #[inline(always)]
-    fn prepare(&mut self) {
+    fn prepare(&mut self) -> f64 {
         let n = self.pb.n;
-        let eps = self.eps;
         let [s1, s2, s3] = &self.s;
         let [l1, l2, l3] = &self.l;
-        let (s1, s2, s3, l1, l2, l3) = (&s1[..n], &s2[..n], &s3[..n], &l1[..n], &l2[..n], &l3[..n]);
-        let (xi, r) = (&self.xi[..n], &self.r[..n]);
         let [is1, is2, is3] = &mut self.inv_s;
-        let [il1, il2, il3] = &mut self.inv_l;
-        let [rp1, rp2, rp3] = &mut self.rp;
-        let (is1, is2, is3) = (&mut is1[..n], &mut is2[..n], &mut is3[..n]);
-        let (il1, il2, il3) = (&mut il1[..n], &mut il2[..n], &mut il3[..n]);
-        let (rp1, rp2, rp3) = (&mut rp1[..n], &mut rp2[..n], &mut rp3[..n]);
-        let (a_inv, b, root_d) = (
+        let sum = prepare_samples(
+            self.eps,
+            self.c,
+            [&s1[..n], &s2[..n], &s3[..n]],
+            [&l1[..n], &l2[..n], &l3[..n]],
+            &self.xi[..n],
+            &self.r[..n],
+            &self.pb.w[..n],
+            [&mut is1[..n], &mut is2[..n], &mut is3[..n]],
             &mut self.a_inv[..n],
             &mut self.b[..n],
             &mut self.root_d[..n],
-        );
-        prepare_samples(
-            eps,
-            [s1, s2, s3],
-            [l1, l2, l3],
-            xi,
-            r,
-            [is1, is2, is3],
-            [il1, il2, il3],
-            [rp1, rp2, rp3],
-            a_inv,
-            b,
-            root_d,
+            &mut self.u[..n],
         );
         for j in 0..self.gamma.len() {
             self.rp_b[0][j] = if self.has[0][j] {
@@ -370,20 +690,14 @@ impl State<'_> {
                 0.0
             };
         }
+        (sum + self.bounds_complementarity()) / self.count
     }
 
     /// `I + D_b + Σ dᵢ zᵢzᵢᵀ`, Cholesky-factored; `None` if not numerically positive definite.
     #[inline(always)]
-    fn factor(&self, sz: &mut [f64]) -> Option<faer::Mat<f64>> {
+    fn factor(&self) -> Option<faer::Mat<f64>> {
         let (n, q) = (self.pb.n, self.pb.q());
-        for j in 0..q {
-            let dst = &mut sz[j * n..(j + 1) * n];
-            for ((o, &z), &rd) in dst.iter_mut().zip(col(&self.pb.z, j)).zip(&self.root_d) {
-                *o = z * rd;
-            }
-        }
-        let cols: Vec<&[f64]> = (0..q).map(|j| &sz[j * n..(j + 1) * n]).collect();
-        let up = kernels::cross_products(&cols, n);
+        let up = kernels::cross_products(&self.cols(), n, Some(&self.root_d));
         let h = faer::Mat::<f64>::from_fn(q, q, |i, j| {
             if self.fixed[i] || self.fixed[j] {
                 // A fixed coordinate does not move: its row and column are the identity.
@@ -403,44 +717,18 @@ impl State<'_> {
         cholesky(h.as_ref(), 0.0)
     }
 
-    /// The Newton direction for the complementarity targets `rc(i)` (per sample) and
-    /// `rc_b` (per bound side), into `out`.
+    /// The coefficient part of the Newton direction for the current u (built by a pass
+    /// for the wanted sample targets) and the bound targets `rc_b`, into `out`; returns
+    /// the bounds' largest `−Δs/s` and `−Δλ/λ`.
     #[inline(always)]
-    fn direction(
-        &mut self,
+    fn coefficient_direction(
+        &self,
         chol: &faer::Mat<f64>,
-        rc: [&[f64]; 3],
         rc_b: &[Vec<f64>; 2],
         out: &mut Direction,
-    ) {
-        let (n, q) = (self.pb.n, self.pb.q());
-        let c = self.c;
-        {
-            let w = &self.pb.w[..n];
-            let [l1, l2, l3] = &self.l;
-            let (l1, l2, l3) = (&l1[..n], &l2[..n], &l3[..n]);
-            let [is1, is2, is3] = &self.inv_s;
-            let (is1, is2, is3) = (&is1[..n], &is2[..n], &is3[..n]);
-            let [rp1, rp2, rp3] = &self.rp;
-            let (rp1, rp2, rp3) = (&rp1[..n], &rp2[..n], &rp3[..n]);
-            let (b, a_inv) = (&self.b[..n], &self.a_inv[..n]);
-            let (rhs_xi, u) = (&mut self.rhs_xi[..n], &mut self.u[..n]);
-            // g_k = S⁻¹ rc_k + D_k rp_k; rhs_ξ = −r_dξ − (g₁ + g₂ + g₃); the γ part goes
-            // through Zᵀ: (λ₁ − λ₂) − (g₁ − g₂) − (b/a) rhs_ξ.
-            rhs_samples(
-                rc,
-                c,
-                w,
-                [l1, l2, l3],
-                [is1, is2, is3],
-                [rp1, rp2, rp3],
-                b,
-                a_inv,
-                rhs_xi,
-                u,
-            );
-        }
-        let ztu = zt_v(&self.pb.z, &self.u);
+    ) -> (f64, f64) {
+        let q = self.pb.q();
+        let ztu = kernels::transposed_product(&self.cols(), &self.u);
         for j in 0..q {
             out.dg[j] = if self.fixed[j] {
                 0.0
@@ -461,42 +749,8 @@ impl State<'_> {
                 out.dg[j] = 0.0;
             }
         }
-        out.zd = mat_vec(&self.pb.z, &out.dg);
-        // Δs = A Δx + r_p (rows of A: (1, z), (1, −z), (1, 0)); Δλ = −S⁻¹(rc + Λ Δs);
-        // the step limit from the largest −Δv/v (lane-wise maxima, so that it vectorises).
-        let (mut worst, mut worst_d): (f64, f64);
-        {
-            let [l1, l2, l3] = &self.l;
-            let (l1, l2, l3) = (&l1[..n], &l2[..n], &l3[..n]);
-            let [is1, is2, is3] = &self.inv_s;
-            let (is1, is2, is3) = (&is1[..n], &is2[..n], &is3[..n]);
-            let [il1, il2, il3] = &self.inv_l;
-            let (il1, il2, il3) = (&il1[..n], &il2[..n], &il3[..n]);
-            let [rp1, rp2, rp3] = &self.rp;
-            let (rp1, rp2, rp3) = (&rp1[..n], &rp2[..n], &rp3[..n]);
-            let (b, a_inv, rhs_xi) = (&self.b[..n], &self.a_inv[..n], &self.rhs_xi[..n]);
-            let zd = &out.zd[..n];
-            let dxi_out = &mut out.dxi[..n];
-            let [ds1o, ds2o, ds3o] = &mut out.ds;
-            let (ds1o, ds2o, ds3o) = (&mut ds1o[..n], &mut ds2o[..n], &mut ds3o[..n]);
-            let [dl1o, dl2o, dl3o] = &mut out.dl;
-            let (dl1o, dl2o, dl3o) = (&mut dl1o[..n], &mut dl2o[..n], &mut dl3o[..n]);
-            (worst, worst_d) = step_samples(
-                rc,
-                [l1, l2, l3],
-                [is1, is2, is3],
-                [il1, il2, il3],
-                [rp1, rp2, rp3],
-                b,
-                a_inv,
-                rhs_xi,
-                zd,
-                dxi_out,
-                [ds1o, ds2o, ds3o],
-                [dl1o, dl2o, dl3o],
-            );
-        }
-
+        kernels::combination(&self.cols(), &out.dg, &mut out.zd);
+        let (mut worst, mut worst_d) = (0.0f64, 0.0f64);
         for side in 0..2 {
             for j in 0..q {
                 if !self.has[side][j] {
@@ -513,35 +767,13 @@ impl State<'_> {
                 worst_d = worst_d.max(-dl / self.l_b[side][j]);
             }
         }
-        out.step_max = if worst > 0.0 {
-            1.0 / worst
-        } else {
-            f64::INFINITY
-        };
-        out.step_max_dual = if worst_d > 0.0 {
-            1.0 / worst_d
-        } else {
-            f64::INFINITY
-        };
+        (worst, worst_d)
     }
 
-    /// Mean complementarity after a step `alpha` along `d`.
+    /// `Σ (s_b + αΔs_b)(λ_b + αΔλ_b)` over the bounds.
     #[inline(always)]
-    fn complementarity_after(&self, d: &Direction, alpha: f64) -> f64 {
-        let n = self.pb.n;
-        let mut acc = [0.0f64; 8];
-        for k in 0..3 {
-            let (s, l, ds, dl) = (
-                &self.s[k][..n],
-                &self.l[k][..n],
-                &d.ds[k][..n],
-                &d.dl[k][..n],
-            );
-            for i in 0..n {
-                acc[i % 8] += (s[i] + alpha * ds[i]) * (l[i] + alpha * dl[i]);
-            }
-        }
-        let mut t: f64 = acc.iter().sum();
+    fn bounds_complementarity_after(&self, d: &Direction, alpha: f64) -> f64 {
+        let mut t = 0.0;
         for side in 0..2 {
             for j in 0..self.gamma.len() {
                 if self.has[side][j] {
@@ -550,11 +782,13 @@ impl State<'_> {
                 }
             }
         }
-        t / self.count
+        t
     }
 
+    /// The corrector step of length `alpha` (γ, bounds, samples); returns the new mean
+    /// complementarity.
     #[inline(always)]
-    fn step(&mut self, d: &Direction, alpha: f64) {
+    fn step(&mut self, aff: &Direction, target: f64, d: &Direction, alpha: f64) -> f64 {
         for j in 0..self.gamma.len() {
             self.gamma[j] += alpha * d.dg[j];
             for side in 0..2 {
@@ -564,20 +798,27 @@ impl State<'_> {
                 }
             }
         }
-        for (v, dv) in self.xi.iter_mut().zip(&d.dxi) {
-            *v += alpha * dv;
-        }
-        for (v, dv) in self.r.iter_mut().zip(&d.zd) {
-            *v -= alpha * dv;
-        }
-        for k in 0..3 {
-            for (v, dv) in self.s[k].iter_mut().zip(&d.ds[k]) {
-                *v += alpha * dv;
-            }
-            for (v, dv) in self.l[k].iter_mut().zip(&d.dl[k]) {
-                *v += alpha * dv;
-            }
-        }
+        let n = self.pb.n;
+        let [is1, is2, is3] = &self.inv_s;
+        let [s1, s2, s3] = &mut self.s;
+        let [l1, l2, l3] = &mut self.l;
+        let sum = step_samples(
+            self.eps,
+            self.c,
+            [&is1[..n], &is2[..n], &is3[..n]],
+            &self.pb.w[..n],
+            &self.a_inv[..n],
+            &self.b[..n],
+            &aff.zd[..n],
+            target,
+            &d.zd[..n],
+            alpha,
+            [&mut s1[..n], &mut s2[..n], &mut s3[..n]],
+            [&mut l1[..n], &mut l2[..n], &mut l3[..n]],
+            &mut self.xi[..n],
+            &mut self.r[..n],
+        );
+        (sum + self.bounds_complementarity()) / self.count
     }
 }
 
@@ -735,21 +976,16 @@ fn solve_generic(
         s_b,
         l_b,
         inv_s: [zeros(), zeros(), zeros()],
-        inv_l: [zeros(), zeros(), zeros()],
-        rp: [zeros(), zeros(), zeros()],
         rp_b: [vec![0.0; q], vec![0.0; q]],
         a_inv: zeros(),
         b: zeros(),
         root_d: zeros(),
-        rhs_xi: zeros(),
         u: zeros(),
         count,
     };
     let mu0 = st.complementarity();
-    let mut sz = vec![0.0; n * q];
     let mut aff = Direction::new(n, q);
     let mut cor = Direction::new(n, q);
-    let mut rc: [Vec<f64>; 3] = [zeros(), zeros(), zeros()];
     let mut rc_b: [Vec<f64>; 2] = [vec![0.0; q], vec![0.0; q]];
     let mut last = Iterate {
         gamma: st.gamma.clone(),
@@ -760,47 +996,47 @@ fn solve_generic(
         f: f64::INFINITY,
     };
     for it in 1..=MAX_ITERATIONS {
-        let mu = st.complementarity();
-        st.prepare();
-        let Some(chol) = st.factor(&mut sz) else {
+        let mu = st.prepare();
+        let Some(chol) = st.factor() else {
             break;
         };
-        // Predictor (affine scaling): rc = s∘λ.
+        // Predictor (affine scaling): targets s∘λ (the u of `prepare`).
         for side in 0..2 {
             for j in 0..q {
                 rc_b[side][j] = st.s_b[side][j] * st.l_b[side][j];
             }
         }
-        for k in 0..3 {
-            for ((o, a), b) in rc[k].iter_mut().zip(&st.s[k]).zip(&st.l[k]) {
-                *o = a * b;
-            }
-        }
-        st.direction(&chol, [&rc[0], &rc[1], &rc[2]], &rc_b, &mut aff);
+        let (wb, wbd) = st.coefficient_direction(&chol, &rc_b, &mut aff);
+        let summary = affine_samples(samples!(st), eps, c, &aff.zd);
+        let inv = |w: f64| if w > 0.0 { 1.0 / w } else { f64::INFINITY };
+        aff.step_max = inv(summary.worst.max(wb));
+        aff.step_max_dual = inv(summary.worst_dual.max(wbd));
         // One step length for slacks and multipliers (separate ones made no difference
         // on the benchmark designs, and one keeps the dual residual of γ linear).
         let alpha_aff = aff.step_max.min(aff.step_max_dual).min(1.0);
-        let mu_aff = st.complementarity_after(&aff, alpha_aff);
+        let [p0, p1, p2] = summary.poly;
+        let mu_aff = (p0
+            + alpha_aff * (p1 + alpha_aff * p2)
+            + st.bounds_complementarity_after(&aff, alpha_aff))
+            / st.count;
         let sigma = (mu_aff / mu).powi(3).clamp(0.0, 1.0);
-        // Corrector: rc = s∘λ + Δs_aff∘Δλ_aff − σμ.
+        // Corrector: targets s∘λ + Δs_aff∘Δλ_aff − σμ.
         let target = sigma * mu;
         for side in 0..2 {
             for j in 0..q {
                 rc_b[side][j] += aff.ds_b[side][j] * aff.dl_b[side][j] - target;
             }
         }
-        for k in 0..3 {
-            for ((o, a), b) in rc[k].iter_mut().zip(&aff.ds[k]).zip(&aff.dl[k]) {
-                *o += a * b - target;
-            }
-        }
-        st.direction(&chol, [&rc[0], &rc[1], &rc[2]], &rc_b, &mut cor);
+        corrector_rhs_samples(samples!(st), eps, c, &aff.zd, target, &mut st.u);
+        let (wb, wbd) = st.coefficient_direction(&chol, &rc_b, &mut cor);
+        let (ws, wd) = corrector_ratios(samples!(st), eps, c, &aff.zd, target, &cor.zd);
+        cor.step_max = inv(ws.max(wb));
+        cor.step_max_dual = inv(wd.max(wbd));
         let alpha = (STEP_FRACTION * cor.step_max.min(cor.step_max_dual)).min(1.0);
         if !(alpha > 0.0 && alpha.is_finite()) {
             break;
         }
-        st.step(&cor, alpha);
-        let mu_now = st.complementarity();
+        let mu_now = st.step(&aff, target, &cor, alpha);
         // The full check (two passes over Z, and the exact finish) only when it can
         // succeed: the margin candidates fit the q coordinates (the finish needs that), or
         // the complementarity — the interior point's own estimate of the duality gap — is
