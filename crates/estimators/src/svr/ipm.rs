@@ -153,6 +153,39 @@ struct At {
 }
 
 impl At {
+    /// A sample's iterate with its scalings `D_k = λ_k/s_k`: `1/(D₁ + D₂ + D₃)`, `D₁ − D₂`,
+    /// and `√dᵢ` with `dᵢ = (4D₁D₂ + D₃(D₁ + D₂))/(D₁ + D₂ + D₃)` (a form without
+    /// cancellation, dᵢ ≥ 0) for the normal matrix.
+    #[inline(always)]
+    fn prepared(s: [f64; 3], l: [f64; 3], xi: f64, r: f64, w: f64) -> (At, f64) {
+        let x = [1.0 / s[0], 1.0 / s[1], 1.0 / s[2]];
+        let (d1, d2, d3) = (l[0] * x[0], l[1] * x[1], l[2] * x[2]);
+        let ai = 1.0 / (d1 + d2 + d3);
+        let at = At {
+            s,
+            l,
+            inv_s: x,
+            xi,
+            r,
+            w,
+            a_inv: ai,
+            b: d1 - d2,
+        };
+        (at, ((4.0 * d1 * d2 + d3 * (d1 + d2)) * ai).sqrt())
+    }
+
+    /// The predictor's u (targets s∘λ) and `Σ_k s_kλ_k`.
+    #[inline(always)]
+    fn predictor_u(&self, eps: f64, c: f64) -> (f64, f64) {
+        let rc = [
+            self.s[0] * self.l[0],
+            self.s[1] * self.l[1],
+            self.s[2] * self.l[2],
+        ];
+        let (_, u) = self.rhs(c, rc, self.rp(eps));
+        (u, rc[0] + rc[1] + rc[2])
+    }
+
     /// Primal residuals `rp_k` of `s₁ = ξ − r + ε`, `s₂ = ξ + r + ε`, `s₃ = ξ`.
     #[inline(always)]
     fn rp(&self, eps: f64) -> [f64; 3] {
@@ -334,9 +367,8 @@ impl<'a> Samples<'a> {
 // no-alias information into the inlined loop, without which the vectoriser gives up on
 // a dozen streams that might overlap.
 
-/// Pass 1: the scalings `D_k = λ_k/s_k` of the iterate, `1/(D₁ + D₂ + D₃)`, `D₁ − D₂`, `√dᵢ`
-/// with `dᵢ = (4D₁D₂ + D₃(D₁ + D₂))/(D₁ + D₂ + D₃)` (a form without cancellation, dᵢ ≥ 0), and
-/// the predictor's u (targets s∘λ). Returns `Σ s∘λ`.
+/// Pass 1 of the first iteration (later ones get it from the step, pass 5): the scalings of
+/// the iterate ([`At::prepared`]) and the predictor's u (targets s∘λ). Returns `Σ s∘λ`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn prepare_samples(
@@ -377,29 +409,18 @@ fn prepare_samples(
         let mut sl = [0.0f64; STRIP];
         let sl = &mut sl[..len];
         for t in 0..len {
-            let x = [1.0 / s1[t], 1.0 / s2[t], 1.0 / s3[t]];
-            let (d1, d2, d3) = (l1[t] * x[0], l2[t] * x[1], l3[t] * x[2]);
-            let ai = 1.0 / (d1 + d2 + d3);
-            let at = At {
-                s: [s1[t], s2[t], s3[t]],
-                l: [l1[t], l2[t], l3[t]],
-                inv_s: x,
-                xi: xi[t],
-                r: r[t],
-                w: w[t],
-                a_inv: ai,
-                b: d1 - d2,
-            };
-            is1[t] = x[0];
-            is2[t] = x[1];
-            is3[t] = x[2];
-            a_inv[t] = ai;
-            b[t] = d1 - d2;
-            root_d[t] = ((4.0 * d1 * d2 + d3 * (d1 + d2)) * ai).sqrt();
-            let rc = [at.s[0] * at.l[0], at.s[1] * at.l[1], at.s[2] * at.l[2]];
-            let (_, ui) = at.rhs(c, rc, at.rp(eps));
-            u[t] = ui;
-            sl[t] = rc[0] + rc[1] + rc[2];
+            let (at, rd) = At::prepared(
+                [s1[t], s2[t], s3[t]],
+                [l1[t], l2[t], l3[t]],
+                xi[t],
+                r[t],
+                w[t],
+            );
+            [is1[t], is2[t], is3[t]] = at.inv_s;
+            a_inv[t] = at.a_inv;
+            b[t] = at.b;
+            root_d[t] = rd;
+            (u[t], sl[t]) = at.predictor_u(eps, c);
         }
         fold_sum(sl, &mut acc);
         start += len;
@@ -529,16 +550,15 @@ fn corrector_ratios(
     (lanes_max(&worst), lanes_fraction(&best))
 }
 
-/// Pass 5: the corrector step of length `alpha`, in place; returns the new `Σ s∘λ`.
+/// Pass 5: the corrector step of length `alpha`, in place, and pass 1 of the next
+/// iteration on the new iterate (its scalings and predictor's u overwrite this
+/// iteration's once a sample's step is taken). Returns the new `Σ s∘λ`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn step_samples(
     eps: f64,
     c: f64,
-    inv_s: [&[f64]; 3],
     w: &[f64],
-    a_inv: &[f64],
-    b: &[f64],
     zd_aff: &[f64],
     target: f64,
     zd: &[f64],
@@ -547,18 +567,23 @@ fn step_samples(
     l: [&mut [f64]; 3],
     xi: &mut [f64],
     r: &mut [f64],
+    inv_s: [&mut [f64]; 3],
+    a_inv: &mut [f64],
+    b: &mut [f64],
+    root_d: &mut [f64],
+    u: &mut [f64],
 ) -> f64 {
     let n = xi.len();
     let [s1, s2, s3] = s;
     let [l1, l2, l3] = l;
+    let [is1, is2, is3] = inv_s;
     let mut acc = [0.0f64; 8];
     let mut start = 0;
     while start < n {
         let len = STRIP.min(n - start);
         let end = start + len;
         let cut = |v| sub(v, start, end);
-        let [is1, is2, is3] = inv_s.map(cut);
-        let (w, a_inv, b, za, zc) = (cut(w), cut(a_inv), cut(b), cut(zd_aff), cut(zd));
+        let (w, za, zc) = (cut(w), cut(zd_aff), cut(zd));
         let (s1, s2, s3) = (
             &mut s1[start..end],
             &mut s2[start..end],
@@ -569,7 +594,18 @@ fn step_samples(
             &mut l2[start..end],
             &mut l3[start..end],
         );
+        let (is1, is2, is3) = (
+            &mut is1[start..end],
+            &mut is2[start..end],
+            &mut is3[start..end],
+        );
         let (xi, r) = (&mut xi[start..end], &mut r[start..end]);
+        let (a_inv, b, root_d, u) = (
+            &mut a_inv[start..end],
+            &mut b[start..end],
+            &mut root_d[start..end],
+            &mut u[start..end],
+        );
         let mut sl = [0.0f64; STRIP];
         let sl = &mut sl[..len];
         for t in 0..len {
@@ -587,17 +623,19 @@ fn step_samples(
             let rp = at.rp(eps);
             let (rhs, _) = at.rhs(c, rc, rp);
             let (dxi, ds, dl) = at.step(rc, rp, rhs, zc[t]);
-            xi[t] += alpha * dxi;
-            r[t] -= alpha * zc[t];
             let sn: [f64; 3] = std::array::from_fn(|k| at.s[k] + alpha * ds[k]);
             let ln: [f64; 3] = std::array::from_fn(|k| at.l[k] + alpha * dl[k]);
-            s1[t] = sn[0];
-            s2[t] = sn[1];
-            s3[t] = sn[2];
-            l1[t] = ln[0];
-            l2[t] = ln[1];
-            l3[t] = ln[2];
-            sl[t] = sn[0] * ln[0] + sn[1] * ln[1] + sn[2] * ln[2];
+            let (xn, rn) = (at.xi + alpha * dxi, at.r - alpha * zc[t]);
+            [s1[t], s2[t], s3[t]] = sn;
+            [l1[t], l2[t], l3[t]] = ln;
+            xi[t] = xn;
+            r[t] = rn;
+            let (next, rd) = At::prepared(sn, ln, xn, rn, at.w);
+            [is1[t], is2[t], is3[t]] = next.inv_s;
+            a_inv[t] = next.a_inv;
+            b[t] = next.b;
+            root_d[t] = rd;
+            (u[t], sl[t]) = next.predictor_u(eps, c);
         }
         fold_sum(sl, &mut acc);
         start = end;
@@ -678,6 +716,13 @@ impl State<'_> {
             &mut self.root_d[..n],
             &mut self.u[..n],
         );
+        self.prepare_bounds();
+        (sum + self.bounds_complementarity()) / self.count
+    }
+
+    /// The bounds' primal residuals.
+    #[inline(always)]
+    fn prepare_bounds(&mut self) {
         for j in 0..self.gamma.len() {
             self.rp_b[0][j] = if self.has[0][j] {
                 self.gamma[j] - self.lo[j] - self.s_b[0][j]
@@ -690,7 +735,6 @@ impl State<'_> {
                 0.0
             };
         }
-        (sum + self.bounds_complementarity()) / self.count
     }
 
     /// `I + D_b + Σ dᵢ zᵢzᵢᵀ`, Cholesky-factored; `None` if not numerically positive definite.
@@ -799,16 +843,13 @@ impl State<'_> {
             }
         }
         let n = self.pb.n;
-        let [is1, is2, is3] = &self.inv_s;
+        let [is1, is2, is3] = &mut self.inv_s;
         let [s1, s2, s3] = &mut self.s;
         let [l1, l2, l3] = &mut self.l;
         let sum = step_samples(
             self.eps,
             self.c,
-            [&is1[..n], &is2[..n], &is3[..n]],
             &self.pb.w[..n],
-            &self.a_inv[..n],
-            &self.b[..n],
             &aff.zd[..n],
             target,
             &d.zd[..n],
@@ -817,7 +858,13 @@ impl State<'_> {
             [&mut l1[..n], &mut l2[..n], &mut l3[..n]],
             &mut self.xi[..n],
             &mut self.r[..n],
+            [&mut is1[..n], &mut is2[..n], &mut is3[..n]],
+            &mut self.a_inv[..n],
+            &mut self.b[..n],
+            &mut self.root_d[..n],
+            &mut self.u[..n],
         );
+        self.prepare_bounds();
         (sum + self.bounds_complementarity()) / self.count
     }
 }
@@ -995,8 +1042,8 @@ fn solve_generic(
         gap: f64::INFINITY,
         f: f64::INFINITY,
     };
+    let mut mu = st.prepare();
     for it in 1..=MAX_ITERATIONS {
-        let mu = st.prepare();
         let Some(chol) = st.factor() else {
             break;
         };
@@ -1037,6 +1084,7 @@ fn solve_generic(
             break;
         }
         let mu_now = st.step(&aff, target, &cor, alpha);
+        mu = mu_now;
         // The full check (two passes over Z, and the exact finish) only when it can
         // succeed: the margin candidates fit the q coordinates (the finish needs that), or
         // the complementarity — the interior point's own estimate of the duality gap — is
