@@ -5,8 +5,12 @@
 //! samples carry curvature a few at a time, so its Newton steps grow with the number of
 //! samples near the tube's edge — on designs stacked with a steady turning circle,
 //! thousands of nearly equal rows sit within 1e-8 of the edge and it took 100–150 steps.
-//! The interior-point iteration count does not depend on that structure (15–30 here),
-//! and each iteration costs one weighted Gram `Σ dᵢ zᵢzᵢᵀ` plus four passes over Z.
+//! The interior-point iteration count depends less on that structure (13–19 on the
+//! zig-zag designs, 25–75 with a turning circle), and each iteration costs one weighted
+//! Gram `Σ dᵢ zᵢzᵢᵀ` (a third of the time at q = 22), four passes over Z (`Zᵀu`, `ZΔγ`,
+//! for predictor and corrector) and four strip-mined passes over the per-sample state,
+//! which recompute the per-sample parts of the directions instead of storing them (their
+//! memory traffic, not their arithmetic, was the cost).
 //!
 //! Formulation (scaled space, merged samples of weight wᵢ):
 //!
