@@ -503,7 +503,9 @@ pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
-/// Fit `families` jointly on recordings `idx` with the base (and its effects) fixed.
+/// Fit `families` jointly on recordings `idx` with the base (and its effects) fixed: from each
+/// family's grid of starts (the best three refined), or, when `warm` starts are given (the
+/// parameters already fitted to the two folds), from those alone.
 fn fit_families(
     base: &(dyn Dynamics + Send + Sync),
     base_effects: &[Effect],
@@ -511,6 +513,7 @@ fn fit_families(
     prep: &[Prepared],
     idx: &[usize],
     scale: &[f64; 3],
+    warm: &[Vec<f64>],
 ) -> (Vec<Effect>, FitResult) {
     let ship = *base.ship();
     let dims: Vec<usize> = families.iter().map(|f| f.dim()).collect();
@@ -534,17 +537,23 @@ fn fit_families(
     }
     // Starts: the product of each family's starts is small (wind has 36, the others 1–2).
     let mut starts: Vec<Vec<f64>> = vec![vec![]];
-    for f in families {
-        starts = starts
-            .iter()
-            .flat_map(|s| {
-                f.starts().into_iter().map(move |t| {
-                    let mut u = s.clone();
-                    u.extend(t);
-                    u
+    let k: usize = dims.iter().sum();
+    let warm: Vec<&Vec<f64>> = warm.iter().filter(|w| w.len() == k).collect();
+    if !warm.is_empty() {
+        starts = warm.into_iter().cloned().collect();
+    } else {
+        for f in families {
+            starts = starts
+                .iter()
+                .flat_map(|s| {
+                    f.starts().into_iter().map(move |t| {
+                        let mut u = s.clone();
+                        u.extend(t);
+                        u
+                    })
                 })
-            })
-            .collect();
+                .collect();
+        }
     }
     let objective = |p: &[f64]| {
         let c = Composite {
@@ -860,23 +869,26 @@ impl Judge<'_> {
             .collect()
     }
 
-    /// Fit on one fold, score on the other, both ways: per-recording held-out scores and the fitted
-    /// effects of each fold.
-    fn cross(&self, families: &[Family]) -> Vec<ReplayScore> {
+    /// Fit on one fold, score on the other, both ways: per-recording held-out scores and the
+    /// parameters fitted to each fold.
+    fn cross(&self, families: &[Family]) -> (Vec<ReplayScore>, Vec<Vec<f64>>) {
         let mut out = vec![ReplayScore::default(); self.prep.len()];
+        let mut fitted = Vec::new();
         for k in 0..2 {
             let (train, test) = (&self.folds[k], &self.folds[1 - k]);
             if test.is_empty() {
                 continue;
             }
-            let (effects, _) = fit_families(
+            let (effects, fit) = fit_families(
                 self.base,
                 self.base_effects,
                 families,
                 self.prep,
                 train,
                 &self.scale,
+                &[],
             );
+            fitted.push(fit.params);
             if std::env::var_os("SHIPID_DEBUG").is_some() {
                 let sc = self.score(&effects, test);
                 eprintln!(
@@ -891,7 +903,7 @@ impl Judge<'_> {
                 out[i] = s;
             }
         }
-        out
+        (out, fitted)
     }
 }
 
@@ -1032,10 +1044,14 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
         (sigma_pos.powi(2) + (sigma_vel_init * horizon_s / 3f64.sqrt()).powi(2)).sqrt() / lpp;
 
     // Candidates, each judged held-out (in parallel).
-    let single: Vec<(Family, Vec<ReplayScore>)> = Family::ALL
+    let single: Vec<(Family, (Vec<ReplayScore>, Vec<Vec<f64>>))> = Family::ALL
         .par_iter()
         .map(|&f| (f, judge.cross(&[f])))
         .collect();
+    // The parameters fitted to the two folds, per assessed candidate (warm starts of its final fit).
+    let mut fold_params: Vec<Vec<Vec<f64>>> = single.iter().map(|(_, (_, p))| p.clone()).collect();
+    let single: Vec<(Family, Vec<ReplayScore>)> =
+        single.into_iter().map(|(f, (s, _))| (f, s)).collect();
     // Typical per-recording change: the geometric mean of after/before over recordings, so that one
     // recording the base model already fits badly (or where a segment runs away) cannot decide alone.
     let typical_ratio = |idx: &[usize], scores: &[ReplayScore]| {
@@ -1124,14 +1140,15 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
                 pairs.push(vec![f, g]);
             }
         }
-        let pairs: Vec<(Vec<Family>, Vec<ReplayScore>)> = pairs
+        let pairs: Vec<(Vec<Family>, (Vec<ReplayScore>, Vec<Vec<f64>>))> = pairs
             .into_par_iter()
             .map(|fams| {
                 let s = judge.cross(&fams);
                 (fams, s)
             })
             .collect();
-        for (fams, s) in pairs {
+        for (fams, (s, params)) in pairs {
+            fold_params.push(params);
             let name = fams.iter().map(|f| f.label()).collect::<Vec<_>>().join("+");
             let k = fams.iter().map(|f| f.dim()).sum();
             let mut a = assess(name, k, &s);
@@ -1143,9 +1160,13 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
     }
 
     // Final parameters on all recordings, for every candidate (reported) — the chosen one's are the model.
+    // Warm started from the two fold fits: the grid of starts was searched there already.
     let finals: Vec<(Vec<Effect>, FitResult)> = assessed
         .par_iter()
-        .map(|(fams, _, _)| fit_families(base, input.base_effects, fams, &prep, &all, &scale))
+        .zip(&fold_params)
+        .map(|((fams, _, _), warm)| {
+            fit_families(base, input.base_effects, fams, &prep, &all, &scale, warm)
+        })
         .collect();
     let candidates: Vec<Candidate> = assessed
         .iter()
