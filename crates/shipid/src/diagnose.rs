@@ -577,6 +577,10 @@ fn fit_families(
     (split(&best.params), best)
 }
 
+/// A candidate judged across the folds: per-recording held-out scores, and the parameters
+/// fitted to each of the two folds.
+type CrossFit = (Vec<ReplayScore>, Vec<Vec<f64>>);
+
 /// Position and heading errors of segment replays.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct ReplayScore {
@@ -871,7 +875,7 @@ impl Judge<'_> {
 
     /// Fit on one fold, score on the other, both ways: per-recording held-out scores and the
     /// parameters fitted to each fold.
-    fn cross(&self, families: &[Family]) -> (Vec<ReplayScore>, Vec<Vec<f64>>) {
+    fn cross(&self, families: &[Family]) -> CrossFit {
         let mut out = vec![ReplayScore::default(); self.prep.len()];
         let mut fitted = Vec::new();
         for k in 0..2 {
@@ -1044,7 +1048,7 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
         (sigma_pos.powi(2) + (sigma_vel_init * horizon_s / 3f64.sqrt()).powi(2)).sqrt() / lpp;
 
     // Candidates, each judged held-out (in parallel).
-    let single: Vec<(Family, (Vec<ReplayScore>, Vec<Vec<f64>>))> = Family::ALL
+    let single: Vec<(Family, CrossFit)> = Family::ALL
         .par_iter()
         .map(|&f| (f, judge.cross(&[f])))
         .collect();
@@ -1140,7 +1144,7 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
                 pairs.push(vec![f, g]);
             }
         }
-        let pairs: Vec<(Vec<Family>, (Vec<ReplayScore>, Vec<Vec<f64>>))> = pairs
+        let pairs: Vec<(Vec<Family>, CrossFit)> = pairs
             .into_par_iter()
             .map(|fams| {
                 let s = judge.cross(&fams);
