@@ -152,6 +152,47 @@ fn residual_at(cols: &[&[f64]], y: &[f64], beta: &[f64], i: usize) -> f64 {
     r
 }
 
+/// `Φᵀw` for the vector w given chunk by chunk (`chunk(r0)`: its `U·L` entries from row r0,
+/// computed in registers) and entry by entry in the tail (`at(i)`): Φ is read once, and w
+/// need not exist in memory.
+#[inline(always)]
+fn transposed_generic<const L: usize, const U: usize, const FMA: bool>(
+    cols: &[&[f64]],
+    n: usize,
+    chunk: impl Fn(usize) -> [[f64; L]; U],
+    at: impl Fn(usize) -> f64,
+) -> Vec<f64> {
+    let rows = L * U;
+    let full = n - n % rows;
+    let mut acc = vec![[0.0f64; L]; cols.len()];
+    let mut r0 = 0;
+    while r0 < full {
+        let w = chunk(r0);
+        for (a, c) in acc.iter_mut().zip(cols) {
+            let mut s = *a;
+            for u in 0..U {
+                let x = lanes::<L>(c, r0 + u * L);
+                for l in 0..L {
+                    s[l] = madd::<FMA>(x[l], w[u][l], s[l]);
+                }
+            }
+            *a = s;
+        }
+        r0 += rows;
+    }
+    let mut out: Vec<f64> = acc
+        .iter()
+        .map(|a| a.iter().fold(0.0, |s, v| s + v))
+        .collect();
+    for i in full..n {
+        let w = at(i);
+        for (o, c) in out.iter_mut().zip(cols) {
+            *o += c[i] * w;
+        }
+    }
+    out
+}
+
 /// `Φᵀ(y − Φβ)`.
 #[inline(always)]
 fn gradient_generic<const L: usize, const U: usize, const FMA: bool>(
@@ -159,36 +200,12 @@ fn gradient_generic<const L: usize, const U: usize, const FMA: bool>(
     y: &[f64],
     beta: &[f64],
 ) -> Vec<f64> {
-    let n = y.len();
-    let chunk = L * U;
-    let full = n - n % chunk;
-    let mut acc = vec![[0.0f64; L]; cols.len()];
-    let mut r0 = 0;
-    while r0 < full {
-        let r = residual_chunk::<L, U, FMA>(cols, y, beta, r0);
-        for (a, c) in acc.iter_mut().zip(cols) {
-            let mut s = *a;
-            for u in 0..U {
-                let x = lanes::<L>(c, r0 + u * L);
-                for l in 0..L {
-                    s[l] = madd::<FMA>(x[l], r[u][l], s[l]);
-                }
-            }
-            *a = s;
-        }
-        r0 += chunk;
-    }
-    let mut out: Vec<f64> = acc
-        .iter()
-        .map(|a| a.iter().fold(0.0, |s, v| s + v))
-        .collect();
-    for i in full..n {
-        let r = residual_at(cols, y, beta, i);
-        for (o, c) in out.iter_mut().zip(cols) {
-            *o += c[i] * r;
-        }
-    }
-    out
+    transposed_generic::<L, U, FMA>(
+        cols,
+        y.len(),
+        |r0| residual_chunk::<L, U, FMA>(cols, y, beta, r0),
+        |i| residual_at(cols, y, beta, i),
+    )
 }
 
 /// `Φᵀv`.
@@ -197,35 +214,12 @@ fn transposed_product_generic<const L: usize, const U: usize, const FMA: bool>(
     cols: &[&[f64]],
     v: &[f64],
 ) -> Vec<f64> {
-    let n = v.len();
-    let chunk = L * U;
-    let full = n - n % chunk;
-    let mut acc = vec![[0.0f64; L]; cols.len()];
-    let mut r0 = 0;
-    while r0 < full {
-        let vv: [[f64; L]; U] = std::array::from_fn(|u| lanes::<L>(v, r0 + u * L));
-        for (a, c) in acc.iter_mut().zip(cols) {
-            let mut s = *a;
-            for u in 0..U {
-                let x = lanes::<L>(c, r0 + u * L);
-                for l in 0..L {
-                    s[l] = madd::<FMA>(x[l], vv[u][l], s[l]);
-                }
-            }
-            *a = s;
-        }
-        r0 += chunk;
-    }
-    let mut out: Vec<f64> = acc
-        .iter()
-        .map(|a| a.iter().fold(0.0, |s, v| s + v))
-        .collect();
-    for i in full..n {
-        for (o, c) in out.iter_mut().zip(cols) {
-            *o += c[i] * v[i];
-        }
-    }
-    out
+    transposed_generic::<L, U, FMA>(
+        cols,
+        v.len(),
+        |r0| std::array::from_fn(|u| lanes::<L>(v, r0 + u * L)),
+        |i| v[i],
+    )
 }
 
 /// `Φv` into `out` (length n).
