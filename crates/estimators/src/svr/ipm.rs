@@ -86,8 +86,7 @@ pub(super) fn dual(pb: &Data, theta: &[f64], eps: f64, lo: &[f64], hi: &[f64]) -
     lin + quad
 }
 
-/// The coefficient part of a Newton direction (Δγ, Δs₄,₅, Δλ₄,₅), `ZΔγ`, and the largest
-/// step that keeps s and λ positive. The per-sample parts (Δξ, Δs₁…₃, Δλ₁…₃) are not
+/// The coefficient part of a Newton direction (Δγ, Δs₄,₅, Δλ₄,₅) and `ZΔγ`. The per-sample parts (Δξ, Δs₁…₃, Δλ₁…₃) are not
 /// stored: every pass recomputes them from `ZΔγ` and the iterate ([`At`]), which moves a
 /// third of the data that storing them (and reading them back) did.
 struct Direction {
@@ -95,9 +94,6 @@ struct Direction {
     ds_b: [Vec<f64>; 2],
     dl_b: [Vec<f64>; 2],
     zd: Vec<f64>,
-    step_max: f64,
-    /// The same for the multipliers (`step_max` covers the slacks).
-    step_max_dual: f64,
 }
 
 impl Direction {
@@ -107,8 +103,6 @@ impl Direction {
             ds_b: std::array::from_fn(|_| vec![0.0; q]),
             dl_b: std::array::from_fn(|_| vec![0.0; q]),
             zd: vec![0.0; n],
-            step_max: 0.0,
-            step_max_dual: 0.0,
         }
     }
 }
@@ -124,6 +118,8 @@ struct State<'a> {
     /// Bound present (finite and not fixed), per side.
     has: [Vec<bool>; 2],
     fixed: Vec<bool>,
+    /// The columns of Z.
+    cols: Vec<&'a [f64]>,
     gamma: Vec<f64>,
     xi: Vec<f64>,
     r: Vec<f64>,
@@ -178,14 +174,20 @@ impl At {
         (at, ((4.0 * d1 * d2 + d3 * (d1 + d2)) * ai).sqrt())
     }
 
-    /// The predictor's u (targets s∘λ) and `Σ_k s_kλ_k`.
+    /// The complementarity products `s∘λ` (the predictor's targets).
     #[inline(always)]
-    fn predictor_u(&self, eps: f64, c: f64) -> (f64, f64) {
-        let rc = [
+    fn products(&self) -> [f64; 3] {
+        [
             self.s[0] * self.l[0],
             self.s[1] * self.l[1],
             self.s[2] * self.l[2],
-        ];
+        ]
+    }
+
+    /// The predictor's u (targets s∘λ) and `Σ_k s_kλ_k`.
+    #[inline(always)]
+    fn predictor_u(&self, eps: f64, c: f64) -> (f64, f64) {
+        let rc = self.products();
         let (_, u) = self.rhs(c, rc, self.rp(eps));
         (u, rc[0] + rc[1] + rc[2])
     }
@@ -224,11 +226,7 @@ impl At {
     /// The predictor's (affine-scaling) targets `s∘λ` and its `(Δs, Δλ)` from `zd_aff`.
     #[inline(always)]
     fn affine(&self, eps: f64, c: f64, zd_aff: f64) -> ([f64; 3], [f64; 3], [f64; 3]) {
-        let rc = [
-            self.s[0] * self.l[0],
-            self.s[1] * self.l[1],
-            self.s[2] * self.l[2],
-        ];
+        let rc = self.products();
         let rp = self.rp(eps);
         let (rhs, _) = self.rhs(c, rc, rp);
         let (_, ds, dl) = self.step(rc, rp, rhs, zd_aff);
@@ -240,6 +238,22 @@ impl At {
     fn corrector_targets(&self, eps: f64, c: f64, zd_aff: f64, target: f64) -> [f64; 3] {
         let (rc, ds, dl) = self.affine(eps, c, zd_aff);
         std::array::from_fn(|k| rc[k] + ds[k] * dl[k] - target)
+    }
+
+    /// The corrector's `(Δξ, Δs, Δλ)` from `zd = zᵢΔγ` (its targets recomputed from `zd_aff`).
+    #[inline(always)]
+    fn corrector(
+        &self,
+        eps: f64,
+        c: f64,
+        zd_aff: f64,
+        target: f64,
+        zd: f64,
+    ) -> (f64, [f64; 3], [f64; 3]) {
+        let rc = self.corrector_targets(eps, c, zd_aff, target);
+        let rp = self.rp(eps);
+        let (rhs, _) = self.rhs(c, rc, rp);
+        self.step(rc, rp, rhs, zd)
     }
 }
 
@@ -531,10 +545,7 @@ fn corrector_ratios(
         let (b0, b1, b2) = (&mut b0[..len], &mut b1[..len], &mut b2[..len]);
         for t in 0..len {
             let at = vs.at(t);
-            let rc = at.corrector_targets(eps, c, za[t], target);
-            let rp = at.rp(eps);
-            let (rhs, _) = at.rhs(c, rc, rp);
-            let (_, ds, dl) = at.step(rc, rp, rhs, zc[t]);
+            let (_, ds, dl) = at.corrector(eps, c, za[t], target, zc[t]);
             let ratio: [f64; 3] = std::array::from_fn(|k| -ds[k] * at.inv_s[k]);
             b0[t] = big(big(ratio[0], ratio[1]), ratio[2]);
             // The largest −Δλ_k/λ_k of the three as a fraction (λ > 0).
@@ -623,10 +634,7 @@ fn step_samples(
                 a_inv: a_inv[t],
                 b: b[t],
             };
-            let rc = at.corrector_targets(eps, c, za[t], target);
-            let rp = at.rp(eps);
-            let (rhs, _) = at.rhs(c, rc, rp);
-            let (dxi, ds, dl) = at.step(rc, rp, rhs, zc[t]);
+            let (dxi, ds, dl) = at.corrector(eps, c, za[t], target, zc[t]);
             let sn: [f64; 3] = std::array::from_fn(|k| at.s[k] + alpha * ds[k]);
             let ln: [f64; 3] = std::array::from_fn(|k| at.l[k] + alpha * dl[k]);
             let (xn, rn) = (at.xi + alpha * dxi, at.r - alpha * zc[t]);
@@ -679,25 +687,6 @@ impl State<'_> {
         t
     }
 
-    /// The columns of Z.
-    fn cols(&self) -> Vec<&[f64]> {
-        (0..self.pb.q()).map(|j| col(&self.pb.z, j)).collect()
-    }
-
-    /// Mean complementarity `sᵀλ / m` of the starting point (the passes return their own).
-    fn complementarity(&self) -> f64 {
-        let sum: f64 = (0..3)
-            .map(|k| {
-                self.s[k]
-                    .iter()
-                    .zip(&self.l[k])
-                    .map(|(a, b)| a * b)
-                    .sum::<f64>()
-            })
-            .sum();
-        (sum + self.bounds_complementarity()) / self.count
-    }
-
     /// Scalings, the predictor's u and the bounds' primal residuals; returns the mean
     /// complementarity.
     #[inline(always)]
@@ -745,7 +734,7 @@ impl State<'_> {
     #[inline(always)]
     fn factor(&self) -> Option<faer::Mat<f64>> {
         let (n, q) = (self.pb.n, self.pb.q());
-        let up = kernels::cross_products(&self.cols(), n, Some(&self.root_d));
+        let up = kernels::cross_products(&self.cols, n, Some(&self.root_d));
         let h = faer::Mat::<f64>::from_fn(q, q, |i, j| {
             if self.fixed[i] || self.fixed[j] {
                 // A fixed coordinate does not move: its row and column are the identity.
@@ -776,7 +765,7 @@ impl State<'_> {
         out: &mut Direction,
     ) -> (f64, f64) {
         let q = self.pb.q();
-        let ztu = kernels::transposed_product(&self.cols(), &self.u);
+        let ztu = kernels::transposed_product(&self.cols, &self.u);
         for j in 0..q {
             out.dg[j] = if self.fixed[j] {
                 0.0
@@ -797,7 +786,7 @@ impl State<'_> {
                 out.dg[j] = 0.0;
             }
         }
-        kernels::combination(&self.cols(), &out.dg, &mut out.zd);
+        kernels::combination(&self.cols, &out.dg, &mut out.zd);
         let (mut worst, mut worst_d) = (0.0f64, 0.0f64);
         for side in 0..2 {
             for j in 0..q {
@@ -1019,6 +1008,7 @@ fn solve_generic(
         hi,
         has: [has_lo, has_hi],
         fixed,
+        cols: (0..q).map(|j| col(&pb.z, j)).collect(),
         gamma,
         xi,
         r,
@@ -1034,7 +1024,6 @@ fn solve_generic(
         u: zeros(),
         count,
     };
-    let mu0 = st.complementarity();
     let mut aff = Direction::new(n, q);
     let mut cor = Direction::new(n, q);
     let mut rc_b: [Vec<f64>; 2] = [vec![0.0; q], vec![0.0; q]];
@@ -1047,6 +1036,7 @@ fn solve_generic(
         f: f64::INFINITY,
     };
     let mut mu = st.prepare();
+    let mu0 = mu;
     for it in 1..=MAX_ITERATIONS {
         let Some(chol) = st.factor() else {
             break;
@@ -1060,11 +1050,12 @@ fn solve_generic(
         let (wb, wbd) = st.coefficient_direction(&chol, &rc_b, &mut aff);
         let summary = affine_samples(samples!(st), eps, c, &aff.zd);
         let inv = |w: f64| if w > 0.0 { 1.0 / w } else { f64::INFINITY };
-        aff.step_max = inv(summary.worst.max(wb));
-        aff.step_max_dual = inv(summary.worst_dual.max(wbd));
+        // The largest steps that keep the slacks and the multipliers positive.
+        let (step_max, step_max_dual) =
+            (inv(summary.worst.max(wb)), inv(summary.worst_dual.max(wbd)));
         // One step length for slacks and multipliers (separate ones made no difference
         // on the benchmark designs, and one keeps the dual residual of γ linear).
-        let alpha_aff = aff.step_max.min(aff.step_max_dual).min(1.0);
+        let alpha_aff = step_max.min(step_max_dual).min(1.0);
         let [p0, p1, p2] = summary.poly;
         let mu_aff = (p0
             + alpha_aff * (p1 + alpha_aff * p2)
@@ -1081,9 +1072,7 @@ fn solve_generic(
         corrector_rhs_samples(samples!(st), eps, c, &aff.zd, target, &mut st.u);
         let (wb, wbd) = st.coefficient_direction(&chol, &rc_b, &mut cor);
         let (ws, wd) = corrector_ratios(samples!(st), eps, c, &aff.zd, target, &cor.zd);
-        cor.step_max = inv(ws.max(wb));
-        cor.step_max_dual = inv(wd.max(wbd));
-        let alpha = (STEP_FRACTION * cor.step_max.min(cor.step_max_dual)).min(1.0);
+        let alpha = (STEP_FRACTION * inv(ws.max(wb)).min(inv(wd.max(wbd)))).min(1.0);
         if !(alpha > 0.0 && alpha.is_finite()) {
             break;
         }
