@@ -8,7 +8,7 @@
 //! only needs λ_min, λ_max and one eigenvector, which this does in a few µs with the same
 //! backward stability (eigenvalues of the tridiagonal matrix to about ε‖G‖).
 
-/// Relative width at which eigenvalue bisection stops: the callers need κ = √(λ_max/λ_min)
+/// Relative width of the bracket at which the extreme-eigenvalue search stops: the callers need κ = √(λ_max/λ_min)
 /// to 1e-6 relative (what [`crate::fit`]'s condition number promises against the SVD), and
 /// the eigenvalues of the Gram carry a rounding error of ε‖G‖ anyway; 1e-10 leaves four
 /// orders of margin.
@@ -347,8 +347,8 @@ mod tests {
             let (lo, hi) = (ev[0], ev[k - 1]);
             let t = Tridiagonal::new(&a, k);
             let (emin, emax) = t.extremes();
-            // Both are backward stable (eigenvalues to a few ε‖A‖), and the bisection stops
-            // at a relative width of RELATIVE_WIDTH.
+            // Both are backward stable (eigenvalues to a few ε‖A‖), and the search stops at a
+            // relative bracket width of RELATIVE_WIDTH.
             let tol = |v: f64| 1e3 * f64::EPSILON * hi.abs() + RELATIVE_WIDTH * v.abs();
             assert!((emin - lo).abs() <= tol(lo), "k={k}: {emin:e} vs {lo:e}");
             assert!((emax - hi).abs() <= tol(hi), "k={k}: {emax:e} vs {hi:e}");
@@ -418,7 +418,7 @@ mod tests {
 
     #[test]
     fn wide_spectrum_of_an_ill_conditioned_gram() {
-        // κ(G) = 1e10, the direct path's limit, and a negative-definite shift of it.
+        // κ(G) = 1e10, the direct path's limit, and the same spectrum shifted by −0.5 (indefinite).
         let lambda: Vec<f64> = (0..22)
             .map(|i| 10f64.powf(-10.0 + i as f64 * 10.0 / 21.0))
             .collect();

@@ -565,6 +565,14 @@ fn certified(gap: f64, f: f64) -> bool {
     gap.is_finite() && f.is_finite() && gap <= GAP_TOLERANCE * f
 }
 
+/// An exact-finish candidate is taken when its true objective is no worse than that of the
+/// iterate it came from (`f`), up to rounding: the finish solves the KKT system of guessed sets,
+/// and a wrong guess would show as a higher objective.
+fn no_worse(pb: &Data, candidate: &[f64], f: f64, c: f64, eps: f64) -> bool {
+    let r = residual(&pb.z, &pb.y, candidate);
+    ipm::primal(candidate, &r, &pb.w, c, eps) <= f * (1.0 + 1e-12) + f64::MIN_POSITIVE
+}
+
 /// The sets read off a smoothed solution: its band samples are the candidate margin set.
 fn sides_from_band(r: &[f64], eps: f64, mu: f64) -> Vec<Side> {
     r.iter()
@@ -817,12 +825,11 @@ pub(crate) fn solve(
     let mut finished: Option<Vec<f64>> = None;
     let out = ipm::solve(pb, c, eps, lo, hi, scale, |it| {
         let sides = sides_from_multipliers(&it.theta, &it.r, &pb.w, c);
-        if let Some(cand) = exact_finish(&s0, &it.gamma, sides, lo, hi, scale, IPM_FINISH_ROUNDS) {
-            let rc = residual(&pb.z, &pb.y, &cand);
-            if ipm::primal(&cand, &rc, &pb.w, c, eps) <= it.f * (1.0 + 1e-12) + f64::MIN_POSITIVE {
-                finished = Some(cand);
-                return true;
-            }
+        if let Some(cand) = exact_finish(&s0, &it.gamma, sides, lo, hi, scale, IPM_FINISH_ROUNDS)
+            && no_worse(pb, &cand, it.f, c, eps)
+        {
+            finished = Some(cand);
+            return true;
         }
         certified(it.gap, it.f)
     });
@@ -880,16 +887,13 @@ fn continuation(
         let sides = sides_from_band(&r, eps, mu);
         if let Some(candidate) =
             exact_finish(&s, &gamma, sides, lo, hi, scale, max_finish_rounds(q))
+            && no_worse(pb, &candidate, f_true, c, eps)
         {
-            let rc = residual(&pb.z, &pb.y, &candidate);
-            let fc = ipm::primal(&candidate, &rc, &pb.w, c, eps);
-            if fc <= f_true * (1.0 + 1e-12) + f64::MIN_POSITIVE {
-                return Solution {
-                    gamma: candidate,
-                    status: Status::Ok,
-                    iterations,
-                };
-            }
+            return Solution {
+                gamma: candidate,
+                status: Status::Ok,
+                iterations,
+            };
         }
         // F(γ) − F* ≤ [F(γ) − F_μ(γ)] + [F_μ(γ) − min F_μ], the latter at most the decrement.
         if certified((f_true - f_smooth) + decrement, f_true) {
