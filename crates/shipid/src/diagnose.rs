@@ -535,15 +535,13 @@ fn fit_families(
         lo.extend(l);
         hi.extend(h);
     }
-    // Starts: the product of each family's starts is small (wind has 36, the others 1–2).
-    let mut starts: Vec<Vec<f64>> = vec![vec![]];
+    // Starts: the warm ones of the right length, else the product of each family's starts (small:
+    // wind has 36, the others 1–2).
     let k: usize = dims.iter().sum();
-    let warm: Vec<&Vec<f64>> = warm.iter().filter(|w| w.len() == k).collect();
-    if !warm.is_empty() {
-        starts = warm.into_iter().cloned().collect();
-    } else {
-        for f in families {
-            starts = starts
+    let warm: Vec<Vec<f64>> = warm.iter().filter(|w| w.len() == k).cloned().collect();
+    let starts: Vec<Vec<f64>> = if warm.is_empty() {
+        families.iter().fold(vec![vec![]], |starts, f| {
+            starts
                 .iter()
                 .flat_map(|s| {
                     f.starts().into_iter().map(move |t| {
@@ -552,9 +550,11 @@ fn fit_families(
                         u
                     })
                 })
-                .collect();
-        }
-    }
+                .collect()
+        })
+    } else {
+        warm
+    };
     let objective = |p: &[f64]| {
         let c = Composite {
             base,
@@ -1052,10 +1052,6 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
         .par_iter()
         .map(|&f| (f, judge.cross(&[f])))
         .collect();
-    // The parameters fitted to the two folds, per assessed candidate (warm starts of its final fit).
-    let mut fold_params: Vec<Vec<Vec<f64>>> = single.iter().map(|(_, (_, p))| p.clone()).collect();
-    let single: Vec<(Family, Vec<ReplayScore>)> =
-        single.into_iter().map(|(f, (s, _))| (f, s)).collect();
     // Typical per-recording change: the geometric mean of after/before over recordings, so that one
     // recording the base model already fits badly (or where a segment runs away) cannot decide alone.
     let typical_ratio = |idx: &[usize], scores: &[ReplayScore]| {
@@ -1094,13 +1090,15 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
             accepted,
         }
     };
-    let mut assessed: Vec<(Vec<Family>, Assessed, Vec<ReplayScore>)> = single
-        .iter()
-        .map(|(f, s)| (vec![*f], assess(f.label().into(), f.dim(), s), s.clone()))
+    // Each candidate with its assessment and its cross fit (held-out scores, and the fold fits that
+    // warm start its final fit).
+    let mut assessed: Vec<(Vec<Family>, Assessed, CrossFit)> = single
+        .into_iter()
+        .map(|(f, cross)| (vec![f], assess(f.label().into(), f.dim(), &cross.0), cross))
         .collect();
     let rank = |a: &Assessed| a.score;
     // The accepted candidate with the highest score.
-    let best_accepted = |assessed: &[(Vec<Family>, Assessed, Vec<ReplayScore>)]| {
+    let best_accepted = |assessed: &[(Vec<Family>, Assessed, CrossFit)]| {
         assessed
             .iter()
             .enumerate()
@@ -1151,14 +1149,13 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
                 (fams, s)
             })
             .collect();
-        for (fams, (s, params)) in pairs {
-            fold_params.push(params);
+        for (fams, cross) in pairs {
             let name = fams.iter().map(|f| f.label()).collect::<Vec<_>>().join("+");
             let k = fams.iter().map(|f| f.dim()).sum();
-            let mut a = assess(name, k, &s);
+            let mut a = assess(name, k, &cross.0);
             // A pair must beat the single effect clearly, on the held-out recordings.
             a.accepted = a.accepted && a.after_l < 0.7 * after_l;
-            assessed.push((fams, a, s));
+            assessed.push((fams, a, cross));
         }
         best = best_accepted(&assessed);
     }
@@ -1167,8 +1164,7 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
     // Warm started from the two fold fits: the grid of starts was searched there already.
     let finals: Vec<(Vec<Effect>, FitResult)> = assessed
         .par_iter()
-        .zip(&fold_params)
-        .map(|((fams, _, _), warm)| {
+        .map(|(fams, _, (_, warm))| {
             fit_families(base, input.base_effects, fams, &prep, &all, &scale, warm)
         })
         .collect();
@@ -1201,7 +1197,7 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
 
     let (verdict, effects, std_errors, after_scores, explanation) = match best {
         Some(b) => {
-            let (fams, a, s) = &assessed[b];
+            let (fams, a, (s, _)) = &assessed[b];
             let (effects, fit) = &finals[b];
             let std_errors = standard_errors(fams, effects, fit, &ship);
             (

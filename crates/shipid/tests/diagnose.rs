@@ -40,14 +40,16 @@ fn identified() -> (AbkowitzDynamics, f64) {
     (model, level)
 }
 
+/// The diagnosis of the default manoeuvres generated with the concealed `effects` and noise of
+/// `seed` (noise-free without one).
 fn diagnose_concealed(
     base: &(dyn Dynamics + Send + Sync),
     level: Option<f64>,
-    effect: Option<&str>,
-    seed: u64,
+    effects: &[&str],
+    seed: Option<u64>,
 ) -> Report {
-    let effects: Vec<Effect> = effect.iter().map(|e| e.parse().unwrap()).collect();
-    let ds = to_dataset(generate_with(Some(seed), &effects).unwrap(), "concealed");
+    let effects: Vec<Effect> = effects.iter().map(|e| e.parse().unwrap()).collect();
+    let ds = to_dataset(generate_with(seed, &effects).unwrap(), "concealed");
     diagnose(
         &DiagnoseInput {
             base,
@@ -79,7 +81,7 @@ fn check(report: &Report, word: &str) {
 #[test]
 fn a_current_is_named_and_its_speed_and_direction_recovered() {
     let base = MmgModel::kvlcc2();
-    let r = diagnose_concealed(&base, None, Some("current:speed=0.03,from=120"), 5);
+    let r = diagnose_concealed(&base, None, &["current:speed=0.03,from=120"], Some(5));
     check(&r, "current");
     let Effect::Current(c) = found(&r) else {
         panic!("not a current")
@@ -93,7 +95,7 @@ fn a_current_is_named_and_its_speed_and_direction_recovered() {
 #[test]
 fn shallow_water_is_named_against_the_reference_model() {
     let base = MmgModel::kvlcc2();
-    let r = diagnose_concealed(&base, None, Some("shallow_water:h_over_t=1.5"), 6);
+    let r = diagnose_concealed(&base, None, &["shallow_water:h_over_t=1.5"], Some(6));
     check(&r, "shallow_water");
     let Effect::ShallowWater(s) = found(&r) else {
         panic!("not shallow water")
@@ -104,14 +106,14 @@ fn shallow_water_is_named_against_the_reference_model() {
 #[test]
 fn rudder_lag_and_a_rudder_offset_are_found_against_an_identified_model() {
     let (base, level) = identified();
-    let r = diagnose_concealed(&base, Some(level), Some("rudder_lag:tau=1.6"), 7);
+    let r = diagnose_concealed(&base, Some(level), &["rudder_lag:tau=1.6"], Some(7));
     check(&r, "rudder_lag");
     let Effect::RudderLag(l) = found(&r) else {
         panic!("not a lag")
     };
     // Delay and time constant trade off; their sum is the phase lag a zig-zag sees.
     assert!((l.time_constant_s + l.delay_s - 1.6).abs() < 0.3, "{l:?}");
-    let r = diagnose_concealed(&base, Some(level), Some("asymmetry:offset=-2"), 8);
+    let r = diagnose_concealed(&base, Some(level), &["asymmetry:offset=-2"], Some(8));
     check(&r, "asymmetry");
     let Effect::Asymmetry(a) = found(&r) else {
         panic!("not an asymmetry")
@@ -123,7 +125,7 @@ fn rudder_lag_and_a_rudder_offset_are_found_against_an_identified_model() {
 fn effect_free_recordings_give_none() {
     let (base, level) = identified();
     for seed in [11, 12] {
-        let r = diagnose_concealed(&base, Some(level), None, seed);
+        let r = diagnose_concealed(&base, Some(level), &[], Some(seed));
         assert_eq!(r.verdict, "none", "seed {seed}: {}", r.explanation);
         assert!(r.effects.is_empty());
     }
@@ -134,22 +136,12 @@ fn effect_free_recordings_give_none() {
 /// accepted single effect.
 #[test]
 fn a_current_with_a_wind_is_found_as_a_pair() {
-    let base = MmgModel::kvlcc2();
-    let effects: Vec<Effect> = ["current:speed=0.02,from=45", "wind:speed=4.5,from=300"]
-        .iter()
-        .map(|e| e.parse().unwrap())
-        .collect();
-    let ds = to_dataset(generate_with(Some(1), &effects).unwrap(), "two effects");
-    let r = diagnose(
-        &DiagnoseInput {
-            base: &base,
-            base_effects: &[],
-            model_level_over_l: None,
-        },
-        &ds,
-        &DiagnoseOptions::default(),
-    )
-    .unwrap();
+    let r = diagnose_concealed(
+        &MmgModel::kvlcc2(),
+        None,
+        &["current:speed=0.02,from=45", "wind:speed=4.5,from=300"],
+        Some(1),
+    );
     let kinds: Vec<&str> = r
         .effects
         .iter()
@@ -174,17 +166,7 @@ fn a_current_with_a_wind_is_found_as_a_pair() {
 /// verdict was `unexplained`.
 #[test]
 fn the_reference_replays_its_own_noise_free_recordings_exactly_and_finds_nothing() {
-    let clean = to_dataset(generate_with(None, &[]).unwrap(), "clean");
-    let report = diagnose(
-        &DiagnoseInput {
-            base: &MmgModel::kvlcc2(),
-            base_effects: &[],
-            model_level_over_l: None,
-        },
-        &clean,
-        &DiagnoseOptions::default(),
-    )
-    .unwrap();
+    let report = diagnose_concealed(&MmgModel::kvlcc2(), None, &[], None);
     assert!(
         report.fit_before.position_rmse_over_l < 1e-3,
         "{}",
