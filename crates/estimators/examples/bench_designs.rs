@@ -1,7 +1,7 @@
 //! Times `Solver::Fast` (and optionally `Solver::Qp`) of one estimator on the designs
 //! exported by `fit_bench --export DIR` (bench/designs), without the polars-heavy shipid
 //! crate: a quick loop for solver work. Prints one line per design: the fastest of the
-//! repeats (ms; the least disturbed one on a shared machine), iterations, objective,
+//! repeats (ms; the least disturbed one on a shared machine) and their median, iterations, objective,
 //! condition number and status, and with `--qp` the relative objective difference to the
 //! QP. CASE is svr (default), ridge, lasso or lsq, unbounded. The figures of record come
 //! from `bench/run.sh`.
@@ -109,11 +109,21 @@ fn run() -> Result<(), String> {
             .collect();
         times.sort_by(f64::total_cmp);
         let best = times.first().copied().unwrap_or(f64::NAN);
+        let median = times.get(times.len() / 2).copied().unwrap_or(f64::NAN);
+        if std::env::var_os("DECILES").is_some() {
+            eprintln!(
+                "{:?}",
+                (0..=10)
+                    .map(|k| (times[(k * (times.len() - 1)) / 10] * 1e6).round())
+                    .collect::<Vec<_>>()
+            );
+        }
         total += best;
         let mut line = format!(
-            "{:28} n={n:5} p={q:2} fast {:8.3} ms it={:4} J={:.12e} κ={:.1e} {:?}",
+            "{:28} n={n:5} p={q:2} fast {:8.3} ms (median {:8.3}) it={:4} J={:.12e} κ={:.1e} {:?}",
             s("id"),
             best * 1e3,
+            median * 1e3,
             first.iterations,
             first.objective,
             first.condition_number.unwrap_or(f64::NAN),

@@ -1,5 +1,5 @@
 //! The direct path of `Solver::Fast` for LSQ and bounded LSQ on well-conditioned designs:
-//! three passes over the raw design Φ and O(p³) work on p × p matrices, with no scaled copy
+//! two passes over the raw design Φ and O(p³) work on p × p matrices, with no scaled copy
 //! of Φ.
 //!
 //! 1. One fused pass forms the cross products of `[Φ y]`. Their diagonal holds the column
@@ -13,11 +13,13 @@
 //!    general path's own limit for the semi-normal equations, and when G has a Cholesky
 //!    factor.
 //! 4. Corrected semi-normal equations (Björck 1987): `Gγ₁ = b`, then one refinement step
-//!    on the explicit residual (second pass: `r = y − Φβ₁` and `Φᵀr` together), which
-//!    squares the κ²ε error of the normal equations away.
-//! 5. Third pass: the explicit final residual for J = ‖y − Φβ‖²/2n and, when κ(Z) is above
-//!    1e4 (where the Gram eigenvalue alone is not accurate to 1e-6), the Rayleigh quotient
-//!    `‖Zv‖²/n` of the smallest eigenvector, as in [`crate::fit`]'s condition number.
+//!    on the explicit residual (second pass: `r₁ = y − Φβ₁` with `Φᵀr₁` and `‖r₁‖²`),
+//!    which squares the κ²ε error of the normal equations away. When κ(Z) is above 1e4
+//!    (where the Gram eigenvalue alone is not accurate to 1e-6) the same pass gives the
+//!    Rayleigh quotient `‖Zv‖²/n` of the smallest eigenvector, as in [`crate::fit`]'s
+//!    condition number.
+//! 5. J = ‖y − Φβ‖²/2n follows from `‖r₁‖²` and the step ([`residual_after_step`]); a
+//!    third pass evaluates it explicitly only when the step is not small against it.
 //!
 //! Anything else — zero columns, n ≤ p, values whose squares leave the safe range, worse
 //! conditioning, a solution on or outside a bound — returns `None`, and the caller runs
@@ -101,7 +103,15 @@ pub(crate) fn try_lsq(
     let mut gamma = b;
     cholesky_solve(&l, &mut gamma);
     let beta1: Vec<f64> = gamma.iter().zip(&scales).map(|(x, s)| x / s).collect();
-    let grad = kernels::gradient(phi, y, &beta1);
+    // ‖Zv‖²/n on Z itself is accurate to about (ε κ(G))² relative, the Gram's λ_min only
+    // to ε κ(G); v does not depend on β, so the refinement pass computes it on the way.
+    let rayleigh_vector: Option<Vec<f64>> = if emin > emax / GRAM_EIGENVALUES_SUFFICE {
+        None
+    } else {
+        let v = tri.eigenvector(emin)?;
+        Some(v.iter().zip(&scales).map(|(x, s)| x / s).collect())
+    };
+    let (grad, rr1, uu) = kernels::refinement(phi, y, &beta1, rayleigh_vector.as_deref());
     // Zᵀr/n = S⁻¹Φᵀr/n.
     let mut dx: Vec<f64> = grad
         .iter()
@@ -131,17 +141,11 @@ pub(crate) fn try_lsq(
         }
     }
     let beta: Vec<f64> = gamma.iter().zip(&scales).map(|(x, s)| x / s).collect();
-
-    let (rr, kappa) = if emin > emax / GRAM_EIGENVALUES_SUFFICE {
-        let (rr, _) = kernels::residual_norms(phi, y, &beta, None);
-        (rr, (emax / emin).sqrt())
-    } else {
-        // ‖Zv‖²/n on Z itself is accurate to about (ε κ(G))² relative, the Gram's λ_min
-        // only to ε κ(G).
-        let v = tri.eigenvector(emin)?;
-        let w: Vec<f64> = v.iter().zip(&scales).map(|(x, s)| x / s).collect();
-        let (rr, uu) = kernels::residual_norms(phi, y, &beta, Some(&w));
-        (rr, (emax / (uu / nf)).sqrt())
+    let rr = residual_after_step(&cross, m, &grad, rr1, &beta1, &beta)
+        .unwrap_or_else(|| kernels::residual_norms(phi, y, &beta, None).0);
+    let kappa = match rayleigh_vector {
+        None => (emax / emin).sqrt(),
+        Some(_) => (emax / (uu / nf)).sqrt(),
     };
     Some(Ok(Fit {
         coefficients: beta,
@@ -153,4 +157,34 @@ pub(crate) fn try_lsq(
         condition_number: Some(kappa),
         zero_columns: Vec::new(),
     }))
+}
+
+/// `‖y − Φβ‖²` from the refinement pass's `‖r₁‖²` and `g = Φᵀr₁` at `β₁`, without another
+/// pass over Φ: with `d = β − β₁` (an exact difference, the two being close),
+/// `‖r₁ − Φd‖² = ‖r₁‖² − 2dᵀg + dᵀ(ΦᵀΦ)d`, the cross products `ΦᵀΦ` being the upper
+/// triangle of the first pass's `cross` (row length `m`). Accurate to rounding when the
+/// step's change is small against ‖r₁‖² — the semi-normal equations' point — and `None`
+/// otherwise (e.g. a noise-free fit whose residual is all rounding), when the caller
+/// evaluates the residual explicitly.
+fn residual_after_step(
+    cross: &[f64],
+    m: usize,
+    grad: &[f64],
+    rr1: f64,
+    beta1: &[f64],
+    beta: &[f64],
+) -> Option<f64> {
+    let p = beta.len();
+    let d: Vec<f64> = beta.iter().zip(beta1).map(|(b, b1)| b - b1).collect();
+    let mut quad = 0.0;
+    for i in 0..p {
+        let mut row = 0.5 * cross[i * m + i] * d[i];
+        for j in i + 1..p {
+            row += cross[i * m + j] * d[j];
+        }
+        quad += 2.0 * d[i] * row;
+    }
+    let lin: f64 = d.iter().zip(grad).map(|(a, g)| a * g).sum();
+    let change = quad - 2.0 * lin;
+    (change.abs() <= 1e-3 * rr1 && rr1.is_finite()).then_some(rr1 + change)
 }

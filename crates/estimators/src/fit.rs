@@ -49,8 +49,8 @@ pub fn fit(
     }
     let mut f = fit_problem(&pb, estimator, bounds, solver)?;
     if !matches!(estimator, Estimator::Svr { .. }) {
-        // The same evaluation as `objective()`, so that the two agree to the last bit
-        // whichever path produced the fit.
+        // The same evaluation as `objective()`, so that the two agree to the last bit on
+        // this path (the direct path's J agrees to rounding).
         f.objective = ls_objective(design, y, estimator, &f.coefficients, &pb.scales);
     }
     Ok(f)

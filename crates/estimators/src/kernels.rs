@@ -1,7 +1,8 @@
 //! Fused passes over the columns of a raw design for the direct least-squares path
 //! ([`crate::direct`]): the cross-product matrix of `[Φ y]` in one pass, and the residual
-//! `y − Φβ` with `Φᵀr` or `‖r‖²` (plus `‖Φv‖²`) in another; and the products `Φᵀv`, `Φv`
-//! of the SVR interior point's iterations.
+//! `y − Φβ` with `Φᵀr` and `‖r‖²` (plus `‖Φv‖²`) in another; `‖y − Φβ‖²` for
+//! [`crate::fit`]'s objective; and the products `Φᵀv`, `Φv` of the SVR interior point's
+//! iterations.
 //!
 //! At the shapes of the Abkowitz designs (n ≈ 1e3–1e4, p ≤ 22) faer's general matrix
 //! product packs both operands and its matrix-vector products visit Φ once per product;
@@ -159,8 +160,8 @@ fn residual_at(cols: &[&[f64]], y: &[f64], beta: &[f64], i: usize) -> f64 {
 fn transposed_generic<const L: usize, const U: usize, const FMA: bool>(
     cols: &[&[f64]],
     n: usize,
-    chunk: impl Fn(usize) -> [[f64; L]; U],
-    at: impl Fn(usize) -> f64,
+    mut chunk: impl FnMut(usize) -> [[f64; L]; U],
+    mut at: impl FnMut(usize) -> f64,
 ) -> Vec<f64> {
     let rows = L * U;
     let full = n - n % rows;
@@ -193,19 +194,48 @@ fn transposed_generic<const L: usize, const U: usize, const FMA: bool>(
     out
 }
 
-/// `Φᵀ(y − Φβ)`.
+/// `(Φᵀr, ‖r‖², ‖Φw‖²)` for `r = y − Φβ`, the last only when `w` is given: the direct
+/// path's refinement pass, which also yields what its objective and condition number need.
 #[inline(always)]
-fn gradient_generic<const L: usize, const U: usize, const FMA: bool>(
+fn refinement_generic<const L: usize, const U: usize, const FMA: bool>(
     cols: &[&[f64]],
     y: &[f64],
     beta: &[f64],
-) -> Vec<f64> {
-    transposed_generic::<L, U, FMA>(
+    w: Option<&[f64]>,
+) -> (Vec<f64>, f64, f64) {
+    let (mut rr, mut uu) = ([0.0f64; L], [0.0f64; L]);
+    let (mut rr_tail, mut uu_tail) = (0.0, 0.0);
+    let grad = transposed_generic::<L, U, FMA>(
         cols,
         y.len(),
-        |r0| residual_chunk::<L, U, FMA>(cols, y, beta, r0),
-        |i| residual_at(cols, y, beta, i),
-    )
+        |r0| {
+            let r = residual_chunk::<L, U, FMA>(cols, y, beta, r0);
+            for ru in &r {
+                for l in 0..L {
+                    rr[l] = madd::<FMA>(ru[l], ru[l], rr[l]);
+                }
+            }
+            if let Some(w) = w {
+                for uv in &combination_chunk::<L, U, FMA>(cols, w, r0) {
+                    for l in 0..L {
+                        uu[l] = madd::<FMA>(uv[l], uv[l], uu[l]);
+                    }
+                }
+            }
+            r
+        },
+        |i| {
+            let r = residual_at(cols, y, beta, i);
+            rr_tail += r * r;
+            if let Some(w) = w {
+                let u: f64 = cols.iter().zip(w).map(|(c, b)| b * c[i]).sum();
+                uu_tail += u * u;
+            }
+            r
+        },
+    );
+    let sum = |a: [f64; L]| a.iter().fold(0.0, |s, v| s + v);
+    (grad, sum(rr) + rr_tail, sum(uu) + uu_tail)
 }
 
 /// `Φᵀv`.
@@ -329,8 +359,9 @@ dispatch!(
 );
 
 dispatch!(
-    /// `Φᵀ(y − Φβ)` in one pass over Φ.
-    gradient, gradient_generic, (cols: &[&[f64]], y: &[f64], beta: &[f64]) -> Vec<f64>,
+    /// `(Φᵀr, ‖r‖², ‖Φw‖²)` for `r = y − Φβ` in one pass over Φ (the last 0 without `w`).
+    refinement, refinement_generic,
+    (cols: &[&[f64]], y: &[f64], beta: &[f64], w: Option<&[f64]>) -> (Vec<f64>, f64, f64),
     avx512: <8, 4, true>, avx2: <4, 4, true>, base: <2, 2, false>
 );
 

@@ -191,7 +191,9 @@ impl Status {
 pub struct Fit {
     /// Unscaled coefficients β (prime system), one per design column.
     pub coefficients: Vec<f64>,
-    /// The documented objective (see [`Estimator`]) evaluated at `coefficients`.
+    /// The documented objective (see [`Estimator`]) evaluated at `coefficients`: the value
+    /// [`crate::objective`] gives, to the last bit except on the direct LSQ path, which
+    /// updates its refinement step's residual sum of squares algebraically (to rounding).
     pub objective: f64,
     pub status: Status,
     /// Interior-point iterations (`Qp`); active-set iterations, Newton steps or 1 for a
