@@ -110,14 +110,6 @@ fn run() -> Result<(), String> {
         times.sort_by(f64::total_cmp);
         let best = times.first().copied().unwrap_or(f64::NAN);
         let median = times.get(times.len() / 2).copied().unwrap_or(f64::NAN);
-        if std::env::var_os("DECILES").is_some() {
-            eprintln!(
-                "{:?}",
-                (0..=10)
-                    .map(|k| (times[(k * (times.len() - 1)) / 10] * 1e6).round())
-                    .collect::<Vec<_>>()
-            );
-        }
         total += best;
         let mut line = format!(
             "{:28} n={n:5} p={q:2} fast {:8.3} ms (median {:8.3}) it={:4} J={:.12e} κ={:.1e} {:?}",
