@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 use shipid_io::{AddedMass, PrimeScale, Ship};
 
 use crate::design::PrimeInertia;
-use crate::set::{CoefficientSet, Dof, SetError, SetFile};
+use crate::set::{CoefficientSet, Dof, Powers, SetError, SetFile};
 
 /// An Abkowitz model ready to evaluate.
 #[derive(Debug, Clone, PartialEq)]
@@ -81,11 +81,12 @@ impl AbkowitzModel {
 
     /// Hydrodynamic forces f_X, f_Y, f_N (prime) of the polynomial at a primed state.
     pub fn forces_prime(&self, du: f64, v: f64, r: f64, delta: f64) -> [f64; 3] {
+        let powers = Powers::new(du, v, r, delta);
         std::array::from_fn(|d| {
             self.set.terms[d]
                 .iter()
                 .zip(&self.coefficients[d])
-                .map(|(m, b)| b * m.eval(du, v, r, delta))
+                .map(|(m, b)| b * m.eval_powers(&powers))
                 .sum()
         })
     }

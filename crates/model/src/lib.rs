@@ -16,4 +16,4 @@ pub use abkowitz::{
     Refinement, TrainingWindow,
 };
 pub use design::{Design, PrimeInertia, Samples, design};
-pub use set::{CoefficientSet, Dof, Known, Monomial, SetError, SetFile};
+pub use set::{CoefficientSet, Dof, Known, Monomial, Powers, SetError, SetFile};

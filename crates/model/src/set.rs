@@ -116,9 +116,44 @@ impl Monomial {
             * delta.powi(self.delta as i32)
     }
 
+    /// [`Monomial::eval`] from powers tabulated once per state: the same value to the last
+    /// bit, without four `powi` calls per term (which were a fifth of a diagnosis's time).
+    #[inline]
+    pub fn eval_powers(&self, p: &Powers) -> f64 {
+        p.get(0, self.du) * p.get(1, self.v) * p.get(2, self.r) * p.get(3, self.delta)
+    }
+
     /// Parity under (v, r, δ) → (−v, −r, −δ): true when the term changes sign.
     pub fn is_odd(&self) -> bool {
         (self.v + self.r + self.delta) % 2 == 1
+    }
+}
+
+/// Powers 0–3 of (Δu', v', r', δ) at one state, each as `powi` computes it (binary
+/// powering: x³ = x·x², so the products below round exactly as `powi` does); higher
+/// exponents fall back to `powi`.
+#[derive(Debug, Clone, Copy)]
+pub struct Powers {
+    table: [[f64; 4]; 4],
+}
+
+impl Powers {
+    pub fn new(du: f64, v: f64, r: f64, delta: f64) -> Powers {
+        let row = |x: f64| {
+            let x2 = x * x;
+            [1.0, x, x2, x * x2]
+        };
+        Powers {
+            table: [row(du), row(v), row(r), row(delta)],
+        }
+    }
+
+    #[inline]
+    fn get(&self, variable: usize, exponent: u8) -> f64 {
+        match self.table[variable].get(exponent as usize) {
+            Some(&p) => p,
+            None => self.table[variable][1].powi(exponent as i32),
+        }
     }
 }
 
@@ -200,9 +235,10 @@ pub struct SetError {
     pub message: String,
 }
 
-const BUILTIN: [(&str, &str); 3] = [
+const BUILTIN: [(&str, &str); 4] = [
     ("reduced32", include_str!("../sets/reduced32.toml")),
     ("full68", include_str!("../sets/full68.toml")),
+    ("full74", include_str!("../sets/full74.toml")),
     ("chen2021", include_str!("../sets/chen2021.toml")),
 ];
 

@@ -3,8 +3,8 @@
 use proptest::prelude::*;
 use shipid_io::{AddedMass, PrimeScale, Recording, Ship};
 use shipid_model::{
-    AbkowitzModel, CoefficientSet, Dof, EstimatorInfo, ModelFile, Monomial, Samples, SetFile,
-    design,
+    AbkowitzModel, CoefficientSet, Dof, EstimatorInfo, ModelFile, Monomial, Powers, Samples,
+    SetFile, design,
 };
 
 fn kvlcc2() -> (Ship, AddedMass) {
@@ -43,14 +43,21 @@ fn check_count(name: &str, per_dof: [usize; 3], total: usize) {
 #[test]
 fn shipped_sets_have_the_sizes_of_domain_section_3_and_paper_001() {
     check_count("full68", [18, 25, 25], 68);
+    check_count("full74", [18, 28, 28], 74);
     check_count("reduced32", [10, 11, 11], 32);
     check_count("chen2021", [11, 14, 14], 39);
 }
 
 #[test]
 fn sets_respect_port_starboard_symmetry() {
-    // X is even in (v, r, δ); Y and N are odd except the asymmetry constants and their Δu dependence.
+    // X is even in (v, r, δ); Y and N are odd except the asymmetry constants and their Δu dependence,
+    // and the second-order asymmetry terms of the set built for it.
     for name in CoefficientSet::builtin_names() {
+        let declared_even: &[&str] = if name == "full74" {
+            &["vv", "vr", "rr"]
+        } else {
+            &[]
+        };
         let s = CoefficientSet::builtin(name).unwrap();
         assert!(
             s.terms[0].iter().all(|m| !m.is_odd()),
@@ -58,7 +65,10 @@ fn sets_respect_port_starboard_symmetry() {
         );
         for d in [Dof::Y, Dof::N] {
             for m in &s.terms[d.index()] {
-                let asymmetry = m.v + m.r + m.delta == 0;
+                let asymmetry = m.v + m.r + m.delta == 0
+                    || declared_even
+                        .iter()
+                        .any(|t| Monomial::parse(t).unwrap() == *m);
                 assert!(
                     m.is_odd() || asymmetry,
                     "{name}: {} is even",
@@ -151,7 +161,7 @@ proptest! {
     #[test]
     fn targets_invert_the_model_equations(seed in 0u64..50, states in proptest::collection::vec(
         (0.3f64..1.3, -0.3f64..0.3, -0.1f64..0.1, -0.6f64..0.6), 5..30)) {
-        for set in ["full68", "reduced32", "chen2021"] {
+        for set in ["full68", "full74", "reduced32", "chen2021"] {
             let model = model_with(set, seed);
             let (ship, _) = kvlcc2();
             let mut rec = Recording::default();
@@ -208,4 +218,18 @@ fn straight_run_at_u0_is_an_equilibrium_of_any_symmetric_model() {
     let m = model_with("reduced32", 5);
     let a = m.accelerations(1.179, 0.0, 0.0, 0.0);
     assert!(a.iter().all(|x| x.abs() < 1e-15), "{a:?}");
+}
+
+proptest! {
+    /// The tabulated powers give every monomial's value to the last bit (the model's forces,
+    /// and so every simulation, did not change when they replaced `powi`).
+    #[test]
+    fn tabulated_powers_equal_powi_to_the_last_bit(
+        x in proptest::array::uniform4(-2.0f64..2.0),
+        e in proptest::array::uniform4(0u8..6),
+    ) {
+        let m = Monomial { du: e[0], v: e[1], r: e[2], delta: e[3] };
+        let p = Powers::new(x[0], x[1], x[2], x[3]);
+        prop_assert_eq!(m.eval_powers(&p).to_bits(), m.eval(x[0], x[1], x[2], x[3]).to_bits());
+    }
 }
