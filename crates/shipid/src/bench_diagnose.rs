@@ -2,7 +2,7 @@
 //!
 //! Every case simulates the six default manoeuvres with the MMG reference under one concealed effect (or
 //! none: the controls) and towing-tank noise with its own seed, and diagnoses them against a model
-//! identified from the clean default data (full68, LSQ, all six recordings, then refined in the
+//! identified from the clean default data (full74, LSQ, all six recordings, then refined in the
 //! output-error sense as `shipid fit --refine` does; or `--base`). Effects and
 //! magnitudes run from barely-above-noise to strong; directions are drawn per seed. Results:
 //! `cases.csv/.parquet` (one row per case), `confusion.csv/.parquet`, `summary.md`.
@@ -240,7 +240,7 @@ pub fn run(
                 let names: Vec<String> = clean.recordings.iter().map(|r| r.file.clone()).collect();
                 let fit = fit_dataset(
                     &clean,
-                    load_set("full68")?,
+                    load_set("full74")?,
                     &EstimatorSpec {
                         refine: true,
                         ..EstimatorSpec::named("lsq")
@@ -252,7 +252,7 @@ pub fn run(
                 (
                     Box::new(AbkowitzDynamics(fit.model)),
                     Vec::new(),
-                    "full68 LSQ fitted on the six clean default recordings, refined in the output-error sense (`shipid fit --refine`)".into(),
+                    "full74 LSQ fitted on the six clean default recordings, refined in the output-error sense (`shipid fit --refine`)".into(),
                 )
             }
         };

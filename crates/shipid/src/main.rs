@@ -49,7 +49,7 @@ enum Command {
     /// Identify an Abkowitz model from a data set.
     Fit {
         dataset: PathBuf,
-        /// reduced32, full68, chen2021 or a set file.
+        /// reduced32, full68, full74 (full68 + port/starboard asymmetry), chen2021 or a set file.
         #[arg(long, default_value = "reduced32")]
         set: String,
         /// lsq, bounded-lsq, ridge, lasso, svr, or sparse-gp (paper 001; --set does not apply).
