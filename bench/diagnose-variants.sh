@@ -4,16 +4,17 @@
 # README's table "Other implementations of the effects, and two effects at once".
 #
 #   bench/diagnose-variants.sh [BASE]     BASE: a model file or mmg:kvlcc2
-#                                         (default results/kvlcc2-mmg-full68-lsq-refined.toml, made by
-#                                         `shipid fit data/kvlcc2-mmg/dataset.toml --set full68
-#                                         --estimator lsq --refine --out <that file>`)
+#                                         (default results/kvlcc2-mmg-full74-lsq-refined.toml, made by
+#                                         `shipid fit data/kvlcc2-mmg/dataset.toml --set full74
+#                                         --estimator lsq --refine --out <that file>`, the base of
+#                                         `shipid bench-diagnose`)
 #
 # Prints one markdown row per case: concealed effects | noise seed | verdict | found | before → after.
 # Needs target/release/shipid (`cargo test --release --workspace --no-run`) and python3.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 S=target/release/shipid
-B=${1:-results/kvlcc2-mmg-full68-lsq-refined.toml}
+B=${1:-results/kvlcc2-mmg-full74-lsq-refined.toml}
 WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT
 
