@@ -35,6 +35,38 @@ fn lsq_recovers_coefficients_from_noise_free_data() {
     }
 }
 
+/// The direct path takes J from its refinement pass and the step instead of a final pass
+/// over Φ. On a noise-free fit ‖r₁‖² is mostly the first solve's error, which the step
+/// removes (without the step's correction the reduced design reports 5e-32 for 2e-35), and
+/// the path falls back to the explicit residual when the step is not small. Either way J is
+/// J at the coefficients, to the
+/// accuracy with which J can be evaluated at all: each residual carries a rounding error of
+/// about ε‖y‖/√n, so J = ‖r‖²/2n is known to about ε‖y‖‖r‖/n (relative 3e-9 at a noise of
+/// 1e-9, far above 1e-12).
+#[test]
+fn direct_lsq_objective_is_the_residual_at_its_coefficients_with_and_without_noise() {
+    for (name, phi, p) in [
+        ("reduced", reduced_design(1500), 9),
+        ("full", full_design(4000), 22),
+    ] {
+        let beta = sway_like_coefficients(p);
+        for noise in [0.0, 1e-9, 1e-3] {
+            let y = target(&phi, &beta, noise, 3);
+            let f = fit(phi.as_ref(), &y, &Estimator::Lsq, None, Solver::Fast).unwrap();
+            let j = objective(phi.as_ref(), &y, &Estimator::Lsq, &f.coefficients).unwrap();
+            let n = y.len() as f64;
+            let y_norm = y.iter().map(|v| v * v).sum::<f64>().sqrt();
+            let r_norm = (2.0 * n * j).sqrt();
+            let evaluation_error = 16.0 * f64::EPSILON * y_norm * r_norm / n;
+            assert!(
+                (f.objective - j).abs() <= evaluation_error.max(1e-12 * j),
+                "{name} noise {noise:e}: reported {:e}, at the coefficients {j:e} (evaluation error {evaluation_error:e})",
+                f.objective
+            );
+        }
+    }
+}
+
 #[test]
 fn lsq_recovers_coefficients_of_the_full_set() {
     let phi = full_design(4000);
