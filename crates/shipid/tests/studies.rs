@@ -48,7 +48,7 @@ fn bad_study_files_name_the_file_and_key() {
     );
     check_bad(
         "unknown_set.toml",
-        ": key `sets[0]`: unknown coefficient set `reduced33` (not one of reduced32, full68, chen2021 and no such file)",
+        ": key `sets[0]`: unknown coefficient set `reduced33` (not one of reduced32, full68, full74, chen2021 and no such file)",
     );
     check_bad(
         "missing_dataset.toml",
