@@ -142,7 +142,7 @@ pub(crate) fn try_lsq(
     }
     let beta: Vec<f64> = gamma.iter().zip(&scales).map(|(x, s)| x / s).collect();
     let rr = residual_after_step(&cross, m, &grad, rr1, &beta1, &beta)
-        .unwrap_or_else(|| kernels::residual_norms(phi, y, &beta, None).0);
+        .unwrap_or_else(|| kernels::residual_norm(phi, y, &beta));
     let kappa = match rayleigh_vector {
         None => (emax / emin).sqrt(),
         Some(_) => (emax / (uu / nf)).sqrt(),

@@ -61,8 +61,7 @@ pub(crate) fn half_mse_raw(design: MatRef<'_, f64>, y: &[f64], beta: &[f64]) -> 
     let columns: Vec<std::borrow::Cow<'_, [f64]>> =
         (0..design.ncols()).map(|j| col_of(design, j)).collect();
     let cols: Vec<&[f64]> = columns.iter().map(|c| c.as_ref()).collect();
-    let (rr, _) = kernels::residual_norms(&cols, y, beta, None);
-    0.5 * rr / y.len() as f64
+    0.5 * kernels::residual_norm(&cols, y, beta) / y.len() as f64
 }
 
 /// The objective of a least-squares-family estimator at the unscaled `beta`, penalties on

@@ -1,6 +1,6 @@
 //! Fused passes over the columns of a raw design for the direct least-squares path
 //! ([`crate::direct`]): the cross-product matrix of `[Φ y]` in one pass, and the residual
-//! `y − Φβ` with `Φᵀr` and `‖r‖²` (plus `‖Φv‖²`) in another; `‖y − Φβ‖²` for
+//! `y − Φβ` with `Φᵀr` and `‖r‖²` (plus `‖Φv‖²`) in another; `‖y − Φβ‖²` alone for
 //! [`crate::fit`]'s objective; and the products `Φᵀv`, `Φv` of the SVR interior point's
 //! iterations.
 //!
@@ -153,6 +153,29 @@ fn residual_at(cols: &[&[f64]], y: &[f64], beta: &[f64], i: usize) -> f64 {
     r
 }
 
+/// `(Φv)ᵢ`, the tail rows' twin of [`combination_chunk`].
+fn combination_at(cols: &[&[f64]], v: &[f64], i: usize) -> f64 {
+    cols.iter().zip(v).map(|(c, b)| b * c[i]).sum()
+}
+
+/// Adds the squares of a chunk's `U·L` values to lane-wise accumulators.
+#[inline(always)]
+fn add_squares<const L: usize, const U: usize, const FMA: bool>(
+    acc: &mut [f64; L],
+    chunk: &[[f64; L]; U],
+) {
+    for x in chunk {
+        for l in 0..L {
+            acc[l] = madd::<FMA>(x[l], x[l], acc[l]);
+        }
+    }
+}
+
+/// The sum of lane-wise accumulators, lane by lane in order.
+fn lane_sum<const L: usize>(acc: &[f64; L]) -> f64 {
+    acc.iter().fold(0.0, |s, v| s + v)
+}
+
 /// `Φᵀw` for the vector w given chunk by chunk (`chunk(r0)`: its `U·L` entries from row r0,
 /// computed in registers) and entry by entry in the tail (`at(i)`): Φ is read once, and w
 /// need not exist in memory.
@@ -181,10 +204,7 @@ fn transposed_generic<const L: usize, const U: usize, const FMA: bool>(
         }
         r0 += rows;
     }
-    let mut out: Vec<f64> = acc
-        .iter()
-        .map(|a| a.iter().fold(0.0, |s, v| s + v))
-        .collect();
+    let mut out: Vec<f64> = acc.iter().map(lane_sum).collect();
     for i in full..n {
         let w = at(i);
         for (o, c) in out.iter_mut().zip(cols) {
@@ -210,17 +230,9 @@ fn refinement_generic<const L: usize, const U: usize, const FMA: bool>(
         y.len(),
         |r0| {
             let r = residual_chunk::<L, U, FMA>(cols, y, beta, r0);
-            for ru in &r {
-                for l in 0..L {
-                    rr[l] = madd::<FMA>(ru[l], ru[l], rr[l]);
-                }
-            }
+            add_squares::<L, U, FMA>(&mut rr, &r);
             if let Some(w) = w {
-                for uv in &combination_chunk::<L, U, FMA>(cols, w, r0) {
-                    for l in 0..L {
-                        uu[l] = madd::<FMA>(uv[l], uv[l], uu[l]);
-                    }
-                }
+                add_squares::<L, U, FMA>(&mut uu, &combination_chunk::<L, U, FMA>(cols, w, r0));
             }
             r
         },
@@ -228,14 +240,13 @@ fn refinement_generic<const L: usize, const U: usize, const FMA: bool>(
             let r = residual_at(cols, y, beta, i);
             rr_tail += r * r;
             if let Some(w) = w {
-                let u: f64 = cols.iter().zip(w).map(|(c, b)| b * c[i]).sum();
+                let u = combination_at(cols, w, i);
                 uu_tail += u * u;
             }
             r
         },
     );
-    let sum = |a: [f64; L]| a.iter().fold(0.0, |s, v| s + v);
-    (grad, sum(rr) + rr_tail, sum(uu) + uu_tail)
+    (grad, lane_sum(&rr) + rr_tail, lane_sum(&uu) + uu_tail)
 }
 
 /// `Φᵀv`.
@@ -271,51 +282,32 @@ fn combination_generic<const L: usize, const U: usize, const FMA: bool>(
         r0 += chunk;
     }
     for i in full..n {
-        out[i] = cols.iter().zip(v).map(|(c, b)| b * c[i]).sum();
+        out[i] = combination_at(cols, v, i);
     }
 }
 
-/// `(‖y − Φβ‖², ‖Φv‖²)`, the second only when `v` is given.
+/// `‖y − Φβ‖²`.
 #[inline(always)]
-fn residual_norms_generic<const L: usize, const U: usize, const FMA: bool>(
+fn residual_norm_generic<const L: usize, const U: usize, const FMA: bool>(
     cols: &[&[f64]],
     y: &[f64],
     beta: &[f64],
-    v: Option<&[f64]>,
-) -> (f64, f64) {
+) -> f64 {
     let n = y.len();
     let chunk = L * U;
     let full = n - n % chunk;
-    let (mut rr, mut uu) = ([0.0f64; L], [0.0f64; L]);
+    let mut rr = [0.0f64; L];
     let mut r0 = 0;
     while r0 < full {
-        let r = residual_chunk::<L, U, FMA>(cols, y, beta, r0);
-        for ru in &r {
-            for l in 0..L {
-                rr[l] = madd::<FMA>(ru[l], ru[l], rr[l]);
-            }
-        }
-        if let Some(v) = v {
-            let u = combination_chunk::<L, U, FMA>(cols, v, r0);
-            for uv in &u {
-                for l in 0..L {
-                    uu[l] = madd::<FMA>(uv[l], uv[l], uu[l]);
-                }
-            }
-        }
+        add_squares::<L, U, FMA>(&mut rr, &residual_chunk::<L, U, FMA>(cols, y, beta, r0));
         r0 += chunk;
     }
-    let mut rr = rr.iter().fold(0.0, |s, v| s + v);
-    let mut uu = uu.iter().fold(0.0, |s, v| s + v);
+    let mut rr = lane_sum(&rr);
     for i in full..n {
         let r = residual_at(cols, y, beta, i);
         rr += r * r;
-        if let Some(v) = v {
-            let u: f64 = cols.iter().zip(v).map(|(c, b)| b * c[i]).sum();
-            uu += u * u;
-        }
     }
-    (rr, uu)
+    rr
 }
 
 macro_rules! dispatch {
@@ -366,9 +358,8 @@ dispatch!(
 );
 
 dispatch!(
-    /// `(‖y − Φβ‖², ‖Φv‖²)` in one pass over Φ (the second 0 without `v`).
-    residual_norms, residual_norms_generic,
-    (cols: &[&[f64]], y: &[f64], beta: &[f64], v: Option<&[f64]>) -> (f64, f64),
+    /// `‖y − Φβ‖²` in one pass over Φ.
+    residual_norm, residual_norm_generic, (cols: &[&[f64]], y: &[f64], beta: &[f64]) -> f64,
     avx512: <8, 4, true>, avx2: <4, 4, true>, base: <2, 2, false>
 );
 
