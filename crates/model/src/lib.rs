@@ -1,14 +1,17 @@
 //! The Abkowitz manoeuvring model as data and as equations. No I/O.
 //!
-//! - [`set`]: coefficient sets as TOML data ([`CoefficientSet`]); `full68`, `reduced32` and `chen2021`
+//! - [`set`]: coefficient sets as TOML data ([`CoefficientSet`]); `full68`, `full74`, `reduced32` and `chen2021`
 //!   are shipped in `crates/model/sets/`, a user set is any file of the same form;
 //! - [`design`]: primed samples, design matrices Φ and targets y per degree of freedom (DOMAIN.md §2),
 //!   per-term force contributions;
 //! - [`abkowitz`]: an identified model ([`AbkowitzModel`]), its accelerations for any state, and the
-//!   model file written by `shipid fit` ([`ModelFile`]).
+//!   model file written by `shipid fit` ([`ModelFile`]);
+//! - [`envelope`]: where an identified model's regression extrapolates ([`IdentificationRange`]: the
+//!   leverage of a state against the training design).
 
 pub mod abkowitz;
 pub mod design;
+pub mod envelope;
 pub mod set;
 
 pub use abkowitz::{
@@ -16,4 +19,5 @@ pub use abkowitz::{
     Refinement, TrainingWindow,
 };
 pub use design::{Design, PrimeInertia, Samples, design};
+pub use envelope::{IdentificationRange, RangeError};
 pub use set::{CoefficientSet, Dof, Known, Monomial, Powers, SetError, SetFile};

@@ -23,12 +23,14 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use shipid_estimators::Solver;
 use shipid_io::{Dataset, DatasetRecording};
+use shipid_model::IdentificationRange;
 use shipid_sim::effects::{Asymmetry, Current, RudderLag, ShallowWater, Wind};
 use shipid_sim::{AbkowitzDynamics, Dynamics, Effect};
 use shipid_tables::Table;
 
 use crate::diagnose::{DiagnoseInput, DiagnoseOptions, diagnose, model_level};
-use crate::fit::{EstimatorSpec, WindowSpec, fit_dataset, load_set};
+use crate::diagnose_cmd::{identification_range, training_data};
+use crate::fit::{EstimatorSpec, WindowSpec, fit_dataset, load_set, training_samples};
 use crate::generate::{Generated, default_manoeuvres, generate_with};
 use crate::simulate_cmd::load_model_parts;
 use crate::{CliError, Outcome, failed};
@@ -220,6 +222,8 @@ struct Row {
     found_param: Option<f64>,
     direction_error_deg: Option<f64>,
     effects: String,
+    /// Fraction of the recorded states outside the base model's identification range.
+    outside: Option<f64>,
     time_s: f64,
 }
 
@@ -230,11 +234,13 @@ pub fn run(
     controls: u64,
 ) -> Result<Outcome, CliError> {
     let clean = to_dataset(generate_with(None, &[])?, "embedded default data (clean)");
-    let (base, base_effects, base_name): (Box<dyn Dynamics + Send + Sync>, Vec<Effect>, String) =
+    type Base = (Box<dyn Dynamics + Send + Sync>, Vec<Effect>, String);
+    let ((base, base_effects, base_name), range): (Base, Option<IdentificationRange>) =
         match base_spec {
             Some(spec) => {
                 let (b, e) = load_model_parts(spec)?;
-                (b, e, spec.to_string())
+                let range = training_data(spec).as_ref().and_then(identification_range);
+                ((b, e, spec.to_string()), range)
             }
             None => {
                 let names: Vec<String> = clean.recordings.iter().map(|r| r.file.clone()).collect();
@@ -249,10 +255,15 @@ pub fn run(
                     WindowSpec::Whole,
                     Solver::Fast,
                 )?;
+                let (samples, _) = training_samples(&clean, &names, WindowSpec::Whole)?;
+                let range = IdentificationRange::from_samples(&fit.model.set, &samples).ok();
                 (
-                    Box::new(AbkowitzDynamics(fit.model)),
-                    Vec::new(),
-                    "full74 LSQ fitted on the six clean default recordings, refined in the output-error sense (`shipid fit --refine`)".into(),
+                    (
+                        Box::new(AbkowitzDynamics(fit.model)),
+                        Vec::new(),
+                        "full74 LSQ fitted on the six clean default recordings, refined in the output-error sense (`shipid fit --refine`)".into(),
+                    ),
+                    range,
                 )
             }
         };
@@ -261,6 +272,7 @@ pub fn run(
         base: base.as_ref(),
         base_effects: &base_effects,
         model_level_over_l: None,
+        identification_range: range.as_ref(),
     };
     let level = model_level(&input, &clean, &opts);
     input.model_level_over_l = Some(level);
@@ -291,6 +303,7 @@ pub fn run(
                 found_param,
                 direction_error_deg: direction_error(case, &report.effects),
                 effects: report.effects.join(" "),
+                outside: report.outside_identification_range,
                 time_s: started.elapsed().as_secs_f64(),
                 case: case.clone(),
             })
@@ -382,6 +395,7 @@ fn write_results(
     t.push_num("recovered_parameter", num(&|r| r.found_param));
     t.push_num("direction_error_deg", num(&|r| r.direction_error_deg));
     t.push_text("found_effects", text(&|r| r.effects.clone()));
+    t.push_num("outside_identification_range", num(&|r| r.outside));
     t.push_num("time_s", num(&|r| Some(r.time_s)));
     t.write(out, "cases")?;
 
@@ -461,6 +475,26 @@ fn write_results(
         reduced_50,
         correct.len()
     ));
+    let outside: Vec<f64> = rows.iter().filter_map(|r| r.outside).collect();
+    if !outside.is_empty() {
+        let short = correct
+            .iter()
+            .filter(|r| r.detectable && r.after > 0.5 * r.before)
+            .filter_map(|r| Some(format!("{} {:.0} %", r.case.id, 100.0 * r.outside?)))
+            .collect::<Vec<_>>();
+        md.push_str(&format!(
+            "- Recorded states outside the base model's identification range (leverage above its training maximum): at most {:.0} % in any case{}.\n",
+            100.0 * outside.iter().cloned().fold(0.0f64, f64::max),
+            if short.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    "; in the detectable correct cases reduced by less than 50 %: {}",
+                    short.join(", ")
+                )
+            }
+        ));
+    }
     let mean_time = rows.iter().map(|r| r.time_s).sum::<f64>() / rows.len().max(1) as f64;
     md.push_str(&format!(
         "- Mean wall time per case (generation + diagnosis, cases run two at a time): {mean_time:.1} s.\n\n"

@@ -32,7 +32,10 @@ use std::collections::BTreeMap;
 
 use rayon::prelude::*;
 use serde::Serialize;
-use shipid_io::{Accelerations, Dataset, Recording, Ship, deriv::accelerations_or_estimate};
+use shipid_io::{
+    Accelerations, Dataset, PrimeScale, Recording, Ship, deriv::accelerations_or_estimate,
+};
+use shipid_model::IdentificationRange;
 use shipid_sim::effects::{Asymmetry, Current, RudderLag, ShallowWater, Wind};
 use shipid_sim::{
     Dynamics, Effect, Replay, SimOptions, SimStatus, State, WithEffects, sim::RudderFilter,
@@ -816,6 +819,10 @@ pub struct RecordingFit {
     pub recording: String,
     pub before_position_rmse_over_l: f64,
     pub after_position_rmse_over_l: f64,
+    /// Fraction of the recording's states outside the base model's identification range (leverage
+    /// above the largest of its training states, [`IdentificationRange`]), when that range is known.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub outside_identification_range: Option<f64>,
 }
 
 /// The diagnosis report (DATA.md "A diagnosis report"; keys after `fit_after` are additions).
@@ -839,6 +846,11 @@ pub struct Report {
     /// The model's own held-out-style level on its training recordings, when known.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub model_level_position_rmse_over_l: Option<f64>,
+    /// Fraction of all recorded states outside the base model's identification range, when known: there
+    /// the base model's own forces are an extrapolation, and a mismatch left after the effect is likely
+    /// the base model's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub outside_identification_range: Option<f64>,
     pub explanation: String,
 }
 
@@ -937,6 +949,35 @@ pub struct DiagnoseInput<'a> {
     pub base_effects: &'a [Effect],
     /// The model's level on its training recordings (position RMSE ÷ L of segment replays), if known.
     pub model_level_over_l: Option<f64>,
+    /// Where the base model was identified (an Abkowitz model with readable training data), if known.
+    pub identification_range: Option<&'a IdentificationRange>,
+}
+
+/// The explanation mentions the identification range when at least this fraction of the recorded
+/// states lies outside it (and the mismatch is real).
+const OUTSIDE_WORTH_SAYING: f64 = 0.05;
+
+/// Fractions of the thinned samples of each recording whose state lies outside `range`.
+fn outside_fractions(range: &IdentificationRange, prep: &[Prepared], ship: &Ship) -> Vec<f64> {
+    let s = PrimeScale::of(ship);
+    prep.iter()
+        .map(|p| {
+            let outside = p
+                .samples
+                .iter()
+                .filter(|&&i| {
+                    let ratio = range.leverage_ratio(
+                        s.delta_u_prime(p.rec.u[i]),
+                        s.velocity_prime(p.rec.v[i]),
+                        s.yaw_rate_prime(p.rec.r[i]),
+                        p.rec.delta[i],
+                    );
+                    ratio > 1.0
+                })
+                .count();
+            outside as f64 / p.samples.len().max(1) as f64
+        })
+        .collect()
 }
 
 /// Equation-error residuals of the model (with its effects) per recording, each DOF divided by its robust
@@ -1252,13 +1293,34 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
             worse.join(", ")
         )
     };
+    let outside: Option<Vec<f64>> = input
+        .identification_range
+        .map(|range| outside_fractions(range, &prep, &ship));
+    let outside_all = outside.as_ref().map(|f| {
+        let total: usize = prep.iter().map(|p| p.samples.len()).sum();
+        let weighted: f64 = f
+            .iter()
+            .zip(&prep)
+            .map(|(x, p)| x * p.samples.len() as f64)
+            .sum();
+        weighted / total.max(1) as f64
+    });
+    let explanation = match outside_all {
+        Some(f) if f >= OUTSIDE_WORTH_SAYING && before_l > real_threshold => format!(
+            "{explanation}; {:.0} % of the recorded states lie outside the base model's identification range (leverage above its training maximum), where its own forces are extrapolated: part of any mismatch left there is the base model's",
+            100.0 * f
+        ),
+        _ => explanation,
+    };
     let per_recording = prep
         .iter()
         .zip(before_each.iter().zip(&after_scores))
-        .map(|(p, (b, a))| RecordingFit {
+        .enumerate()
+        .map(|(k, (p, (b, a)))| RecordingFit {
             recording: p.file.clone(),
             before_position_rmse_over_l: b.position_rmse() / lpp,
             after_position_rmse_over_l: a.position_rmse() / lpp,
+            outside_identification_range: outside.as_ref().map(|f| f[k]),
         })
         .collect();
     let located = locate(&prep, &base_res, &scale, &ship);
@@ -1282,6 +1344,7 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
         horizon_s,
         noise_floor_position_rmse_over_l: noise_floor,
         model_level_position_rmse_over_l: model_level,
+        outside_identification_range: outside_all,
         explanation,
     })
 }

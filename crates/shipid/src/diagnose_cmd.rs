@@ -4,23 +4,21 @@
 use std::path::{Path, PathBuf};
 
 use plotters::prelude::*;
-use shipid_io::Dataset;
 use shipid_io::write::write_atomic;
-use shipid_model::{AugmentedModelFile, EffectEntry, ModelFile};
+use shipid_io::{Dataset, PrimeScale};
+use shipid_model::{
+    AugmentedModelFile, CoefficientSet, EffectEntry, IdentificationRange, ModelFile,
+};
 use shipid_sim::{Dynamics, Effect, WithEffects};
 
 use crate::diagnose::{DiagnoseInput, DiagnoseOptions, Report, diagnose, model_level};
 use crate::simulate_cmd::load_model_parts;
 use crate::{CliError, Outcome, bad_input, failed};
 
-/// The model's own level: segment replays on the recordings it was trained on, when the model file names
-/// a data set that can still be read (paths as written by `shipid fit`, tried as given and relative to
-/// the model file).
-fn own_level(
-    model_spec: &str,
-    input: &DiagnoseInput,
-    opts: &DiagnoseOptions,
-) -> Option<(f64, String)> {
+/// The model file's training data, when it names a data set that can still be read (paths as written by
+/// `shipid fit`, tried as given and relative to the model file): the file, the data set restricted to the
+/// training recordings, and the data set's path.
+pub fn training_data(model_spec: &str) -> Option<(ModelFile, Dataset, PathBuf)> {
     let path = Path::new(model_spec);
     let text = std::fs::read_to_string(path).ok()?;
     let file: ModelFile = toml::from_str(&text).ok()?;
@@ -30,13 +28,49 @@ fn own_level(
     let mut candidates = vec![PathBuf::from(&first.dataset)];
     let dir = std::path::absolute(path).ok()?;
     candidates.extend(dir.ancestors().skip(1).map(|a| a.join(&first.dataset)));
-    let ds_path = candidates.iter().find(|p| p.is_file())?;
+    let ds_path = candidates.into_iter().find(|p| p.is_file())?;
     let used: Vec<String> = file.training.iter().map(|w| w.recording.clone()).collect();
-    let ds = Dataset::load_filtered(ds_path, |f| used.iter().any(|u| u == f)).ok()?;
-    let level = model_level(input, &ds, opts);
+    let ds = Dataset::load_filtered(&ds_path, |f| used.iter().any(|u| u == f)).ok()?;
+    Some((file, ds, ds_path))
+}
+
+/// The model's own level: segment replays on the recordings it was trained on.
+fn own_level(
+    training: &(ModelFile, Dataset, PathBuf),
+    input: &DiagnoseInput,
+    opts: &DiagnoseOptions,
+) -> Option<(f64, String)> {
+    let level = model_level(input, &training.1, opts);
     level
         .is_finite()
-        .then(|| (level, ds_path.display().to_string()))
+        .then(|| (level, training.2.display().to_string()))
+}
+
+/// Where an Abkowitz model was identified: its set's leverage over the states of its training windows.
+pub fn identification_range(
+    (file, ds, _): &(ModelFile, Dataset, PathBuf),
+) -> Option<IdentificationRange> {
+    if file.kind != "abkowitz" {
+        return None;
+    }
+    let set = CoefficientSet::from_file(file.set.clone()).ok()?;
+    let scale = PrimeScale::of(&ds.ship);
+    let mut states = Vec::new();
+    for w in &file.training {
+        let r = ds.recordings.iter().find(|r| r.file == w.recording)?;
+        let rec = &r.recording;
+        for i in 0..rec.len() {
+            if rec.t[i] >= w.t_start_s && rec.t[i] <= w.t_end_s {
+                states.push([
+                    scale.delta_u_prime(rec.u[i]),
+                    scale.velocity_prime(rec.v[i]),
+                    scale.yaw_rate_prime(rec.r[i]),
+                    rec.delta[i],
+                ]);
+            }
+        }
+    }
+    IdentificationRange::new(&set, &states).ok()
 }
 
 pub fn run(
@@ -62,9 +96,13 @@ pub fn run(
         base: base.as_ref(),
         base_effects: &base_effects,
         model_level_over_l: None,
+        identification_range: None,
     };
-    let level = own_level(model_spec, &input, &opts);
+    let training = training_data(model_spec);
+    let range = training.as_ref().and_then(identification_range);
+    let level = training.as_ref().and_then(|t| own_level(t, &input, &opts));
     input.model_level_over_l = level.as_ref().map(|l| l.0);
+    input.identification_range = range.as_ref();
     let report = diagnose(&input, &ds, &opts).ok_or_else(|| {
         bad_input(format!(
             "{}: no recording with at least 20 samples to diagnose",
@@ -156,6 +194,25 @@ fn print_summary(r: &Report, model: &str, dataset: &Path, level_from: Option<&st
         r.fit_after.position_rmse_over_l,
         r.noise_floor_position_rmse_over_l
     );
+    if let Some(f) = r.outside_identification_range {
+        let each: Vec<String> = r
+            .per_recording
+            .iter()
+            .filter_map(|p| {
+                let x = p.outside_identification_range?;
+                (x > 0.0).then(|| format!("{} {:.0} %", p.recording, 100.0 * x))
+            })
+            .collect();
+        println!(
+            "  recorded states outside the model's identification range: {:.0} %{}",
+            100.0 * f,
+            if each.is_empty() {
+                String::new()
+            } else {
+                format!(" ({})", each.join(", "))
+            }
+        );
+    }
     for e in &r.effects {
         println!("  effect: {e}");
     }

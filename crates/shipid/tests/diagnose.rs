@@ -33,6 +33,7 @@ fn identified() -> (AbkowitzDynamics, f64) {
             base: &model,
             base_effects: &[],
             model_level_over_l: None,
+            identification_range: None,
         },
         &clean,
         &DiagnoseOptions::default(),
@@ -55,6 +56,7 @@ fn diagnose_concealed(
             base,
             base_effects: &[],
             model_level_over_l: level,
+            identification_range: None,
         },
         &ds,
         &DiagnoseOptions::default(),
@@ -281,4 +283,81 @@ fn a_bad_effect_in_a_model_file_names_the_key() {
         err.contains("key `effects[0].effect`") && err.contains("speed"),
         "{err}"
     );
+}
+
+/// A model identified on one zig-zag, diagnosed against all six default manoeuvres: the turning
+/// circles lie outside its identification range and the report says so, while the model identified on
+/// all six sees every state of them inside its range. (Wrong units of the states, e.g. degrees for δ or
+/// unprimed velocities, would put everything outside.)
+#[test]
+fn states_a_model_was_not_identified_on_are_reported_outside_its_identification_range() {
+    use shipid::fit::training_samples;
+    use shipid_model::IdentificationRange;
+
+    let clean = to_dataset(generate_with(None, &[]).unwrap(), "clean");
+    let one = vec!["zz35_35_ps.csv".to_string()];
+    let set = load_set("reduced32").unwrap();
+    let fit = fit_dataset(
+        &clean,
+        set.clone(),
+        &EstimatorSpec::named("lsq"),
+        &one,
+        WindowSpec::Overshoots(4),
+        Solver::Fast,
+    )
+    .unwrap();
+    let (samples, _) = training_samples(&clean, &one, WindowSpec::Overshoots(4)).unwrap();
+    let range = IdentificationRange::from_samples(&set, &samples).unwrap();
+    let model = AbkowitzDynamics(fit.model);
+    let report = diagnose(
+        &DiagnoseInput {
+            base: &model,
+            base_effects: &[],
+            model_level_over_l: None,
+            identification_range: Some(&range),
+        },
+        &clean,
+        &DiagnoseOptions::default(),
+    )
+    .unwrap();
+    let fraction = |file: &str| {
+        report
+            .per_recording
+            .iter()
+            .find(|p| p.recording == file)
+            .and_then(|p| p.outside_identification_range)
+            .unwrap()
+    };
+    for tc in ["tc35_ps.csv", "tc35_sb.csv"] {
+        assert!(fraction(tc) > 0.5, "{tc}: {}", fraction(tc));
+    }
+    assert!(
+        fraction("zz35_35_ps.csv") < 0.05,
+        "{}",
+        fraction("zz35_35_ps.csv")
+    );
+    assert!(report.outside_identification_range.unwrap() > 0.2);
+    assert!(
+        report.explanation.contains("identification range"),
+        "{}",
+        report.explanation
+    );
+
+    let all: Vec<String> = clean.recordings.iter().map(|r| r.file.clone()).collect();
+    let full = load_set("full68").unwrap();
+    let (samples, _) = training_samples(&clean, &all, WindowSpec::Whole).unwrap();
+    let range = IdentificationRange::from_samples(&full, &samples).unwrap();
+    let (model, level) = identified();
+    let report = diagnose(
+        &DiagnoseInput {
+            base: &model,
+            base_effects: &[],
+            model_level_over_l: Some(level),
+            identification_range: Some(&range),
+        },
+        &clean,
+        &DiagnoseOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(report.outside_identification_range, Some(0.0));
 }
