@@ -29,9 +29,9 @@ use shipid_sim::{AbkowitzDynamics, Dynamics, Effect};
 use shipid_tables::Table;
 
 use crate::diagnose::{DiagnoseInput, DiagnoseOptions, diagnose, model_level};
-use crate::diagnose_cmd::{identification_range, training_data};
 use crate::fit::{EstimatorSpec, WindowSpec, fit_dataset, load_set, training_samples};
 use crate::generate::{Generated, default_manoeuvres, generate_with};
+use crate::range::{identification_range, training_data};
 use crate::simulate_cmd::load_model_parts;
 use crate::{CliError, Outcome, failed};
 

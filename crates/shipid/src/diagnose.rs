@@ -41,6 +41,7 @@ use shipid_sim::{
     Dynamics, Effect, Replay, SimOptions, SimStatus, State, WithEffects, sim::RudderFilter,
 };
 
+use crate::range::outside_fraction;
 use crate::validate::{DT_OVER_L_OVER_U0, interp};
 
 /// Tunables of the diagnosis, with their reasons.
@@ -961,22 +962,7 @@ const OUTSIDE_WORTH_SAYING: f64 = 0.05;
 fn outside_fractions(range: &IdentificationRange, prep: &[Prepared], ship: &Ship) -> Vec<f64> {
     let s = PrimeScale::of(ship);
     prep.iter()
-        .map(|p| {
-            let outside = p
-                .samples
-                .iter()
-                .filter(|&&i| {
-                    let ratio = range.leverage_ratio(
-                        s.delta_u_prime(p.rec.u[i]),
-                        s.velocity_prime(p.rec.v[i]),
-                        s.yaw_rate_prime(p.rec.r[i]),
-                        p.rec.delta[i],
-                    );
-                    ratio > 1.0
-                })
-                .count();
-            outside as f64 / p.samples.len().max(1) as f64
-        })
+        .map(|p| outside_fraction(range, &p.rec, &s, p.samples.iter().copied()))
         .collect()
 }
 

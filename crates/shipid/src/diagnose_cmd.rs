@@ -4,35 +4,15 @@
 use std::path::{Path, PathBuf};
 
 use plotters::prelude::*;
+use shipid_io::Dataset;
 use shipid_io::write::write_atomic;
-use shipid_io::{Dataset, PrimeScale};
-use shipid_model::{
-    AugmentedModelFile, CoefficientSet, EffectEntry, IdentificationRange, ModelFile,
-};
+use shipid_model::{AugmentedModelFile, EffectEntry, ModelFile};
 use shipid_sim::{Dynamics, Effect, WithEffects};
 
 use crate::diagnose::{DiagnoseInput, DiagnoseOptions, Report, diagnose, model_level};
+use crate::range::{identification_range, training_data};
 use crate::simulate_cmd::load_model_parts;
 use crate::{CliError, Outcome, bad_input, failed};
-
-/// The model file's training data, when it names a data set that can still be read (paths as written by
-/// `shipid fit`, tried as given and relative to the model file): the file, the data set restricted to the
-/// training recordings, and the data set's path.
-pub fn training_data(model_spec: &str) -> Option<(ModelFile, Dataset, PathBuf)> {
-    let path = Path::new(model_spec);
-    let text = std::fs::read_to_string(path).ok()?;
-    let file: ModelFile = toml::from_str(&text).ok()?;
-    let first = file.training.first()?;
-    // As given (relative to the working directory of `fit`), then relative to the model file's folder
-    // and each folder above it (a model in results/ names data/… of the project root).
-    let mut candidates = vec![PathBuf::from(&first.dataset)];
-    let dir = std::path::absolute(path).ok()?;
-    candidates.extend(dir.ancestors().skip(1).map(|a| a.join(&first.dataset)));
-    let ds_path = candidates.into_iter().find(|p| p.is_file())?;
-    let used: Vec<String> = file.training.iter().map(|w| w.recording.clone()).collect();
-    let ds = Dataset::load_filtered(&ds_path, |f| used.iter().any(|u| u == f)).ok()?;
-    Some((file, ds, ds_path))
-}
 
 /// The model's own level: segment replays on the recordings it was trained on.
 fn own_level(
@@ -44,33 +24,6 @@ fn own_level(
     level
         .is_finite()
         .then(|| (level, training.2.display().to_string()))
-}
-
-/// Where an Abkowitz model was identified: its set's leverage over the states of its training windows.
-pub fn identification_range(
-    (file, ds, _): &(ModelFile, Dataset, PathBuf),
-) -> Option<IdentificationRange> {
-    if file.kind != "abkowitz" {
-        return None;
-    }
-    let set = CoefficientSet::from_file(file.set.clone()).ok()?;
-    let scale = PrimeScale::of(&ds.ship);
-    let mut states = Vec::new();
-    for w in &file.training {
-        let r = ds.recordings.iter().find(|r| r.file == w.recording)?;
-        let rec = &r.recording;
-        for i in 0..rec.len() {
-            if rec.t[i] >= w.t_start_s && rec.t[i] <= w.t_end_s {
-                states.push([
-                    scale.delta_u_prime(rec.u[i]),
-                    scale.velocity_prime(rec.v[i]),
-                    scale.yaw_rate_prime(rec.r[i]),
-                    rec.delta[i],
-                ]);
-            }
-        }
-    }
-    IdentificationRange::new(&set, &states).ok()
 }
 
 pub fn run(

@@ -15,6 +15,7 @@ pub mod metrics_cmd;
 pub mod output_error;
 pub mod paper001;
 pub mod plot;
+pub mod range;
 pub mod runner;
 pub mod simulate_cmd;
 pub mod spec;

@@ -3,8 +3,9 @@
 use std::path::Path;
 
 use serde_json::{Map, json};
-use shipid_io::Dataset;
+use shipid_io::{Dataset, PrimeScale};
 
+use crate::range::{identification_range, outside_fraction, training_data};
 use crate::simulate_cmd::load_model;
 use crate::validate::validate_recording;
 use crate::{CliError, Outcome};
@@ -12,12 +13,23 @@ use crate::{CliError, Outcome};
 pub fn run(model_spec: &str, dataset: &Path, as_json: bool) -> Result<Outcome, CliError> {
     let model = load_model(model_spec)?;
     let ds = Dataset::load(dataset)?;
+    // Where the model was identified, when its file says so and its training data can be read: a
+    // recording mostly outside that range tests the model's extrapolation, not its fit.
+    let range = training_data(model_spec)
+        .as_ref()
+        .and_then(identification_range);
+    let scale = PrimeScale::of(&ds.ship);
     let mut recs = Map::new();
     let mut any_failed = false;
     for r in &ds.recordings {
         let v = validate_recording(model.as_ref(), r, &ds.ship);
         any_failed |= v.diverged();
-        recs.insert(r.file.clone(), serde_json::to_value(&v).unwrap_or_default());
+        let mut value = serde_json::to_value(&v).unwrap_or_default();
+        if let (Some(range), Some(obj)) = (&range, value.as_object_mut()) {
+            let f = outside_fraction(range, &r.recording, &scale, 0..r.recording.len());
+            obj.insert("outside_identification_range".into(), json!(f));
+        }
+        recs.insert(r.file.clone(), value);
     }
     let value = json!({
         "model": model_spec,
@@ -32,8 +44,8 @@ pub fn run(model_spec: &str, dataset: &Path, as_json: bool) -> Result<Outcome, C
         );
     } else {
         println!(
-            "{:<16} {:>10} {:>9} {:>9} {:>9} {:>9} {:>8}",
-            "recording", "pos/L", "psi[deg]", "u[m/s]", "v[m/s]", "r[deg/s]", "MRAE"
+            "{:<16} {:>10} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8}",
+            "recording", "pos/L", "psi[deg]", "u[m/s]", "v[m/s]", "r[deg/s]", "MRAE", "outside"
         );
         for (file, v) in &recs {
             let f = |k: &str| {
@@ -44,20 +56,29 @@ pub fn run(model_spec: &str, dataset: &Path, as_json: bool) -> Result<Outcome, C
             let mrae = v["manoeuvre"]["mrae"]
                 .as_f64()
                 .map_or("-".into(), |x| format!("{:.1}%", 100.0 * x));
+            let outside = v["outside_identification_range"]
+                .as_f64()
+                .map_or("-".into(), |x| format!("{:.0}%", 100.0 * x));
             let status = v["replay"]["status"].as_str().unwrap_or("?").to_string();
             println!(
-                "{file:<16} {:>10} {:>9} {:>9} {:>9} {:>9} {:>8} {}",
+                "{file:<16} {:>10} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8} {}",
                 f("position_rmse_over_l"),
                 f("heading_rmse_deg"),
                 f("u_rmse_m_s"),
                 f("v_rmse_m_s"),
                 f("r_rmse_deg_s"),
                 mrae,
+                outside,
                 if status == "ok" {
                     String::new()
                 } else {
                     status
                 }
+            );
+        }
+        if range.is_some() {
+            println!(
+                "outside: share of the recording's states outside the model's identification range (leverage above every training state's; there its forces are extrapolated)"
             );
         }
     }

@@ -115,3 +115,48 @@ fn metrics_json_has_one_entry_per_recording() {
     assert!(recs["tc35_sb.csv"]["tactical_diameter"].as_f64().is_some());
     assert!(recs["zz35_35_sb.csv"]["overshoot_2"].as_f64().is_some());
 }
+
+/// `validate` says how much of each recording lies outside the range the model was identified on: a
+/// model trained on one zig-zag sees the turning circles mostly outside, its own training manoeuvre
+/// inside; the reference model (no training data) gets no such key.
+#[test]
+fn validate_reports_the_share_of_states_outside_the_identification_range() {
+    let dir = common::root().join("target/test-validate-range");
+    std::fs::create_dir_all(&dir).unwrap();
+    let model = dir.join("reduced32-zz35.toml");
+    let ds = common::root().join("data/kvlcc2-mmg/dataset.toml");
+    let (ds, model) = (ds.to_str().unwrap(), model.to_str().unwrap());
+    let out = common::shipid(&[
+        "fit",
+        ds,
+        "--set",
+        "reduced32",
+        "--estimator",
+        "lsq",
+        "--recordings",
+        "zz35_35_ps.csv",
+        "--overshoots",
+        "4",
+        "--out",
+        model,
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let outside = |model: &str, file: &str| {
+        let out = common::shipid(&["validate", model, ds, "--json"]);
+        assert!(out.status.success());
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        v["recordings"][file]["outside_identification_range"].as_f64()
+    };
+    for tc in ["tc35_ps.csv", "tc35_sb.csv"] {
+        let f = outside(model, tc).unwrap();
+        assert!(f > 0.5, "{tc}: {f}");
+    }
+    // The training window ends after four overshoots; the rest of the record repeats them.
+    let own = outside(model, "zz35_35_ps.csv").unwrap();
+    assert!(own < 0.02, "{own}");
+    assert_eq!(outside("mmg:kvlcc2", "tc35_ps.csv"), None);
+}
