@@ -13,10 +13,13 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use shipid_estimators::{Solver, Status};
+use shipid_io::PrimeScale;
 use shipid_io::write::write_atomic;
+use shipid_model::IdentificationRange;
 use shipid_sim::{AbkowitzDynamics, Metrics, SimStatus};
 
-use crate::fit::{fit_dataset, load_set};
+use crate::fit::{fit_dataset, load_set, training_samples};
+use crate::range::outside_fraction;
 use crate::study::{Case, Study};
 use crate::validate::validate_recording;
 
@@ -55,6 +58,10 @@ pub struct TestRow {
     pub predicted: Option<Metrics>,
     pub relative_error: std::collections::BTreeMap<String, f64>,
     pub mrae: Option<f64>,
+    /// Share of the test recording's states outside the model's identification range (leverage above
+    /// every training state's); absent in results written before it existed.
+    #[serde(default)]
+    pub outside_identification_range: Option<f64>,
 }
 
 /// What one case produced.
@@ -144,6 +151,10 @@ pub fn run_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
         })
         .unwrap_or("ok");
     let model = AbkowitzDynamics(out.model.clone());
+    let range = training_samples(&study.dataset, &case.training, case.window)
+        .ok()
+        .and_then(|(samples, _)| IdentificationRange::from_samples(&out.model.set, &samples).ok());
+    let scale = PrimeScale::of(&study.dataset.ship);
     let tests = study
         .tests
         .iter()
@@ -186,6 +197,9 @@ pub fn run_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
                 predicted,
                 relative_error,
                 mrae,
+                outside_identification_range: range
+                    .as_ref()
+                    .map(|g| outside_fraction(g, &r.recording, &scale, 0..r.recording.len())),
             }
         })
         .collect();

@@ -93,6 +93,10 @@ pub fn summary_table(study: &Study, results: &[CaseResult]) -> Table {
     t.push_num("u_rmse_m_s", num(&|x| Some(x.u_rmse_m_s)));
     t.push_num("v_rmse_m_s", num(&|x| Some(x.v_rmse_m_s)));
     t.push_num("r_rmse_deg_s", num(&|x| Some(x.r_rmse_deg_s)));
+    t.push_num(
+        "outside_identification_range",
+        num(&|x| x.outside_identification_range),
+    );
     for (i, key) in METRIC_KEYS.iter().enumerate() {
         t.push_num(
             &format!("{key}_recorded"),
