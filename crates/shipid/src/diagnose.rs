@@ -742,19 +742,27 @@ fn replay_score(model: &dyn Dynamics, rec: &Recording, horizon_s: f64) -> Replay
     s
 }
 
-/// North and east positions [m] of each segment replay (for figures).
-pub fn segment_tracks(
-    model: &dyn Dynamics,
-    rec: &Recording,
-    horizon_s: f64,
-) -> Vec<(Vec<f64>, Vec<f64>)> {
+/// Times and north and east positions [m] of each segment replay (for figures).
+pub fn segment_tracks(model: &dyn Dynamics, rec: &Recording, horizon_s: f64) -> Vec<SegmentTrack> {
     segments(rec, horizon_s)
         .into_iter()
         .map(|(a, b)| {
             let (sim, _) = replay_segment(model, rec, a, b);
-            (sim.x0, sim.y0)
+            SegmentTrack {
+                t_s: sim.t.iter().map(|t| t + rec.t[a]).collect(),
+                x0: sim.x0,
+                y0: sim.y0,
+            }
         })
         .collect()
+}
+
+/// One segment replay's track: recording time [s] and earth-fixed position x0 (north), y0 (east) [m].
+#[derive(Debug, Clone)]
+pub struct SegmentTrack {
+    pub t_s: Vec<f64>,
+    pub x0: Vec<f64>,
+    pub y0: Vec<f64>,
 }
 
 /// Noise of a signal: second differences of white noise have variance 6σ² (smooth motion at 10 Hz or

@@ -9,9 +9,12 @@ use shipid_io::write::write_atomic;
 use shipid_model::{AugmentedModelFile, EffectEntry, ModelFile};
 use shipid_sim::{Dynamics, Effect, WithEffects};
 
-use crate::diagnose::{DiagnoseInput, DiagnoseOptions, Report, diagnose, model_level};
+use crate::diagnose::{
+    DiagnoseInput, DiagnoseOptions, Report, SegmentTrack, diagnose, model_level,
+};
 use crate::range::{identification_range, training_data};
 use crate::simulate_cmd::load_model_parts;
+use crate::validate::interp;
 use crate::{CliError, Outcome, bad_input, failed};
 
 /// The model's own level: segment replays on the recordings it was trained on.
@@ -267,7 +270,9 @@ fn write_augmented(
     write_atomic(out, text.as_bytes()).map_err(failed)
 }
 
-/// Track of a recording with the segment replays of the model before and after the diagnosis.
+/// Track of a recording with the segment replays of the model before and after the diagnosis, and
+/// below it the replays' position error over time: on a track many ship lengths long a mismatch of a
+/// few hundredths of L is invisible, its size over time is not.
 fn track_figure(
     path: &Path,
     name: &str,
@@ -279,14 +284,17 @@ fn track_figure(
     let b = crate::diagnose::segment_tracks(before, rec, horizon_s);
     let a = crate::diagnose::segment_tracks(after, rec, horizon_s);
     let l = before.ship().lpp;
-    let pts = |x: &[f64], y: &[f64]| -> Vec<(f64, f64)> {
-        x.iter().zip(y).map(|(n, e)| (e / l, n / l)).collect()
+    let pts = |s: &SegmentTrack| -> Vec<(f64, f64)> {
+        s.x0.iter()
+            .zip(&s.y0)
+            .map(|(n, e)| (e / l, n / l))
+            .collect()
     };
     let mut xs: Vec<f64> = rec.y0.iter().map(|v| v / l).collect();
     let mut ys: Vec<f64> = rec.x0.iter().map(|v| v / l).collect();
     for s in b.iter().chain(&a) {
-        xs.extend(s.1.iter().map(|v| v / l));
-        ys.extend(s.0.iter().map(|v| v / l));
+        xs.extend(s.y0.iter().map(|v| v / l));
+        ys.extend(s.x0.iter().map(|v| v / l));
     }
     let range = |v: &[f64]| {
         let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
@@ -307,9 +315,10 @@ fn track_figure(
         let c = 0.5 * (y0 + y1);
         (y0, y1) = (c - 0.5 * w / aspect, c + 0.5 * w / aspect);
     }
-    let root = SVGBackend::new(path, (900, 800)).into_drawing_area();
+    let root = SVGBackend::new(path, (900, 1120)).into_drawing_area();
     root.fill(&WHITE)?;
-    let mut chart = ChartBuilder::on(&root)
+    let (top, bottom) = root.split_vertically(800);
+    let mut chart = ChartBuilder::on(&top)
         .caption(
             format!("{name}: recorded track and {horizon_s:.0} s segment replays"),
             ("sans-serif", 20),
@@ -325,27 +334,25 @@ fn track_figure(
         .draw()?;
     chart
         .draw_series(LineSeries::new(
-            pts(&rec.x0, &rec.y0),
+            rec.x0.iter().zip(&rec.y0).map(|(n, e)| (e / l, n / l)),
             BLACK.stroke_width(2),
         ))?
         .label("recorded")
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
     let red = RGBColor(214, 39, 40);
     let blue = RGBColor(31, 119, 180);
-    for (i, s) in b.iter().enumerate() {
-        let series = chart.draw_series(LineSeries::new(pts(&s.0, &s.1), red.stroke_width(1)))?;
-        if i == 0 {
-            series
-                .label("model (before)")
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], red));
-        }
-    }
-    for (i, s) in a.iter().enumerate() {
-        let series = chart.draw_series(LineSeries::new(pts(&s.0, &s.1), blue.stroke_width(1)))?;
-        if i == 0 {
-            series
-                .label("model + effect (after)")
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], blue));
+    let sides = [
+        (&b, red, "model (before)"),
+        (&a, blue, "model + effect (after)"),
+    ];
+    for (tracks, colour, label) in sides {
+        for (i, s) in tracks.iter().enumerate() {
+            let series = chart.draw_series(LineSeries::new(pts(s), colour.stroke_width(1)))?;
+            if i == 0 {
+                series
+                    .label(label)
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
+            }
         }
     }
     chart
@@ -353,6 +360,56 @@ fn track_figure(
         .border_style(BLACK)
         .background_style(WHITE.mix(0.8))
         .draw()?;
+
+    // Distance between each replay and the recorded position at the same time, ÷ L.
+    let errors = |tracks: &[SegmentTrack]| -> Vec<Vec<(f64, f64)>> {
+        tracks
+            .iter()
+            .map(|s| {
+                s.t_s
+                    .iter()
+                    .zip(s.x0.iter().zip(&s.y0))
+                    .map(|(&t, (&n, &e))| {
+                        let dn = n - interp(&rec.t, &rec.x0, t);
+                        let de = e - interp(&rec.t, &rec.y0, t);
+                        (t, dn.hypot(de) / l)
+                    })
+                    .collect()
+            })
+            .collect()
+    };
+    let (eb, ea) = (errors(&b), errors(&a));
+    let top_error = eb
+        .iter()
+        .chain(&ea)
+        .flatten()
+        .map(|p| p.1)
+        .filter(|v| v.is_finite())
+        .fold(0.0f64, f64::max)
+        .max(1e-3);
+    let t_end = rec.t.last().copied().unwrap_or(1.0).max(1e-3);
+    let mut err_chart = ChartBuilder::on(&bottom)
+        .caption(
+            "position error of the segment replays ÷ L",
+            ("sans-serif", 16),
+        )
+        .margin(15)
+        .x_label_area_size(40)
+        .y_label_area_size(50)
+        .build_cartesian_2d(0.0..t_end, 0.0..1.05 * top_error)?;
+    err_chart
+        .configure_mesh()
+        .x_desc("t [s]")
+        .y_desc("|Δ position| / L")
+        .draw()?;
+    for (segs, colour) in [(&eb, red), (&ea, blue)] {
+        for seg in segs.iter() {
+            err_chart.draw_series(LineSeries::new(
+                seg.iter().copied().filter(|p| p.1.is_finite()),
+                colour.stroke_width(1),
+            ))?;
+        }
+    }
     root.present()?;
     Ok(())
 }

@@ -9,7 +9,7 @@
 //!   a mark where the signs of a term disagree across cases;
 //! - `vif_<set>.svg` (Fig. 14/15): VIF per term (log scale);
 //! - `forces_<case>_<test>.svg` (Fig. 12/19): per-term force contributions φ_k β_k over time per DOF,
-//!   for the first case and its first training recording.
+//!   for the case with the smallest mean MRAE over its tests and its first training recording.
 //!
 //! A diverged prediction is drawn up to its divergence time, marked with an × and labelled
 //! "diverged" in the legend, never dropped. A figure that cannot be drawn is a warning, not a failure.
@@ -108,6 +108,29 @@ fn load_cases<'a>(study: &'a Study, out: &Path) -> Vec<CaseData<'a>> {
         .collect()
 }
 
+/// The case whose force decomposition is drawn: the one with the smallest mean MRAE over its test
+/// manoeuvres (its `result.json`), so the figure shows the study's best model rather than whichever
+/// case comes first (in a truncation sweep, a one-overshoot fit that diverges); the first case with a
+/// model when no case has an MRAE.
+fn best_case<'c, 'a>(cases: &'c [CaseData<'a>], out: &Path) -> Option<&'c CaseData<'a>> {
+    let mean_mrae = |c: &CaseData| -> Option<f64> {
+        let text =
+            std::fs::read_to_string(out.join("cases").join(&c.case.id).join("result.json")).ok()?;
+        let result: crate::runner::CaseResult = serde_json::from_str(&text).ok()?;
+        let m: Vec<f64> = result.tests.iter().filter_map(|t| t.mrae).collect();
+        (!m.is_empty() && result.tests.iter().all(|t| t.status == "ok"))
+            .then(|| m.iter().sum::<f64>() / m.len() as f64)
+    };
+    let with_model = cases.iter().filter(|c| c.model.is_some());
+    with_model
+        .clone()
+        .filter_map(|c| Some((mean_mrae(c)?, c)))
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, c)| c)
+        .or_else(|| with_model.clone().next())
+        .or_else(|| cases.first())
+}
+
 /// File-name-safe form of a name.
 fn slug(s: &str) -> String {
     let s: String = s
@@ -180,12 +203,12 @@ pub fn write_figures(study: &Study, out: &Path) -> FigureReport {
         }
         Err(e) => r.warnings.push(format!("diagnostics.csv: {e}")),
     }
-    if let Some(first) = cases.first()
-        && let Some(test) = first.case.training.first()
+    if let Some(chosen) = best_case(&cases, out)
+        && let Some(test) = chosen.case.training.first()
     {
-        let name = format!("forces_{}_{}.svg", slug(&first.case.id), slug(test));
+        let name = format!("forces_{}_{}.svg", slug(&chosen.case.id), slug(test));
         attempt(r, dir.join(name), &|p: &Path| {
-            forces(p, study, first, test).map(|_| true)
+            forces(p, study, chosen, test).map(|_| true)
         });
     }
     report
@@ -365,7 +388,7 @@ fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
     chart
         .configure_series_labels()
         .position(position)
-        .background_style(WHITE.mix(0.85))
+        .background_style(WHITE.mix(0.6))
         .border_style(BLACK)
         .label_font((FONT, 13))
         .draw()

@@ -239,7 +239,15 @@ fn the_report_follows_data_md_and_the_augmented_model_carries_the_effect() {
     let before = v["fit_before"]["position_rmse_over_l"].as_f64().unwrap();
     let after = v["fit_after"]["position_rmse_over_l"].as_f64().unwrap();
     assert!(after < 0.5 * before, "{before} → {after}");
-    assert!(dir.join("figures/tc35_sb-tracks.svg").is_file());
+    let track = std::fs::read_to_string(dir.join("figures/tc35_sb-tracks.svg")).unwrap();
+    assert!(
+        track.contains("model + effect (after)"),
+        "legend of the replays"
+    );
+    assert!(
+        track.contains("position error of the segment replays"),
+        "the error-over-time panel"
+    );
 
     // The augmented model: a file with `base = "mmg:kvlcc2"` and the current; simulating it replays the
     // current, so the recording is matched far better than by the base.
