@@ -70,7 +70,7 @@ struct CaseData<'a> {
     model: Option<AbkowitzModel>,
 }
 
-/// Legend of a case: set, estimator (with its fixed hyper-parameter), window.
+/// Legend of a case: set, estimator (refined or not, with its fixed hyper-parameter), window.
 fn case_label(c: &Case) -> String {
     let e = &c.estimator;
     let hyper = if e.tune {
@@ -85,9 +85,10 @@ fn case_label(c: &Case) -> String {
         String::new()
     };
     format!(
-        "{} {}{} {}",
+        "{} {}{}{} {}",
         c.set,
         e.name,
+        if e.refine { " refined" } else { "" },
         hyper,
         WindowSpec::label(c.window)
     )
@@ -765,6 +766,15 @@ fn bars(path: &Path, set: &str, rows: &[LongRow], kind: BarKind) -> Result<()> {
             BarKind::Vif => "VIF [-]",
         })
         .axis_desc_style((FONT, 15))
+        // Decades as 1e-5, not the 9.999999999999e-6 that the log scale's ticks print.
+        .y_label_formatter(&|v| {
+            let e = v.log10().round();
+            if (v / 10f64.powf(e) - 1.0).abs() < 1e-6 {
+                format!("1e{e:.0}")
+            } else {
+                format!("{v:.1e}")
+            }
+        })
         .draw()?;
     let k = cases.len().max(1) as f64;
     for (ci, case) in cases.iter().enumerate() {

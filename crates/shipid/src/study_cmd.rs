@@ -26,7 +26,14 @@ fn case_columns(t: &mut Table, rows: &[(&Case, &CaseResult)]) {
     };
     t.push_text("case", text(&|c, _| c.id.clone()));
     t.push_text("set", text(&|c, _| c.set.clone()));
-    t.push_text("estimator", text(&|c, _| c.estimator.name.clone()));
+    // A refined fit is another estimator for every reader of the tables ("lsq-oe", as in its case id).
+    t.push_text(
+        "estimator",
+        text(&|c, _| {
+            let e = &c.estimator;
+            format!("{}{}", e.name, if e.refine { "-oe" } else { "" })
+        }),
+    );
     t.push_text("solver", text(&|c, _| c.solver.clone()));
     t.push_text("training", text(&|c, _| c.training.join("+")));
     t.push_text("window", text(&|c, _| c.window.label()));

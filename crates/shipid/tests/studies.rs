@@ -202,7 +202,8 @@ fn check_reports_a_changed_number_and_exits_1() {
 }
 
 #[test]
-fn refine_in_a_study_is_its_own_case_and_its_replay_of_the_training_zigzag_is_closer() {
+fn refine_in_a_study_is_its_own_case_labelled_as_refined_and_its_replay_of_the_training_zigzag_is_closer()
+ {
     let study = load_study(&common::root().join(FIXTURES).join("refine.toml")).unwrap();
     let ids: Vec<&str> = study.cases.iter().map(|c| c.id.as_str()).collect();
     assert_eq!(ids.len(), 2, "{ids:?}");
@@ -225,4 +226,22 @@ fn refine_in_a_study_is_its_own_case_and_its_replay_of_the_training_zigzag_is_cl
         lsq.position_rmse_over_l
     );
     assert_ne!(results[0].coefficients, results[1].coefficients);
+    // Regression (both cases were labelled "lsq 4 OS" in the tables and figures): the refined one is
+    // told apart everywhere a reader meets it.
+    let tables = std::fs::read_to_string(dir.path().join("summary.csv")).unwrap();
+    assert!(
+        tables.contains(",lsq-oe,"),
+        "estimator column of the refined case"
+    );
+    let figures = dir.path().join("figures");
+    let bars = std::fs::read_to_string(figures.join("coefficients_reduced32.svg")).unwrap();
+    assert!(
+        bars.contains("lsq-oe 4 OS"),
+        "bar legend of the refined case"
+    );
+    let track = std::fs::read_to_string(figures.join("trajectories_zz35_35_ps.svg")).unwrap();
+    assert!(
+        track.contains("reduced32 lsq refined 4 OS"),
+        "track legend of the refined case"
+    );
 }
