@@ -358,7 +358,7 @@ fn track_figure(
     chart
         .configure_series_labels()
         .border_style(BLACK)
-        .background_style(WHITE.mix(0.8))
+        .background_style(WHITE.mix(0.6))
         .draw()?;
 
     // Distance between each replay and the recorded position at the same time, ÷ L.

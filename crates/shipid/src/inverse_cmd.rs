@@ -409,6 +409,7 @@ fn write_modes(out: &Path, modes: &VariationModes) -> Result<()> {
         .configure_mesh()
         .x_desc("mode")
         .y_desc("contribution [%]")
+        .x_label_formatter(&|x| format!("{x:.0}"))
         .draw()?;
     chart
         .draw_series(modes.contribution.iter().enumerate().map(|(i, c)| {
@@ -440,7 +441,7 @@ fn write_modes(out: &Path, modes: &VariationModes) -> Result<()> {
     chart
         .configure_series_labels()
         .position(SeriesLabelPosition::MiddleRight)
-        .background_style(WHITE.mix(0.8))
+        .background_style(WHITE.mix(0.6))
         .border_style(BLACK)
         .draw()?;
     root.present()?;
@@ -483,26 +484,40 @@ fn motions_figure(path: &PathBuf, target: &TargetShip, figures: &[MotionFigure])
             .x_desc("y0 / L")
             .y_desc("x0 / L")
             .draw()?;
-        for (m, colour) in sims.iter().filter_map(|(m, c)| m.as_ref().map(|m| (m, c))) {
-            for rec in [&m.turn_p35, &m.turn_m35] {
+        for ((m, colour), label) in sims
+            .iter()
+            .zip(["network's weights (paper 003)", "refined by re-simulation"])
+            .filter_map(|((m, c), label)| m.as_ref().map(|m| ((m, *c), label)))
+        {
+            for (k, rec) in [&m.turn_p35, &m.turn_m35].into_iter().enumerate() {
                 let end = rec
                     .psi
                     .iter()
                     .position(|p| (p - rec.psi[0]).abs() > std::f64::consts::PI * 1.1)
                     .unwrap_or(rec.len());
-                c.draw_series(LineSeries::new(
+                let series = c.draw_series(LineSeries::new(
                     (0..end).map(|i| (rec.y0[i] / l, rec.x0[i] / l)),
                     colour.stroke_width(2),
                 ))?;
+                if k == 0 {
+                    series.label(label).legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+                    });
+                }
             }
         }
-        for (ad, dt) in [(q[0], q[1]), (q[3], q[4])] {
-            c.draw_series(DashedLineSeries::new(
+        for (k, (ad, dt)) in [(q[0], q[1]), (q[3], q[4])].into_iter().enumerate() {
+            let given = c.draw_series(DashedLineSeries::new(
                 [(0.0, ad), (dt, ad)],
                 5,
                 4,
                 BLACK.into(),
             ))?;
+            if k == 0 {
+                given
+                    .label("given index (advance, tactical diameter, peak ψ and its time)")
+                    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 8, y)], BLACK));
+            }
             c.draw_series(DashedLineSeries::new(
                 [(dt, -1.0), (dt, 6.0)],
                 5,
@@ -510,6 +525,12 @@ fn motions_figure(path: &PathBuf, target: &TargetShip, figures: &[MotionFigure])
                 BLACK.into(),
             ))?;
         }
+        c.configure_series_labels()
+            .position(SeriesLabelPosition::LowerLeft)
+            .background_style(WHITE.mix(0.6))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 11))
+            .draw()?;
         for (k, (side, peak, t_idx)) in [(1.0, q[5], q[6]), (-1.0, q[7], q[8])]
             .into_iter()
             .enumerate()
@@ -529,7 +550,7 @@ fn motions_figure(path: &PathBuf, target: &TargetShip, figures: &[MotionFigure])
                 .build_cartesian_2d(0.0..t_max, -55.0..55.0)?;
             c.configure_mesh()
                 .x_desc("t U0 / L")
-                .y_desc("ψ, δ [deg]")
+                .y_desc("ψ (coloured), δ (grey) [deg]")
                 .draw()?;
             for (m, colour) in sims.iter().filter_map(|(m, c)| m.as_ref().map(|m| (m, c))) {
                 let rec = if side > 0.0 {
@@ -537,15 +558,17 @@ fn motions_figure(path: &PathBuf, target: &TargetShip, figures: &[MotionFigure])
                 } else {
                     &m.zigzag_m20
                 };
+                // Points past the axis would be drawn on its edge, as a vertical line.
+                let shown = rec.t.iter().take_while(|&&t| t / tl <= t_max).count();
                 c.draw_series(LineSeries::new(
-                    rec.t
+                    rec.t[..shown]
                         .iter()
                         .zip(&rec.psi)
                         .map(|(t, p)| (t / tl, (p - rec.psi[0]).to_degrees())),
                     colour.stroke_width(2),
                 ))?;
                 c.draw_series(LineSeries::new(
-                    rec.t
+                    rec.t[..shown]
                         .iter()
                         .zip(&rec.delta)
                         .map(|(t, d)| (t / tl, d.to_degrees())),

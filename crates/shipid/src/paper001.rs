@@ -341,7 +341,7 @@ fn figure(path: &Path, rec: &Recording, series: &[(String, Predicted)]) -> Resul
         }
         chart
             .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
+            .background_style(WHITE.mix(0.6))
             .border_style(BLACK)
             .label_font((FONT, 13))
             .position(SeriesLabelPosition::LowerLeft)
@@ -393,7 +393,7 @@ fn figure(path: &Path, rec: &Recording, series: &[(String, Predicted)]) -> Resul
     }
     chart
         .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
+        .background_style(WHITE.mix(0.6))
         .border_style(BLACK)
         .label_font((FONT, 13))
         .position(SeriesLabelPosition::UpperLeft)
