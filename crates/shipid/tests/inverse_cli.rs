@@ -67,6 +67,11 @@ fn a_small_run_writes_tables_and_figures() {
     ] {
         assert!(dir.path().join(f).is_file(), "{f} missing");
     }
+    // Regression: the motions figure had no legend saying which colour is which.
+    let motions = std::fs::read_to_string(dir.path().join("kvlcc2/motions.svg")).unwrap();
+    for label in ["weights (paper 003)", "refined by re-simulation"] {
+        assert!(motions.contains(label), "legend entry {label}");
+    }
     let csv = std::fs::read_to_string(dir.path().join("virtual/indexes.csv")).expect("written");
     // Header + 9 indexes × 3 motions, + 9 × 3 refined rows.
     assert_eq!(csv.lines().count(), 1 + 27 + 27, "{csv}");
