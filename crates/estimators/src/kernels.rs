@@ -57,6 +57,32 @@ fn cross_products_generic<const T: usize, const L: usize, const FMA: bool>(
             let b: [&[f64]; T] = std::array::from_fn(|t| &col(pair.1 * T + t)[..end]);
             let mut s = *s_out;
             let mut r = start;
+            if pair.0 == pair.1 {
+                // A diagonal tile: the same columns on both sides, so half the loads, and only the
+                // products i ≤ j (10 of 16 at T = 4) are needed.
+                while r < end {
+                    let bv: [[f64; L]; T] = std::array::from_fn(|t| lanes::<L>(a[t], r));
+                    let mut av = bv;
+                    if let Some(rw) = root_weights {
+                        let wl = lanes::<L>(rw, r);
+                        for t in 0..T {
+                            for l in 0..L {
+                                av[t][l] *= wl[l] * wl[l];
+                            }
+                        }
+                    }
+                    for i in 0..T {
+                        for j in i..T {
+                            for l in 0..L {
+                                s[i][j][l] = madd::<FMA>(av[i][l], bv[j][l], s[i][j][l]);
+                            }
+                        }
+                    }
+                    r += L;
+                }
+                *s_out = s;
+                continue;
+            }
             while r < end {
                 let mut av: [[f64; L]; T] = std::array::from_fn(|t| lanes::<L>(a[t], r));
                 let bv: [[f64; L]; T] = std::array::from_fn(|t| lanes::<L>(b[t], r));
