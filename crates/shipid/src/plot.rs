@@ -70,8 +70,10 @@ struct CaseData<'a> {
     model: Option<AbkowitzModel>,
 }
 
-/// Legend of a case: set, estimator (refined or not, with its fixed hyper-parameter), window.
-fn case_label(c: &Case) -> String {
+/// Legend of a case: set, estimator (refined or not, with its fixed hyper-parameter), window, and the
+/// training recordings when the study has several training combinations (otherwise cases that differ
+/// only in them would share a label).
+fn case_label(study: &Study, c: &Case) -> String {
     let e = &c.estimator;
     let hyper = if e.tune {
         " tuned".to_string()
@@ -84,13 +86,25 @@ fn case_label(c: &Case) -> String {
     } else {
         String::new()
     };
+    let several_trainings = study.cases.iter().any(|o| o.training != c.training);
+    let training = if several_trainings {
+        let names: Vec<&str> = c
+            .training
+            .iter()
+            .map(|f| f.trim_end_matches(".csv"))
+            .collect();
+        format!(" on {}", names.join("+"))
+    } else {
+        String::new()
+    };
     format!(
-        "{} {}{}{} {}",
+        "{} {}{}{} {}{}",
         c.set,
         e.name,
         if e.refine { " refined" } else { "" },
         hyper,
-        WindowSpec::label(c.window)
+        WindowSpec::label(c.window),
+        training
     )
 }
 
@@ -287,7 +301,7 @@ fn predictions(study: &Study, cases: &[CaseData], r: &DatasetRecording) -> Vec<P
                 SimStatus::Diverged { t_s, .. } => Some(t_s + t0),
             };
             Some(Prediction {
-                label: case_label(c.case),
+                label: case_label(study, c.case),
                 colour: colour(i),
                 t: s.t.iter().map(|t| t + t0).collect(),
                 x0: s.x0,
@@ -862,7 +876,7 @@ fn forces(path: &Path, study: &Study, c: &CaseData, test: &str) -> Result<()> {
     title.draw(&Text::new(
         format!(
             "Force contributions φ_k β_k of case {} on {} (prime)",
-            case_label(c.case),
+            case_label(study, c.case),
             test
         ),
         (20, 12),
@@ -927,4 +941,31 @@ fn forces(path: &Path, study: &Study, c: &CaseData, test: &str) -> Result<()> {
     }
     root.present()?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Regression: in a study with several training combinations (the HSVA study), cases that
+    /// differed only in their training recordings shared one legend label.
+    #[test]
+    fn cases_that_differ_only_in_training_get_different_labels() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/studies/small.toml");
+        let mut study = crate::study::load_study(&path).unwrap();
+        let alone = case_label(&study, &study.cases[0]);
+        assert!(
+            !alone.contains(" on "),
+            "{alone}: one training combination needs no names"
+        );
+        let mut other = study.cases[0].clone();
+        other.training = vec!["zz20_20_ps.csv".into()];
+        study.cases.push(other);
+        let (a, b) = (
+            case_label(&study, &study.cases[0]),
+            case_label(&study, study.cases.last().unwrap()),
+        );
+        assert_ne!(a, b);
+        assert!(b.ends_with(" on zz20_20_ps"), "{b}");
+    }
 }
