@@ -31,6 +31,47 @@ fn lanes<const L: usize>(c: &[f64], r: usize) -> [f64; L] {
     v
 }
 
+/// One T×T register tile of [`cross_products_generic`] over rows `start..end`: `s[i][j] += Σ
+/// wᵣ aᵢᵣ bⱼᵣ` lane-wise. A diagonal tile (`DIAG`, `a` = `b`) loads its columns once and forms only
+/// the products i ≤ j (10 of 16 at T = 4); the others are left as they are.
+#[inline(always)]
+fn tile<const T: usize, const L: usize, const FMA: bool, const DIAG: bool>(
+    mut s: [[[f64; L]; T]; T],
+    a: [&[f64]; T],
+    b: [&[f64]; T],
+    root_weights: Option<&[f64]>,
+    start: usize,
+    end: usize,
+) -> [[[f64; L]; T]; T] {
+    let mut r = start;
+    while r < end {
+        let bv: [[f64; L]; T] = std::array::from_fn(|t| lanes::<L>(b[t], r));
+        let mut av: [[f64; L]; T] = if DIAG {
+            bv
+        } else {
+            std::array::from_fn(|t| lanes::<L>(a[t], r))
+        };
+        if let Some(rw) = root_weights {
+            // (√wᵢ aᵢ)(√wᵢ bᵢ) = wᵢ aᵢ bᵢ: one side carries the weight.
+            let wl = lanes::<L>(rw, r);
+            for t in 0..T {
+                for l in 0..L {
+                    av[t][l] *= wl[l] * wl[l];
+                }
+            }
+        }
+        for i in 0..T {
+            for j in (if DIAG { i } else { 0 })..T {
+                for l in 0..L {
+                    s[i][j][l] = madd::<FMA>(av[i][l], bv[j][l], s[i][j][l]);
+                }
+            }
+        }
+        r += L;
+    }
+    s
+}
+
 /// Upper triangle (row-major pairs `i ≤ j`) of `AᵀA` for the columns of `A`, all of
 /// length `n`. T×T register tiles of column pairs, L lanes per accumulator.
 #[inline(always)]
@@ -55,56 +96,11 @@ fn cross_products_generic<const T: usize, const L: usize, const FMA: bool>(
         for (pair, s_out) in pairs.iter().zip(acc.iter_mut()) {
             let a: [&[f64]; T] = std::array::from_fn(|t| &col(pair.0 * T + t)[..end]);
             let b: [&[f64]; T] = std::array::from_fn(|t| &col(pair.1 * T + t)[..end]);
-            let mut s = *s_out;
-            let mut r = start;
-            if pair.0 == pair.1 {
-                // A diagonal tile: the same columns on both sides, so half the loads, and only the
-                // products i ≤ j (10 of 16 at T = 4) are needed.
-                while r < end {
-                    let bv: [[f64; L]; T] = std::array::from_fn(|t| lanes::<L>(a[t], r));
-                    let mut av = bv;
-                    if let Some(rw) = root_weights {
-                        let wl = lanes::<L>(rw, r);
-                        for t in 0..T {
-                            for l in 0..L {
-                                av[t][l] *= wl[l] * wl[l];
-                            }
-                        }
-                    }
-                    for i in 0..T {
-                        for j in i..T {
-                            for l in 0..L {
-                                s[i][j][l] = madd::<FMA>(av[i][l], bv[j][l], s[i][j][l]);
-                            }
-                        }
-                    }
-                    r += L;
-                }
-                *s_out = s;
-                continue;
-            }
-            while r < end {
-                let mut av: [[f64; L]; T] = std::array::from_fn(|t| lanes::<L>(a[t], r));
-                let bv: [[f64; L]; T] = std::array::from_fn(|t| lanes::<L>(b[t], r));
-                if let Some(rw) = root_weights {
-                    // (√wᵢ aᵢ)(√wᵢ bᵢ) = wᵢ aᵢ bᵢ: one side carries the weight.
-                    let wl = lanes::<L>(rw, r);
-                    for t in 0..T {
-                        for l in 0..L {
-                            av[t][l] *= wl[l] * wl[l];
-                        }
-                    }
-                }
-                for i in 0..T {
-                    for j in 0..T {
-                        for l in 0..L {
-                            s[i][j][l] = madd::<FMA>(av[i][l], bv[j][l], s[i][j][l]);
-                        }
-                    }
-                }
-                r += L;
-            }
-            *s_out = s;
+            *s_out = if pair.0 == pair.1 {
+                tile::<T, L, FMA, true>(*s_out, a, a, root_weights, start, end)
+            } else {
+                tile::<T, L, FMA, false>(*s_out, a, b, root_weights, start, end)
+            };
         }
         start = end;
     }
