@@ -53,10 +53,9 @@ struct DofRange {
 }
 
 impl DofRange {
-    /// ‖R⁻ᵀ S⁻¹ φ‖² by forward substitution on Rᵀ.
-    fn leverage(&self, phi: &[f64]) -> f64 {
+    /// ‖R⁻ᵀ S⁻¹ φ‖² by forward substitution on Rᵀ; `w` is scratch of at least φ's length.
+    fn leverage(&self, phi: &[f64], w: &mut [f64]) -> f64 {
         let p = phi.len();
-        let mut w = vec![0.0; p];
         let mut h = 0.0;
         for j in 0..p {
             let mut v = phi[j] * self.inv_scale[j];
@@ -97,7 +96,6 @@ impl IdentificationRange {
         set: &CoefficientSet,
         states: &[[f64; 4]],
     ) -> Result<IdentificationRange, RangeError> {
-        let n = states.len();
         if states.iter().flatten().any(|v| !v.is_finite()) {
             return Err(RangeError::NonFinite);
         }
@@ -105,60 +103,8 @@ impl IdentificationRange {
             .iter()
             .map(|&[du, v, r, d]| Powers::new(du, v, r, d))
             .collect();
-        let mut dofs = Vec::with_capacity(3);
-        for dof in Dof::ALL {
-            let terms = &set.terms[dof.index()];
-            let p = terms.len();
-            if n <= p {
-                return Err(RangeError::TooFewSamples {
-                    dof,
-                    samples: n,
-                    terms: p,
-                });
-            }
-            let phi = Mat::<f64>::from_fn(n, p, |i, j| terms[j].eval_powers(&powers[i]));
-            let inv_scale: Vec<f64> = (0..p)
-                .map(|j| {
-                    let ss: f64 = (0..n).map(|i| phi[(i, j)] * phi[(i, j)]).sum();
-                    let rms = (ss / n as f64).sqrt();
-                    if rms > 0.0 { 1.0 / rms } else { 0.0 }
-                })
-                .collect();
-            let z = Mat::<f64>::from_fn(n, p, |i, j| phi[(i, j)] * inv_scale[j]);
-            let qr = z.as_ref().qr();
-            let rf = qr.thin_R();
-            let mut r = vec![0.0; p * p];
-            for i in 0..p {
-                for j in i..p {
-                    r[i * p + j] = rf[(i, j)];
-                }
-            }
-            let largest = (0..p).fold(0.0f64, |m, j| m.max(r[j * p + j].abs()));
-            if let Some(j) = (0..p).find(|&j| {
-                inv_scale[j] == 0.0
-                    || r[j * p + j].abs().partial_cmp(&(RANK_TOLERANCE * largest))
-                        != Some(std::cmp::Ordering::Greater)
-            }) {
-                return Err(RangeError::RankDeficient {
-                    dof,
-                    term: set.names(dof)[j].clone(),
-                });
-            }
-            let mut range = DofRange {
-                inv_scale,
-                r,
-                h_max: 0.0,
-            };
-            let mut row = vec![0.0; p];
-            for pw in &powers {
-                for (x, t) in row.iter_mut().zip(terms) {
-                    *x = t.eval_powers(pw);
-                }
-                range.h_max = range.h_max.max(range.leverage(&row));
-            }
-            dofs.push(range);
-        }
-        let dofs: [DofRange; 3] = dofs.try_into().map_err(|_| RangeError::NonFinite)?;
+        let range = |dof: Dof| dof_range(set, dof, &powers);
+        let dofs = [range(Dof::X)?, range(Dof::Y)?, range(Dof::N)?];
         Ok(IdentificationRange {
             set: set.clone(),
             dofs,
@@ -173,16 +119,73 @@ impl IdentificationRange {
             return f64::NAN;
         }
         let pw = Powers::new(du, v, r, delta);
+        // One row and one scratch buffer for the three equations (called once per sample).
+        let p = self.set.terms.iter().map(Vec::len).max().unwrap_or(0);
+        let (mut row, mut w) = (Vec::with_capacity(p), vec![0.0; p]);
         let mut worst = 0.0f64;
-        for (d, range) in self.dofs.iter().enumerate() {
-            let row: Vec<f64> = self.set.terms[d]
-                .iter()
-                .map(|t| t.eval_powers(&pw))
-                .collect();
-            worst = worst.max(range.leverage(&row) / range.h_max);
+        for (terms, range) in self.set.terms.iter().zip(&self.dofs) {
+            row.clear();
+            row.extend(terms.iter().map(|t| t.eval_powers(&pw)));
+            worst = worst.max(range.leverage(&row, &mut w) / range.h_max);
         }
         worst
     }
+}
+
+/// The range of one degree of freedom over the training states' `powers`.
+fn dof_range(set: &CoefficientSet, dof: Dof, powers: &[Powers]) -> Result<DofRange, RangeError> {
+    let n = powers.len();
+    let terms = &set.terms[dof.index()];
+    let p = terms.len();
+    if n <= p {
+        return Err(RangeError::TooFewSamples {
+            dof,
+            samples: n,
+            terms: p,
+        });
+    }
+    let phi = Mat::<f64>::from_fn(n, p, |i, j| terms[j].eval_powers(&powers[i]));
+    let inv_scale: Vec<f64> = (0..p)
+        .map(|j| {
+            let ss: f64 = (0..n).map(|i| phi[(i, j)] * phi[(i, j)]).sum();
+            let rms = (ss / n as f64).sqrt();
+            if rms > 0.0 { 1.0 / rms } else { 0.0 }
+        })
+        .collect();
+    let z = Mat::<f64>::from_fn(n, p, |i, j| phi[(i, j)] * inv_scale[j]);
+    let qr = z.as_ref().qr();
+    let rf = qr.thin_R();
+    let mut r = vec![0.0; p * p];
+    for i in 0..p {
+        for j in i..p {
+            r[i * p + j] = rf[(i, j)];
+        }
+    }
+    let largest = (0..p).fold(0.0f64, |m, j| m.max(r[j * p + j].abs()));
+    if let Some(j) = (0..p).find(|&j| {
+        inv_scale[j] == 0.0
+            || r[j * p + j].abs().partial_cmp(&(RANK_TOLERANCE * largest))
+                != Some(std::cmp::Ordering::Greater)
+    }) {
+        return Err(RangeError::RankDeficient {
+            dof,
+            term: set.names(dof)[j].clone(),
+        });
+    }
+    let mut range = DofRange {
+        inv_scale,
+        r,
+        h_max: 0.0,
+    };
+    // The training rows are Φ's own rows: the same values leverage_ratio forms for a state.
+    let (mut row, mut w) = (vec![0.0; p], vec![0.0; p]);
+    for i in 0..n {
+        for (j, x) in row.iter_mut().enumerate() {
+            *x = phi[(i, j)];
+        }
+        range.h_max = range.h_max.max(range.leverage(&row, &mut w));
+    }
+    Ok(range)
 }
 
 #[cfg(test)]

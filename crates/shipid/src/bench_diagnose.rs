@@ -29,7 +29,7 @@ use shipid_sim::{AbkowitzDynamics, Dynamics, Effect};
 use shipid_tables::Table;
 
 use crate::diagnose::{DiagnoseInput, DiagnoseOptions, diagnose, model_level};
-use crate::fit::{EstimatorSpec, WindowSpec, fit_dataset, load_set, training_samples};
+use crate::fit::{EstimatorSpec, WindowSpec, fit_dataset, load_set};
 use crate::generate::{Generated, default_manoeuvres, generate_with};
 use crate::range::{identification_range, training_data};
 use crate::simulate_cmd::load_model_parts;
@@ -255,8 +255,7 @@ pub fn run(
                     WindowSpec::Whole,
                     Solver::Fast,
                 )?;
-                let (samples, _) = training_samples(&clean, &names, WindowSpec::Whole)?;
-                let range = IdentificationRange::from_samples(&fit.model.set, &samples).ok();
+                let range = IdentificationRange::from_samples(&fit.model.set, &fit.training).ok();
                 (
                     (
                         Box::new(AbkowitzDynamics(fit.model)),

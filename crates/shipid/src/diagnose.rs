@@ -41,7 +41,7 @@ use shipid_sim::{
     Dynamics, Effect, Replay, SimOptions, SimStatus, State, WithEffects, sim::RudderFilter,
 };
 
-use crate::range::outside_fraction;
+use crate::range::{outside_count, share};
 use crate::validate::{DT_OVER_L_OVER_U0, interp};
 
 /// Tunables of the diagnosis, with their reasons.
@@ -966,11 +966,15 @@ pub struct DiagnoseInput<'a> {
 /// states lies outside it (and the mismatch is real).
 const OUTSIDE_WORTH_SAYING: f64 = 0.05;
 
-/// Fractions of the thinned samples of each recording whose state lies outside `range`.
-fn outside_fractions(range: &IdentificationRange, prep: &[Prepared], ship: &Ship) -> Vec<f64> {
+/// Per recording, how many of its thinned samples lie outside `range`, and how many there are.
+fn outside_counts(
+    range: &IdentificationRange,
+    prep: &[Prepared],
+    ship: &Ship,
+) -> Vec<(usize, usize)> {
     let s = PrimeScale::of(ship);
     prep.iter()
-        .map(|p| outside_fraction(range, &p.rec, &s, p.samples.iter().copied()))
+        .map(|p| outside_count(range, &p.rec, &s, p.samples.iter().copied()))
         .collect()
 }
 
@@ -1287,18 +1291,12 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
             worse.join(", ")
         )
     };
-    let outside: Option<Vec<f64>> = input
+    let outside: Option<Vec<(usize, usize)>> = input
         .identification_range
-        .map(|range| outside_fractions(range, &prep, &ship));
-    let outside_all = outside.as_ref().map(|f| {
-        let total: usize = prep.iter().map(|p| p.samples.len()).sum();
-        let weighted: f64 = f
-            .iter()
-            .zip(&prep)
-            .map(|(x, p)| x * p.samples.len() as f64)
-            .sum();
-        weighted / total.max(1) as f64
-    });
+        .map(|range| outside_counts(range, &prep, &ship));
+    let outside_all = outside
+        .as_ref()
+        .map(|c| share(c.iter().fold((0, 0), |(o, t), &(co, ct)| (o + co, t + ct))));
     let explanation = match outside_all {
         Some(f) if f >= OUTSIDE_WORTH_SAYING && before_l > real_threshold => format!(
             "{explanation}; {:.0} % of the recorded states lie outside the base model's identification range (leverage above its training maximum), where its own forces are extrapolated: part of any mismatch left there is the base model's",
@@ -1314,7 +1312,7 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
             recording: p.file.clone(),
             before_position_rmse_over_l: b.position_rmse() / lpp,
             after_position_rmse_over_l: a.position_rmse() / lpp,
-            outside_identification_range: outside.as_ref().map(|f| f[k]),
+            outside_identification_range: outside.as_ref().map(|c| share(c[k])),
         })
         .collect();
     let located = locate(&prep, &base_res, &scale, &ship);

@@ -216,7 +216,8 @@ pub struct FitOutput {
     /// Wall time of the estimator solves including tuning and the output-error refinement [s] (not
     /// loading or building Φ).
     pub fit_time_s: f64,
-    pub samples: usize,
+    /// The primed training samples (stacked windows), e.g. for the model's identification range.
+    pub training: Samples,
 }
 
 /// The named recordings of `ds` (all of them when `recordings` is empty); a name the data set does not
@@ -428,7 +429,7 @@ pub fn fit_dataset(
         file,
         dofs: reports,
         fit_time_s,
-        samples: samples.len(),
+        training: samples,
     })
 }
 

@@ -60,7 +60,7 @@ pub fn report_json(out: &FitOutput) -> Value {
     }
     json!({
         "fit_time_s": out.fit_time_s,
-        "samples": out.samples,
+        "samples": out.training.len(),
         "set": out.model.set.name,
         "estimator": out.file.estimator,
         "dofs": dofs,
@@ -91,7 +91,7 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
             "fitted {} with {} on {} samples in {:.2} ms → {}",
             out.model.set.name,
             out.file.estimator.name,
-            out.samples,
+            out.training.len(),
             out.fit_time_s * 1e3,
             a.out.display()
         );

@@ -58,13 +58,13 @@ pub fn primed_state(rec: &Recording, scale: &PrimeScale, i: usize) -> [f64; 4] {
     ]
 }
 
-/// Fraction of the samples `idx` of `rec` whose state lies outside `range`.
-pub fn outside_fraction(
+/// How many of the samples `idx` of `rec` lie outside `range`, and how many there are.
+pub fn outside_count(
     range: &IdentificationRange,
     rec: &Recording,
     scale: &PrimeScale,
     idx: impl Iterator<Item = usize>,
-) -> f64 {
+) -> (usize, usize) {
     let (mut outside, mut total) = (0usize, 0usize);
     for i in idx {
         let [du, v, r, d] = primed_state(rec, scale, i);
@@ -73,5 +73,20 @@ pub fn outside_fraction(
             outside += 1;
         }
     }
+    (outside, total)
+}
+
+/// `outside / total` of an [`outside_count`] (0 without samples).
+pub fn share((outside, total): (usize, usize)) -> f64 {
     outside as f64 / total.max(1) as f64
+}
+
+/// Fraction of the samples `idx` of `rec` whose state lies outside `range`.
+pub fn outside_fraction(
+    range: &IdentificationRange,
+    rec: &Recording,
+    scale: &PrimeScale,
+    idx: impl Iterator<Item = usize>,
+) -> f64 {
+    share(outside_count(range, rec, scale, idx))
 }

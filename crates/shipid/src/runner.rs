@@ -18,7 +18,7 @@ use shipid_io::write::write_atomic;
 use shipid_model::IdentificationRange;
 use shipid_sim::{AbkowitzDynamics, Metrics, SimStatus};
 
-use crate::fit::{fit_dataset, load_set, training_samples};
+use crate::fit::{fit_dataset, load_set};
 use crate::range::outside_fraction;
 use crate::study::{Case, Study};
 use crate::validate::validate_recording;
@@ -151,9 +151,7 @@ pub fn run_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
         })
         .unwrap_or("ok");
     let model = AbkowitzDynamics(out.model.clone());
-    let range = training_samples(&study.dataset, &case.training, case.window)
-        .ok()
-        .and_then(|(samples, _)| IdentificationRange::from_samples(&out.model.set, &samples).ok());
+    let range = IdentificationRange::from_samples(&out.model.set, &out.training).ok();
     let scale = PrimeScale::of(&study.dataset.ship);
     let tests = study
         .tests
@@ -230,7 +228,7 @@ pub fn run_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
         status: worst.into(),
         message: None,
         fit_time_s: Some(out.fit_time_s),
-        samples: out.samples,
+        samples: out.training.len(),
         dofs: out
             .dofs
             .iter()
