@@ -288,6 +288,21 @@ def versions():
     return v
 
 
+def measure(pb, case, method, data, run):
+    """One method's record on problem pb: `run()` returns (beta, info, times); J is evaluated
+    at beta on `data` = (phi, y, scale, hp). A failed solve is a result too."""
+    phi, y, scale, hp = data
+    try:
+        beta, info, times = run()
+        j = float(objective(case, phi, y, scale, hp, beta))
+        rec = {"time_s": statistics.median(times), "time_min_s": min(times),
+               "repeats": len(times), "objective": j, "coefficients": beta.tolist(), **info}
+    except Exception as e:
+        rec = {"error": f"{type(e).__name__}: {e}"}
+    return {"id": pb["id"], "set": pb["set"], "training_set": pb["training_set"],
+            "dof": pb["dof"], "n": pb["n"], "p": pb["p"], "case": case, "method": method, **rec}
+
+
 def report(rec):
     print(f"{rec['id']:>28} {rec['case']:>11} {rec['method']:>24}: "
           f"{rec.get('time_s', float('nan')):.3e} s  J={rec.get('objective')}"
@@ -329,41 +344,22 @@ def main():
             for case in cases:
                 lo, hi = (lower, upper) if case == "bounded_lsq" else (
                     np.full_like(lower, -np.inf), np.full_like(upper, np.inf))
+                def record(method, run):
+                    rec = measure(pb, case, method, (phi, y, scale, hp), run)
+                    records.append(rec)
+                    report(rec)
+
+                args = (phi, y, lo, hi, hp)
                 for name, fn in METHODS[case]:
                     if a.skip_cvxpy_svr and case == "svr" and name.startswith("cvxpy"):
                         continue
-                    try:
-                        beta, info, times = timed(fn, (phi, y, lo, hi, hp),
-                                                  a.min_repeats, a.min_time, a.max_time)
-                        j = float(objective(case, phi, y, scale, hp, beta))
-                        rec = {"time_s": statistics.median(times), "time_min_s": min(times),
-                               "repeats": len(times), "objective": j,
-                               "coefficients": beta.tolist(), **info}
-                    except Exception as e:  # a failed solve is a result too
-                        rec = {"error": f"{type(e).__name__}: {e}"}
-                    rec = {"id": pb["id"], "set": pb["set"], "training_set": pb["training_set"],
-                           "dof": pb["dof"], "n": pb["n"], "p": pb["p"], "case": case,
-                           "method": name, **rec}
-                    records.append(rec)
-                    report(rec)
+                    record(name, lambda: timed(fn, args, a.min_repeats, a.min_time,
+                                               a.max_time))
                 j_ref = reference.get((pb["id"], case))
                 if case in EQUAL_J_CASES and j_ref is not None and not (
                         a.skip_cvxpy_svr and case == "svr"):
-                    try:
-                        beta, info, times = equal_objective(
-                            case, (phi, y, lo, hi, hp), j_ref, scale,
-                            a.min_repeats, a.min_time, a.max_time)
-                        j = float(objective(case, phi, y, scale, hp, beta))
-                        rec = {"time_s": statistics.median(times), "time_min_s": min(times),
-                               "repeats": len(times), "objective": j,
-                               "coefficients": beta.tolist(), **info}
-                    except Exception as e:
-                        rec = {"error": f"{type(e).__name__}: {e}"}
-                    rec = {"id": pb["id"], "set": pb["set"], "training_set": pb["training_set"],
-                           "dof": pb["dof"], "n": pb["n"], "p": pb["p"], "case": case,
-                           "method": EQUAL_J_METHOD, **rec}
-                    records.append(rec)
-                    report(rec)
+                    record(EQUAL_J_METHOD, lambda: equal_objective(
+                        case, args, j_ref, scale, a.min_repeats, a.min_time, a.max_time))
             a.out.write_text(json.dumps({"versions": versions(), "records": records}, indent=1))
     a.out.write_text(json.dumps({"versions": versions(), "min_repeats": a.min_repeats,
                                  "min_time_s": a.min_time, "max_time_s": a.max_time,

@@ -213,13 +213,13 @@ def main():
                 if sol and m == "cvxpy":
                     cell += f" ({'/'.join(sol)})"
                 if m == EQUAL_J:
-                    tols = sorted({r["tolerance"] for r in rs if "tolerance" in r})
-                    cell += f" (OSQP, tol. {'…'.join(f'{t:.0e}' for t in (tols[0], tols[-1]))})" \
-                        if tols else ""
-                    missed = [r for r in rs if r.get("reached_equal_objective") is False]
+                    tols = sorted({f"{r['tolerance']:.0e}" for r in rs if "tolerance" in r},
+                                  key=float)
+                    if tols:
+                        cell += f" (OSQP, tol. {'…'.join(dict.fromkeys((tols[0], tols[-1])))})"
+                    missed = sum(r.get("reached_equal_objective") is False for r in rs)
                     if missed:
-                        st[m]["missed"] = st[m].get("missed", 0) + len(missed)
-                        cell += f" (ΔJ ≤ {tol:g} not reached on {len(missed)} DOF)"
+                        cell += f" (ΔJ ≤ {tol:g} not reached on {missed} DOF)"
                 cell += f" · {sp:.0f}×" if sp >= 10 else f" · {sp:.1f}×"
                 cell += f" · {sci(dj)}"
                 if warn:
