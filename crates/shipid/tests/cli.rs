@@ -52,14 +52,13 @@ fn bad_input_exits_with_2_and_names_the_problem() {
 
 #[test]
 fn simulate_prints_status_and_metric_keys() {
-    let out = common::shipid(&[
+    let out = common::shipid_ok(&[
         "simulate",
         "mmg:kvlcc2",
         "--manoeuvre",
         "zigzag:20/20:starboard",
         "--json",
     ]);
-    assert!(out.status.success());
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["status"], "ok");
     // DOMAIN.md §6: 20/20 starboard first 10.5° / 15.7°.
@@ -81,7 +80,7 @@ fn simulate_prints_status_and_metric_keys() {
 fn simulate_writes_a_readable_time_series() {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("tc.csv");
-    let out = common::shipid(&[
+    common::shipid_ok(&[
         "simulate",
         "mmg:kvlcc2",
         "--manoeuvre",
@@ -91,11 +90,6 @@ fn simulate_writes_a_readable_time_series() {
         "--out",
         csv.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let rec = shipid_io::recording::read_recording(&csv).unwrap();
     assert!((rec.t.last().unwrap() - 120.0).abs() < 1e-9);
     assert!(
@@ -106,8 +100,7 @@ fn simulate_writes_a_readable_time_series() {
 
 #[test]
 fn metrics_json_has_one_entry_per_recording() {
-    let out = common::shipid(&["metrics", "data/kvlcc2-mmg/dataset.toml", "--json"]);
-    assert!(out.status.success());
+    let out = common::shipid_ok(&["metrics", "data/kvlcc2-mmg/dataset.toml", "--json"]);
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     let recs = v["recordings"].as_object().unwrap();
     assert_eq!(recs.len(), 6);
@@ -126,7 +119,7 @@ fn validate_reports_the_share_of_states_outside_the_identification_range() {
     let model = dir.join("reduced32-zz35.toml");
     let ds = common::root().join("data/kvlcc2-mmg/dataset.toml");
     let (ds, model) = (ds.to_str().unwrap(), model.to_str().unwrap());
-    let out = common::shipid(&[
+    common::shipid_ok(&[
         "fit",
         ds,
         "--set",
@@ -140,14 +133,8 @@ fn validate_reports_the_share_of_states_outside_the_identification_range() {
         "--out",
         model,
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let outside = |model: &str, file: &str| {
-        let out = common::shipid(&["validate", model, ds, "--json"]);
-        assert!(out.status.success());
+        let out = common::shipid_ok(&["validate", model, ds, "--json"]);
         let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
         v["recordings"][file]["outside_identification_range"].as_f64()
     };

@@ -18,6 +18,17 @@ pub fn shipid(args: &[&str]) -> Output {
         .expect("the shipid binary runs")
 }
 
+/// Run the `shipid` binary from the workspace root and require success (its stderr is the message).
+pub fn shipid_ok(args: &[&str]) -> Output {
+    let out = shipid(args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 /// The HSVA recordings of `../shared`, or None after printing a visible skip line. With
 /// `SHIPID_REQUIRE_SHARED=1` (CI) a missing directory fails the test instead.
 pub fn shared_hsva(test: &str) -> Option<PathBuf> {
