@@ -114,10 +114,11 @@ impl Samples {
     /// Append a recording (already windowed) with its accelerations (SI, midship).
     pub fn push(&mut self, rec: &Recording, acc: &Accelerations, scale: &PrimeScale, group: usize) {
         for i in 0..rec.len() {
-            self.du.push(scale.delta_u_prime(rec.u[i]));
-            self.v.push(scale.velocity_prime(rec.v[i]));
-            self.r.push(scale.yaw_rate_prime(rec.r[i]));
-            self.delta.push(rec.delta[i]);
+            let [du, v, r, delta] = primed_state(rec, scale, i);
+            self.du.push(du);
+            self.v.push(v);
+            self.r.push(r);
+            self.delta.push(delta);
             self.u_dot.push(scale.acceleration_prime(acc.u_dot[i]));
             self.v_dot.push(scale.acceleration_prime(acc.v_dot[i]));
             self.r_dot.push(scale.yaw_acceleration_prime(acc.r_dot[i]));
@@ -125,6 +126,17 @@ impl Samples {
             self.t.push(rec.t[i]);
         }
     }
+}
+
+/// The primed state (Δu′, v′, r′, δ [rad]) of sample `i`: the regressors of the design matrices and
+/// the coordinates of the identification range.
+pub fn primed_state(rec: &Recording, scale: &PrimeScale, i: usize) -> [f64; 4] {
+    [
+        scale.delta_u_prime(rec.u[i]),
+        scale.velocity_prime(rec.v[i]),
+        scale.yaw_rate_prime(rec.r[i]),
+        rec.delta[i],
+    ]
 }
 
 /// The regression problem of one degree of freedom.

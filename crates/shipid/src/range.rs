@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use shipid_io::{Dataset, PrimeScale, Recording};
+use shipid_model::design::primed_state;
 use shipid_model::{CoefficientSet, IdentificationRange, ModelFile};
 
 /// The model file's training data, when it names a data set that can still be read (paths as written by
@@ -46,16 +47,6 @@ pub fn identification_range(
         );
     }
     IdentificationRange::new(&set, &states).ok()
-}
-
-/// The primed state (Δu′, v′, r′, δ [rad]) of sample `i`.
-pub fn primed_state(rec: &Recording, scale: &PrimeScale, i: usize) -> [f64; 4] {
-    [
-        scale.delta_u_prime(rec.u[i]),
-        scale.velocity_prime(rec.v[i]),
-        scale.yaw_rate_prime(rec.r[i]),
-        rec.delta[i],
-    ]
 }
 
 /// How many of the samples `idx` of `rec` lie outside `range`, and how many there are.
