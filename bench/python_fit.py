@@ -30,6 +30,7 @@ the returned coefficients with the exported scales, by the same formula as the R
 
 Usage: python_fit.py [--designs DIR] [--out FILE] [--min-repeats N] [--min-time S]
                      [--max-time S] [--only SUBSTRING] [--skip-cvxpy-svr] [--rust FILE]
+                     [--cases lsq,bounded_lsq,...] [--methods NAME,NAME,...]
 """
 
 import os
@@ -323,7 +324,16 @@ def main():
     ap.add_argument("--skip-cvxpy-svr", action="store_true")
     ap.add_argument("--rust", type=Path, default=here / "results_rust.json",
                     help="our objectives, the reference of the equal-objective OSQP runs")
+    ap.add_argument("--cases", default="",
+                    help="comma-separated subset of the cases (default: all)")
+    ap.add_argument("--methods", default="",
+                    help="comma-separated subset of the method names (default: all)")
     a = ap.parse_args()
+    only_cases = set(filter(None, a.cases.split(",")))
+    only_methods = set(filter(None, a.methods.split(",")))
+    known = {name for ms in METHODS.values() for name, _ in ms} | {EQUAL_J_METHOD}
+    for bad in sorted((only_cases - set(METHODS)) | (only_methods - known)):
+        ap.error(f"unknown case or method {bad!r}")
 
     manifest = json.loads((a.designs / "manifest.json").read_text())
     cases = [c["case"] for c in manifest["cases"]]
@@ -342,6 +352,8 @@ def main():
             phi, y, scale, lower, upper = load(a.designs, pb)
             hp = {k: pb[k] for k in ("lambda", "alpha", "c", "epsilon")}
             for case in cases:
+                if only_cases and case not in only_cases:
+                    continue
                 lo, hi = (lower, upper) if case == "bounded_lsq" else (
                     np.full_like(lower, -np.inf), np.full_like(upper, np.inf))
                 def record(method, run):
@@ -353,11 +365,14 @@ def main():
                 for name, fn in METHODS[case]:
                     if a.skip_cvxpy_svr and case == "svr" and name.startswith("cvxpy"):
                         continue
+                    if only_methods and name not in only_methods:
+                        continue
                     record(name, lambda: timed(fn, args, a.min_repeats, a.min_time,
                                                a.max_time))
                 j_ref = reference.get((pb["id"], case))
                 if case in EQUAL_J_CASES and j_ref is not None and not (
-                        a.skip_cvxpy_svr and case == "svr"):
+                        a.skip_cvxpy_svr and case == "svr") and (
+                        not only_methods or EQUAL_J_METHOD in only_methods):
                     record(EQUAL_J_METHOD, lambda: equal_objective(
                         case, args, j_ref, scale, a.min_repeats, a.min_time, a.max_time))
             a.out.write_text(json.dumps({"versions": versions(), "records": records}, indent=1))

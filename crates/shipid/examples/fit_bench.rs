@@ -4,7 +4,11 @@
 //! ```text
 //! cargo run --release -p shipid --example fit_bench -- [--export DIR] [--out FILE]
 //!     [--dataset FILE] [--sets full68,reduced32] [--min-repeats N] [--min-time S]
+//!     [--cases lsq,bounded_lsq,ridge,lasso,svr] [--solvers fast,qp]
 //! ```
+//!
+//! `--cases` and `--solvers` time a subset (default: all); `bench/paired.sh` uses them to
+//! alternate short Rust and Python runs of the least-squares cases.
 //!
 //! For every coefficient set × training set × DOF it builds Φ and y exactly as `shipid fit`
 //! does (zig-zags truncated after 4 overshoots, turning circles whole, recordings stacked),
@@ -67,6 +71,8 @@ struct Args {
     sets: Vec<String>,
     min_repeats: usize,
     min_time_s: f64,
+    cases: Vec<String>,
+    solvers: Vec<Solver>,
 }
 
 fn parse_args() -> Result<Args, String> {
@@ -78,6 +84,8 @@ fn parse_args() -> Result<Args, String> {
         sets: vec!["full68".into(), "reduced32".into()],
         min_repeats: 5,
         min_time_s: 0.5,
+        cases: CASES.iter().map(|(c, _)| c.to_string()).collect(),
+        solvers: vec![Solver::Fast, Solver::Qp],
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -91,10 +99,27 @@ fn parse_args() -> Result<Args, String> {
                 a.min_repeats = value()?.parse().map_err(|e| format!("{flag}: {e}"))?;
             }
             "--min-time" => a.min_time_s = value()?.parse().map_err(|e| format!("{flag}: {e}"))?,
+            "--cases" => {
+                a.cases = value()?.split(',').map(String::from).collect();
+                if let Some(bad) = a.cases.iter().find(|c| !CASES.iter().any(|(k, _)| k == c)) {
+                    return Err(format!("{flag}: unknown case `{bad}`"));
+                }
+            }
+            "--solvers" => {
+                a.solvers = value()?
+                    .split(',')
+                    .map(|v| match v {
+                        "fast" => Ok(Solver::Fast),
+                        "qp" => Ok(Solver::Qp),
+                        other => Err(format!("{flag}: unknown solver `{other}` (fast, qp)")),
+                    })
+                    .collect::<Result<_, _>>()?;
+            }
             "-h" | "--help" => {
                 return Err(
                     "usage: fit_bench [--export DIR] [--out FILE] [--dataset FILE] \
-                     [--sets full68,reduced32] [--min-repeats N] [--min-time S]"
+                     [--sets full68,reduced32] [--min-repeats N] [--min-time S] \
+                     [--cases lsq,bounded_lsq,ridge,lasso,svr] [--solvers fast,qp]"
                         .into(),
                 );
             }
@@ -411,7 +436,10 @@ fn run() -> Result<(), String> {
         }
         records.push(rec);
         for (case, bounded) in CASES {
-            for solver in [Solver::Fast, Solver::Qp] {
+            if !args.cases.iter().any(|c| c == case) {
+                continue;
+            }
+            for &solver in &args.solvers {
                 let r = time_case(pb, case, bounded, solver, &args);
                 eprintln!(
                     "{:>9} {:>15} {} n={:5} p={:2} {:>13} {:?}: {:>10.3e} s  J={}",
