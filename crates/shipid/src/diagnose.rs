@@ -765,18 +765,29 @@ pub struct SegmentTrack {
     pub y0: Vec<f64>,
 }
 
-/// Noise of a signal: second differences of white noise have variance 6σ² (smooth motion at 10 Hz or
-/// faster adds almost nothing).
-fn noise_sigma(x: &[f64]) -> f64 {
-    if x.len() < 3 {
-        return 0.0;
+/// Noise of a signal sampled at times `t` (DATA.md allows uneven sampling): the residual of each
+/// sample from the straight line through its neighbours, `e = x₁ − (h₂x₀ + h₁x₂)/(h₁ + h₂)`, has
+/// variance `σ²(1 + (h₁² + h₂²)/(h₁ + h₂)²)` for white noise and vanishes for motion that is linear
+/// over the two steps (smooth motion at the rates of these recordings adds almost nothing). With even
+/// steps this is the second difference, variance 6σ². The plain second difference would read an
+/// uneven step as noise: a position moving at U0 with steps of 0.1 and 0.2 s is off by 0.1 s · U0.
+fn noise_sigma(t: &[f64], x: &[f64]) -> f64 {
+    let (mut e2, mut weight) = (0.0, 0.0);
+    for (tw, xw) in t.windows(3).zip(x.windows(3)) {
+        let (h1, h2) = (tw[1] - tw[0], tw[2] - tw[1]);
+        let h = h1 + h2;
+        if !(h1 > 0.0 && h2 > 0.0) {
+            continue;
+        }
+        let e = xw[1] - (h2 * xw[0] + h1 * xw[2]) / h;
+        e2 += e * e;
+        weight += 1.0 + (h1 * h1 + h2 * h2) / (h * h);
     }
-    let s: f64 = x
-        .windows(3)
-        .map(|w| (w[0] - 2.0 * w[1] + w[2]).powi(2))
-        .sum::<f64>()
-        / (x.len() - 2) as f64;
-    (s / 6.0).sqrt()
+    if weight > 0.0 {
+        (e2 / weight).sqrt()
+    } else {
+        0.0
+    }
 }
 
 // ---------------------------------------------------------------- report
@@ -1077,8 +1088,9 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
     // Noise floor: position noise plus the drift from the remaining initial-velocity noise over a segment.
     let (mut sp, mut sv) = (0.0, 0.0);
     for p in &prep {
-        sp += noise_sigma(&p.rec.x0).powi(2) + noise_sigma(&p.rec.y0).powi(2);
-        sv += noise_sigma(&p.rec.u).powi(2) + noise_sigma(&p.rec.v).powi(2);
+        let t = &p.rec.t;
+        sp += noise_sigma(t, &p.rec.x0).powi(2) + noise_sigma(t, &p.rec.y0).powi(2);
+        sv += noise_sigma(t, &p.rec.u).powi(2) + noise_sigma(t, &p.rec.v).powi(2);
     }
     let n = prep.len() as f64;
     let sigma_pos = (sp / n).sqrt();
@@ -1545,16 +1557,38 @@ mod tests {
         assert!((fit.params[0] - 2.0).abs() < 1e-5 && (fit.params[1] - 0.7).abs() < 1e-5);
     }
 
-    #[test]
-    fn noise_sigma_of_white_noise_on_a_smooth_signal() {
+    /// `noise_sigma` on `x(t) = 5 sin(0.05 t) + U0·t` (a ship's position through a turn) plus white noise of σ = 0.01, sampled at `t`.
+    fn check_noise_sigma(t: &[f64], expected: f64) {
         use rand::{Rng, SeedableRng};
         let mut rng = rand::rngs::StdRng::seed_from_u64(3);
-        let x: Vec<f64> = (0..20000)
-            .map(|i| {
-                (i as f64 * 0.01).sin() * 5.0 + 0.01 * (rng.random::<f64>() - 0.5) * 12f64.sqrt()
+        let x: Vec<f64> = t
+            .iter()
+            .map(|&ti| {
+                (0.05 * ti).sin() * 5.0
+                    + 1.179 * ti
+                    + 0.01 * (rng.random::<f64>() - 0.5) * 12f64.sqrt()
             })
             .collect();
-        let s = noise_sigma(&x);
-        assert!((s - 0.01).abs() < 5e-4, "{s}");
+        let s = noise_sigma(t, &x);
+        assert!((s - expected).abs() < 0.05 * expected, "{s} vs {expected}");
+    }
+
+    #[test]
+    fn noise_sigma_of_white_noise_on_a_smooth_signal() {
+        let t: Vec<f64> = (0..20000).map(|i| i as f64 * 0.01).collect();
+        check_noise_sigma(&t, 0.01);
+    }
+
+    #[test]
+    fn noise_sigma_of_unevenly_sampled_motion_is_the_noise_not_the_step_changes() {
+        // A 10 Hz record with 40 % of the samples dropped at random (steps of 0.1–0.5 s): the
+        // plain second difference read 0.1 s · U0 ≈ 0.12 m of "noise" into every uneven step.
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand::rngs::StdRng::seed_from_u64(11);
+        let t: Vec<f64> = (0..20000)
+            .map(|i| i as f64 * 0.1)
+            .filter(|_| rng.random::<f64>() >= 0.4)
+            .collect();
+        check_noise_sigma(&t, 0.01);
     }
 }
