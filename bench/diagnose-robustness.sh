@@ -2,10 +2,11 @@
 # Verdicts of `shipid diagnose` on recordings at other sampling rates and noise levels than the
 # generator's (10 Hz, tank noise): a stand-in for concealed-effect recordings made elsewhere.
 # One control and five effects (one seed each), each as generated, decimated to 5 Hz and 2 Hz
-# (bench/resample.py keeps every k-th row), and with three times the tank noise; diagnosed against
+# (bench/resample.py keeps every k-th row), with three times the tank noise, and unevenly sampled
+# (40 % of the rows dropped at random: steps of 0.1–0.5 s and more); diagnosed against
 # BASE (default: the benchmark's refined full74 base; `mmg:kvlcc2` for the exact model).
 #
-#   bench/diagnose-robustness.sh [BASE]      # ≈ 1 min; prints one line per case
+#   bench/diagnose-robustness.sh [BASE]      # ≈ 1.5 min; prints one line per case
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BASE=${1:-results/kvlcc2-mmg-full74-lsq-refined.toml}
@@ -26,7 +27,8 @@ for c in "${cases[@]}"; do
     python3 bench/resample.py "$W/$name" "$W/${name}_5hz" 2
     python3 bench/resample.py "$W/$name" "$W/${name}_2hz" 5
     python3 bench/resample.py "$W/$name" "$W/${name}_3x-noise" 1 2.83 7
-    for v in "" _5hz _2hz _3x-noise; do
+    python3 bench/resample.py "$W/$name" "$W/${name}_uneven" 1 0 7 0.4
+    for v in "" _5hz _2hz _3x-noise _uneven; do
         "$B" diagnose "$BASE" "$W/$name$v/dataset.toml" --json "$W/r.json" >/dev/null || true
         python3 - "$W/r.json" "$name$v" "${3:-none}" <<'PY'
 import json, sys
