@@ -43,6 +43,10 @@ pub enum EstimatorError {
     #[error("invalid folds: {0}")]
     InvalidFolds(String),
 
+    /// A solver name other than `qp` and `fast`.
+    #[error("unknown solver `{0}`: expected qp or fast")]
+    UnknownSolver(String),
+
     /// An empty tuning grid.
     #[error("the tuning grid is empty")]
     EmptyGrid,

@@ -79,6 +79,29 @@ pub enum Solver {
     Fast,
 }
 
+impl Solver {
+    /// The solver's name on the command line, in study files and in model files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Solver::Qp => "qp",
+            Solver::Fast => "fast",
+        }
+    }
+}
+
+impl std::str::FromStr for Solver {
+    type Err = EstimatorError;
+
+    /// The inverse of [`Solver::name`].
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "qp" => Ok(Solver::Qp),
+            "fast" => Ok(Solver::Fast),
+            other => Err(EstimatorError::UnknownSolver(other.into())),
+        }
+    }
+}
+
 /// Per-coefficient bounds `lower[j] ≤ β_j ≤ upper[j]` on the *unscaled* coefficients.
 /// Infinite entries mean "no bound".
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

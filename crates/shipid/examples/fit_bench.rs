@@ -108,11 +108,7 @@ fn parse_args() -> Result<Args, String> {
             "--solvers" => {
                 a.solvers = value()?
                     .split(',')
-                    .map(|v| match v {
-                        "fast" => Ok(Solver::Fast),
-                        "qp" => Ok(Solver::Qp),
-                        other => Err(format!("{flag}: unknown solver `{other}` (fast, qp)")),
-                    })
+                    .map(|v| v.parse().map_err(|e| format!("{flag}: {e}")))
                     .collect::<Result<_, _>>()?;
             }
             "-h" | "--help" => {
@@ -461,7 +457,7 @@ fn run() -> Result<(), String> {
                     "n": pb.phi.nrows(),
                     "p": pb.phi.ncols(),
                     "case": case,
-                    "solver": format!("{solver:?}").to_lowercase(),
+                    "solver": solver.name(),
                 });
                 if let (Some(m), Value::Object(extra)) = (rec.as_object_mut(), r) {
                     m.extend(extra);

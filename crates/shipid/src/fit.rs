@@ -393,10 +393,7 @@ pub fn fit_dataset(
         .map_err(|e| bad_input(format!("identified model is unusable: {e}")))?;
     let info = EstimatorInfo {
         name: spec.name.clone(),
-        solver: match solver {
-            Solver::Qp => "qp".into(),
-            Solver::Fast => "fast".into(),
-        },
+        solver: solver.name().into(),
         hyper,
         tuned: spec.tune,
         refinement: None,

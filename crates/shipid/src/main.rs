@@ -307,15 +307,9 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                     "--similarity applies to --estimator sparse-gp only",
                 ));
             }
-            let solver = match solver.as_str() {
-                "qp" => shipid_estimators::Solver::Qp,
-                "fast" => shipid_estimators::Solver::Fast,
-                other => {
-                    return Err(shipid::bad_input(format!(
-                        "unknown solver `{other}`: expected qp or fast"
-                    )));
-                }
-            };
+            let solver: shipid_estimators::Solver = solver
+                .parse()
+                .map_err(|e: shipid_estimators::EstimatorError| shipid::bad_input(e.to_string()))?;
             shipid::fit_cmd::run(shipid::fit_cmd::FitArgs {
                 dataset: &dataset,
                 set: &set,

@@ -124,10 +124,10 @@ pub fn run_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
         Ok(s) => s,
         Err(e) => return (failed(e.to_string()), None),
     };
-    let solver = if case.solver == "qp" {
-        Solver::Qp
-    } else {
-        Solver::Fast
+    // Validated when the study was read, so this cannot fail; if it did, the case fails, not the run.
+    let solver: Solver = match case.solver.parse() {
+        Ok(s) => s,
+        Err(e) => return (failed(e.to_string()), None),
     };
     let out = match fit_dataset(
         &study.dataset,

@@ -269,11 +269,8 @@ pub fn load_study(path: &Path) -> Result<Study, InputError> {
     for (i, e) in raw.estimators.iter().enumerate() {
         let k = |f: &str| format!("estimator[{i}].{f}");
         let solver = e.solver.clone().unwrap_or_else(|| "fast".into());
-        if solver != "fast" && solver != "qp" {
-            return Err(key(
-                &k("solver"),
-                format!("unknown solver `{solver}` (fast or qp)"),
-            ));
+        if let Err(err) = solver.parse::<shipid_estimators::Solver>() {
+            return Err(key(&k("solver"), err.to_string()));
         }
         let base = EstimatorSpec {
             epsilon: e.epsilon,
