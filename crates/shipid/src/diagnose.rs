@@ -1557,7 +1557,8 @@ mod tests {
         assert!((fit.params[0] - 2.0).abs() < 1e-5 && (fit.params[1] - 0.7).abs() < 1e-5);
     }
 
-    /// `noise_sigma` on `x(t) = 5 sin(0.05 t) + U0·t` (a ship's position through a turn) plus white noise of σ = 0.01, sampled at `t`.
+    /// `noise_sigma` on `x(t) = 5 sin(0.05 t) + U0·t` (a ship's position through a turn) plus white
+    /// noise of σ = 0.01, sampled at `t`.
     fn check_noise_sigma(t: &[f64], expected: f64) {
         use rand::{Rng, SeedableRng};
         let mut rng = rand::rngs::StdRng::seed_from_u64(3);

@@ -802,11 +802,8 @@ impl RudderFilter for EffectRudder {
         }
         let x = [t_s, t_s + half, t_s + dt_s].map(|t| self.delayed(t - lag.delay_s));
         let tau = lag.time_constant_s;
-        let decay = if tau > 0.0 && half > 0.0 {
-            self.decay(half, tau)
-        } else {
-            0.0
-        };
+        // Unused by lag_linear where τ or h is 0 (it returns early there).
+        let decay = self.decay(half, tau);
         let y0 = *self.output.get_or_insert(x[0]);
         let y1 = lag_linear(y0, x[0], x[1], half, tau, decay);
         let y2 = lag_linear(y1, x[1], x[2], half, tau, decay);
