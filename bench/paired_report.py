@@ -19,12 +19,18 @@ FLOOR = 10.0
 
 
 def per_training_set(records, key):
-    """{(case, method-or-solver, set, training_set): summed median time [s]}"""
+    """{(case, method-or-solver, set, training_set): summed median time [s]}, only for the
+    training sets whose every DOF has a time (a failed DOF would shorten the sum, as report.py
+    shows such a set as "—")."""
     out = defaultdict(float)
+    failed = set()
     for r in records:
+        k = (r["case"], r[key], r["set"], r["training_set"])
         if "time_s" in r:
-            out[(r["case"], r[key], r["set"], r["training_set"])] += r["time_s"]
-    return out
+            out[k] += r["time_s"]
+        else:
+            failed.add(k)
+    return {k: t for k, t in out.items() if k not in failed}
 
 
 def main():
