@@ -1,7 +1,9 @@
 //! `shipid generate`: the embedded default data set, made by the project's MMG reference simulator.
 //!
 //! Six manoeuvres of the KVLCC2 model (DOMAIN.md §6): ZZ10/10, ZZ20/20 and ZZ35/35 to port first,
-//! ZZ35/35 to starboard first, and 35° turning circles to both sides. Each starts from a steady approach
+//! ZZ35/35 to starboard first, and 35° turning circles to both sides (or the zig-zags and turning
+//! circles given by `--manoeuvre`, e.g. to test a diagnosis on manoeuvres its base model was not
+//! identified from). Each starts from a steady approach
 //! at U0 with the rudder at zero; the first execute is at [`T_EXECUTE_S`]. RK4 with dt = 0.05 s, written
 //! at 10 Hz, midship, project signs.
 //!
@@ -150,12 +152,31 @@ pub fn generate(noise_seed: Option<u64>) -> Result<Generated, CliError> {
 
 /// Simulate the default manoeuvres with the MMG reference under concealed `effects`.
 pub fn generate_with(noise_seed: Option<u64>, effects: &[Effect]) -> Result<Generated, CliError> {
+    generate_manoeuvres(noise_seed, effects, &default_manoeuvres())
+}
+
+/// Simulate `manoeuvres` (each at most once: the file is named after it) with the MMG reference
+/// under concealed `effects`.
+pub fn generate_manoeuvres(
+    noise_seed: Option<u64>,
+    effects: &[Effect],
+    manoeuvres: &[Manoeuvre],
+) -> Result<Generated, CliError> {
     let model = MmgModel::kvlcc2();
     let ship = kvlcc2_ship();
     let mut entries = Vec::new();
     let mut recordings = Vec::new();
-    for m in default_manoeuvres() {
-        let file = format!("{}.csv", manoeuvre_stem(&m));
+    for (k, m) in manoeuvres.iter().enumerate() {
+        let file = format!("{}.csv", manoeuvre_stem(m));
+        if manoeuvres[..k]
+            .iter()
+            .any(|o| manoeuvre_stem(o) == manoeuvre_stem(m))
+        {
+            return Err(crate::bad_input(format!(
+                "--manoeuvre: {file} is asked for twice"
+            )));
+        }
+        let m = *m;
         let mut controller = controller_for(&m, T_EXECUTE_S).map_err(failed)?;
         let options =
             SimOptions::new(standard_duration_s(&m, &ship)).with_step(DT_S, SAMPLE_INTERVAL_S);

@@ -30,6 +30,10 @@ enum Command {
         /// Apply a physical effect, concealed (e.g. `current:speed=0.05,from=120`); repeatable.
         #[arg(long, value_name = "KIND:KEY=VALUE,...")]
         effect: Vec<String>,
+        /// Simulate this manoeuvre instead of the default six (`zigzag:15/15:starboard`,
+        /// `turning:20:port`); repeatable.
+        #[arg(long, value_name = "SPEC")]
+        manoeuvre: Vec<String>,
     },
     /// Import recordings of another layout through a mapping file.
     Import {
@@ -241,9 +245,25 @@ enum Command {
 
 fn run(cli: Cli) -> Result<Outcome, CliError> {
     match cli.command {
-        Command::Generate { out, noise, effect } => {
+        Command::Generate {
+            out,
+            noise,
+            effect,
+            manoeuvre,
+        } => {
             let effects = shipid::generate::parse_effects(&effect)?;
-            let g = shipid::generate::generate_with(noise, &effects)?;
+            let manoeuvres = if manoeuvre.is_empty() {
+                shipid::generate::default_manoeuvres()
+            } else {
+                manoeuvre
+                    .iter()
+                    .map(|m| {
+                        shipid::spec::parse_manoeuvre(m)
+                            .map_err(|e| shipid::bad_input(format!("--manoeuvre: {e}")))
+                    })
+                    .collect::<Result<Vec<_>, _>>()?
+            };
+            let g = shipid::generate::generate_manoeuvres(noise, &effects, &manoeuvres)?;
             let recs: Vec<_> = g.recordings.iter().collect();
             shipid_io::write::write_dataset(
                 &out,

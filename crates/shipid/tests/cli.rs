@@ -47,6 +47,19 @@ fn bad_input_exits_with_2_and_names_the_problem() {
         2,
         "invalid simulation option dt_s = -1",
     );
+    check_exit(
+        &[
+            "generate",
+            "--out",
+            "target/never-written",
+            "--manoeuvre",
+            "turning:20:sb",
+            "--manoeuvre",
+            "turning:20:starboard",
+        ],
+        2,
+        "--manoeuvre: tc20_sb.csv is asked for twice",
+    );
     check_exit(&["frobnicate"], 2, "unrecognized subcommand");
 }
 
@@ -146,4 +159,49 @@ fn validate_reports_the_share_of_states_outside_the_identification_range() {
     let own = outside(model, "zz35_35_ps.csv").unwrap();
     assert!(own < 0.02, "{own}");
     assert_eq!(outside("mmg:kvlcc2", "tc35_ps.csv"), None);
+}
+
+#[test]
+fn generate_simulates_the_manoeuvres_asked_for_and_a_current_only_carries_the_track_along() {
+    let dir = tempfile::tempdir().unwrap();
+    let gen_into = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            "generate",
+            "--out",
+            out.to_str().unwrap(),
+            "--manoeuvre",
+            "zigzag:15/15:starboard",
+            "--manoeuvre",
+            "turning:20:port",
+        ];
+        args.extend_from_slice(extra);
+        common::shipid_ok(&args);
+        shipid_io::Dataset::load(&out.join("dataset.toml")).unwrap()
+    };
+    let calm = gen_into("calm", &[]);
+    let files: Vec<&str> = calm.recordings.iter().map(|r| r.file.as_str()).collect();
+    assert_eq!(files, ["zz15_15_sb.csv", "tc20_ps.csv"]);
+    // The zig-zag goes to starboard first.
+    let zz = &calm.recordings[0].recording;
+    let first = zz.delta.iter().find(|d| d.abs() > 1e-3).unwrap();
+    assert!(*first > 0.0, "first rudder {first}");
+
+    // A uniform current from 120° (flowing towards 300°, x north, y east) changes nothing relative
+    // to the water: same heading, and the track over ground is the calm one plus V_c·t.
+    let drift = gen_into("current", &["--effect", "current:speed=0.05,from=120"]);
+    let (vx, vy) = (
+        0.05 * 300f64.to_radians().cos(),
+        0.05 * 300f64.to_radians().sin(),
+    );
+    for (a, b) in calm.recordings.iter().zip(&drift.recordings) {
+        let (a, b) = (&a.recording, &b.recording);
+        assert_eq!(a.len(), b.len());
+        for i in 0..a.len() {
+            let t = a.t[i];
+            assert!((a.psi[i] - b.psi[i]).abs() < 1e-6, "psi at {t} s");
+            let (dx, dy) = (b.x0[i] - a.x0[i] - vx * t, b.y0[i] - a.y0[i] - vy * t);
+            assert!(dx.hypot(dy) < 1e-4, "track at {t} s off by {dx}, {dy} m");
+        }
+    }
 }
