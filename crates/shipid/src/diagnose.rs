@@ -961,6 +961,33 @@ struct Assessed {
     accepted: bool,
 }
 
+/// A winner's score may be this close to a rival's (as a share of the winner's) before the report says
+/// the recordings hardly tell the two apart.
+const NEAR_TIE_SHARE: f64 = 0.25;
+
+/// The accepted candidate that names none of the winner's words and scores within
+/// [`NEAR_TIE_SHARE`] of it (the best such one), as an index into `words`/`scores`/`accepted`.
+/// Why: the verdict is one word, and with a base whose own error is large where the recordings go
+/// (manoeuvres it was not identified from), a current and a wind from the same side can explain the
+/// same share of the mismatch; the verdict then rests on a few thousandths of score, and the user
+/// should read that rather than a confident word.
+fn near_rival(
+    winner: usize,
+    words: &[Vec<&str>],
+    scores: &[f64],
+    accepted: &[bool],
+) -> Option<usize> {
+    let w = scores[winner];
+    (0..scores.len())
+        .filter(|&i| {
+            i != winner
+                && accepted[i]
+                && !words[i].iter().any(|x| words[winner].contains(x))
+                && scores[i] >= w - NEAR_TIE_SHARE * w.abs()
+        })
+        .max_by(|&x, &y| scores[x].total_cmp(&scores[y]))
+}
+
 /// Everything the diagnosis needs besides the data.
 pub struct DiagnoseInput<'a> {
     /// The model without its own effects.
@@ -1251,18 +1278,35 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
             let (fams, a, (s, _)) = &assessed[b];
             let (effects, fit) = &finals[b];
             let std_errors = standard_errors(fams, effects, fit, &ship);
+            let words: Vec<Vec<&str>> = assessed
+                .iter()
+                .map(|(f, _, _)| f.iter().map(|x| x.word()).collect())
+                .collect();
+            let scores: Vec<f64> = assessed.iter().map(|x| x.1.score).collect();
+            let accepted: Vec<bool> = assessed.iter().map(|x| x.1.accepted).collect();
+            let rival = near_rival(b, &words, &scores, &accepted).map(|i| {
+                let r = &assessed[i].1;
+                format!(
+                    "; but {} explains nearly as much ({:.0} %, score {:.3} against {:.3}): these recordings hardly tell the two apart with this model",
+                    r.name,
+                    100.0 * r.explains,
+                    r.score,
+                    a.score
+                )
+            });
             (
                 fams[0].word().to_string(),
                 effects.clone(),
                 std_errors,
                 s.clone(),
                 format!(
-                    "{} explains {:.0} % of the held-out mismatch (position RMSE {:.4} L → {:.4} L, noise floor {:.4} L)",
+                    "{} explains {:.0} % of the held-out mismatch (position RMSE {:.4} L → {:.4} L, noise floor {:.4} L){}",
                     a.name,
                     100.0 * a.explains,
                     before_l,
                     a.after_l,
-                    noise_floor
+                    noise_floor,
+                    rival.unwrap_or_default()
                 ),
             )
         }
@@ -1543,6 +1587,58 @@ mod tests {
             .factor();
             assert!((depth_for_factor(f) - h).abs() < 1e-6, "h/T {h}");
         }
+    }
+
+    fn check_rival(candidates: &[(&str, f64, bool)], winner: usize, expected: Option<usize>) {
+        let words: Vec<Vec<&str>> = candidates
+            .iter()
+            .map(|c| c.0.split('+').collect())
+            .collect();
+        let scores: Vec<f64> = candidates.iter().map(|c| c.1).collect();
+        let accepted: Vec<bool> = candidates.iter().map(|c| c.2).collect();
+        assert_eq!(
+            near_rival(winner, &words, &scores, &accepted),
+            expected,
+            "{candidates:?}"
+        );
+    }
+
+    #[test]
+    fn a_near_tie_names_the_rival_word_and_a_clear_win_does_not() {
+        // The head wind off the base's manoeuvres (bench/diagnose-unseen.sh, seed 39).
+        check_rival(
+            &[
+                ("current", 0.400, true),
+                ("wind", 0.397, true),
+                ("rudder_lag", -0.06, false),
+            ],
+            0,
+            Some(1),
+        );
+        // Clear win; the runner-up scores less than three quarters of the winner.
+        check_rival(&[("current", 0.70, true), ("wind", 0.50, true)], 0, None);
+        // Not accepted: no rival.
+        check_rival(&[("current", 0.40, true), ("wind", 0.39, false)], 0, None);
+        // A pair or a variant holding the winner's word is no rival.
+        check_rival(
+            &[
+                ("wind", 0.36, true),
+                ("wind+asymmetry", 0.45, true),
+                ("asymmetry", 0.1, true),
+            ],
+            0,
+            None,
+        );
+        // The best of several rivals.
+        check_rival(
+            &[
+                ("current", 0.40, true),
+                ("wind", 0.33, true),
+                ("shallow_water", 0.38, true),
+            ],
+            0,
+            Some(2),
+        );
     }
 
     #[test]
