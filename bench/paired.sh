@@ -26,7 +26,7 @@ trap 'rm -rf "$WORK"' EXIT
 cargo test --release --workspace --no-run 2>/dev/null
 
 rust() {
-    target/release/examples/fit_bench --cases lsq,bounded_lsq --solvers fast \
+    target/release/examples/fit_bench --cases lsq,bounded_lsq --solvers fast --no-api-floor \
         --min-repeats 7 --min-time 0.5 --out "$WORK/rust-$1.json" 2>/dev/null
 }
 python() {

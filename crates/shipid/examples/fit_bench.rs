@@ -4,11 +4,12 @@
 //! ```text
 //! cargo run --release -p shipid --example fit_bench -- [--export DIR] [--out FILE]
 //!     [--dataset FILE] [--sets full68,reduced32] [--min-repeats N] [--min-time S]
-//!     [--cases lsq,bounded_lsq,ridge,lasso,svr] [--solvers fast,qp]
+//!     [--cases lsq,bounded_lsq,ridge,lasso,svr] [--solvers fast,qp] [--no-api-floor]
 //! ```
 //!
-//! `--cases` and `--solvers` time a subset (default: all); `bench/paired.sh` uses them to
-//! alternate short Rust and Python runs of the least-squares cases.
+//! `--cases` and `--solvers` time a subset (default: all), and `--no-api-floor` skips timing the
+//! API floor of every problem; `bench/paired.sh` uses them to alternate short Rust and Python runs
+//! of the least-squares cases.
 //!
 //! For every coefficient set × training set × DOF it builds Φ and y exactly as `shipid fit`
 //! does (zig-zags truncated after 4 overshoots, turning circles whole, recordings stacked),
@@ -73,6 +74,8 @@ struct Args {
     min_time_s: f64,
     cases: Vec<String>,
     solvers: Vec<Solver>,
+    /// Time the API floor of every problem (`report.py` uses it; the paired rounds do not).
+    api_floor: bool,
 }
 
 fn parse_args() -> Result<Args, String> {
@@ -86,6 +89,7 @@ fn parse_args() -> Result<Args, String> {
         min_time_s: 0.5,
         cases: CASES.iter().map(|(c, _)| c.to_string()).collect(),
         solvers: vec![Solver::Fast, Solver::Qp],
+        api_floor: true,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -111,11 +115,13 @@ fn parse_args() -> Result<Args, String> {
                     .map(|v| v.parse().map_err(|e| format!("{flag}: {e}")))
                     .collect::<Result<_, _>>()?;
             }
+            "--no-api-floor" => a.api_floor = false,
             "-h" | "--help" => {
                 return Err(
                     "usage: fit_bench [--export DIR] [--out FILE] [--dataset FILE] \
                      [--sets full68,reduced32] [--min-repeats N] [--min-time S] \
-                     [--cases lsq,bounded_lsq,ridge,lasso,svr] [--solvers fast,qp]"
+                     [--cases lsq,bounded_lsq,ridge,lasso,svr] [--solvers fast,qp] \
+                     [--no-api-floor]"
                         .into(),
                 );
             }
@@ -417,20 +423,24 @@ fn run() -> Result<(), String> {
     }
     let mut records = Vec::new();
     for pb in &problems {
-        let mut rec = json!({
-            "id": pb.id(),
-            "set": pb.set,
-            "training_set": pb.training_set,
-            "dof": pb.dof.to_string(),
-            "n": pb.phi.nrows(),
-            "p": pb.phi.ncols(),
-            "case": "api_floor",
-            "solver": "objective_call",
-        });
-        if let (Some(m), Value::Object(extra)) = (rec.as_object_mut(), time_api_floor(pb, &args)) {
-            m.extend(extra);
+        if args.api_floor {
+            let mut rec = json!({
+                "id": pb.id(),
+                "set": pb.set,
+                "training_set": pb.training_set,
+                "dof": pb.dof.to_string(),
+                "n": pb.phi.nrows(),
+                "p": pb.phi.ncols(),
+                "case": "api_floor",
+                "solver": "objective_call",
+            });
+            if let (Some(m), Value::Object(extra)) =
+                (rec.as_object_mut(), time_api_floor(pb, &args))
+            {
+                m.extend(extra);
+            }
+            records.push(rec);
         }
-        records.push(rec);
         for (case, bounded) in CASES {
             if !args.cases.iter().any(|c| c == case) {
                 continue;
