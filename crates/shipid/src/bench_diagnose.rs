@@ -227,6 +227,9 @@ struct Row {
     time_s: f64,
 }
 
+/// `--base` keyword for a sparse GP fitted in memory on the clean default data.
+pub const GP_BASE: &str = "sparse-gp";
+
 pub fn run(
     base_spec: Option<&str>,
     out: &Path,
@@ -237,6 +240,28 @@ pub fn run(
     type Base = (Box<dyn Dynamics + Send + Sync>, Vec<Effect>, String);
     let ((base, base_effects, base_name), range): (Base, Option<IdentificationRange>) =
         match base_spec {
+            Some(GP_BASE) => {
+                let names: Vec<String> = clean.recordings.iter().map(|r| r.file.clone()).collect();
+                let (_, gp, report) = crate::fit_gp::fit_gp_dataset(
+                    &clean,
+                    &names,
+                    WindowSpec::Whole,
+                    crate::fit_gp::DEFAULT_SIMILARITY,
+                )?;
+                (
+                    (
+                        Box::new(gp),
+                        Vec::new(),
+                        format!(
+                            "sparse GP (paper 001, d_gen {}: {} of {} samples kept) fitted on the six clean default recordings (`shipid fit --estimator sparse-gp`)",
+                            crate::fit_gp::DEFAULT_SIMILARITY,
+                            report.kept,
+                            report.candidates
+                        ),
+                    ),
+                    None,
+                )
+            }
             Some(spec) => {
                 let (b, e) = load_model_parts(spec)?;
                 let range = training_data(spec).as_ref().and_then(identification_range);

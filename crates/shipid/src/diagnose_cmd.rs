@@ -19,7 +19,7 @@ use crate::{CliError, Outcome, bad_input, failed};
 
 /// The model's own level: segment replays on the recordings it was trained on.
 fn own_level(
-    training: &(ModelFile, Dataset, PathBuf),
+    training: &(Option<ModelFile>, Dataset, PathBuf),
     input: &DiagnoseInput,
     opts: &DiagnoseOptions,
 ) -> Option<(f64, String)> {

@@ -162,7 +162,7 @@ enum Command {
     /// Benchmark the diagnosis on generated data with concealed effects (confusion matrix, fit
     /// improvements, recovered parameters) written to `--out`.
     BenchDiagnose {
-        /// Base model (default: full68 LSQ fitted on the clean embedded data and refined in the output-error sense, as `shipid fit --refine`).
+        /// Base model: a model file, `mmg:kvlcc2`, or `sparse-gp` (paper 001's sparse GP fitted on the clean embedded data, as `shipid fit --estimator sparse-gp`); default: full74 LSQ fitted on the clean embedded data and refined in the output-error sense (as `shipid fit --set full74 --refine`).
         #[arg(long)]
         base: Option<String>,
         #[arg(long, default_value = "results/diagnose")]

@@ -6,31 +6,40 @@ use std::path::{Path, PathBuf};
 
 use shipid_io::{Dataset, PrimeScale, Recording};
 use shipid_model::design::primed_state;
-use shipid_model::{CoefficientSet, IdentificationRange, ModelFile};
+use shipid_model::{CoefficientSet, IdentificationRange, ModelFile, TrainingWindow};
 
 /// The model file's training data, when it names a data set that can still be read (paths as written by
-/// `shipid fit`, tried as given and relative to the model file): the file, the data set restricted to the
-/// training recordings, and the data set's path.
-pub fn training_data(model_spec: &str) -> Option<(ModelFile, Dataset, PathBuf)> {
+/// `shipid fit`, tried as given and relative to the model file): the Abkowitz model file (`None` for
+/// another kind, such as a sparse GP, whose training windows are read all the same), the data set
+/// restricted to the training recordings, and the data set's path.
+pub fn training_data(model_spec: &str) -> Option<(Option<ModelFile>, Dataset, PathBuf)> {
+    // Only the windows: every kind of model file written by `fit` records them alike.
+    #[derive(serde::Deserialize)]
+    struct Windows {
+        #[serde(default)]
+        training: Vec<TrainingWindow>,
+    }
     let path = Path::new(model_spec);
     let text = std::fs::read_to_string(path).ok()?;
-    let file: ModelFile = toml::from_str(&text).ok()?;
-    let first = file.training.first()?;
+    let windows = toml::from_str::<Windows>(&text).ok()?.training;
+    let first = windows.first()?;
     // As given (relative to the working directory of `fit`), then relative to the model file's folder
     // and each folder above it (a model in results/ names data/… of the project root).
     let mut candidates = vec![PathBuf::from(&first.dataset)];
     let dir = std::path::absolute(path).ok()?;
     candidates.extend(dir.ancestors().skip(1).map(|a| a.join(&first.dataset)));
     let ds_path = candidates.into_iter().find(|p| p.is_file())?;
-    let used: Vec<String> = file.training.iter().map(|w| w.recording.clone()).collect();
+    let used: Vec<String> = windows.iter().map(|w| w.recording.clone()).collect();
     let ds = Dataset::load_filtered(&ds_path, |f| used.iter().any(|u| u == f)).ok()?;
+    let file = toml::from_str::<ModelFile>(&text).ok();
     Some((file, ds, ds_path))
 }
 
 /// Where an Abkowitz model was identified: its set's leverage over the states of its training windows.
 pub fn identification_range(
-    (file, ds, _): &(ModelFile, Dataset, PathBuf),
+    (file, ds, _): &(Option<ModelFile>, Dataset, PathBuf),
 ) -> Option<IdentificationRange> {
+    let file = file.as_ref()?;
     if file.kind != "abkowitz" {
         return None;
     }

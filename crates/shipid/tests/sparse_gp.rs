@@ -126,3 +126,40 @@ fn similarity_flag_errors_are_input_errors() {
         assert!(String::from_utf8_lossy(&out.stderr).contains(needle));
     }
 }
+
+/// Regression: `diagnose` read the training data only from Abkowitz model files, so a sparse-GP base had
+/// no level of its own and every mismatch was judged against the noise alone.
+#[test]
+fn a_sparse_gp_base_gets_its_own_level_from_its_training_data() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("gp.toml");
+    let model = model.to_str().unwrap();
+    common::shipid_ok(&[
+        "fit",
+        "data/kvlcc2-mmg/dataset.toml",
+        "--estimator",
+        "sparse-gp",
+        "--similarity",
+        "0.9",
+        "--out",
+        model,
+    ]);
+    let report = dir.path().join("report.json");
+    let out = common::shipid_ok(&[
+        "diagnose",
+        model,
+        "data/kvlcc2-mmg/dataset.toml",
+        "--json",
+        report.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("model's own level (training data data/kvlcc2-mmg/dataset.toml)"),
+        "{stdout}"
+    );
+    let r: Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    let level = r["model_level_position_rmse_over_l"].as_f64();
+    // Its own training recordings, replayed in segments: a few thousandths of L, and nothing to find.
+    assert!(level.is_some_and(|l| l > 0.0 && l < 0.02), "{level:?}");
+    assert_eq!(r["verdict"], "none", "{stdout}");
+}
