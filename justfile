@@ -25,6 +25,10 @@ import-hsva:
 bench-diagnose:
     cargo run --release -p shipid -- bench-diagnose --out results/diagnose
 
+# The same benchmark against paper 001's sparse GP as base (about 11 min) → results/diagnose/gp-base/.
+bench-diagnose-gp:
+    cargo run --release -p shipid -- bench-diagnose --base sparse-gp --out results/diagnose/gp-base
+
 # Diagnose the HSVA tests against full68 LSQ identified from the default data.
 diagnose-hsva: import-hsva
     cargo run --release -p shipid -- fit data/kvlcc2-mmg/dataset.toml --set full68 --estimator lsq --out results/kvlcc2-mmg-full68-lsq-all.toml
