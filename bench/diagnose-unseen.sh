@@ -11,14 +11,7 @@
 #   bench/diagnose-unseen.sh [BASE]      # ≈ 2 min; prints one line per case
 set -euo pipefail
 cd "$(dirname "$0")/.."
-BASE=${1:-results/kvlcc2-mmg-full74-lsq-refined.toml}
-B=target/release/shipid
-if [ ! -x "$B" ]; then cargo test --release --workspace --no-run >/dev/null; fi
-if [ "$BASE" = results/kvlcc2-mmg-full74-lsq-refined.toml ] && [ ! -f "$BASE" ]; then
-    "$B" fit data/kvlcc2-mmg/dataset.toml --set full74 --estimator lsq --refine --out "$BASE" >/dev/null
-fi
-W=$(mktemp -d)
-trap 'rm -rf "$W"' EXIT
+source bench/diagnose_common.sh
 M=(--manoeuvre zigzag:10/10:starboard --manoeuvre zigzag:15/15:port --manoeuvre zigzag:15/15:starboard
    --manoeuvre zigzag:25/25:starboard --manoeuvre turning:20:port --manoeuvre turning:20:starboard)
 cases=("ctrl 31" "ctrl 32" "ctrl 33"
@@ -34,16 +27,5 @@ for c in "${cases[@]}"; do
     start=$(date +%s.%N)
     "$B" diagnose "$BASE" "$W/$name/dataset.toml" --json "$W/r.json" >/dev/null || true
     secs=$(echo "$(date +%s.%N) - $start" | bc)
-    python3 - "$W/r.json" "$name-$seed" "${3:-none}" "$secs" <<'PY'
-import json, sys
-r = json.load(open(sys.argv[1]))
-v = r["verdict"]
-won = [c for c in r.get("candidates", []) if c["effect"].split("(")[0] == v]
-par = max(won, key=lambda c: c["score"])["parameters"] if won else {}
-par = {k: x for k, x in par.items() if x != 0.0}
-b, a = r["fit_before"]["position_rmse_over_l"], r["fit_after"]["position_rmse_over_l"]
-print(f"{sys.argv[2]:<8} concealed {sys.argv[3]:<34} verdict {v:<14} {b:.4f} → {a:.4f} L "
-      f"({100 * (1 - a / b):.0f} %)  {float(sys.argv[4]):.1f} s  "
-      + ", ".join(f"{k}={x:.4g}" for k, x in par.items()))
-PY
+    line "$W/r.json" "$name-$seed" "${3:-none}" "$secs"
 done

@@ -405,6 +405,24 @@ fn time_api_floor(pb: &Problem, args: &Args) -> Value {
     }))
 }
 
+/// One result row: the problem's identity, the case and solver, and the timing fields.
+fn record(pb: &Problem, case: &str, solver: &str, timing: Value) -> Value {
+    let mut rec = json!({
+        "id": pb.id(),
+        "set": pb.set,
+        "training_set": pb.training_set,
+        "dof": pb.dof.to_string(),
+        "n": pb.phi.nrows(),
+        "p": pb.phi.ncols(),
+        "case": case,
+        "solver": solver,
+    });
+    if let (Some(m), Value::Object(extra)) = (rec.as_object_mut(), timing) {
+        m.extend(extra);
+    }
+    rec
+}
+
 fn main() {
     if let Err(e) = run() {
         eprintln!("fit_bench: {e}");
@@ -424,22 +442,12 @@ fn run() -> Result<(), String> {
     let mut records = Vec::new();
     for pb in &problems {
         if args.api_floor {
-            let mut rec = json!({
-                "id": pb.id(),
-                "set": pb.set,
-                "training_set": pb.training_set,
-                "dof": pb.dof.to_string(),
-                "n": pb.phi.nrows(),
-                "p": pb.phi.ncols(),
-                "case": "api_floor",
-                "solver": "objective_call",
-            });
-            if let (Some(m), Value::Object(extra)) =
-                (rec.as_object_mut(), time_api_floor(pb, &args))
-            {
-                m.extend(extra);
-            }
-            records.push(rec);
+            records.push(record(
+                pb,
+                "api_floor",
+                "objective_call",
+                time_api_floor(pb, &args),
+            ));
         }
         for (case, bounded) in CASES {
             if !args.cases.iter().any(|c| c == case) {
@@ -459,20 +467,7 @@ fn run() -> Result<(), String> {
                     r["time_s"].as_f64().unwrap_or(f64::NAN),
                     r["objective"]
                 );
-                let mut rec = json!({
-                    "id": pb.id(),
-                    "set": pb.set,
-                    "training_set": pb.training_set,
-                    "dof": pb.dof.to_string(),
-                    "n": pb.phi.nrows(),
-                    "p": pb.phi.ncols(),
-                    "case": case,
-                    "solver": solver.name(),
-                });
-                if let (Some(m), Value::Object(extra)) = (rec.as_object_mut(), r) {
-                    m.extend(extra);
-                }
-                records.push(rec);
+                records.push(record(pb, case, solver.name(), r));
             }
         }
     }

@@ -11,6 +11,22 @@ use shipid_sim::{Dynamics, GpDynamics, GpModelFile, State};
 
 const TRAINING: [&str; 3] = ["zz35_35_ps.csv", "zz20_20_ps.csv", "tc35_ps.csv"];
 
+/// `shipid fit data/kvlcc2-mmg/dataset.toml --estimator sparse-gp --similarity 0.9 --out MODEL …`.
+fn fit_gp_cli(model: &str, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "fit",
+        "data/kvlcc2-mmg/dataset.toml",
+        "--estimator",
+        "sparse-gp",
+        "--similarity",
+        "0.9",
+        "--out",
+        model,
+    ];
+    args.extend_from_slice(extra);
+    common::shipid(&args)
+}
+
 #[test]
 fn gp_model_file_restores_the_same_accelerations() {
     let ds =
@@ -54,19 +70,7 @@ fn fit_sparse_gp_then_validate_and_simulate() {
     let dir = tempfile::tempdir().unwrap();
     let model = dir.path().join("gp.toml");
     let model = model.to_str().unwrap();
-    let fit = common::shipid(&[
-        "fit",
-        "data/kvlcc2-mmg/dataset.toml",
-        "--estimator",
-        "sparse-gp",
-        "--similarity",
-        "0.9",
-        "--recordings",
-        &TRAINING.join(","),
-        "--out",
-        model,
-        "--json",
-    ]);
+    let fit = fit_gp_cli(model, &["--recordings", &TRAINING.join(","), "--json"]);
     assert!(
         fit.status.success(),
         "{}",
@@ -134,16 +138,12 @@ fn a_sparse_gp_base_gets_its_own_level_from_its_training_data() {
     let dir = tempfile::tempdir().unwrap();
     let model = dir.path().join("gp.toml");
     let model = model.to_str().unwrap();
-    common::shipid_ok(&[
-        "fit",
-        "data/kvlcc2-mmg/dataset.toml",
-        "--estimator",
-        "sparse-gp",
-        "--similarity",
-        "0.9",
-        "--out",
-        model,
-    ]);
+    let fit = fit_gp_cli(model, &[]);
+    assert!(
+        fit.status.success(),
+        "{}",
+        String::from_utf8_lossy(&fit.stderr)
+    );
     let report = dir.path().join("report.json");
     let out = common::shipid_ok(&[
         "diagnose",
