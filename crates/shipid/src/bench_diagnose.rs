@@ -237,11 +237,12 @@ pub fn run(
     controls: u64,
 ) -> Result<Outcome, CliError> {
     let clean = to_dataset(generate_with(None, &[])?, "embedded default data (clean)");
+    // The in-memory bases are fitted on every clean recording.
+    let names: Vec<String> = clean.recordings.iter().map(|r| r.file.clone()).collect();
     type Base = (Box<dyn Dynamics + Send + Sync>, Vec<Effect>, String);
     let ((base, base_effects, base_name), range): (Base, Option<IdentificationRange>) =
         match base_spec {
             Some(GP_BASE) => {
-                let names: Vec<String> = clean.recordings.iter().map(|r| r.file.clone()).collect();
                 let (_, gp, report) = crate::fit_gp::fit_gp_dataset(
                     &clean,
                     &names,
@@ -268,7 +269,6 @@ pub fn run(
                 ((b, e, spec.to_string()), range)
             }
             None => {
-                let names: Vec<String> = clean.recordings.iter().map(|r| r.file.clone()).collect();
                 let fit = fit_dataset(
                     &clean,
                     load_set("full74")?,
