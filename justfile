@@ -21,13 +21,17 @@ generate:
 import-hsva:
     cargo run --release -p shipid -- import data/kvlcc2-hsva/import.toml --out data/kvlcc2-hsva/imported
 
-# The concealed-effect benchmark of `shipid diagnose` (about 5 min on 2 cores) → results/diagnose/.
+# The concealed-effect benchmark of `shipid diagnose` against paper 001's sparse GP as base (about 3 min on
+# 2 cores) → results/diagnose/.
 bench-diagnose:
     cargo run --release -p shipid -- bench-diagnose --out results/diagnose
 
-# The same benchmark against paper 001's sparse GP as base (about 11 min) → results/diagnose/gp-base/.
-bench-diagnose-gp:
-    cargo run --release -p shipid -- bench-diagnose --base sparse-gp --out results/diagnose/gp-base
+# The same benchmark against refined full74 LSQ (1.5 min) and the exact MMG model (1.2 min).
+bench-diagnose-full74:
+    cargo run --release -p shipid -- bench-diagnose --base full74 --out results/diagnose/full74-base
+
+bench-diagnose-reference:
+    cargo run --release -p shipid -- bench-diagnose --base mmg:kvlcc2 --out results/diagnose/reference-base
 
 # Diagnose the HSVA tests against full68 LSQ identified from the default data.
 diagnose-hsva: import-hsva

@@ -162,9 +162,9 @@ enum Command {
     /// Benchmark the diagnosis on generated data with concealed effects (confusion matrix, fit
     /// improvements, recovered parameters) written to `--out`.
     BenchDiagnose {
-        /// Base model: a model file, `mmg:kvlcc2`, or `sparse-gp` (paper 001's sparse GP fitted on the clean embedded data, as `shipid fit --estimator sparse-gp`); default: full74 LSQ fitted on the clean embedded data and refined in the output-error sense (as `shipid fit --set full74 --refine`).
-        #[arg(long)]
-        base: Option<String>,
+        /// Base model: `sparse-gp` (paper 001's sparse GP fitted on the clean embedded data, as `shipid fit --estimator sparse-gp`), `full74` (full74 LSQ fitted on the clean embedded data and refined in the output-error sense, as `shipid fit --set full74 --refine`), `mmg:kvlcc2`, or a model file.
+        #[arg(long, default_value = shipid::bench_diagnose::GP_BASE)]
+        base: String,
         #[arg(long, default_value = "results/diagnose")]
         out: PathBuf,
         /// Noise seeds per effect and magnitude.
@@ -397,7 +397,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             out,
             seeds,
             controls,
-        } => shipid::bench_diagnose::run(base.as_deref(), &out, seeds, controls),
+        } => shipid::bench_diagnose::run(&base, &out, seeds, controls),
         Command::Diagnose {
             model,
             dataset,
