@@ -703,8 +703,8 @@ pub(crate) fn segments(rec: &Recording, horizon_s: f64) -> Vec<(usize, usize)> {
 /// Longest RK4 step of a segment replay ÷ (L/U0): 0.1 s for the KVLCC2 model, twice the re-simulation
 /// step of `validate` ([`DT_OVER_L_OVER_U0`]). A diagnosis spends most of its time in these replays
 /// (RK4 on ship motions with time constants of several seconds); on a concealed current + wind case of
-/// the default data the held-out RMSEs agree with the 0.05 s step's to 1e-9 relative (a 0.2 s step,
-/// which straddles the rudder's 0.1 s samples, to 5e-5).
+/// the default data the held-out RMSEs before and after the effect agree with the 0.05 s step's to
+/// 5e-8 relative (a 0.2 s step, which straddles the rudder's 0.1 s samples, to 6e-4).
 pub const SEGMENT_STEP_OVER_L_OVER_U0: f64 = 2.0 * DT_OVER_L_OVER_U0;
 
 /// Replay one segment; returns the simulated recording (possibly cut short) and status.
@@ -1282,7 +1282,7 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
         let pairs: Vec<(Vec<Family>, CrossFit)> = pairs
             .into_par_iter()
             .map(|fams| {
-                // Each member starts from its own fit to the same fold.
+                // The members' own fits to the same fold are starts (see `start_grid`).
                 let alone = |k: usize| -> Vec<Option<Vec<f64>>> {
                     fams.iter()
                         .map(|f| {
