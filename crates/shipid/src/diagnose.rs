@@ -1749,6 +1749,23 @@ mod tests {
         assert!((fit.params[0] - 2.0).abs() < 1e-5 && (fit.params[1] - 0.7).abs() < 1e-5);
     }
 
+    #[test]
+    fn levenberg_marquardt_holds_a_parameter_at_the_bound_the_optimum_lies_beyond() {
+        // Coupled residuals whose unconstrained optimum has p0 = 2 beyond its bound 1: the constrained
+        // optimum is p0 = 1, p1 = 1.2. Projecting full steps (p1's step computed as if p0 moved to 2)
+        // used to creep towards it for all 40 iterations, as a shallow-water factor or a lag at 0 did.
+        let evaluations = std::sync::atomic::AtomicUsize::new(0);
+        let f = |p: &[f64]| -> Vec<f64> {
+            evaluations.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            vec![p[0] - 2.0, p[1] + 0.8 * p[0] - 2.0, 0.1 * (p[1] - 1.2)]
+        };
+        let fit = levenberg_marquardt(&f, &[0.5, 0.0], &[0.0, -5.0], &[1.0, 5.0]);
+        assert_eq!(fit.params[0], 1.0);
+        assert!((fit.params[1] - 1.2).abs() < 1e-6, "p1 = {}", fit.params[1]);
+        let n = evaluations.into_inner();
+        assert!(n <= 30, "{n} evaluations");
+    }
+
     /// `noise_sigma` on `x(t) = 5 sin(0.05 t) + U0·t` (a ship's position through a turn) plus white
     /// noise of σ = 0.01, sampled at `t`.
     fn check_noise_sigma(t: &[f64], expected: f64) {
