@@ -413,7 +413,8 @@ fn levenberg_marquardt(
     let cost = r.iter().map(|x| x * x).sum::<f64>();
     let mut at = LmPoint { p, r, cost };
     let mut lambda = 1e-3;
-    let mut jac: Vec<Vec<f64>> = vec![vec![0.0; at.r.len()]; k];
+    // Set by the first iteration (there always is one); the last one's gives the covariance.
+    let mut jac: Vec<Vec<f64>> = Vec::new();
     for _ in 0..40 {
         // The columns in parallel: near the end of a diagnosis one long fit is often all that is left.
         jac = (0..k)
@@ -951,11 +952,7 @@ impl Judge<'_> {
     /// parameters fitted to each fold.
     /// `alone[k]` holds each family's parameters fitted alone to fold k, where known (see
     /// [`start_grid`]).
-    fn cross(
-        &self,
-        families: &[Family],
-        alone: &(dyn Fn(usize) -> Vec<Option<Vec<f64>>> + Sync),
-    ) -> CrossFit {
+    fn cross(&self, families: &[Family], alone: &[Vec<Option<&[f64]>>; 2]) -> CrossFit {
         // The two folds in parallel: a wind's grid of starts makes one candidate's folds the longest
         // tasks of a diagnosis.
         let folds: Vec<(usize, Vec<f64>, Vec<(usize, ReplayScore)>)> = (0..2)
@@ -963,8 +960,6 @@ impl Judge<'_> {
             .filter(|&k| !self.folds[1 - k].is_empty())
             .map(|k| {
                 let (train, test) = (&self.folds[k], &self.folds[1 - k]);
-                let alone = alone(k);
-                let alone: Vec<Option<&[f64]>> = alone.iter().map(Option::as_deref).collect();
                 let (effects, fit) = fit_families(
                     self.base,
                     self.base_effects,
@@ -972,7 +967,7 @@ impl Judge<'_> {
                     self.prep,
                     train,
                     &self.scale,
-                    start_grid(families, &alone),
+                    start_grid(families, &alone[k]),
                     3,
                 );
                 let sc = self.score(&effects, test);
@@ -1183,7 +1178,7 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
     // Candidates, each judged held-out (in parallel).
     let single: Vec<(Family, CrossFit)> = Family::ALL
         .par_iter()
-        .map(|&f| (f, judge.cross(&[f], &|_| Vec::new())))
+        .map(|&f| (f, judge.cross(&[f], &Default::default())))
         .collect();
     // Typical per-recording change: the geometric mean of after/before over recordings, so that one
     // recording the base model already fits badly (or where a segment runs away) cannot decide alone.
@@ -1225,10 +1220,6 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
     };
     // Each candidate with its assessment and its cross fit (held-out scores, and the fold fits that
     // warm start its final fit).
-    let single_folds: BTreeMap<Family, Vec<(usize, Vec<f64>)>> = single
-        .iter()
-        .map(|(f, cross)| (*f, cross.1.clone()))
-        .collect();
     let mut assessed: Vec<(Vec<Family>, Assessed, CrossFit)> = single
         .into_iter()
         .map(|(f, cross)| (vec![f], assess(f.label().into(), f.dim(), &cross.0), cross))
@@ -1279,20 +1270,18 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
                 pairs.push(vec![f, g]);
             }
         }
+        // A single effect's parameters fitted to fold k (from its cross fit above).
+        let fold_fit = |f: Family, k: usize| -> Option<&[f64]> {
+            let (_, _, (_, fits)) = assessed.iter().find(|(fams, _, _)| fams[..] == [f])?;
+            fits.iter()
+                .find(|(fk, _)| *fk == k)
+                .map(|(_, p)| p.as_slice())
+        };
         let pairs: Vec<(Vec<Family>, CrossFit)> = pairs
             .into_par_iter()
             .map(|fams| {
                 // The members' own fits to the same fold are starts (see `start_grid`).
-                let alone = |k: usize| -> Vec<Option<Vec<f64>>> {
-                    fams.iter()
-                        .map(|f| {
-                            single_folds
-                                .get(f)
-                                .and_then(|fits| fits.iter().find(|(fk, _)| *fk == k))
-                                .map(|(_, p)| p.clone())
-                        })
-                        .collect()
-                };
+                let alone = [0, 1].map(|k| fams.iter().map(|&f| fold_fit(f, k)).collect());
                 let s = judge.cross(&fams, &alone);
                 (fams, s)
             })
