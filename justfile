@@ -8,6 +8,10 @@ main:
 test:
     cargo test --release --workspace
 
+# The stored-metrics regression check of the studies (what CI runs after the tests).
+check:
+    for study in truncation estimators gp; do cargo run --release -p shipid -- check studies/$study.toml --reference results/reference/$study; done
+
 lint:
     cargo fmt --all -- --check
     cargo clippy --workspace --all-targets --release -- -D warnings

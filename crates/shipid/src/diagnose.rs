@@ -618,6 +618,9 @@ fn fit_families(
 /// fitted to each fold (by fold index).
 type CrossFit = (Vec<ReplayScore>, Vec<(usize, Vec<f64>)>);
 
+/// One fold's fit: the fold trained on, its parameters, and the held-out recordings' scores.
+type FoldFit = (usize, Vec<f64>, Vec<(usize, ReplayScore)>);
+
 /// Position and heading errors of segment replays.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct ReplayScore {
@@ -955,7 +958,7 @@ impl Judge<'_> {
     fn cross(&self, families: &[Family], alone: &[Vec<Option<&[f64]>>; 2]) -> CrossFit {
         // The two folds in parallel: a wind's grid of starts makes one candidate's folds the longest
         // tasks of a diagnosis.
-        let folds: Vec<(usize, Vec<f64>, Vec<(usize, ReplayScore)>)> = (0..2)
+        let folds: Vec<FoldFit> = (0..2)
             .into_par_iter()
             .filter(|&k| !self.folds[1 - k].is_empty())
             .map(|k| {

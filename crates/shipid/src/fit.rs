@@ -44,7 +44,7 @@ pub fn load_set(spec: &str) -> Result<CoefficientSet, CliError> {
 /// Which estimator, with its hyper-parameters as given on the command line.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct EstimatorSpec {
-    /// lsq, bounded-lsq, ridge, lasso, svr.
+    /// lsq, bounded-lsq, ridge, lasso, svr, or sparse-gp (paper 001's sparse GP; no coefficient set).
     pub name: String,
     pub lambda: Option<f64>,
     pub alpha: Option<f64>,
@@ -56,6 +56,10 @@ pub struct EstimatorSpec {
     /// when off, so the ids of study cases stay as they were.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub refine: bool,
+    /// Similarity threshold d_gen of the sparse GP (paper 001; `sparse-gp` only). Not serialised when
+    /// absent, so the ids of the polynomial estimators' study cases stay as they were.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub similarity: Option<f64>,
 }
 
 /// ε of the SVR when it is not given: 1 % of the RMS of the DOF's target (the ε-tube then ignores only
@@ -74,6 +78,7 @@ impl EstimatorSpec {
             epsilon: None,
             tune: false,
             refine: false,
+            similarity: None,
         }
     }
 
@@ -92,8 +97,35 @@ impl EstimatorSpec {
                 ))),
             }
         };
+        if self.similarity.is_some() && self.name != "sparse-gp" {
+            return Err(bad_input(
+                "--similarity applies to --estimator sparse-gp only",
+            ));
+        }
         match self.name.as_str() {
             "lsq" | "bounded-lsq" => Ok(()),
+            "sparse-gp" => {
+                for (given, flag) in [
+                    (self.lambda.is_some(), "lambda"),
+                    (self.alpha.is_some(), "alpha"),
+                    (self.c.is_some(), "c"),
+                    (self.epsilon.is_some(), "epsilon"),
+                    (self.tune, "tune"),
+                    (self.refine, "refine"),
+                ] {
+                    if given {
+                        return Err(bad_input(format!(
+                            "--{flag} does not apply to sparse-gp (its one setting is the similarity threshold d_gen)"
+                        )));
+                    }
+                }
+                match self.similarity {
+                    Some(d) if !(d > 0.0 && d <= 1.0) => Err(bad_input(format!(
+                        "--similarity must be in (0, 1], not {d}"
+                    ))),
+                    _ => Ok(()),
+                }
+            }
             "ridge" => need(self.lambda, "lambda"),
             "lasso" => need(self.alpha, "alpha"),
             "svr" => {
@@ -108,7 +140,7 @@ impl EstimatorSpec {
                 Ok(())
             }
             other => Err(bad_input(format!(
-                "unknown estimator `{other}`: expected lsq, bounded-lsq, ridge, lasso or svr"
+                "unknown estimator `{other}`: expected lsq, bounded-lsq, ridge, lasso, svr or sparse-gp"
             ))),
         }
     }

@@ -171,6 +171,15 @@ pub fn fit_gp_dataset(
     ))
 }
 
+/// The model file's text: a header naming the units, then the TOML.
+pub fn model_text(file: &GpModelFile) -> Result<String, toml::ser::Error> {
+    let header = format!(
+        "# Sparse Gaussian-process acceleration model (paper 001) identified by shipid {}.\n# Inputs u [m/s], v [m/s], r [rad/s], delta [rad] of midship (rudder positive to starboard); outputs u_dot, v_dot [m/s^2], r_dot [rad/s^2].\n",
+        env!("CARGO_PKG_VERSION")
+    );
+    Ok(format!("{header}{}", toml::to_string(file)?))
+}
+
 /// `shipid fit DATASET --estimator sparse-gp [--similarity D] --out MODEL.toml [--json] [--validate]`.
 pub fn run(
     dataset: &std::path::Path,
@@ -184,13 +193,8 @@ pub fn run(
     let ds = Dataset::load(dataset)?;
     let threshold = similarity.unwrap_or(DEFAULT_SIMILARITY);
     let (file, _model, report) = fit_gp_dataset(&ds, recordings, window, threshold)?;
-    let text = toml::to_string(&file).map_err(crate::failed)?;
-    let header = format!(
-        "# Sparse Gaussian-process acceleration model (paper 001) identified by shipid {}.\n# Inputs u [m/s], v [m/s], r [rad/s], delta [rad] of midship (rudder positive to starboard); outputs u_dot, v_dot [m/s^2], r_dot [rad/s^2].\n",
-        env!("CARGO_PKG_VERSION")
-    );
-    shipid_io::write::write_atomic(out, format!("{header}{text}").as_bytes())
-        .map_err(crate::failed)?;
+    let text = model_text(&file).map_err(crate::failed)?;
+    shipid_io::write::write_atomic(out, text.as_bytes()).map_err(crate::failed)?;
     if json {
         println!(
             "{}",

@@ -311,6 +311,17 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                 (None, Some(w)) => parse_window(&w)?,
                 (None, None) => shipid::fit::WindowSpec::Whole,
             };
+            let spec = shipid::fit::EstimatorSpec {
+                name: estimator.clone(),
+                lambda,
+                alpha,
+                c,
+                epsilon,
+                tune,
+                refine,
+                similarity,
+            };
+            spec.validate()?;
             if estimator == "sparse-gp" {
                 return shipid::fit_gp::run(
                     &dataset,
@@ -322,26 +333,13 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                     validate,
                 );
             }
-            if similarity.is_some() {
-                return Err(shipid::bad_input(
-                    "--similarity applies to --estimator sparse-gp only",
-                ));
-            }
             let solver: shipid_estimators::Solver = solver
                 .parse()
                 .map_err(|e: shipid_estimators::EstimatorError| shipid::bad_input(e.to_string()))?;
             shipid::fit_cmd::run(shipid::fit_cmd::FitArgs {
                 dataset: &dataset,
                 set: &set,
-                estimator: shipid::fit::EstimatorSpec {
-                    name: estimator,
-                    lambda,
-                    alpha,
-                    c,
-                    epsilon,
-                    tune,
-                    refine,
-                },
+                estimator: spec,
                 recordings,
                 window,
                 solver,

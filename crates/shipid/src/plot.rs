@@ -23,10 +23,11 @@ use plotters::prelude::*;
 use shipid_io::{DatasetRecording, Recording};
 use shipid_model::design::contributions;
 use shipid_model::{AbkowitzModel, Dof, ModelFile, PrimeInertia, design};
-use shipid_sim::{AbkowitzDynamics, SimStatus};
+use shipid_sim::{AbkowitzDynamics, Dynamics, GpDynamics, SimStatus};
 use shipid_tables::Table;
 
 use crate::fit::{WindowSpec, training_samples};
+use crate::fit_gp::load_gp_model;
 use crate::runner::default_out;
 use crate::study::{Case, Study, load_study};
 use crate::validate::replay;
@@ -67,7 +68,10 @@ type LineKey = (String, String, String, String);
 /// A case of the run with what it left on disk.
 struct CaseData<'a> {
     case: &'a Case,
+    /// The polynomial model (force decompositions and tracks).
     model: Option<AbkowitzModel>,
+    /// A sparse-GP case's model (tracks only).
+    gp: Option<GpDynamics>,
 }
 
 /// Legend of a case: set, estimator (refined or not, with its fixed hyper-parameter), window, and the
@@ -83,6 +87,8 @@ fn case_label(study: &Study, c: &Case) -> String {
         format!(" α={a:e}")
     } else if let Some(c) = e.c {
         format!(" C={c:e}")
+    } else if let Some(d) = e.similarity {
+        format!(" d_gen={d}")
     } else {
         String::new()
     };
@@ -97,9 +103,15 @@ fn case_label(study: &Study, c: &Case) -> String {
     } else {
         String::new()
     };
+    // A sparse-GP case has no coefficient set.
+    let set = if c.set == crate::study::NO_SET {
+        String::new()
+    } else {
+        format!("{} ", c.set)
+    };
     format!(
-        "{} {}{}{} {}{}",
-        c.set,
+        "{}{}{}{} {}{}",
+        set,
         e.name,
         if e.refine { " refined" } else { "" },
         hyper,
@@ -114,11 +126,16 @@ fn load_cases<'a>(study: &'a Study, out: &Path) -> Vec<CaseData<'a>> {
         .iter()
         .map(|case| {
             let dir = out.join("cases").join(&case.id);
-            let model = std::fs::read_to_string(dir.join("model.toml"))
-                .ok()
+            let path = dir.join("model.toml");
+            let text = std::fs::read_to_string(&path).ok();
+            let gp = text
+                .as_deref()
+                .and_then(|t| load_gp_model(&path, t).ok().flatten());
+            let model = text
+                .filter(|_| gp.is_none())
                 .and_then(|t| toml::from_str::<ModelFile>(&t).ok())
                 .and_then(|f| f.to_model().ok());
-            CaseData { case, model }
+            CaseData { case, model, gp }
         })
         .collect()
 }
@@ -293,8 +310,13 @@ fn predictions(study: &Study, cases: &[CaseData], r: &DatasetRecording) -> Vec<P
         .iter()
         .enumerate()
         .filter_map(|(i, c)| {
-            let model = AbkowitzDynamics(c.model.clone()?);
-            let sim = closed_loop(&model, r, ship).unwrap_or_else(|| replay(&model, &r.recording));
+            let polynomial = c.model.clone().map(AbkowitzDynamics);
+            let model: &dyn Dynamics = match (&polynomial, &c.gp) {
+                (Some(m), _) => m,
+                (None, Some(g)) => g,
+                (None, None) => return None,
+            };
+            let sim = closed_loop(model, r, ship).unwrap_or_else(|| replay(model, &r.recording));
             let s = sim.recording;
             let diverged_at_s = match sim.status {
                 SimStatus::Ok => None,

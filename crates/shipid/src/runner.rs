@@ -16,7 +16,7 @@ use shipid_estimators::{Solver, Status};
 use shipid_io::PrimeScale;
 use shipid_io::write::write_atomic;
 use shipid_model::IdentificationRange;
-use shipid_sim::{AbkowitzDynamics, Metrics, SimStatus};
+use shipid_sim::{AbkowitzDynamics, Dynamics, Metrics, SimStatus};
 
 use crate::fit::{fit_dataset, load_set};
 use crate::range::outside_fraction;
@@ -120,6 +120,9 @@ pub fn run_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
         vif: vec![],
         tests: vec![],
     };
+    if case.estimator.name == crate::study::GP {
+        return run_gp_case(study, case);
+    }
     let set = match load_set(&resolve_set(study, &case.set)) {
         Ok(s) => s,
         Err(e) => return (failed(e.to_string()), None),
@@ -152,55 +155,7 @@ pub fn run_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
         .unwrap_or("ok");
     let model = AbkowitzDynamics(out.model.clone());
     let range = IdentificationRange::from_samples(&out.model.set, &out.training).ok();
-    let scale = PrimeScale::of(&study.dataset.ship);
-    let tests = study
-        .tests
-        .iter()
-        .filter_map(|f| study.dataset.recording(f))
-        .map(|r| {
-            let v = validate_recording(&model, r, &study.dataset.ship);
-            let (status, diverged_at_s, recorded, predicted, relative_error, mrae) =
-                match v.manoeuvre {
-                    Some(m) => {
-                        let (st, at) = match m.status {
-                            SimStatus::Ok => ("ok".to_string(), None),
-                            SimStatus::Diverged { t_s, .. } => ("diverged".to_string(), Some(t_s)),
-                        };
-                        (st, at, m.recorded, m.predicted, m.relative_error, m.mrae)
-                    }
-                    None => (
-                        "replay-only".into(),
-                        None,
-                        Metrics::default(),
-                        None,
-                        Default::default(),
-                        None,
-                    ),
-                };
-            TestRow {
-                test: r.file.clone(),
-                kind: v.kind.into(),
-                status,
-                diverged_at_s,
-                replay_status: match v.replay.status {
-                    SimStatus::Ok => "ok".into(),
-                    SimStatus::Diverged { .. } => "diverged".into(),
-                },
-                position_rmse_over_l: v.replay.position_rmse_over_l,
-                heading_rmse_deg: v.replay.heading_rmse_deg,
-                u_rmse_m_s: v.replay.u_rmse_m_s,
-                v_rmse_m_s: v.replay.v_rmse_m_s,
-                r_rmse_deg_s: v.replay.r_rmse_deg_s,
-                recorded,
-                predicted,
-                relative_error,
-                mrae,
-                outside_identification_range: range
-                    .as_ref()
-                    .map(|g| outside_fraction(g, &r.recording, &scale, 0..r.recording.len())),
-            }
-        })
-        .collect();
+    let tests = test_rows(study, &model, range.as_ref());
     let mut coefficients = Vec::new();
     let mut vif = Vec::new();
     for d in &out.dofs {
@@ -247,6 +202,123 @@ pub fn run_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
         tests,
     };
     (result, model_text)
+}
+
+/// Validate a model on every test recording of the study: one row each. `range`: the polynomial
+/// model's identification range (none for the sparse GP).
+fn test_rows(
+    study: &Study,
+    model: &dyn Dynamics,
+    range: Option<&IdentificationRange>,
+) -> Vec<TestRow> {
+    let scale = PrimeScale::of(&study.dataset.ship);
+    study
+        .tests
+        .iter()
+        .filter_map(|f| study.dataset.recording(f))
+        .map(|r| {
+            let v = validate_recording(model, r, &study.dataset.ship);
+            let (status, diverged_at_s, recorded, predicted, relative_error, mrae) =
+                match v.manoeuvre {
+                    Some(m) => {
+                        let (st, at) = match m.status {
+                            SimStatus::Ok => ("ok".to_string(), None),
+                            SimStatus::Diverged { t_s, .. } => ("diverged".to_string(), Some(t_s)),
+                        };
+                        (st, at, m.recorded, m.predicted, m.relative_error, m.mrae)
+                    }
+                    None => (
+                        "replay-only".into(),
+                        None,
+                        Metrics::default(),
+                        None,
+                        Default::default(),
+                        None,
+                    ),
+                };
+            TestRow {
+                test: r.file.clone(),
+                kind: v.kind.into(),
+                status,
+                diverged_at_s,
+                replay_status: match v.replay.status {
+                    SimStatus::Ok => "ok".into(),
+                    SimStatus::Diverged { .. } => "diverged".into(),
+                },
+                position_rmse_over_l: v.replay.position_rmse_over_l,
+                heading_rmse_deg: v.replay.heading_rmse_deg,
+                u_rmse_m_s: v.replay.u_rmse_m_s,
+                v_rmse_m_s: v.replay.v_rmse_m_s,
+                r_rmse_deg_s: v.replay.r_rmse_deg_s,
+                recorded,
+                predicted,
+                relative_error,
+                mrae,
+                outside_identification_range: range
+                    .map(|g| outside_fraction(g, &r.recording, &scale, 0..r.recording.len())),
+            }
+        })
+        .collect()
+}
+
+/// A sparse-GP case (paper 001): fit, then validate on every test recording. Its `dofs` are the three
+/// GP outputs (u_dot [m/s²], v_dot [m/s²], r_dot [rad/s²]: accelerations in SI, not prime forces), with
+/// the residual RMS over all training samples and, as the objective, the negative log marginal
+/// likelihood the training minimised; it has no coefficients, VIFs or identification range.
+fn run_gp_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
+    let threshold = case
+        .estimator
+        .similarity
+        .unwrap_or(crate::fit_gp::DEFAULT_SIMILARITY);
+    let (file, model, report) =
+        match crate::fit_gp::fit_gp_dataset(&study.dataset, &case.training, case.window, threshold)
+        {
+            Ok(x) => x,
+            Err(e) => {
+                return (
+                    CaseResult {
+                        case_id: case.id.clone(),
+                        status: "fit-failed".into(),
+                        message: Some(e.to_string()),
+                        fit_time_s: None,
+                        samples: 0,
+                        dofs: vec![],
+                        coefficients: vec![],
+                        vif: vec![],
+                        tests: vec![],
+                    },
+                    None,
+                );
+            }
+        };
+    let tests = test_rows(study, &model, None);
+    let result = CaseResult {
+        case_id: case.id.clone(),
+        status: "ok".into(),
+        message: Some(format!(
+            "sparse GP: kept {} of {} training samples (d_gen {threshold})",
+            report.kept, report.candidates
+        )),
+        fit_time_s: Some(report.sparsify_time_s + report.train_time_s),
+        samples: report.candidates,
+        dofs: report
+            .outputs
+            .iter()
+            .map(|o| DofSummary {
+                dof: o.name.clone(),
+                status: "ok".into(),
+                residual_rms: o.rms_residual_all_samples,
+                condition_number: None,
+                scaled_condition_number: None,
+                hyper_parameter: None,
+                objective: -o.log_marginal_likelihood,
+            })
+            .collect(),
+        coefficients: vec![],
+        vif: vec![],
+        tests,
+    };
+    (result, crate::fit_gp::model_text(&file).ok())
 }
 
 /// A set named in a study: shipped name, or a path relative to the study file.

@@ -15,6 +15,9 @@
 //! name = "ridge"
 //! lambda = [1e-6, 1e-4]                         # one case per value; or tune = true
 //! refine = true                                 # then refine in the output-error sense (default false)
+//! [[estimator]]
+//! name = "sparse-gp"                            # paper 001's sparse GP: no set, no solver; one case
+//! similarity = [0.9, 0.96]                      # per threshold d_gen (default 0.96)
 //! [test]
 //! recordings = "all"                            # or a list of files
 //! [check]                                       # tolerances of `shipid check`, per summary column
@@ -30,6 +33,12 @@ use shipid_model::CoefficientSet;
 use shipid_sim::metrics::zigzag_events;
 
 use crate::fit::{EstimatorSpec, WindowSpec};
+
+/// The estimator name of paper 001's sparse GP.
+pub const GP: &str = "sparse-gp";
+/// `Case::set` and `Case::solver` of a sparse-GP case, which has neither.
+pub const NO_SET: &str = "none";
+const NO_SOLVER: &str = "none";
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(untagged)]
@@ -86,6 +95,10 @@ pub struct RawEstimator {
     /// "fast" (default) or "qp".
     #[serde(default)]
     pub solver: Option<String>,
+    /// Similarity thresholds d_gen of `sparse-gp` (one case per value; default
+    /// [`crate::fit_gp::DEFAULT_SIMILARITY`]).
+    #[serde(default)]
+    pub similarity: Option<OneOrMany>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -119,6 +132,8 @@ pub struct RawStudy {
     #[serde(default)]
     pub description: String,
     pub dataset: String,
+    /// Coefficient sets of the polynomial estimators (may be left out when every estimator is the GP).
+    #[serde(default)]
     pub sets: Vec<String>,
     pub training: RawTraining,
     #[serde(rename = "estimator")]
@@ -179,7 +194,8 @@ pub fn load_study(path: &Path) -> Result<Study, InputError> {
         ));
     }
     let dataset = Dataset::load(&dataset_path)?;
-    if raw.sets.is_empty() {
+    let polynomial = raw.estimators.iter().any(|e| e.name != GP);
+    if raw.sets.is_empty() && polynomial {
         return Err(key("sets", "the grid is empty: no coefficient set".into()));
     }
     for (i, s) in raw.sets.iter().enumerate() {
@@ -268,6 +284,51 @@ pub fn load_study(path: &Path) -> Result<Study, InputError> {
     let mut estimators: Vec<(EstimatorSpec, String)> = Vec::new();
     for (i, e) in raw.estimators.iter().enumerate() {
         let k = |f: &str| format!("estimator[{i}].{f}");
+        if e.name == GP {
+            // Keys of the polynomial estimators name what they would change; here nothing.
+            for (given, flag) in [
+                (e.lambda.is_some(), "lambda"),
+                (e.alpha.is_some(), "alpha"),
+                (e.c.is_some(), "c"),
+                (e.epsilon.is_some(), "epsilon"),
+                (e.tune, "tune"),
+                (e.refine, "refine"),
+                (e.solver.is_some(), "solver"),
+            ] {
+                if given {
+                    return Err(key(
+                        &k(flag),
+                        format!(
+                            "does not apply to {GP} (its one setting is `similarity`, the threshold d_gen)"
+                        ),
+                    ));
+                }
+            }
+            let values = e
+                .similarity
+                .as_ref()
+                .map(OneOrMany::values)
+                .unwrap_or_else(|| vec![crate::fit_gp::DEFAULT_SIMILARITY]);
+            if values.is_empty() {
+                return Err(key(
+                    &k("similarity"),
+                    "the grid is empty: give similarity values or leave it out".into(),
+                ));
+            }
+            for d in values {
+                let spec = EstimatorSpec {
+                    similarity: Some(d),
+                    ..EstimatorSpec::named(GP)
+                };
+                spec.validate()
+                    .map_err(|err| key(&k("similarity"), err.to_string()))?;
+                estimators.push((spec, NO_SOLVER.into()));
+            }
+            continue;
+        }
+        if e.similarity.is_some() {
+            return Err(key(&k("similarity"), format!("applies to {GP} only")));
+        }
         let solver = e.solver.clone().unwrap_or_else(|| "fast".into());
         if let Err(err) = solver.parse::<shipid_estimators::Solver>() {
             return Err(key(&k("solver"), err.to_string()));
@@ -306,7 +367,9 @@ pub fn load_study(path: &Path) -> Result<Study, InputError> {
             other => {
                 return Err(key(
                     &k("name"),
-                    format!("unknown estimator `{other}` (lsq, bounded-lsq, ridge, lasso, svr)"),
+                    format!(
+                        "unknown estimator `{other}` (lsq, bounded-lsq, ridge, lasso, svr, {GP})"
+                    ),
                 ));
             }
         };
@@ -351,11 +414,20 @@ pub fn load_study(path: &Path) -> Result<Study, InputError> {
     };
     let mut cases = Vec::new();
     for set in &raw.sets {
-        for (est, solver) in &estimators {
+        for (est, solver) in estimators.iter().filter(|(e, _)| e.name != GP) {
             for combo in &raw.training.recordings {
                 for w in &windows {
                     cases.push(case(set, est, solver, combo, *w));
                 }
+            }
+        }
+    }
+    // The GP has no coefficient set: its cases come once, after the polynomial ones (whose order, and
+    // so every existing study's, is unchanged).
+    for (est, solver) in estimators.iter().filter(|(e, _)| e.name == GP) {
+        for combo in &raw.training.recordings {
+            for w in &windows {
+                cases.push(case(NO_SET, est, solver, combo, *w));
             }
         }
     }
@@ -405,12 +477,13 @@ fn check_overshoots(
 fn case(set: &str, est: &EstimatorSpec, solver: &str, combo: &[String], w: WindowSpec) -> Case {
     let hyper = |name: &str, v: Option<f64>| v.map(|x| format!("-{name}{x:e}")).unwrap_or_default();
     let est_part = format!(
-        "{}{}{}{}{}{}{}",
+        "{}{}{}{}{}{}{}{}",
         est.name,
         hyper("l", est.lambda),
         hyper("a", est.alpha),
         hyper("c", est.c),
         hyper("e", est.epsilon),
+        hyper("d", est.similarity),
         if est.tune { "-cv" } else { "" },
         if est.refine { "-oe" } else { "" }
     );
@@ -423,7 +496,11 @@ fn case(set: &str, est: &EstimatorSpec, solver: &str, combo: &[String], w: Windo
         WindowSpec::Overshoots(n) => format!("os{n}"),
         WindowSpec::Time { start_s, end_s } => format!("t{start_s}-{end_s}"),
     };
-    let readable = format!("{set}_{est_part}_{solver}_{}_{window}", train.join("+"));
+    let readable = if set == NO_SET {
+        format!("{est_part}_{}_{window}", train.join("+"))
+    } else {
+        format!("{set}_{est_part}_{solver}_{}_{window}", train.join("+"))
+    };
     let mut c = Case {
         id: String::new(),
         set: set.into(),

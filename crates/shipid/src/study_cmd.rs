@@ -58,6 +58,7 @@ fn case_columns(t: &mut Table, rows: &[(&Case, &CaseResult)]) {
                     .or(c.estimator.lambda)
                     .or(c.estimator.alpha)
                     .or(c.estimator.c)
+                    .or(c.estimator.similarity)
             }),
         );
     }

@@ -117,6 +117,15 @@ fn similarity_flag_errors_are_input_errors() {
             vec!["--estimator", "sparse-gp", "--similarity", "1.5"],
             "--similarity must be in (0, 1]",
         ),
+        // Regression: flags of the polynomial estimators were silently ignored with the GP.
+        (
+            vec!["--estimator", "sparse-gp", "--tune"],
+            "--tune does not apply to sparse-gp",
+        ),
+        (
+            vec!["--estimator", "sparse-gp", "--refine"],
+            "--refine does not apply to sparse-gp",
+        ),
     ] {
         let mut all = vec![
             "fit",

@@ -28,7 +28,7 @@ fn bad_study_files_name_the_file_and_key() {
     );
     check_bad(
         "unknown_estimator.toml",
-        ": key `estimator[0].name`: unknown estimator `neural-net` (lsq, bounded-lsq, ridge, lasso, svr)",
+        ": key `estimator[0].name`: unknown estimator `neural-net` (lsq, bounded-lsq, ridge, lasso, svr, sparse-gp)",
     );
     check_bad(
         "empty_grid.toml",
@@ -49,6 +49,18 @@ fn bad_study_files_name_the_file_and_key() {
     check_bad(
         "unknown_set.toml",
         ": key `sets[0]`: unknown coefficient set `reduced33` (not one of reduced32, full68, full74, chen2021 and no such file)",
+    );
+    check_bad(
+        "gp_with_lambda.toml",
+        ": key `estimator[0].lambda`: does not apply to sparse-gp (its one setting is `similarity`, the threshold d_gen)",
+    );
+    check_bad(
+        "gp_similarity_out_of_range.toml",
+        ": key `estimator[0].similarity`: --similarity must be in (0, 1], not 1.5",
+    );
+    check_bad(
+        "similarity_on_lsq.toml",
+        ": key `estimator[0].similarity`: applies to sparse-gp only",
     );
     check_bad(
         "missing_dataset.toml",
@@ -243,5 +255,55 @@ fn refine_in_a_study_is_its_own_case_labelled_as_refined_and_its_replay_of_the_t
     assert!(
         track.contains("reduced32 lsq refined 4 OS"),
         "track legend of the refined case"
+    );
+}
+
+#[test]
+fn a_sparse_gp_case_needs_no_set_and_is_validated_and_drawn_like_the_polynomial_ones() {
+    let study = load_study(&common::root().join(FIXTURES).join("gp_without_sets.toml")).unwrap();
+    assert_eq!(study.cases.len(), 1);
+    let case = &study.cases[0];
+    assert!(
+        case.id.starts_with("sparse-gp-d9.6e-1_zz35_35_ps_os4-"),
+        "{}",
+        case.id
+    );
+    assert_eq!((case.set.as_str(), case.solver.as_str()), ("none", "none"));
+    let dir = tempfile::tempdir().unwrap();
+    let results = run_and_write(&study, dir.path(), 1, false, false).unwrap();
+    let r = &results[0];
+    assert_eq!(r.status, "ok", "{:?}", r.message);
+    assert!(
+        r.message.as_deref().unwrap_or("").contains("kept"),
+        "{:?}",
+        r.message
+    );
+    let outputs: Vec<&str> = r.dofs.iter().map(|d| d.dof.as_str()).collect();
+    assert_eq!(outputs, ["u_dot_m_s2", "v_dot_m_s2", "r_dot_rad_s2"]);
+    assert!(r.coefficients.is_empty() && r.vif.is_empty());
+    // Trained on ZZ35/35 PS (4 OS) of the default data, the GP predicts the 20/20 zig-zag's
+    // overshoots and times within a few percent (2.0 % measured; reduced32 LSQ: 11.6 %).
+    let t = &r.tests[0];
+    assert_eq!(
+        (t.test.as_str(), t.status.as_str()),
+        ("zz20_20_ps.csv", "ok")
+    );
+    let mrae = t.mrae.unwrap();
+    assert!(mrae < 0.04, "MRAE {mrae}");
+    assert_eq!(t.outside_identification_range, None);
+    // The model file is the GP's, and the figures draw it.
+    let model = std::fs::read_to_string(dir.path().join("cases").join(&case.id).join("model.toml"))
+        .unwrap();
+    assert!(model.contains("kind = \"sparse-gp\""));
+    let heading =
+        std::fs::read_to_string(dir.path().join("figures").join("heading_zz20_20_ps.svg")).unwrap();
+    assert!(
+        heading.contains("sparse-gp d_gen=0.96 4 OS"),
+        "legend of the GP case"
+    );
+    let summary = std::fs::read_to_string(dir.path().join("summary.csv")).unwrap();
+    assert!(
+        summary.contains(",none,sparse-gp,none,"),
+        "set, estimator, solver columns"
     );
 }
