@@ -234,6 +234,11 @@ pub const GP_BASE: &str = "sparse-gp";
 pub const FULL74_BASE: &str = "full74";
 
 pub fn run(base_spec: &str, out: &Path, seeds: u64, controls: u64) -> Result<Outcome, CliError> {
+    if [GP_BASE, FULL74_BASE].contains(&base_spec) && Path::new(base_spec).exists() {
+        return Err(crate::bad_input(format!(
+            "--base {base_spec}: both a base keyword and a file here; pass ./{base_spec} for the file"
+        )));
+    }
     let clean = to_dataset(generate_with(None, &[])?, "embedded default data (clean)");
     // The in-memory bases are fitted on every clean recording.
     let names: Vec<String> = clean.recordings.iter().map(|r| r.file.clone()).collect();

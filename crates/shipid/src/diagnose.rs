@@ -1475,6 +1475,9 @@ fn standard_errors(
         let se = &fit.std_err[at..at + d];
         let base: Vec<(&str, f64)> = f.effect(p, ship).parameters();
         let mut var = vec![0.0; base.len()];
+        // A physical parameter that no fitted one moves is fixed by the family (e.g. the offset
+        // variant's n0 and y0): it has no standard error, not a zero one.
+        let mut fitted = vec![false; base.len()];
         for j in 0..d {
             let h = (se[j] * 1e-2).max(1e-9);
             let mut q = p.to_vec();
@@ -1486,9 +1489,10 @@ fn standard_errors(
                     diff = (diff + 180.0).rem_euclid(360.0) - 180.0;
                 }
                 var[k] += (diff / h * se[j]).powi(2);
+                fitted[k] |= diff != 0.0;
             }
         }
-        for ((key, _), v) in base.iter().zip(var) {
+        for (((key, _), v), _) in base.iter().zip(var).zip(&fitted).filter(|(_, f)| **f) {
             let name = if fams.len() > 1 {
                 format!("{}.{key}", e.kind())
             } else {
@@ -1663,6 +1667,25 @@ mod tests {
         assert_eq!(score.diverged_segments, 0);
         let rmse_over_l = score.position_rmse() / ship.lpp;
         assert!(rmse_over_l < 1e-3, "position RMSE {rmse_over_l} L");
+    }
+
+    #[test]
+    fn a_rudder_offset_reports_the_error_of_the_offset_only() {
+        // Regression: the offset variant of `asymmetry` also printed "± n0 0.0000 ± y0 0.0000" for the
+        // side force and moment it keeps at zero.
+        let ship = *shipid_sim::MmgModel::kvlcc2().ship();
+        let fit = FitResult {
+            params: vec![0.5],
+            cost: 0.0,
+            std_err: vec![0.02],
+        };
+        let fams = [Family::RudderOffset];
+        let effects = [fams[0].effect(&fit.params, &ship)];
+        let se = standard_errors(&fams, &effects, &fit, &ship);
+        assert_eq!(se.len(), 1, "{se:?}");
+        let (key, value) = se.iter().next().unwrap();
+        assert!(key.contains("offset"), "{key}");
+        assert!((value - 0.02).abs() < 1e-9, "{value}");
     }
 
     #[test]

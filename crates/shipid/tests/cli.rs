@@ -205,3 +205,26 @@ fn generate_simulates_the_manoeuvres_asked_for_and_a_current_only_carries_the_tr
         }
     }
 }
+
+/// Regression: a model file named `full74` (or `sparse-gp`) in the working directory was silently
+/// replaced by the base of that keyword.
+#[test]
+fn a_model_file_named_like_a_bench_diagnose_base_keyword_is_an_input_error() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("full74"), "").unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_shipid"))
+        .args([
+            "bench-diagnose",
+            "--base",
+            "full74",
+            "--out",
+            "never-written",
+        ])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("pass ./full74 for the file"), "{err}");
+    assert!(!dir.path().join("never-written").exists());
+}
