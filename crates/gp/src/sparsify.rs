@@ -52,6 +52,13 @@ impl Similarity {
         (-self.scaled_sq_distance(a, b)).exp()
     }
 
+    /// True when some point of `kept` is at least d_gen similar to `x` (the walk's own test, so every
+    /// sample it walked is covered by the points it kept: a kept one by itself, another by the point
+    /// that made it redundant).
+    pub fn covered(&self, kept: &Points, x: &[f64]) -> bool {
+        (0..kept.len()).any(|j| self.similarity(x, kept.row(j)) >= self.threshold)
+    }
+
     fn scaled_sq_distance(&self, a: &[f64], b: &[f64]) -> f64 {
         a.iter()
             .zip(b)

@@ -1,6 +1,7 @@
 //! The identification range of a model file (where its regression extrapolates, see
 //! [`shipid_model::envelope`]): built from the training windows the file records, when its data set can
-//! still be read, and applied to recordings by `diagnose` and `validate`.
+//! still be read, and applied to recordings by `diagnose` and `validate`. A sparse GP carries its own
+//! (its sparse points and their similarity, [`gp_outside_fraction`]).
 
 use std::path::{Path, PathBuf};
 
@@ -89,4 +90,13 @@ pub fn outside_fraction(
     idx: impl Iterator<Item = usize>,
 ) -> f64 {
     share(outside_count(range, rec, scale, idx))
+}
+
+/// Fraction of the samples of `rec` outside a sparse GP's identification range: no sparse point is
+/// d_gen-similar to the state ([`shipid_sim::GpDynamics::covers`]).
+pub fn gp_outside_fraction(gp: &shipid_sim::GpDynamics, rec: &Recording) -> f64 {
+    let outside = (0..rec.len())
+        .filter(|&i| !gp.covers(rec.u[i], rec.v[i], rec.r[i], rec.delta[i]))
+        .count();
+    share((outside, rec.len()))
 }

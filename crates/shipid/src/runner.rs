@@ -155,7 +155,13 @@ pub fn run_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
         .unwrap_or("ok");
     let model = AbkowitzDynamics(out.model.clone());
     let range = IdentificationRange::from_samples(&out.model.set, &out.training).ok();
-    let tests = test_rows(study, &model, range.as_ref());
+    let scale = PrimeScale::of(&study.dataset.ship);
+    let outside = |rec: &shipid_io::Recording| {
+        range
+            .as_ref()
+            .map(|g| outside_fraction(g, rec, &scale, 0..rec.len()))
+    };
+    let tests = test_rows(study, &model, &outside);
     let mut coefficients = Vec::new();
     let mut vif = Vec::new();
     for d in &out.dofs {
@@ -204,14 +210,13 @@ pub fn run_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
     (result, model_text)
 }
 
-/// Validate a model on every test recording of the study: one row each. `range`: the polynomial
-/// model's identification range (none for the sparse GP).
+/// Validate a model on every test recording of the study: one row each. `outside`: the share of a
+/// recording's states outside the model's identification range, where it has one.
 fn test_rows(
     study: &Study,
     model: &dyn Dynamics,
-    range: Option<&IdentificationRange>,
+    outside: &dyn Fn(&shipid_io::Recording) -> Option<f64>,
 ) -> Vec<TestRow> {
-    let scale = PrimeScale::of(&study.dataset.ship);
     study
         .tests
         .iter()
@@ -254,8 +259,7 @@ fn test_rows(
                 predicted,
                 relative_error,
                 mrae,
-                outside_identification_range: range
-                    .map(|g| outside_fraction(g, &r.recording, &scale, 0..r.recording.len())),
+                outside_identification_range: outside(&r.recording),
             }
         })
         .collect()
@@ -264,7 +268,8 @@ fn test_rows(
 /// A sparse-GP case (paper 001): fit, then validate on every test recording. Its `dofs` are the three
 /// GP outputs (u_dot [m/s²], v_dot [m/s²], r_dot [rad/s²]: accelerations in SI, not prime forces), with
 /// the residual RMS over all training samples and, as the objective, the negative log marginal
-/// likelihood the training minimised; it has no coefficients, VIFs or identification range.
+/// likelihood the training minimised; it has no coefficients or VIFs, and its identification range is
+/// its sparse points' coverage ([`crate::range::gp_outside_fraction`]).
 fn run_gp_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
     let threshold = case
         .estimator
@@ -291,7 +296,9 @@ fn run_gp_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
                 );
             }
         };
-    let tests = test_rows(study, &model, None);
+    let tests = test_rows(study, &model, &|rec| {
+        Some(crate::range::gp_outside_fraction(&model, rec))
+    });
     let result = CaseResult {
         case_id: case.id.clone(),
         status: "ok".into(),

@@ -172,3 +172,36 @@ fn a_sparse_gp_base_gets_its_own_level_from_its_training_data() {
     assert!(level.is_some_and(|l| l > 0.0 && l < 0.02), "{level:?}");
     assert_eq!(r["verdict"], "none", "{stdout}");
 }
+
+/// The GP's identification range is its sparse points' coverage: every state it was trained on lies in
+/// it (the similarity walk's own guarantee), and a manoeuvre it never saw mostly does not. Measured:
+/// trained on ZZ35/35 PS (4 OS), 98 % of the 10/10 zig-zag's states are outside (its posterior variance
+/// above every training state's: 98.5 %, the same answer).
+#[test]
+fn a_sparse_gp_covers_its_training_states_and_not_an_unseen_manoeuvre() {
+    let ds =
+        shipid_io::Dataset::load(&common::root().join("data/kvlcc2-mmg/dataset.toml")).unwrap();
+    let (file, gp, _) = fit_gp_dataset(
+        &ds,
+        &["zz35_35_ps.csv".to_string()],
+        WindowSpec::Overshoots(4),
+        0.96,
+    )
+    .unwrap();
+    let window = &file.training[0];
+    let rec = &ds.recording("zz35_35_ps.csv").unwrap().recording;
+    let trained: Vec<usize> = (0..rec.len())
+        .filter(|&i| rec.t[i] >= window.t_start_s && rec.t[i] <= window.t_end_s)
+        .collect();
+    assert!(trained.len() > 1000);
+    for &i in &trained {
+        assert!(
+            gp.covers(rec.u[i], rec.v[i], rec.r[i], rec.delta[i]),
+            "training state at t = {} s",
+            rec.t[i]
+        );
+    }
+    let unseen = &ds.recording("zz10_10_ps.csv").unwrap().recording;
+    let outside = shipid::range::gp_outside_fraction(&gp, unseen);
+    assert!(outside > 0.9, "{outside}");
+}

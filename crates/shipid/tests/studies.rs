@@ -290,7 +290,10 @@ fn a_sparse_gp_case_needs_no_set_and_is_validated_and_drawn_like_the_polynomial_
     );
     let mrae = t.mrae.unwrap();
     assert!(mrae < 0.04, "MRAE {mrae}");
-    assert_eq!(t.outside_identification_range, None);
+    // Its identification range is the sparse points' coverage: the 20/20 zig-zag's smaller drift and
+    // yaw rate lie off the 35/35 one's orbit (98 % measured).
+    let outside = t.outside_identification_range.unwrap();
+    assert!(outside > 0.9, "{outside}");
     // The model file is the GP's, and the figures draw it.
     let model = std::fs::read_to_string(dir.path().join("cases").join(&case.id).join("model.toml"))
         .unwrap();

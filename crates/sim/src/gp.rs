@@ -11,7 +11,7 @@
 //! turn a force into an acceleration; the GP itself does not use them.
 
 use serde::{Deserialize, Serialize};
-use shipid_gp::{Gp, GpError, Hyper, Points, Termination};
+use shipid_gp::{Gp, GpError, Hyper, Points, Similarity, Termination};
 use shipid_io::{AddedMass, Ship};
 use shipid_model::TrainingWindow;
 
@@ -101,6 +101,9 @@ pub struct GpDynamics {
     pub added_mass: AddedMass,
     /// u̇, v̇, ṙ.
     pub gps: [Gp; 3],
+    /// The sparse points and the similarity that chose them: where the model was identified.
+    pub points: Points,
+    pub similarity: Similarity,
 }
 
 impl GpDynamics {
@@ -141,6 +144,16 @@ impl GpDynamics {
                 }
             })
         };
+        let similarity = Similarity {
+            scales: f.sparsification.scales.clone(),
+            threshold: f.sparsification.similarity_threshold,
+        };
+        similarity
+            .check(GP_INPUTS.len())
+            .map_err(|source| GpModelError::Gp {
+                output: "sparsification".into(),
+                source,
+            })?;
         Ok(GpDynamics {
             ship: f.ship,
             added_mass: f.added_mass,
@@ -149,7 +162,17 @@ impl GpDynamics {
                 build(&f.outputs[1])?,
                 build(&f.outputs[2])?,
             ],
+            points: x,
+            similarity,
         })
+    }
+
+    /// Whether the state (u [m/s], v [m/s], r [rad/s], δ [rad]) lies within the identification range:
+    /// some sparse point is at least d_gen similar to it — paper 001's test for "no new information",
+    /// which every training sample passes by construction. Outside, no training data was near and the
+    /// mean reverts towards its constant.
+    pub fn covers(&self, u: f64, v: f64, r: f64, delta_rad: f64) -> bool {
+        self.similarity.covered(&self.points, &[u, v, r, delta_rad])
     }
 
     /// Predictive mean and latent variance of the three accelerations at one state and rudder angle.
