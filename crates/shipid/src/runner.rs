@@ -80,6 +80,21 @@ pub struct CaseResult {
 }
 
 impl CaseResult {
+    /// The row of a case whose fit could not be made (`message` says why).
+    fn fit_failed(case: &Case, message: String) -> CaseResult {
+        CaseResult {
+            case_id: case.id.clone(),
+            status: "fit-failed".into(),
+            message: Some(message),
+            fit_time_s: None,
+            samples: 0,
+            dofs: vec![],
+            coefficients: vec![],
+            vif: vec![],
+            tests: vec![],
+        }
+    }
+
     /// True when the fit failed or any test diverged.
     pub fn failed(&self) -> bool {
         !(self.status == "ok" || self.status == "ill-conditioned")
@@ -109,17 +124,7 @@ struct StoredConfig<'a> {
 
 /// Run one case: fit, then validate on every test recording.
 pub fn run_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
-    let failed = |msg: String| CaseResult {
-        case_id: case.id.clone(),
-        status: "fit-failed".into(),
-        message: Some(msg),
-        fit_time_s: None,
-        samples: 0,
-        dofs: vec![],
-        coefficients: vec![],
-        vif: vec![],
-        tests: vec![],
-    };
+    let failed = |msg: String| CaseResult::fit_failed(case, msg);
     if case.estimator.name == crate::study::GP {
         return run_gp_case(study, case);
     }
@@ -279,22 +284,7 @@ fn run_gp_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
         match crate::fit_gp::fit_gp_dataset(&study.dataset, &case.training, case.window, threshold)
         {
             Ok(x) => x,
-            Err(e) => {
-                return (
-                    CaseResult {
-                        case_id: case.id.clone(),
-                        status: "fit-failed".into(),
-                        message: Some(e.to_string()),
-                        fit_time_s: None,
-                        samples: 0,
-                        dofs: vec![],
-                        coefficients: vec![],
-                        vif: vec![],
-                        tests: vec![],
-                    },
-                    None,
-                );
-            }
+            Err(e) => return (CaseResult::fit_failed(case, e.to_string()), None),
         };
     let tests = test_rows(study, &model, &|rec| {
         Some(crate::range::gp_outside_fraction(&model, rec))
