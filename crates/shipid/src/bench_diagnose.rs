@@ -28,7 +28,7 @@ use shipid_sim::effects::{Asymmetry, Current, RudderLag, ShallowWater, Wind};
 use shipid_sim::{AbkowitzDynamics, Dynamics, Effect};
 use shipid_tables::Table;
 
-use crate::diagnose::{DiagnoseInput, DiagnoseOptions, diagnose, model_level};
+use crate::diagnose::{BaseRange, DiagnoseInput, DiagnoseOptions, diagnose, model_level};
 use crate::fit::{EstimatorSpec, WindowSpec, fit_dataset, load_set};
 use crate::generate::{Generated, default_manoeuvres, generate_with};
 use crate::range::{identification_range, training_data};
@@ -243,6 +243,8 @@ pub fn run(base_spec: &str, out: &Path, seeds: u64, controls: u64) -> Result<Out
     // The in-memory bases are fitted on every clean recording.
     let names: Vec<String> = clean.recordings.iter().map(|r| r.file.clone()).collect();
     type Base = (Box<dyn Dynamics + Send + Sync>, Vec<Effect>, String);
+    // A polynomial base's leverage range, or a GP base's own coverage range.
+    let mut gp_range: Option<shipid_sim::GpDynamics> = None;
     let ((base, base_effects, base_name), range): (Base, Option<IdentificationRange>) =
         match base_spec {
             GP_BASE => {
@@ -252,6 +254,7 @@ pub fn run(base_spec: &str, out: &Path, seeds: u64, controls: u64) -> Result<Out
                     WindowSpec::Whole,
                     crate::fit_gp::DEFAULT_SIMILARITY,
                 )?;
+                gp_range = Some(gp.clone());
                 (
                     (
                         Box::new(gp),
@@ -291,6 +294,7 @@ pub fn run(base_spec: &str, out: &Path, seeds: u64, controls: u64) -> Result<Out
             spec => {
                 let (b, e) = load_model_parts(spec)?;
                 let range = training_data(spec).as_ref().and_then(identification_range);
+                gp_range = crate::fit_gp::gp_model_of(spec);
                 ((b, e, spec.to_string()), range)
             }
         };
@@ -299,7 +303,7 @@ pub fn run(base_spec: &str, out: &Path, seeds: u64, controls: u64) -> Result<Out
         base: base.as_ref(),
         base_effects: &base_effects,
         model_level_over_l: None,
-        identification_range: range.as_ref(),
+        identification_range: BaseRange::of(range.as_ref(), gp_range.as_ref()),
     };
     let level = model_level(&input, &clean, &opts);
     input.model_level_over_l = Some(level);
@@ -349,7 +353,11 @@ pub fn run(base_spec: &str, out: &Path, seeds: u64, controls: u64) -> Result<Out
     for r in &mut ok_rows {
         r.detectable = r.case.word != "none" && r.before >= threshold;
     }
-    write_results(out, &ok_rows, level, threshold, &base_name, seeds).map_err(failed)?;
+    let criterion = input.identification_range.map_or("", BaseRange::criterion);
+    write_results(
+        out, &ok_rows, level, threshold, &base_name, criterion, seeds,
+    )
+    .map_err(failed)?;
     for f in &failures {
         eprintln!("case failed: {f}");
     }
@@ -393,6 +401,7 @@ fn write_results(
     level: f64,
     threshold: f64,
     base_name: &str,
+    range_criterion: &str,
     seeds: u64,
 ) -> anyhow::Result<()> {
     let mut t = Table::default();
@@ -510,7 +519,7 @@ fn write_results(
             .filter_map(|r| Some(format!("{} {:.0} %", r.case.id, 100.0 * r.outside?)))
             .collect::<Vec<_>>();
         md.push_str(&format!(
-            "- Recorded states outside the base model's identification range (leverage above its training maximum): at most {:.0} % in any case{}.\n",
+            "- Recorded states outside the base model's identification range ({range_criterion}): at most {:.0} % in any case{}.\n",
             100.0 * outside.iter().cloned().fold(0.0f64, f64::max),
             if short.is_empty() {
                 String::new()

@@ -1049,8 +1049,39 @@ pub struct DiagnoseInput<'a> {
     pub base_effects: &'a [Effect],
     /// The model's level on its training recordings (position RMSE ÷ L of segment replays), if known.
     pub model_level_over_l: Option<f64>,
-    /// Where the base model was identified (an Abkowitz model with readable training data), if known.
-    pub identification_range: Option<&'a IdentificationRange>,
+    /// Where the base model was identified (an Abkowitz model with readable training data, or a
+    /// sparse GP), if known.
+    pub identification_range: Option<BaseRange<'a>>,
+}
+
+/// Where a base model was identified, tested one recorded state at a time.
+#[derive(Clone, Copy)]
+pub enum BaseRange<'a> {
+    /// A polynomial's leverage envelope: outside where the leverage exceeds every training state's.
+    Leverage(&'a IdentificationRange),
+    /// A sparse GP's coverage: outside where no sparse point is d_gen-similar
+    /// ([`shipid_sim::GpDynamics::covers`]).
+    Coverage(&'a shipid_sim::GpDynamics),
+}
+
+impl<'a> BaseRange<'a> {
+    /// The leverage range where there is one, else the GP's coverage.
+    pub fn of(
+        leverage: Option<&'a IdentificationRange>,
+        gp: Option<&'a shipid_sim::GpDynamics>,
+    ) -> Option<BaseRange<'a>> {
+        leverage
+            .map(BaseRange::Leverage)
+            .or(gp.map(BaseRange::Coverage))
+    }
+
+    /// What "outside" means, for the report's explanation.
+    pub fn criterion(self) -> &'static str {
+        match self {
+            BaseRange::Leverage(_) => "leverage above its training maximum",
+            BaseRange::Coverage(_) => "no sparse point of the GP d_gen-similar",
+        }
+    }
 }
 
 /// The explanation mentions the identification range when at least this fraction of the recorded
@@ -1058,14 +1089,21 @@ pub struct DiagnoseInput<'a> {
 const OUTSIDE_WORTH_SAYING: f64 = 0.05;
 
 /// Per recording, how many of its thinned samples lie outside `range`, and how many there are.
-fn outside_counts(
-    range: &IdentificationRange,
-    prep: &[Prepared],
-    ship: &Ship,
-) -> Vec<(usize, usize)> {
+fn outside_counts(range: BaseRange, prep: &[Prepared], ship: &Ship) -> Vec<(usize, usize)> {
     let s = PrimeScale::of(ship);
     prep.iter()
-        .map(|p| outside_count(range, &p.rec, &s, p.samples.iter().copied()))
+        .map(|p| match range {
+            BaseRange::Leverage(r) => outside_count(r, &p.rec, &s, p.samples.iter().copied()),
+            BaseRange::Coverage(gp) => {
+                let rec = &p.rec;
+                let outside = p
+                    .samples
+                    .iter()
+                    .filter(|&&i| !gp.covers(rec.u[i], rec.v[i], rec.r[i], rec.delta[i]))
+                    .count();
+                (outside, p.samples.len())
+            }
+        })
         .collect()
 }
 
@@ -1418,8 +1456,9 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
         .map(|c| share(c.iter().fold((0, 0), |(o, t), &(co, ct)| (o + co, t + ct))));
     let explanation = match outside_all {
         Some(f) if f >= OUTSIDE_WORTH_SAYING && before_l > real_threshold => format!(
-            "{explanation}; {:.0} % of the recorded states lie outside the base model's identification range (leverage above its training maximum), where its own forces are extrapolated: part of any mismatch left there is the base model's",
-            100.0 * f
+            "{explanation}; {:.0} % of the recorded states lie outside the base model's identification range ({}), where its own forces are extrapolated: part of any mismatch left there is the base model's",
+            100.0 * f,
+            input.identification_range.map_or("", BaseRange::criterion)
         ),
         _ => explanation,
     };

@@ -5,7 +5,7 @@ use std::path::Path;
 use serde_json::{Map, json};
 use shipid_io::{Dataset, PrimeScale};
 
-use crate::fit_gp::load_gp_model;
+use crate::fit_gp::gp_model_of;
 use crate::range::{gp_outside_fraction, identification_range, outside_fraction, training_data};
 use crate::simulate_cmd::load_model;
 use crate::validate::validate_recording;
@@ -20,9 +20,7 @@ pub fn run(model_spec: &str, dataset: &Path, as_json: bool) -> Result<Outcome, C
         .as_ref()
         .and_then(identification_range);
     // A sparse GP's range is its sparse points' coverage, recorded in its own file.
-    let gp = std::fs::read_to_string(model_spec)
-        .ok()
-        .and_then(|t| load_gp_model(Path::new(model_spec), &t).ok().flatten());
+    let gp = gp_model_of(model_spec);
     let scale = PrimeScale::of(&ds.ship);
     let mut recs = Map::new();
     let mut any_failed = false;

@@ -171,6 +171,12 @@ fn a_sparse_gp_base_gets_its_own_level_from_its_training_data() {
     // Its own training recordings, replayed in segments: a few thousandths of L, and nothing to find.
     assert!(level.is_some_and(|l| l > 0.0 && l < 0.02), "{level:?}");
     assert_eq!(r["verdict"], "none", "{stdout}");
+    // Its identification range is its sparse points' coverage, which holds every training state.
+    assert_eq!(
+        r["outside_identification_range"].as_f64(),
+        Some(0.0),
+        "{stdout}"
+    );
 }
 
 /// The GP's identification range is its sparse points' coverage: every state it was trained on lies in
