@@ -188,6 +188,10 @@ pub fn run(dataset: &Path, out: &Path, similarity: f64) -> Result<String> {
     let mut rows = Vec::new();
     let mut one_step = Vec::new();
     let mut figure_series = Vec::new();
+    // The GP's identification range (its sparse points' coverage) over the recorded validation states
+    // and over the states of its own RK4 prediction: whether the prediction leaves the neighbourhood
+    // of the training data that the recorded run stays in.
+    let mut coverage: Option<(f64, f64)> = None;
     for (name, model, paper) in [
         (
             gp_name.as_str(),
@@ -204,6 +208,12 @@ pub fn run(dataset: &Path, out: &Path, similarity: f64) -> Result<String> {
         let started = Instant::now();
         let sim = replay(model, rec);
         let rk4_s = started.elapsed().as_secs_f64();
+        if coverage.is_none() {
+            coverage = Some((
+                crate::range::gp_outside_fraction(&gp, rec),
+                crate::range::gp_outside_fraction(&gp, &sim.recording),
+            ));
+        }
         let rk4 = Predicted::from_recording(&sim.recording, &sim.status);
         let started = Instant::now();
         let euler = euler_replay(model, rec);
@@ -249,6 +259,13 @@ pub fn run(dataset: &Path, out: &Path, similarity: f64) -> Result<String> {
             r.track_max_m,
             r.predict_s,
             r.paper
+        ));
+    }
+    if let Some((recorded, predicted)) = coverage {
+        md.push_str(&format!(
+            "\nThe GP's identification range (no sparse point d_gen-similar = outside): {:.1} % of the recorded {VALIDATION} states and {:.1} % of the states of the GP's own RK4 prediction lie outside it.\n",
+            100.0 * recorded,
+            100.0 * predicted
         ));
     }
     md.push_str(
