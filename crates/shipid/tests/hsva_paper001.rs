@@ -54,4 +54,14 @@ fn hsva_tab5_row3_and_gp_surge_advantage() {
         u_gp < u,
         "GP surge RMSE {u_gp} not below the parametric {u}"
     );
+    // The GP's identification range (its sparse points' coverage) holds every training run and about
+    // two fifths of the 25/5 run lies outside it, between the 20/5 and 30/5 orbits (42.1 % measured).
+    let v = common::shipid(&["validate", &gp, ds, "--json"]);
+    let v: Value = serde_json::from_slice(&v.stdout).unwrap();
+    let outside = |f: &str| v["recordings"][f]["outside_identification_range"].as_f64();
+    for f in TRAINING.split(',') {
+        assert_eq!(outside(f), Some(0.0), "{f}");
+    }
+    let o = outside("z25_05_sb.csv").unwrap();
+    assert!((0.3..0.55).contains(&o), "25/5 outside {o}");
 }
