@@ -243,8 +243,6 @@ pub fn run(base_spec: &str, out: &Path, seeds: u64, controls: u64) -> Result<Out
     // The in-memory bases are fitted on every clean recording.
     let names: Vec<String> = clean.recordings.iter().map(|r| r.file.clone()).collect();
     type Base = (Box<dyn Dynamics + Send + Sync>, Vec<Effect>, String);
-    // A polynomial base's leverage range, or a GP base's own coverage range.
-    let mut gp_range: Option<shipid_sim::GpDynamics> = None;
     let ((base, base_effects, base_name), range): (Base, Option<IdentificationRange>) =
         match base_spec {
             GP_BASE => {
@@ -254,7 +252,6 @@ pub fn run(base_spec: &str, out: &Path, seeds: u64, controls: u64) -> Result<Out
                     WindowSpec::Whole,
                     crate::fit_gp::DEFAULT_SIMILARITY,
                 )?;
-                gp_range = Some(gp.clone());
                 (
                     (
                         Box::new(gp),
@@ -294,7 +291,6 @@ pub fn run(base_spec: &str, out: &Path, seeds: u64, controls: u64) -> Result<Out
             spec => {
                 let (b, e) = load_model_parts(spec)?;
                 let range = training_data(spec).as_ref().and_then(identification_range);
-                gp_range = crate::fit_gp::gp_model_of(spec);
                 ((b, e, spec.to_string()), range)
             }
         };
@@ -303,7 +299,8 @@ pub fn run(base_spec: &str, out: &Path, seeds: u64, controls: u64) -> Result<Out
         base: base.as_ref(),
         base_effects: &base_effects,
         model_level_over_l: None,
-        identification_range: BaseRange::of(range.as_ref(), gp_range.as_ref()),
+        // A polynomial base's leverage range, or a GP base's own coverage range.
+        identification_range: BaseRange::of(range.as_ref(), base.sparse_gp()),
     };
     let level = model_level(&input, &clean, &opts);
     input.model_level_over_l = Some(level);

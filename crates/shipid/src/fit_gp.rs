@@ -248,10 +248,3 @@ pub fn load_gp_model(path: &std::path::Path, text: &str) -> Result<Option<GpDyna
         .map(Some)
         .map_err(|e| bad_input(format!("{}: {e}", path.display())))
 }
-
-/// The GP model of the model file at `spec`, when it is one (for its identification range).
-pub fn gp_model_of(spec: &str) -> Option<GpDynamics> {
-    let path = std::path::Path::new(spec);
-    let text = std::fs::read_to_string(path).ok()?;
-    load_gp_model(path, &text).ok().flatten()
-}

@@ -5,7 +5,6 @@ use std::path::Path;
 use serde_json::{Map, json};
 use shipid_io::{Dataset, PrimeScale};
 
-use crate::fit_gp::gp_model_of;
 use crate::range::{gp_outside_fraction, identification_range, outside_fraction, training_data};
 use crate::simulate_cmd::load_model;
 use crate::validate::validate_recording;
@@ -14,13 +13,17 @@ use crate::{CliError, Outcome};
 pub fn run(model_spec: &str, dataset: &Path, as_json: bool) -> Result<Outcome, CliError> {
     let model = load_model(model_spec)?;
     let ds = Dataset::load(dataset)?;
-    // Where the model was identified, when its file says so and its training data can be read: a
-    // recording mostly outside that range tests the model's extrapolation, not its fit.
-    let range = training_data(model_spec)
-        .as_ref()
-        .and_then(identification_range);
-    // A sparse GP's range is its sparse points' coverage, recorded in its own file.
-    let gp = gp_model_of(model_spec);
+    // Where the model was identified: a recording mostly outside that range tests the model's
+    // extrapolation, not its fit. A sparse GP carries its range (its sparse points' coverage); a
+    // polynomial's needs the training data its file names, when they can still be read.
+    let gp = model.sparse_gp();
+    let range = if gp.is_some() {
+        None
+    } else {
+        training_data(model_spec)
+            .as_ref()
+            .and_then(identification_range)
+    };
     let scale = PrimeScale::of(&ds.ship);
     let mut recs = Map::new();
     let mut any_failed = false;

@@ -148,11 +148,21 @@ pub trait Dynamics {
     fn over_ground(&self, through_water: &State) -> State {
         *through_water
     }
+
+    /// The sparse GP this model is (or wraps), whose identification range travels with it
+    /// ([`crate::GpDynamics::covers`]); `None` for models whose range needs their training data (a
+    /// polynomial's leverage) or that have none.
+    fn sparse_gp(&self) -> Option<&crate::GpDynamics> {
+        None
+    }
 }
 
 impl<T: Dynamics + ?Sized> Dynamics for &T {
     fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
         (**self).accelerations(state, delta_rad)
+    }
+    fn sparse_gp(&self) -> Option<&crate::GpDynamics> {
+        (**self).sparse_gp()
     }
     fn ship(&self) -> &Ship {
         (**self).ship()
@@ -177,6 +187,9 @@ impl<T: Dynamics + ?Sized> Dynamics for &T {
 impl<T: Dynamics + ?Sized> Dynamics for Box<T> {
     fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
         (**self).accelerations(state, delta_rad)
+    }
+    fn sparse_gp(&self) -> Option<&crate::GpDynamics> {
+        (**self).sparse_gp()
     }
     fn ship(&self) -> &Ship {
         (**self).ship()

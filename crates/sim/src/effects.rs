@@ -700,6 +700,10 @@ impl<D: Dynamics> Dynamics for WithEffects<D> {
         WithEffects::over_ground(self, through_water)
     }
 
+    fn sparse_gp(&self) -> Option<&crate::GpDynamics> {
+        self.inner.sparse_gp()
+    }
+
     fn linear_hull_derivatives(&self) -> Option<LinearHullDerivatives> {
         let lin = self.inner.linear_hull_derivatives();
         match &self.shallow {

@@ -194,6 +194,10 @@ impl GpDynamics {
 }
 
 impl Dynamics for GpDynamics {
+    fn sparse_gp(&self) -> Option<&GpDynamics> {
+        Some(self)
+    }
+
     fn accelerations(&self, s: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
         let x = [s.u, s.v, s.r, delta_rad];
         if x.iter().any(|v| !v.is_finite()) {
