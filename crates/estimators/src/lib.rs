@@ -105,7 +105,9 @@ pub use diagnostics::{condition_number, contributions, scaled_condition_number, 
 pub use error::EstimatorError;
 pub use fit::{fit, objective, predict};
 pub use problem::column_scales;
-pub use tuning::{CvPoint, Family, Folds, Tuning, default_grid, log_grid, tune};
+pub use tuning::{
+    CvPoint, Family, Folds, Tuning, default_epsilon_grid, default_grid, log_grid, tune, tune_svr,
+};
 pub use types::{Bounds, Estimator, Fit, ILL_CONDITIONED_THRESHOLD, Solver, Status};
 
 /// Re-exported so that callers use the same faer version for designs.

@@ -223,3 +223,61 @@ proptest! {
         prop_assert_eq!(next, n);
     }
 }
+
+#[test]
+fn svr_tuning_over_c_and_epsilon_keeps_the_least_validation_error() {
+    let (phi, y, _) = problem();
+    let folds = Folds::Blocked { k: 4 };
+    let epsilons = default_epsilon_grid(&y);
+    let rms = (y.iter().map(|v| v * v).sum::<f64>() / y.len() as f64).sqrt();
+    let shares: Vec<f64> = epsilons.iter().map(|e| e / rms).collect();
+    for (got, want) in shares
+        .iter()
+        .zip([1e-3, 3.162e-3, 1e-2, 3.162e-2, 1e-1, 3.162e-1])
+    {
+        assert!((got / want - 1.0).abs() < 1e-3, "{shares:?}");
+    }
+    let t = tune_svr(phi.as_ref(), &y, &epsilons, &folds, None, Solver::Fast).unwrap();
+    let c_grid = default_grid(&Family::Svr { epsilon: 0.0 }, phi.as_ref(), &y).unwrap();
+    assert_eq!(t.curve.len(), epsilons.len() * c_grid.len());
+    // Grid order, C fastest; every point labelled with its ε.
+    for (k, point) in t.curve.iter().enumerate() {
+        assert_eq!(point.param, c_grid[k % c_grid.len()]);
+        assert_eq!(point.epsilon, Some(epsilons[k / c_grid.len()]));
+    }
+    let best = t
+        .curve
+        .iter()
+        .min_by(|a, b| a.mse.total_cmp(&b.mse))
+        .unwrap();
+    assert_eq!(
+        t.estimator,
+        Estimator::Svr {
+            c: best.param,
+            epsilon: best.epsilon.unwrap()
+        }
+    );
+    assert_eq!(t.best, best.param);
+    // Each ε's row is the one-parameter tuning at that ε, fit for fit.
+    for (row, &epsilon) in epsilons.iter().enumerate() {
+        let one = tune(
+            phi.as_ref(),
+            &y,
+            &Family::Svr { epsilon },
+            &c_grid,
+            &folds,
+            None,
+            Solver::Fast,
+        )
+        .unwrap();
+        for (a, b) in one.curve.iter().zip(&t.curve[row * c_grid.len()..]) {
+            assert_eq!((a.param, a.mse), (b.param, b.mse));
+            assert_eq!(a.epsilon, None);
+        }
+    }
+    // No ε is no grid.
+    assert!(matches!(
+        tune_svr(phi.as_ref(), &y, &[], &folds, None, Solver::Fast),
+        Err(EstimatorError::EmptyGrid)
+    ));
+}

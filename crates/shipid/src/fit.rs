@@ -9,8 +9,8 @@ use std::time::Instant;
 
 use serde::Serialize;
 use shipid_estimators::{
-    Bounds, Estimator, Family, Fit, Folds, Solver, Tuning, condition_number, default_grid, predict,
-    scaled_condition_number, tune, vif,
+    Bounds, Estimator, Family, Fit, Folds, Solver, Tuning, condition_number, default_epsilon_grid,
+    default_grid, predict, scaled_condition_number, tune, tune_svr, vif,
 };
 use shipid_io::deriv::accelerations_or_estimate;
 use shipid_io::{Dataset, DatasetRecording, Manoeuvre, PrimeScale, Recording};
@@ -50,7 +50,8 @@ pub struct EstimatorSpec {
     pub alpha: Option<f64>,
     pub c: Option<f64>,
     pub epsilon: Option<f64>,
-    /// Choose the hyper-parameter by blocked cross-validation.
+    /// Choose the hyper-parameters by blocked cross-validation (the SVR's C and ε together unless ε is
+    /// given).
     pub tune: bool,
     /// Then refine all coefficients in the output-error sense ([`crate::output_error`]). Not serialised
     /// when off, so the ids of study cases stay as they were.
@@ -62,8 +63,10 @@ pub struct EstimatorSpec {
     pub similarity: Option<f64>,
 }
 
-/// ε of the SVR when it is not given: 1 % of the RMS of the DOF's target (the ε-tube then ignores only
-/// residuals far below the force level; on noisy data give ε explicitly, about the noise level).
+/// ε of the SVR when it is neither given nor tuned (`--c` without `--tune`): 1 % of the RMS of the
+/// DOF's target (the ε-tube then ignores only residuals far below the force level; on noisy data give
+/// ε explicitly, about the noise level). `--tune` without `--epsilon` chooses it by cross-validation
+/// ([`shipid_estimators::tune_svr`]).
 pub const SVR_DEFAULT_EPSILON_OF_RMS: f64 = 0.01;
 /// Folds of the blocked cross-validation (contiguous in time; by recording when several are stacked).
 pub const CV_FOLDS: usize = 5;
@@ -394,12 +397,9 @@ pub fn fit_dataset(
             None
         };
         let target_rms = rms(&d.y);
-        let epsilon = spec
-            .epsilon
-            .unwrap_or(SVR_DEFAULT_EPSILON_OF_RMS * target_rms);
         let started = Instant::now();
         let (estimator, tuning) =
-            resolve_estimator(spec, &d, epsilon, &folds, bounds.as_ref(), solver)?;
+            resolve_estimator(spec, &d, target_rms, &folds, bounds.as_ref(), solver)?;
         let fit = shipid_estimators::fit(d.phi.as_ref(), &d.y, &estimator, bounds.as_ref(), solver)
             .map_err(|e| bad_input(format!("{dof}: {e}")))?;
         fit_time_s += started.elapsed().as_secs_f64();
@@ -462,14 +462,19 @@ pub fn fit_dataset(
     })
 }
 
+/// The estimator of `spec` on this DOF's design, tuning what `--tune` leaves open: λ, α, or the
+/// SVR's C and ε together (C alone when ε is given). `target_rms` scales the SVR's default ε.
 fn resolve_estimator(
     spec: &EstimatorSpec,
     d: &shipid_model::Design,
-    epsilon: f64,
+    target_rms: f64,
     folds: &Folds,
     bounds: Option<&Bounds>,
     solver: Solver,
 ) -> Result<(Estimator, Option<Tuning>), CliError> {
+    let epsilon = spec
+        .epsilon
+        .unwrap_or(SVR_DEFAULT_EPSILON_OF_RMS * target_rms);
     let family = match spec.name.as_str() {
         "lsq" => return Ok((Estimator::Lsq, None)),
         "bounded-lsq" => return Ok((Estimator::BoundedLsq, None)),
@@ -481,8 +486,20 @@ fn resolve_estimator(
             Some(alpha) if !spec.tune => return Ok((Estimator::Lasso { alpha }, None)),
             _ => Family::Lasso,
         },
-        "svr" => match spec.c {
-            Some(c) if !spec.tune => return Ok((Estimator::Svr { c, epsilon }, None)),
+        "svr" => match (spec.c, spec.epsilon) {
+            (Some(c), _) if !spec.tune => return Ok((Estimator::Svr { c, epsilon }, None)),
+            (_, None) => {
+                let t = tune_svr(
+                    d.phi.as_ref(),
+                    &d.y,
+                    &default_epsilon_grid(&d.y),
+                    folds,
+                    bounds,
+                    solver,
+                )
+                .map_err(|e| bad_input(format!("{}: tuning: {e}", d.dof)))?;
+                return Ok((t.estimator, Some(t)));
+            }
             _ => Family::Svr { epsilon },
         },
         other => return Err(bad_input(format!("unknown estimator `{other}`"))),

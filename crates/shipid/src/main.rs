@@ -71,10 +71,11 @@ enum Command {
         /// SVR C.
         #[arg(long)]
         c: Option<f64>,
-        /// SVR ε (units of the prime target; default 1 % of its RMS).
+        /// SVR ε (units of the prime target; default 1 % of its RMS, or tuned with --tune).
         #[arg(long)]
         epsilon: Option<f64>,
-        /// Choose the hyper-parameter by blocked cross-validation.
+        /// Choose the hyper-parameters by blocked cross-validation: λ, α, or the SVR's C and ε (C
+        /// alone when --epsilon is given).
         #[arg(long)]
         tune: bool,
         /// Then refine all coefficients so that segment replays of the training windows (10 L/U0,

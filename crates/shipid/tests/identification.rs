@@ -122,22 +122,29 @@ fn lsq_recovers_known_coefficients_and_metrics_from_noise_free_simulations() {
     }
 }
 
+/// Issue 3: trained on ZZ35/35 PS cut after 4 overshoots, every estimator gets the training run's first
+/// and second overshoot within 1°, with either set. The reduced set's margin is thin (0.72–0.95°
+/// measured): it is odd-symmetric and the MMG truth is not.
 #[test]
-fn every_estimator_reproduces_its_training_zigzag_with_the_full_set() {
+fn every_estimator_reproduces_its_training_zigzag_with_either_set() {
     let ds = embedded();
     let training = ds.recording("zz35_35_ps.csv").unwrap();
     let recorded = metrics(&training.recording, &training.manoeuvre, &ds.ship);
-    for (estimator, tune) in [
-        ("lsq", false),
-        ("bounded-lsq", false),
-        ("ridge", true),
-        ("lasso", true),
-        ("svr", true),
-    ] {
+    for (set, name, tune) in ["full68", "reduced32"].into_iter().flat_map(|set| {
+        [
+            ("lsq", false),
+            ("bounded-lsq", false),
+            ("ridge", true),
+            ("lasso", true),
+            ("svr", true),
+        ]
+        .map(|(e, t)| (set, e, t))
+    }) {
+        let estimator = format!("{set} {name}");
         let out = fit_dataset(
             &ds,
-            load_set("full68").unwrap(),
-            &spec(estimator, tune),
+            load_set(set).unwrap(),
+            &spec(name, tune),
             &["zz35_35_ps.csv".into()],
             WindowSpec::Overshoots(4),
             Solver::Fast,
@@ -271,5 +278,62 @@ fn output_error_refinement_lowers_the_replay_error_and_keeps_the_force_fit() {
     let (e0, e1) = (ee(&lsq.model), ee(&refined.model));
     for d in 0..3 {
         assert!(e1[d] < 9.0 * e0[d], "DOF {d}: {} vs {}", e1[d], e0[d]);
+    }
+}
+
+/// `--tune` on the SVR chooses C and ε together by the blocked cross-validation (the point of least
+/// validation MSE over the ε × C grid); a given ε stays fixed and only C is tuned.
+#[test]
+fn svr_tuning_chooses_epsilon_too_unless_it_is_given() {
+    let ds = embedded();
+    let fit = |epsilon: Option<f64>| {
+        fit_dataset(
+            &ds,
+            load_set("reduced32").unwrap(),
+            &EstimatorSpec {
+                epsilon,
+                ..spec("svr", true)
+            },
+            &["zz35_35_ps.csv".into()],
+            WindowSpec::Overshoots(4),
+            Solver::Fast,
+        )
+        .unwrap()
+    };
+    let joint = fit(None);
+    let mut chosen = Vec::new();
+    for d in &joint.dofs {
+        let t = d.tuning.as_ref().expect("tuned");
+        let grid = shipid_estimators::default_epsilon_grid(&[d.target_rms; 7]);
+        assert_eq!(t.curve.len(), grid.len() * 13, "{}", d.dof);
+        let best = t
+            .curve
+            .iter()
+            .min_by(|a, b| a.mse.total_cmp(&b.mse))
+            .unwrap();
+        let shipid_estimators::Estimator::Svr { c, epsilon } = d.fit.estimator else {
+            panic!("{}: {:?}", d.dof, d.fit.estimator)
+        };
+        assert_eq!((c, Some(epsilon)), (best.param, best.epsilon), "{}", d.dof);
+        let share = epsilon / d.target_rms;
+        assert!(
+            (1e-3 * 0.99..=0.32).contains(&share),
+            "{}: ε/rms {share}",
+            d.dof
+        );
+        chosen.push(share);
+    }
+    // On this run the choice is not the old fixed 1 % everywhere (X 0.3 %, Y 0.1 %, N 10 % measured).
+    assert!(chosen.iter().any(|s| (s - 0.01).abs() > 1e-3), "{chosen:?}");
+
+    let fixed = fit(Some(2e-5));
+    for d in &fixed.dofs {
+        let t = d.tuning.as_ref().expect("tuned");
+        assert_eq!(t.curve.len(), 13, "{}", d.dof);
+        assert!(t.curve.iter().all(|p| p.epsilon.is_none()));
+        assert!(matches!(
+            d.fit.estimator,
+            shipid_estimators::Estimator::Svr { epsilon, .. } if epsilon == 2e-5
+        ));
     }
 }
