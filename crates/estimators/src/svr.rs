@@ -14,7 +14,13 @@
 //!    the complementarity is small, every iterate's multipliers θ propose the sets
 //!    (inside, margin `0 < |θᵢ| < C wᵢ`, outside) for the exact finish (3), with a couple
 //!    of corrections; the iterate itself is accepted only with a certified duality gap
-//!    `F(γ) − D(θ) ≤ 1e-10 F(γ)`.
+//!    `F(γ) − D(θ) ≤ 1e-10 F(γ)`. Before the margin candidates fit the q coordinates, once
+//!    they are a thirty-second of the samples, the problem restricted to them is solved
+//!    (the decided samples enter as a shift of γ; [`shrunk`]) and its answer taken when the
+//!    whole problem's exact finish or duality gap proves it: on the benchmark's turning-circle
+//!    sets this ends 3–24 of 25–75 iterations early (1.05–1.35× faster per training set);
+//!    where thousands of samples sit on the tube's edge, the decided sets are too often
+//!    wrong for it to help.
 //! 2. **Smoothing continuation** (the fallback, warm started from the last iterate, when
 //!    the interior point ends uncertified): the hinge is replaced by a Huber-like `h_μ`
 //!    (zero inside the tube, quadratic over a band of width μ outside it, linear beyond),
@@ -627,7 +633,7 @@ fn exact_finish(
     hi: &[f64],
     scale: f64,
     rounds: usize,
-) -> Option<Vec<f64>> {
+) -> Option<(Vec<f64>, Vec<Side>)> {
     let pb = s.pb;
     let (z, y, n, q) = (&pb.z, &pb.y, pb.n, pb.q());
     let wts = &pb.w;
@@ -772,7 +778,7 @@ fn exact_finish(
                 for j in 0..q {
                     new_gamma[j] = new_gamma[j].clamp(lo[j], hi[j]);
                 }
-                return Some(new_gamma);
+                return Some((new_gamma, side));
             }
             Some((_, i, true)) => {
                 side[i] = match side[i] {
@@ -783,6 +789,169 @@ fn exact_finish(
             Some((_, j, false)) => {
                 held[j] = Some(if new_gamma[j] < lo[j] { lo[j] } else { hi[j] });
             }
+        }
+    }
+    None
+}
+
+/// Rounds of [`shrunk`]: restricted solves, each after adding the decided samples the last
+/// one contradicted.
+const SHRINK_ROUNDS: usize = 4;
+
+/// What a restricted solve ([`shrunk`]) proved about its answer.
+enum Shrunk {
+    /// Every KKT condition of the whole problem holds (its exact finish): the minimiser.
+    Exact(Vec<f64>),
+    /// Within the certified duality gap of the whole problem.
+    Certified(Vec<f64>),
+}
+
+/// The problem restricted to the undecided samples of an interior-point iterate, which the
+/// exact finish cannot take yet because they outnumber the q coordinates.
+///
+/// With the samples outside the tube (multiplier at ±C wᵢ) and inside it (0) taken as
+/// decided, each outside sample's loss is linear in γ, `C wᵢ (sᵢ(yᵢ − zᵢγ) − ε)`, and
+/// `½‖γ‖² − gᵀγ = ½‖γ − g‖² + const` with `g = C Σ_out wᵢ sᵢ zᵢ`. So `δ = γ − g` solves the
+/// same SVR on the undecided samples alone, with targets `yᵢ − zᵢg` and the box shifted by
+/// g: an interior point on a few hundred samples instead of thousands. Its answer is only
+/// taken with a proof for the whole problem: its exact sets, with the decided ones, pass
+/// the exact finish of the whole problem (every KKT condition checked), or its dual point,
+/// completed by the decided multipliers, certifies the whole problem's duality gap. A
+/// decided sample the answer contradicts (an "outside" one inside the tube or an "inside"
+/// one outside it) joins the undecided ones for the next round. A wrong guess costs the
+/// attempt, never the answer. (LIBSVM's shrinking rests on the same observation.)
+fn shrunk(
+    whole: &Smoothed<'_>,
+    mut sides: Vec<Side>,
+    lo: &[f64],
+    hi: &[f64],
+    scale: f64,
+    limit: usize,
+) -> Option<Shrunk> {
+    let (pb, c, eps) = (whole.pb, whole.c, whole.eps);
+    let q = pb.q();
+    let tol_r = 1e-9 * scale;
+    for _ in 0..SHRINK_ROUNDS {
+        let undecided: Vec<usize> = (0..pb.n)
+            .filter(|&i| matches!(sides[i], Side::Margin(_)))
+            .collect();
+        if undecided.is_empty() || undecided.len() > limit {
+            return None;
+        }
+        let out_sign: Vec<f64> = sides
+            .iter()
+            .zip(&pb.w)
+            .map(|(sd, wi)| {
+                if let Side::Outside(v) = sd {
+                    v * wi
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let g: Vec<f64> = zt_v(&pb.z, &out_sign).into_iter().map(|v| c * v).collect();
+        let m = undecided.len();
+        let mut z = Tall::zeros(m, q);
+        for j in 0..q {
+            let src = col(&pb.z, j);
+            for (d, &i) in z.col_mut(j).iter_mut().zip(&undecided) {
+                *d = src[i];
+            }
+        }
+        let y: Vec<f64> = undecided
+            .iter()
+            .map(|&i| pb.y[i] - (0..q).map(|j| col(&pb.z, j)[i] * g[j]).sum::<f64>())
+            .collect();
+        let sub = Data {
+            z,
+            y,
+            w: undecided.iter().map(|&i| pb.w[i]).collect(),
+            n: m,
+        };
+        let (sub_lo, sub_hi): (Vec<f64>, Vec<f64>) =
+            (0..q).map(|j| (lo[j] - g[j], hi[j] - g[j])).unzip();
+        let restricted = Smoothed {
+            pb: &sub,
+            c,
+            eps,
+            mu: 0.0,
+        };
+        // F(g + δ) = F_restricted(δ) + k while the decided sets hold, k = ½‖g‖² + C Σ_out wᵢ
+        // (sᵢ(yᵢ − zᵢg) − ε): the restricted gap is judged against the whole objective,
+        // which can be far smaller than the restricted one (‖δ‖ ≈ ‖g‖).
+        let k = 0.5 * g.iter().map(|v| v * v).sum::<f64>()
+            + c * (0..pb.n)
+                .filter(|&i| out_sign[i] != 0.0)
+                .map(|i| {
+                    let zg: f64 = (0..q).map(|j| col(&pb.z, j)[i] * g[j]).sum();
+                    let si = out_sign[i].signum();
+                    pb.w[i] * (si * (pb.y[i] - zg) - eps)
+                })
+                .sum::<f64>();
+        let mut exact: Option<(Vec<f64>, Vec<Side>)> = None;
+        let last = ipm::solve(&sub, c, eps, &sub_lo, &sub_hi, scale, |it| {
+            let sd = sides_from_multipliers(&it.theta, &it.r, &sub.w, c);
+            if let Some((delta, sd)) = exact_finish(
+                &restricted,
+                &it.gamma,
+                sd,
+                &sub_lo,
+                &sub_hi,
+                scale,
+                IPM_FINISH_ROUNDS,
+            ) && no_worse(&sub, &delta, it.f, c, eps)
+            {
+                exact = Some((delta, sd));
+                return true;
+            }
+            certified(it.gap, it.f + k)
+        });
+        let shifted = |delta: &[f64]| -> Vec<f64> {
+            (0..q)
+                .map(|j| (delta[j] + g[j]).clamp(lo[j], hi[j]))
+                .collect()
+        };
+        let gamma = if let Some((delta, inner_sides)) = exact {
+            let mut all = sides.clone();
+            for (&i, sd) in undecided.iter().zip(inner_sides) {
+                all[i] = sd;
+            }
+            let gamma = shifted(&delta);
+            if let Some((g, _)) = exact_finish(whole, &gamma, all, lo, hi, scale, IPM_FINISH_ROUNDS)
+            {
+                return Some(Shrunk::Exact(g));
+            }
+            gamma
+        } else if certified(last.gap, last.f + k) {
+            let gamma = shifted(&last.gamma);
+            let mut theta: Vec<f64> = out_sign.iter().map(|v| c * v).collect();
+            for (&i, t) in undecided.iter().zip(&last.theta) {
+                theta[i] = *t;
+            }
+            let r = residual(&pb.z, &pb.y, &gamma);
+            let f = ipm::primal(&gamma, &r, &pb.w, c, eps);
+            if certified(f - ipm::dual(pb, &theta, eps, lo, hi), f) {
+                return Some(Shrunk::Certified(gamma));
+            }
+            gamma
+        } else {
+            return None;
+        };
+        let r = residual(&pb.z, &pb.y, &gamma);
+        let mut grew = false;
+        for (sd, &ri) in sides.iter_mut().zip(&r) {
+            let contradicted = match *sd {
+                Side::Outside(si) => si * ri < eps - tol_r,
+                Side::Inside => ri.abs() > eps + tol_r,
+                Side::Margin(_) => false,
+            };
+            if contradicted {
+                *sd = Side::Margin(ri.signum());
+                grew = true;
+            }
+        }
+        if !grew {
+            return None;
         }
     }
     None
@@ -825,11 +994,34 @@ pub(crate) fn solve(
     let mut finished: Option<Vec<f64>> = None;
     let out = ipm::solve(pb, c, eps, lo, hi, scale, |it| {
         let sides = sides_from_multipliers(&it.theta, &it.r, &pb.w, c);
-        if let Some(cand) = exact_finish(&s0, &it.gamma, sides, lo, hi, scale, IPM_FINISH_ROUNDS)
-            && no_worse(pb, &cand, it.f, c, eps)
+        let shrinkable = it.margin_candidates > q;
+        if let Some((cand, _)) = exact_finish(
+            &s0,
+            &it.gamma,
+            sides.clone(),
+            lo,
+            hi,
+            scale,
+            IPM_FINISH_ROUNDS,
+        ) && no_worse(pb, &cand, it.f, c, eps)
         {
             finished = Some(cand);
             return true;
+        }
+        if shrinkable {
+            // An exact answer is taken as the exact finish's are; a certified one needs no
+            // comparison with the iterate.
+            match shrunk(&s0, sides, lo, hi, scale, 2 * it.margin_candidates) {
+                Some(Shrunk::Exact(cand)) if no_worse(pb, &cand, it.f, c, eps) => {
+                    finished = Some(cand);
+                    return true;
+                }
+                Some(Shrunk::Certified(cand)) => {
+                    finished = Some(cand);
+                    return true;
+                }
+                _ => {}
+            }
         }
         certified(it.gap, it.f)
     });
@@ -885,7 +1077,7 @@ fn continuation(
 
         let f_smooth = s.value(&gamma, &r);
         let sides = sides_from_band(&r, eps, mu);
-        if let Some(candidate) =
+        if let Some((candidate, _)) =
             exact_finish(&s, &gamma, sides, lo, hi, scale, max_finish_rounds(q))
             && no_worse(pb, &candidate, f_true, c, eps)
         {
@@ -986,5 +1178,92 @@ mod tests {
         let lo = [f64::NEG_INFINITY, 0.05, 0.0, -0.1, f64::NEG_INFINITY];
         let hi = [f64::INFINITY, 0.05, f64::INFINITY, 0.1, f64::INFINITY];
         check(&lo, &hi);
+    }
+
+    /// The sets of the optimum of `problem(300)` (by the continuation, which shares no code
+    /// with the restricted solve), with `undecided` of them opened up, and the restricted
+    /// solve's answer against the optimum.
+    fn restricted(
+        lo: &[f64],
+        hi: &[f64],
+        corrupt: impl Fn(&mut Vec<Side>),
+    ) -> (Option<Shrunk>, f64, f64) {
+        let pb = problem(300);
+        let data = Data::new(&pb);
+        let (c, eps) = (2.0, 0.02);
+        let scale = (pb.y.iter().map(|v| v * v).sum::<f64>() / pb.n as f64).sqrt();
+        let start: Vec<f64> = (0..pb.q()).map(|j| 0.0f64.clamp(lo[j], hi[j])).collect();
+        let best = continuation(&data, start, c, eps, lo, hi, scale);
+        let r = residual(&data.z, &data.y, &best.gamma);
+        let value = |g: &[f64]| {
+            let r = residual(&data.z, &data.y, g);
+            ipm::primal(g, &r, &data.w, c, eps)
+        };
+        // Outside and inside by the residual; everything within 10 % of ε of the edge undecided.
+        let mut sides: Vec<Side> = r
+            .iter()
+            .map(|&ri| {
+                let a = ri.abs() - eps;
+                if a.abs() <= 0.1 * eps {
+                    Side::Margin(ri.signum())
+                } else if a > 0.0 {
+                    Side::Outside(ri.signum())
+                } else {
+                    Side::Inside
+                }
+            })
+            .collect();
+        corrupt(&mut sides);
+        let whole = Smoothed {
+            pb: &data,
+            c,
+            eps,
+            mu: 0.0,
+        };
+        let out = shrunk(&whole, sides, lo, hi, scale, data.n);
+        let f = match &out {
+            Some(Shrunk::Exact(g) | Shrunk::Certified(g)) => value(g),
+            None => f64::NAN,
+        };
+        (out, f, value(&best.gamma))
+    }
+
+    #[test]
+    fn the_restricted_solve_finds_the_optimum_from_its_undecided_samples() {
+        for (lo, hi) in [
+            ([f64::NEG_INFINITY; 5], [f64::INFINITY; 5]),
+            (
+                [f64::NEG_INFINITY, 0.05, 0.0, -0.1, f64::NEG_INFINITY],
+                [f64::INFINITY, 0.05, f64::INFINITY, 0.1, f64::INFINITY],
+            ),
+        ] {
+            let (out, f, best) = restricted(&lo, &hi, |_| {});
+            assert!(out.is_some(), "{lo:?}");
+            assert!((f - best).abs() <= 1e-9 * best, "{f:e} vs {best:e}");
+        }
+    }
+
+    #[test]
+    fn a_wrongly_decided_sample_costs_the_attempt_never_the_answer() {
+        // Samples well inside the tube declared outside (and the reverse): the answer that
+        // comes back, if any, is still the optimum; the growth rounds put them right here.
+        let (out, f, best) = restricted(&[f64::NEG_INFINITY; 5], &[f64::INFINITY; 5], |sides| {
+            let mut flipped = 0;
+            for sd in sides.iter_mut() {
+                *sd = match *sd {
+                    Side::Inside if flipped < 3 => {
+                        flipped += 1;
+                        Side::Outside(1.0)
+                    }
+                    Side::Outside(_) if flipped < 6 => {
+                        flipped += 1;
+                        Side::Inside
+                    }
+                    other => other,
+                };
+            }
+        });
+        assert!(out.is_some());
+        assert!((f - best).abs() <= 1e-9 * best, "{f:e} vs {best:e}");
     }
 }

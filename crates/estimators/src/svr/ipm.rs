@@ -48,12 +48,20 @@ pub(super) struct Iterate {
     /// Certified `F(γ) − F* ≤ gap`.
     pub(super) gap: f64,
     pub(super) f: f64,
+    /// Samples whose multiplier is strictly inside its range (see [`MARGIN_FRACTION`]).
+    pub(super) margin_candidates: usize,
 }
 
 const MAX_ITERATIONS: usize = 80;
 /// A multiplier with `MARGIN_FRACTION < |θᵢ|/(C wᵢ) < 1 − MARGIN_FRACTION` marks a margin
 /// candidate (see `sides_from_multipliers` in [`super`]).
 pub(super) const MARGIN_FRACTION: f64 = 1e-3;
+/// Margin candidates up to which an iterate goes to the caller for a solve restricted to
+/// them (`super::shrunk`): a thirty-second of the samples (an interior point on them costs
+/// about an iteration of the whole), and at least a few per coordinate.
+fn shrink_limit(n: usize, q: usize) -> usize {
+    (n / 32).max(4 * q)
+}
 /// Fraction of the distance to the boundary a step may go.
 const STEP_FRACTION: f64 = 0.99;
 
@@ -1036,9 +1044,11 @@ fn solve_generic(
         iterations: 0,
         gap: f64::INFINITY,
         f: f64::INFINITY,
+        margin_candidates: n,
     };
     let mut mu = st.prepare();
     let mu0 = mu;
+    let mut handed_out = usize::MAX;
     for it in 1..=MAX_ITERATIONS {
         let Some(chol) = st.factor() else {
             break;
@@ -1084,16 +1094,27 @@ fn solve_generic(
         // succeed: the margin candidates fit the q coordinates (the finish needs that), or
         // the complementarity — the interior point's own estimate of the duality gap — is
         // within ten times the certificate's tolerance.
-        let worth_checking = || {
-            let candidates = (0..n)
+        // Or, earlier, when the candidates have halved since the last such hand-out and are few
+        // enough for the caller to solve the problem restricted to them (`super::shrunk`):
+        // an attempt then costs about an iteration, and the attempts form a geometric series.
+        let mut candidates = n;
+        let worth_checking = mu_now <= 1e-4 * mu0 && {
+            candidates = (0..n)
                 .filter(|&i| {
                     let frac = (st.l[0][i] - st.l[1][i]).abs() / (c * w[i]);
                     frac > MARGIN_FRACTION && frac < 1.0 - MARGIN_FRACTION
                 })
                 .count();
-            candidates <= q || mu_now * st.count <= 1e-9 * primal(&st.gamma, &st.r, w, c, eps)
+            let shrinkable = candidates <= shrink_limit(n, q) && 2 * candidates <= handed_out;
+            if shrinkable {
+                handed_out = candidates;
+            }
+            shrinkable
+                || (mu_now <= 1e-6 * mu0
+                    && (candidates <= q
+                        || mu_now * st.count <= 1e-9 * primal(&st.gamma, &st.r, w, c, eps)))
         };
-        if (mu_now <= 1e-6 * mu0 && worth_checking()) || it == MAX_ITERATIONS {
+        if worth_checking || it == MAX_ITERATIONS {
             let g: Vec<f64> = (0..q).map(|j| st.gamma[j].clamp(lo[j], hi[j])).collect();
             let rr = residual(&pb.z, &pb.y, &g);
             let theta: Vec<f64> = (0..n)
@@ -1108,6 +1129,7 @@ fn solve_generic(
                 iterations: it,
                 gap,
                 f,
+                margin_candidates: candidates,
             };
             if stop(&last) {
                 return last;
