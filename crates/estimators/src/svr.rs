@@ -614,6 +614,24 @@ fn sides_from_multipliers(theta: &[f64], r: &[f64], w: &[f64], c: f64) -> Vec<Si
         .collect()
 }
 
+/// The samples outside the tube as `sᵢwᵢ` (0 for the others) and their pull on γ,
+/// `g = C Σ_out wᵢ sᵢ zᵢ`: with their multipliers at the bound, the part of γ they fix.
+fn outside_pull(pb: &Data, sides: &[Side], c: f64) -> (Vec<f64>, Vec<f64>) {
+    let out_sign: Vec<f64> = sides
+        .iter()
+        .zip(&pb.w)
+        .map(|(sd, wi)| {
+            if let Side::Outside(v) = sd {
+                v * wi
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let g = zt_v(&pb.z, &out_sign).into_iter().map(|v| c * v).collect();
+    (out_sign, g)
+}
+
 /// Primal-dual active-set corrections tried per finish: enough to swap every margin
 /// sample once.
 fn max_finish_rounds(q: usize) -> usize {
@@ -654,18 +672,7 @@ fn exact_finish(
         if m > free.len() {
             return None;
         }
-        let out_sign: Vec<f64> = side
-            .iter()
-            .zip(wts)
-            .map(|(sd, wi)| {
-                if let Side::Outside(v) = sd {
-                    v * wi
-                } else {
-                    0.0
-                }
-            })
-            .collect();
-        let g_out: Vec<f64> = zt_v(z, &out_sign).into_iter().map(|v| c * v).collect();
+        let (_, g_out) = outside_pull(pb, &side, c);
         let mut new_gamma: Vec<f64> = (0..q).map(|j| held[j].unwrap_or(g_out[j])).collect();
         let mut theta = vec![0.0; m];
         if m > 0 {
@@ -838,18 +845,7 @@ fn shrunk(
         if undecided.is_empty() || undecided.len() > limit {
             return None;
         }
-        let out_sign: Vec<f64> = sides
-            .iter()
-            .zip(&pb.w)
-            .map(|(sd, wi)| {
-                if let Side::Outside(v) = sd {
-                    v * wi
-                } else {
-                    0.0
-                }
-            })
-            .collect();
-        let g: Vec<f64> = zt_v(&pb.z, &out_sign).into_iter().map(|v| c * v).collect();
+        let (out_sign, g) = outside_pull(pb, &sides, c);
         let m = undecided.len();
         let mut z = Tall::zeros(m, q);
         for j in 0..q {
