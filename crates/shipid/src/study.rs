@@ -198,6 +198,13 @@ pub fn load_study(path: &Path) -> Result<Study, InputError> {
     if raw.sets.is_empty() && polynomial {
         return Err(key("sets", "the grid is empty: no coefficient set".into()));
     }
+    // A repeated grid value would give two cases one id (one directory, one row twice).
+    if let Some((i, j)) = first_repeat(&raw.sets) {
+        return Err(key(
+            &format!("sets[{i}]"),
+            format!("`{}` repeats sets[{j}]", raw.sets[i]),
+        ));
+    }
     for (i, s) in raw.sets.iter().enumerate() {
         let as_path = path.parent().unwrap_or(Path::new(".")).join(s);
         if CoefficientSet::builtin(s).is_none() && !as_path.is_file() {
@@ -214,6 +221,12 @@ pub fn load_study(path: &Path) -> Result<Study, InputError> {
         return Err(key(
             "training.recordings",
             "the grid is empty: no training combination".into(),
+        ));
+    }
+    if let Some((i, j)) = first_repeat(&raw.training.recordings) {
+        return Err(key(
+            &format!("training.recordings[{i}]"),
+            format!("repeats training.recordings[{j}]"),
         ));
     }
     for (i, combo) in raw.training.recordings.iter().enumerate() {
@@ -278,10 +291,36 @@ pub fn load_study(path: &Path) -> Result<Study, InputError> {
         }
         (None, None) => vec![WindowSpec::Whole],
     };
+    if let Some((i, j)) = first_repeat(&windows) {
+        let grid = if raw.training.windows.is_some() {
+            "training.windows"
+        } else {
+            "training.overshoots"
+        };
+        return Err(key(
+            grid,
+            format!("value {} repeats value {} (counting from 1)", i + 1, j + 1),
+        ));
+    }
     if raw.estimators.is_empty() {
         return Err(key("estimator", "the grid is empty: no estimator".into()));
     }
     let mut estimators: Vec<(EstimatorSpec, String)> = Vec::new();
+    // The [[estimator]] entry each of `estimators` came from.
+    let mut origin: Vec<usize> = Vec::new();
+    let repeated = |i: usize, earlier: usize, flag: &str| {
+        if earlier == i {
+            key(
+                &format!("estimator[{i}].{flag}"),
+                "a value appears twice in the grid".into(),
+            )
+        } else {
+            key(
+                &format!("estimator[{i}]"),
+                format!("repeats a case of estimator[{earlier}]"),
+            )
+        }
+    };
     for (i, e) in raw.estimators.iter().enumerate() {
         let k = |f: &str| format!("estimator[{i}].{f}");
         if e.name == GP {
@@ -322,7 +361,12 @@ pub fn load_study(path: &Path) -> Result<Study, InputError> {
                 };
                 spec.validate()
                     .map_err(|err| key(&k("similarity"), err.to_string()))?;
-                estimators.push((spec, NO_SOLVER.into()));
+                let pair = (spec, NO_SOLVER.to_string());
+                if let Some(j) = estimators.iter().position(|e| *e == pair) {
+                    return Err(repeated(i, origin[j], "similarity"));
+                }
+                estimators.push(pair);
+                origin.push(i);
             }
             continue;
         }
@@ -387,7 +431,17 @@ pub fn load_study(path: &Path) -> Result<Study, InputError> {
         for spec in expanded {
             spec.validate()
                 .map_err(|err| key(&k("name"), err.to_string()))?;
-            estimators.push((spec, solver.clone()));
+            let pair = (spec, solver.clone());
+            if let Some(j) = estimators.iter().position(|e| *e == pair) {
+                let flag = match e.name.as_str() {
+                    "ridge" => "lambda",
+                    "lasso" => "alpha",
+                    _ => "c",
+                };
+                return Err(repeated(i, origin[j], flag));
+            }
+            estimators.push(pair);
+            origin.push(i);
         }
     }
     let tests = match &raw.test.recordings {
@@ -472,6 +526,14 @@ fn check_overshoots(
         }
     }
     Ok(())
+}
+
+/// The first `(i, j)` with `j < i` and `items[i] == items[j]`.
+fn first_repeat<T: PartialEq>(items: &[T]) -> Option<(usize, usize)> {
+    items
+        .iter()
+        .enumerate()
+        .find_map(|(i, a)| items[..i].iter().position(|b| b == a).map(|j| (i, j)))
 }
 
 fn case(set: &str, est: &EstimatorSpec, solver: &str, combo: &[String], w: WindowSpec) -> Case {

@@ -62,6 +62,31 @@ fn bad_study_files_name_the_file_and_key() {
         "similarity_on_lsq.toml",
         ": key `estimator[0].similarity`: applies to sparse-gp only",
     );
+    // A repeated grid value would give two cases one id (regression: they shared a directory).
+    check_bad(
+        "repeated_set.toml",
+        ": key `sets[2]`: `reduced32` repeats sets[0]",
+    );
+    check_bad(
+        "repeated_training.toml",
+        ": key `training.recordings[2]`: repeats training.recordings[0]",
+    );
+    check_bad(
+        "repeated_overshoots.toml",
+        ": key `training.overshoots`: value 3 repeats value 2 (counting from 1)",
+    );
+    check_bad(
+        "repeated_lambda.toml",
+        ": key `estimator[0].lambda`: a value appears twice in the grid",
+    );
+    check_bad(
+        "repeated_similarity.toml",
+        ": key `estimator[0].similarity`: a value appears twice in the grid",
+    );
+    check_bad(
+        "repeated_estimator.toml",
+        ": key `estimator[2]`: repeats a case of estimator[0]",
+    );
     check_bad(
         "missing_dataset.toml",
         ": key `dataset`: data set `crates/shipid/tests/fixtures/studies/nowhere/dataset.toml` not found",
