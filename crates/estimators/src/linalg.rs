@@ -36,6 +36,18 @@ impl Tall {
         Tall { data, nrows, ncols }
     }
 
+    /// The rows `rows` of `self`, in that order.
+    pub(crate) fn select_rows(&self, rows: &[usize]) -> Tall {
+        let mut out = Tall::zeros(rows.len(), self.ncols);
+        for j in 0..self.ncols {
+            let src = self.col(j);
+            for (d, &i) in out.col_mut(j).iter_mut().zip(rows) {
+                *d = src[i];
+            }
+        }
+        out
+    }
+
     pub(crate) fn nrows(&self) -> usize {
         self.nrows
     }

@@ -128,15 +128,13 @@ impl Data {
                 n,
             };
         }
-        let mut z = Tall::zeros(m, q);
-        for j in 0..q {
-            let src = col(&pb.z, j);
-            for (d, &i) in z.col_mut(j).iter_mut().zip(&keep) {
-                *d = src[i];
-            }
-        }
         let y = keep.iter().map(|&i| pb.y[i]).collect();
-        Data { z, y, w, n: m }
+        Data {
+            z: pb.z.select_rows(&keep),
+            y,
+            w,
+            n: m,
+        }
     }
 
     fn q(&self) -> usize {
@@ -846,23 +844,13 @@ fn shrunk(
             return None;
         }
         let (out_sign, g) = outside_pull(pb, &sides, c);
-        let m = undecided.len();
-        let mut z = Tall::zeros(m, q);
-        for j in 0..q {
-            let src = col(&pb.z, j);
-            for (d, &i) in z.col_mut(j).iter_mut().zip(&undecided) {
-                *d = src[i];
-            }
-        }
-        let y: Vec<f64> = undecided
-            .iter()
-            .map(|&i| pb.y[i] - (0..q).map(|j| col(&pb.z, j)[i] * g[j]).sum::<f64>())
-            .collect();
+        // y − Zg: the restricted targets, and what the decided samples contribute to k.
+        let y_shifted = residual(&pb.z, &pb.y, &g);
         let sub = Data {
-            z,
-            y,
+            z: pb.z.select_rows(&undecided),
+            y: undecided.iter().map(|&i| y_shifted[i]).collect(),
             w: undecided.iter().map(|&i| pb.w[i]).collect(),
-            n: m,
+            n: undecided.len(),
         };
         let (sub_lo, sub_hi): (Vec<f64>, Vec<f64>) =
             (0..q).map(|j| (lo[j] - g[j], hi[j] - g[j])).unzip();
@@ -878,11 +866,7 @@ fn shrunk(
         let k = 0.5 * g.iter().map(|v| v * v).sum::<f64>()
             + c * (0..pb.n)
                 .filter(|&i| out_sign[i] != 0.0)
-                .map(|i| {
-                    let zg: f64 = (0..q).map(|j| col(&pb.z, j)[i] * g[j]).sum();
-                    let si = out_sign[i].signum();
-                    pb.w[i] * (si * (pb.y[i] - zg) - eps)
-                })
+                .map(|i| pb.w[i] * (out_sign[i].signum() * y_shifted[i] - eps))
                 .sum::<f64>();
         let mut exact: Option<(Vec<f64>, Vec<Side>)> = None;
         let last = ipm::solve(&sub, c, eps, &sub_lo, &sub_hi, scale, |it| {

@@ -138,13 +138,15 @@ pub fn tune(
     bounds: Option<&Bounds>,
     solver: Solver,
 ) -> Result<Tuning, EstimatorError> {
-    let candidates: Vec<Estimator> = grid.iter().map(|&g| family.estimator(g)).collect();
-    let curve = cross_validate(design, y, &candidates, folds, bounds, solver)?;
-    let curve: Vec<CvPoint> = curve
-        .into_iter()
-        .zip(grid)
-        .map(|(point, &param)| CvPoint { param, ..point })
+    let candidates: Vec<Candidate> = grid
+        .iter()
+        .map(|&g| Candidate {
+            estimator: family.estimator(g),
+            param: g,
+            epsilon: None,
+        })
         .collect();
+    let curve = cross_validate(design, y, &candidates, folds, bounds, solver)?;
     let best = select(&curve, |a, b| {
         family
             .strength(b.param)
@@ -180,22 +182,17 @@ pub fn tune_svr(
     if epsilons.is_empty() {
         return Err(EstimatorError::EmptyGrid);
     }
-    let candidates: Vec<Estimator> = epsilons
+    let candidates: Vec<Candidate> = epsilons
         .iter()
-        .flat_map(|&epsilon| c_grid.iter().map(move |&c| Estimator::Svr { c, epsilon }))
-        .collect();
-    let curve: Vec<CvPoint> = cross_validate(design, y, &candidates, folds, bounds, solver)?
-        .into_iter()
-        .zip(&candidates)
-        .map(|(point, e)| match *e {
-            Estimator::Svr { c, epsilon } => CvPoint {
+        .flat_map(|&epsilon| {
+            c_grid.iter().map(move |&c| Candidate {
+                estimator: Estimator::Svr { c, epsilon },
                 param: c,
                 epsilon: Some(epsilon),
-                ..point
-            },
-            _ => point,
+            })
         })
         .collect();
+    let curve = cross_validate(design, y, &candidates, folds, bounds, solver)?;
     let k = select(&curve, |a, b| {
         a.param.total_cmp(&b.param).then(
             b.epsilon
@@ -206,7 +203,7 @@ pub fn tune_svr(
     .unwrap_or(0);
     Ok(Tuning {
         best: curve[k].param,
-        estimator: candidates[k],
+        estimator: candidates[k].estimator,
         curve,
     })
 }
@@ -216,8 +213,7 @@ pub fn tune_svr(
 /// `shipid fit`'s fixed default (1 %); above a third of the RMS most samples sit inside
 /// the tube and the fit has little left to learn from.
 pub fn default_epsilon_grid(y: &[f64]) -> Vec<f64> {
-    let n = y.len().max(1) as f64;
-    let rms = (y.iter().map(|v| v * v).sum::<f64>() / n).sqrt();
+    let rms = target_rms(y);
     log_grid(1e-3, 10f64.powf(-0.5), 6)
         .into_iter()
         .map(|f| f * rms)
@@ -240,12 +236,23 @@ fn select(
         .map(|(k, _)| k)
 }
 
-/// The cross-validation curve of `candidates` (each point's `param` 0 and `epsilon`
-/// `None`, for the caller to label).
+/// A grid point of the cross-validation: the estimator and the labels of its [`CvPoint`].
+struct Candidate {
+    estimator: Estimator,
+    param: f64,
+    epsilon: Option<f64>,
+}
+
+/// `rms(y)`, the scale of the SVR's default grids.
+fn target_rms(y: &[f64]) -> f64 {
+    (y.iter().map(|v| v * v).sum::<f64>() / y.len().max(1) as f64).sqrt()
+}
+
+/// The cross-validation curve of `candidates`, in their order.
 fn cross_validate(
     design: MatRef<'_, f64>,
     y: &[f64],
-    candidates: &[Estimator],
+    candidates: &[Candidate],
     folds: &Folds,
     bounds: Option<&Bounds>,
     solver: Solver,
@@ -254,8 +261,8 @@ fn cross_validate(
     if candidates.is_empty() {
         return Err(EstimatorError::EmptyGrid);
     }
-    for e in candidates {
-        e.validate()?;
+    for cand in candidates {
+        cand.estimator.validate()?;
     }
     let (n, p) = (design.nrows(), design.ncols());
     if let Some(b) = bounds {
@@ -282,8 +289,8 @@ fn cross_validate(
         }
         let yt: Vec<f64> = train.iter().map(|&i| y[i]).collect();
         let pb = Problem::new(xt.as_ref(), &yt)?;
-        for (g, estimator) in candidates.iter().enumerate() {
-            let f = fit_problem(&pb, estimator, bounds, solver)?;
+        for (g, cand) in candidates.iter().enumerate() {
+            let f = fit_problem(&pb, &cand.estimator, bounds, solver)?;
             if !f.status.is_solved() {
                 failed[g] += 1;
             }
@@ -297,10 +304,12 @@ fn cross_validate(
             fold_mse[g].push(s / val.len() as f64);
         }
     }
-    Ok((0..candidates.len())
-        .map(|g| CvPoint {
-            param: 0.0,
-            epsilon: None,
+    Ok(candidates
+        .iter()
+        .enumerate()
+        .map(|(g, cand)| CvPoint {
+            param: cand.param,
+            epsilon: cand.epsilon,
             mse: sse[g] / n as f64,
             fold_mse: std::mem::take(&mut fold_mse[g]),
             failed_fits: failed[g],
@@ -366,7 +375,7 @@ pub fn default_grid(
                 epsilon: *epsilon,
             }
             .validate()?;
-            let rms = (y.iter().map(|v| v * v).sum::<f64>() / n).sqrt();
+            let rms = target_rms(y);
             let c0 = if rms > 0.0 { rms / n } else { 1.0 / n };
             Ok(log_grid(1e-1 * c0, 1e5 * c0, 13))
         }
