@@ -41,6 +41,9 @@ pub fn load_set(spec: &str) -> Result<CoefficientSet, CliError> {
     CoefficientSet::from_file(file).map_err(|e| bad_input(format!("{}: {e}", path.display())))
 }
 
+/// The estimator name of paper 001's sparse GP.
+pub const GP: &str = "sparse-gp";
+
 /// Which estimator, with its hyper-parameters as given on the command line.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct EstimatorSpec {
@@ -100,14 +103,14 @@ impl EstimatorSpec {
                 ))),
             }
         };
-        if self.similarity.is_some() && self.name != "sparse-gp" {
+        if self.similarity.is_some() && self.name != GP {
             return Err(bad_input(
                 "--similarity applies to --estimator sparse-gp only",
             ));
         }
         match self.name.as_str() {
             "lsq" | "bounded-lsq" => Ok(()),
-            "sparse-gp" => {
+            GP => {
                 for (given, flag) in [
                     (self.lambda.is_some(), "lambda"),
                     (self.alpha.is_some(), "alpha"),

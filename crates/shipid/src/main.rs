@@ -323,7 +323,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                 similarity,
             };
             spec.validate()?;
-            if estimator == "sparse-gp" {
+            if estimator == shipid::fit::GP {
                 return shipid::fit_gp::run(
                     &dataset,
                     &recordings,

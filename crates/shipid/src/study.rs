@@ -34,8 +34,7 @@ use shipid_sim::metrics::zigzag_events;
 
 use crate::fit::{EstimatorSpec, WindowSpec};
 
-/// The estimator name of paper 001's sparse GP.
-pub const GP: &str = "sparse-gp";
+pub use crate::fit::GP;
 /// `Case::set` and `Case::solver` of a sparse-GP case, which has neither.
 pub const NO_SET: &str = "none";
 const NO_SOLVER: &str = "none";
@@ -308,19 +307,6 @@ pub fn load_study(path: &Path) -> Result<Study, InputError> {
     let mut estimators: Vec<(EstimatorSpec, String)> = Vec::new();
     // The [[estimator]] entry each of `estimators` came from.
     let mut origin: Vec<usize> = Vec::new();
-    let repeated = |i: usize, earlier: usize, flag: &str| {
-        if earlier == i {
-            key(
-                &format!("estimator[{i}].{flag}"),
-                "a value appears twice in the grid".into(),
-            )
-        } else {
-            key(
-                &format!("estimator[{i}]"),
-                format!("repeats a case of estimator[{earlier}]"),
-            )
-        }
-    };
     for (i, e) in raw.estimators.iter().enumerate() {
         let k = |f: &str| format!("estimator[{i}].{f}");
         if e.name == GP {
@@ -361,11 +347,7 @@ pub fn load_study(path: &Path) -> Result<Study, InputError> {
                 };
                 spec.validate()
                     .map_err(|err| key(&k("similarity"), err.to_string()))?;
-                let pair = (spec, NO_SOLVER.to_string());
-                if let Some(j) = estimators.iter().position(|e| *e == pair) {
-                    return Err(repeated(i, origin[j], "similarity"));
-                }
-                estimators.push(pair);
+                estimators.push((spec, NO_SOLVER.into()));
                 origin.push(i);
             }
             continue;
@@ -418,11 +400,7 @@ pub fn load_study(path: &Path) -> Result<Study, InputError> {
             }
         };
         if expanded.is_empty() {
-            let flag = match e.name.as_str() {
-                "ridge" => "lambda",
-                "lasso" => "alpha",
-                _ => "c",
-            };
+            let flag = grid_key(&e.name);
             return Err(key(
                 &k(flag),
                 format!("the grid is empty: give {flag} values or tune = true"),
@@ -431,18 +409,23 @@ pub fn load_study(path: &Path) -> Result<Study, InputError> {
         for spec in expanded {
             spec.validate()
                 .map_err(|err| key(&k("name"), err.to_string()))?;
-            let pair = (spec, solver.clone());
-            if let Some(j) = estimators.iter().position(|e| *e == pair) {
-                let flag = match e.name.as_str() {
-                    "ridge" => "lambda",
-                    "lasso" => "alpha",
-                    _ => "c",
-                };
-                return Err(repeated(i, origin[j], flag));
-            }
-            estimators.push(pair);
+            estimators.push((spec, solver.clone()));
             origin.push(i);
         }
+    }
+    if let Some((a, b)) = first_repeat(&estimators) {
+        let (i, earlier) = (origin[a], origin[b]);
+        return Err(if i == earlier {
+            key(
+                &format!("estimator[{i}].{}", grid_key(&estimators[a].0.name)),
+                "a value appears twice in the grid".into(),
+            )
+        } else {
+            key(
+                &format!("estimator[{i}]"),
+                format!("repeats a case of estimator[{earlier}]"),
+            )
+        });
     }
     let tests = match &raw.test.recordings {
         TestRecordings::Word(w) if w == "all" => {
@@ -526,6 +509,16 @@ fn check_overshoots(
         }
     }
     Ok(())
+}
+
+/// The key of an estimator's value grid (one case per value).
+fn grid_key(estimator: &str) -> &'static str {
+    match estimator {
+        "ridge" => "lambda",
+        "lasso" => "alpha",
+        GP => "similarity",
+        _ => "c",
+    }
 }
 
 /// The first `(i, j)` with `j < i` and `items[i] == items[j]`.
