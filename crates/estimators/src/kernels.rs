@@ -18,7 +18,7 @@
 const BLOCK_ROWS: usize = 256;
 
 #[inline(always)]
-fn madd<const FMA: bool>(a: f64, b: f64, c: f64) -> f64 {
+pub(crate) fn madd<const FMA: bool>(a: f64, b: f64, c: f64) -> f64 {
     // mul_add is one instruction where FMA is enabled and a slow library call where it
     // is not, hence the separate baseline form.
     if FMA { a.mul_add(b, c) } else { a * b + c }
@@ -136,10 +136,13 @@ fn residual_chunk<const L: usize, const U: usize, const FMA: bool>(
     beta: &[f64],
     r0: usize,
 ) -> [[f64; L]; U] {
-    let mut r: [[f64; L]; U] = std::array::from_fn(|u| lanes::<L>(y, r0 + u * L));
+    let y = &y[r0..r0 + U * L];
+    let mut r: [[f64; L]; U] = std::array::from_fn(|u| lanes::<L>(y, u * L));
     for (c, &b) in cols.iter().zip(beta) {
+        // One bounds check per column and chunk; the constant offsets below need none.
+        let c = &c[r0..r0 + U * L];
         for u in 0..U {
-            let x = lanes::<L>(c, r0 + u * L);
+            let x = lanes::<L>(c, u * L);
             for l in 0..L {
                 r[u][l] = madd::<FMA>(-b, x[l], r[u][l]);
             }
@@ -157,8 +160,9 @@ fn combination_chunk<const L: usize, const U: usize, const FMA: bool>(
 ) -> [[f64; L]; U] {
     let mut out = [[0.0f64; L]; U];
     for (c, &b) in cols.iter().zip(v) {
+        let c = &c[r0..r0 + U * L];
         for u in 0..U {
-            let x = lanes::<L>(c, r0 + u * L);
+            let x = lanes::<L>(c, u * L);
             for l in 0..L {
                 out[u][l] = madd::<FMA>(b, x[l], out[u][l]);
             }
@@ -167,17 +171,26 @@ fn combination_chunk<const L: usize, const U: usize, const FMA: bool>(
     out
 }
 
-fn residual_at(cols: &[&[f64]], y: &[f64], beta: &[f64], i: usize) -> f64 {
-    let mut r = y[i];
-    for (c, &b) in cols.iter().zip(beta) {
-        r -= b * c[i];
+/// `acc_j += Σ_rows Φ_j ⊙ w` lane-wise, for the `U·L` rows from `r0` and the chunk `w` of a
+/// vector held in registers.
+#[inline(always)]
+fn transposed_chunk<const L: usize, const U: usize, const FMA: bool>(
+    acc: &mut [[f64; L]],
+    cols: &[&[f64]],
+    w: &[[f64; L]; U],
+    r0: usize,
+) {
+    for (a, c) in acc.iter_mut().zip(cols) {
+        let c = &c[r0..r0 + U * L];
+        let mut s = *a;
+        for u in 0..U {
+            let x = lanes::<L>(c, u * L);
+            for l in 0..L {
+                s[l] = madd::<FMA>(x[l], w[u][l], s[l]);
+            }
+        }
+        *a = s;
     }
-    r
-}
-
-/// `(Φv)ᵢ`, the tail rows' twin of [`combination_chunk`].
-fn combination_at(cols: &[&[f64]], v: &[f64], i: usize) -> f64 {
-    cols.iter().zip(v).map(|(c, b)| b * c[i]).sum()
 }
 
 /// Adds the squares of a chunk's `U·L` values to lane-wise accumulators.
@@ -198,42 +211,69 @@ fn lane_sum<const L: usize>(acc: &[f64; L]) -> f64 {
     acc.iter().fold(0.0, |s, v| s + v)
 }
 
-/// `Φᵀw` for the vector w given chunk by chunk (`chunk(r0)`: its `U·L` entries from row r0,
-/// computed in registers) and entry by entry in the tail (`at(i)`): Φ is read once, and w
-/// need not exist in memory.
+/// The last rows (from `from`) of every column and of a per-row vector, zero-padded to
+/// `rows` rows, so that a pass ends with one more full chunk through the same register
+/// kernels instead of a scalar loop (zero rows add nothing to a product or a sum; at
+/// n = 1332 and 64-row chunks the scalar tail had cost a third as much as the rest).
+struct PaddedTail {
+    /// Column after column, then the per-row vector; `rows` values each.
+    data: Vec<f64>,
+    rows: usize,
+    columns: usize,
+}
+
+impl PaddedTail {
+    /// Without a `row_vector`, [`Self::row_vector`] is all zeros.
+    fn new(cols: &[&[f64]], row_vector: Option<&[f64]>, from: usize, rows: usize) -> Self {
+        let mut data = vec![0.0; rows * (cols.len() + 1)];
+        for (dst, src) in data
+            .chunks_exact_mut(rows)
+            .zip(cols.iter().chain(&row_vector))
+        {
+            let src = &src[from..];
+            dst[..src.len()].copy_from_slice(src);
+        }
+        PaddedTail {
+            data,
+            rows,
+            columns: cols.len(),
+        }
+    }
+
+    fn cols(&self) -> Vec<&[f64]> {
+        self.data
+            .chunks_exact(self.rows)
+            .take(self.columns)
+            .collect()
+    }
+
+    fn row_vector(&self) -> &[f64] {
+        &self.data[self.columns * self.rows..]
+    }
+}
+
+/// Runs `chunk(cols, row_vector, r0)` on every `rows`-row chunk of a pass, the last one on a
+/// [`PaddedTail`]. Callers mark the closure `#[inline(always)]`: a closure is a function of
+/// its own, and one left out of line loses the caller's `target_feature`s, which turns every
+/// `mul_add` into a library call (eight times slower).
 #[inline(always)]
-fn transposed_generic<const L: usize, const U: usize, const FMA: bool>(
+fn for_each_chunk(
     cols: &[&[f64]],
-    n: usize,
-    mut chunk: impl FnMut(usize) -> [[f64; L]; U],
-    mut at: impl FnMut(usize) -> f64,
-) -> Vec<f64> {
-    let rows = L * U;
+    row_vector: &[f64],
+    rows: usize,
+    mut chunk: impl FnMut(&[&[f64]], &[f64], usize),
+) {
+    let n = row_vector.len();
     let full = n - n % rows;
-    let mut acc = vec![[0.0f64; L]; cols.len()];
     let mut r0 = 0;
     while r0 < full {
-        let w = chunk(r0);
-        for (a, c) in acc.iter_mut().zip(cols) {
-            let mut s = *a;
-            for u in 0..U {
-                let x = lanes::<L>(c, r0 + u * L);
-                for l in 0..L {
-                    s[l] = madd::<FMA>(x[l], w[u][l], s[l]);
-                }
-            }
-            *a = s;
-        }
+        chunk(cols, row_vector, r0);
         r0 += rows;
     }
-    let mut out: Vec<f64> = acc.iter().map(lane_sum).collect();
-    for i in full..n {
-        let w = at(i);
-        for (o, c) in out.iter_mut().zip(cols) {
-            *o += c[i] * w;
-        }
+    if full < n {
+        let tail = PaddedTail::new(cols, Some(row_vector), full, rows);
+        chunk(&tail.cols(), tail.row_vector(), 0);
     }
-    out
 }
 
 /// `(Φᵀr, ‖r‖², ‖Φw‖²)` for `r = y − Φβ`, the last only when `w` is given: the direct
@@ -246,29 +286,26 @@ fn refinement_generic<const L: usize, const U: usize, const FMA: bool>(
     w: Option<&[f64]>,
 ) -> (Vec<f64>, f64, f64) {
     let (mut rr, mut uu) = ([0.0f64; L], [0.0f64; L]);
-    let (mut rr_tail, mut uu_tail) = (0.0, 0.0);
-    let grad = transposed_generic::<L, U, FMA>(
+    let mut grad = vec![[0.0f64; L]; cols.len()];
+    for_each_chunk(
         cols,
-        y.len(),
-        |r0| {
+        y,
+        L * U,
+        #[inline(always)]
+        |cols, y, r0| {
             let r = residual_chunk::<L, U, FMA>(cols, y, beta, r0);
             add_squares::<L, U, FMA>(&mut rr, &r);
             if let Some(w) = w {
                 add_squares::<L, U, FMA>(&mut uu, &combination_chunk::<L, U, FMA>(cols, w, r0));
             }
-            r
-        },
-        |i| {
-            let r = residual_at(cols, y, beta, i);
-            rr_tail += r * r;
-            if let Some(w) = w {
-                let u = combination_at(cols, w, i);
-                uu_tail += u * u;
-            }
-            r
+            transposed_chunk::<L, U, FMA>(&mut grad, cols, &r, r0);
         },
     );
-    (grad, lane_sum(&rr) + rr_tail, lane_sum(&uu) + uu_tail)
+    (
+        grad.iter().map(lane_sum).collect(),
+        lane_sum(&rr),
+        lane_sum(&uu),
+    )
 }
 
 /// `Φᵀv`.
@@ -277,12 +314,19 @@ fn transposed_product_generic<const L: usize, const U: usize, const FMA: bool>(
     cols: &[&[f64]],
     v: &[f64],
 ) -> Vec<f64> {
-    transposed_generic::<L, U, FMA>(
+    let mut acc = vec![[0.0f64; L]; cols.len()];
+    for_each_chunk(
         cols,
-        v.len(),
-        |r0| std::array::from_fn(|u| lanes::<L>(v, r0 + u * L)),
-        |i| v[i],
-    )
+        v,
+        L * U,
+        #[inline(always)]
+        |cols, v, r0| {
+            let v = &v[r0..r0 + U * L];
+            let w: [[f64; L]; U] = std::array::from_fn(|u| lanes::<L>(v, u * L));
+            transposed_chunk::<L, U, FMA>(&mut acc, cols, &w, r0);
+        },
+    );
+    acc.iter().map(lane_sum).collect()
 }
 
 /// `Φv` into `out` (length n).
@@ -293,18 +337,22 @@ fn combination_generic<const L: usize, const U: usize, const FMA: bool>(
     out: &mut [f64],
 ) {
     let n = out.len();
-    let chunk = L * U;
-    let full = n - n % chunk;
+    let rows = L * U;
+    let full = n - n % rows;
     let mut r0 = 0;
     while r0 < full {
         let x = combination_chunk::<L, U, FMA>(cols, v, r0);
-        for u in 0..U {
-            out[r0 + u * L..r0 + (u + 1) * L].copy_from_slice(&x[u]);
+        for (dst, src) in out[r0..r0 + rows].chunks_exact_mut(L).zip(&x) {
+            dst.copy_from_slice(src);
         }
-        r0 += chunk;
+        r0 += rows;
     }
-    for i in full..n {
-        out[i] = combination_at(cols, v, i);
+    if full < n {
+        let tail = PaddedTail::new(cols, None, full, rows);
+        let x = combination_chunk::<L, U, FMA>(&tail.cols(), v, 0);
+        for (dst, src) in out[full..].iter_mut().zip(x.as_flattened()) {
+            *dst = *src;
+        }
     }
 }
 
@@ -315,21 +363,17 @@ fn residual_norm_generic<const L: usize, const U: usize, const FMA: bool>(
     y: &[f64],
     beta: &[f64],
 ) -> f64 {
-    let n = y.len();
-    let chunk = L * U;
-    let full = n - n % chunk;
     let mut rr = [0.0f64; L];
-    let mut r0 = 0;
-    while r0 < full {
-        add_squares::<L, U, FMA>(&mut rr, &residual_chunk::<L, U, FMA>(cols, y, beta, r0));
-        r0 += chunk;
-    }
-    let mut rr = lane_sum(&rr);
-    for i in full..n {
-        let r = residual_at(cols, y, beta, i);
-        rr += r * r;
-    }
-    rr
+    for_each_chunk(
+        cols,
+        y,
+        L * U,
+        #[inline(always)]
+        |cols, y, r0| {
+            add_squares::<L, U, FMA>(&mut rr, &residual_chunk::<L, U, FMA>(cols, y, beta, r0));
+        },
+    );
+    lane_sum(&rr)
 }
 
 macro_rules! dispatch {
@@ -363,6 +407,8 @@ macro_rules! dispatch {
     };
 }
 
+pub(crate) use dispatch;
+
 dispatch!(
     /// Upper triangle of `AᵀWA` (entry `(i, j)`, `i ≤ j`, at `i·m + j`; the rest is 0) for
     /// the `m` columns `cols`, each of length `n`, and `W = diag(root_weights)²` (identity
@@ -376,7 +422,7 @@ dispatch!(
     /// `(Φᵀr, ‖r‖², ‖Φw‖²)` for `r = y − Φβ` in one pass over Φ (the last 0 without `w`).
     refinement, refinement_generic,
     (cols: &[&[f64]], y: &[f64], beta: &[f64], w: Option<&[f64]>) -> (Vec<f64>, f64, f64),
-    avx512: <8, 4, true>, avx2: <4, 4, true>, base: <2, 2, false>
+    avx512: <8, 8, true>, avx2: <4, 4, true>, base: <2, 2, false>
 );
 
 dispatch!(
@@ -396,3 +442,81 @@ dispatch!(
     combination, combination_generic, (cols: &[&[f64]], v: &[f64], out: &mut [f64]) -> (),
     avx512: <8, 4, true>, avx2: <4, 4, true>, base: <2, 2, false>
 );
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Columns of smooth, unrelated values (exact sums in no order, so the check needs a
+    /// tolerance) with `n` rows.
+    fn columns(n: usize, m: usize) -> Vec<Vec<f64>> {
+        (0..m)
+            .map(|j| {
+                (0..n)
+                    .map(|i| ((i as f64 + 1.0) * 0.37 * (j as f64 + 1.0)).sin() + 0.1 * j as f64)
+                    .collect()
+            })
+            .collect()
+    }
+
+    fn close(got: f64, want: f64, what: &str, n: usize) {
+        assert!(
+            (got - want).abs() <= 1e-12 * (1.0 + want.abs()),
+            "{what} at n = {n}: {got} against {want}"
+        );
+    }
+
+    /// Every pass against plain loops, at row counts that leave every tail length of the
+    /// 64-row (AVX-512), 16-row (AVX2) and 4-row (baseline) chunks, including n shorter
+    /// than one chunk; each instruction set's parameters, whichever this CPU dispatches to.
+    #[test]
+    fn every_pass_counts_every_row_whatever_the_tail() {
+        for n in (1..=140).chain([1332]) {
+            check_passes::<4, 8, 8, true>(n);
+            check_passes::<3, 4, 4, true>(n);
+            check_passes::<2, 2, 2, false>(n);
+        }
+    }
+
+    /// T: cross-product tile, L: lanes, U: chunks per pass.
+    fn check_passes<const T: usize, const L: usize, const U: usize, const FMA: bool>(n: usize) {
+        let m = 5;
+        let data = columns(n, m + 2);
+        let cols: Vec<&[f64]> = data[..m].iter().map(|c| c.as_slice()).collect();
+        let (y, v) = (&data[m], &data[m + 1]);
+        let beta: Vec<f64> = (0..m).map(|j| 0.3 - 0.1 * j as f64).collect();
+        let w: Vec<f64> = (0..m).map(|j| 1.0 / (j as f64 + 2.0)).collect();
+        let r: Vec<f64> = (0..n)
+            .map(|i| y[i] - (0..m).map(|j| beta[j] * cols[j][i]).sum::<f64>())
+            .collect();
+        let phi_w: Vec<f64> = (0..n)
+            .map(|i| (0..m).map(|j| w[j] * cols[j][i]).sum())
+            .collect();
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+
+        let (grad, rr, uu) = refinement_generic::<L, U, FMA>(&cols, y, &beta, Some(&w));
+        for j in 0..m {
+            close(grad[j], dot(cols[j], &r), "Φᵀr", n);
+        }
+        close(rr, dot(&r, &r), "‖r‖²", n);
+        close(uu, dot(&phi_w, &phi_w), "‖Φw‖²", n);
+        let rn = residual_norm_generic::<L, U, FMA>(&cols, y, &beta);
+        close(rn, dot(&r, &r), "‖y − Φβ‖²", n);
+        let t = transposed_product_generic::<L, U, FMA>(&cols, v);
+        for j in 0..m {
+            close(t[j], dot(cols[j], v), "Φᵀv", n);
+        }
+        let mut out = vec![f64::NAN; n];
+        combination_generic::<L, U, FMA>(&cols, &w, &mut out);
+        for i in 0..n {
+            close(out[i], phi_w[i], "Φw", n);
+        }
+        let all: Vec<&[f64]> = data.iter().map(|c| c.as_slice()).collect();
+        let cross = cross_products_generic::<T, L, FMA>(&all, n, None);
+        for a in 0..all.len() {
+            for b in a..all.len() {
+                close(cross[a * all.len() + b], dot(all[a], all[b]), "AᵀA", n);
+            }
+        }
+    }
+}

@@ -8,6 +8,8 @@
 //! only needs λ_min, λ_max and one eigenvector, which this does in a few µs with the same
 //! backward stability (eigenvalues of the tridiagonal matrix to about ε‖G‖).
 
+use crate::kernels::madd;
+
 /// Relative width of the bracket at which the extreme-eigenvalue search stops: the callers need κ = √(λ_max/λ_min)
 /// to 1e-6 relative (what [`crate::fit`]'s condition number promises against the SVD), and
 /// the eigenvalues of the Gram carry a rounding error of ε‖G‖ anyway; 1e-10 leaves four
@@ -19,75 +21,23 @@ const RELATIVE_WIDTH: f64 = 1e-10;
 pub(crate) struct Tridiagonal {
     d: Vec<f64>,
     e: Vec<f64>,
-    /// Unit vectors `v_j` of `H_j = I − 2 v_j v_jᵀ` acting on entries `j+1..k`; all zero when
-    /// the column was already reduced.
-    reflectors: Vec<Vec<f64>>,
+    /// Row-major `k × k` work matrix whose row `j`, entries `j+1..k`, holds the unit vector
+    /// `v_j` of `H_j = I − 2 v_j v_jᵀ` (for `j < k − 2`; all zero when the column was already
+    /// reduced): where the reduction read the column from, so it needs no other storage.
+    reflectors: Vec<f64>,
 }
 
 impl Tridiagonal {
     /// `a`: symmetric `k × k`, full storage (row- or column-major alike).
     pub(crate) fn new(a: &[f64], k: usize) -> Self {
-        // The trailing block is kept in full symmetric storage, row-major: A₂₂v is then a
-        // sum of contiguous rows scaled by vᵢ and the rank-2 update runs along rows, both
-        // plain vectorisable loops without reductions. Twice the flops of a one-triangle
-        // update, but at p ≈ 22 the scalar, strided one-triangle version was slower.
-        let mut w = a.to_vec();
-        let at = |i: usize, j: usize| i * k + j;
-        let mut d = vec![0.0; k];
-        let mut e = vec![0.0; k.saturating_sub(1)];
-        let mut reflectors = Vec::with_capacity(k.saturating_sub(2));
-        let mut av = vec![0.0; k];
-        let mut qv = vec![0.0; k];
-        for j in 0..k.saturating_sub(2) {
-            let m = k - j - 1;
-            let base = j + 1;
-            // Column j below the diagonal = row j right of it (symmetry).
-            let mut v: Vec<f64> = w[at(j, base)..at(j, k)].to_vec();
-            let norm = v.iter().map(|t| t * t).sum::<f64>().sqrt();
-            d[j] = w[at(j, j)];
-            if norm == 0.0 {
-                e[j] = 0.0;
-                v.fill(0.0);
-                reflectors.push(v);
-                continue;
-            }
-            let alpha = if v[0] > 0.0 { -norm } else { norm };
-            v[0] -= alpha;
-            let vnorm = v.iter().map(|t| t * t).sum::<f64>().sqrt();
-            for t in v.iter_mut() {
-                *t /= vnorm;
-            }
-            // A₂₂ ← H A₂₂ H = A₂₂ − v qᵀ − q vᵀ with q = 2(A₂₂v − (vᵀA₂₂v) v).
-            let (av, qv) = (&mut av[..m], &mut qv[..m]);
-            av.fill(0.0);
-            for (c, &vc) in v.iter().enumerate() {
-                let row = &w[at(base + c, base)..at(base + c, k)];
-                for (o, &x) in av.iter_mut().zip(row) {
-                    *o += x * vc;
-                }
-            }
-            let vav: f64 = av.iter().zip(&v).map(|(a, b)| a * b).sum();
-            for ((qr, a), b) in qv.iter_mut().zip(av.iter()).zip(&v) {
-                *qr = 2.0 * (a - vav * b);
-            }
-            for c in 0..m {
-                let (vc, qc) = (v[c], qv[c]);
-                let row = &mut w[at(base + c, base)..at(base + c, k)];
-                for ((o, &vr), &qr) in row.iter_mut().zip(v.iter()).zip(qv.iter()) {
-                    *o -= vr * qc + qr * vc;
-                }
-            }
-            e[j] = alpha;
-            reflectors.push(v);
-        }
-        if k >= 2 {
-            d[k - 2] = w[at(k - 2, k - 2)];
-            e[k - 2] = w[at(k - 1, k - 2)];
-        }
-        if k >= 1 {
-            d[k - 1] = w[at(k - 1, k - 1)];
-        }
+        let (d, e, reflectors) = reduce(a, k);
         Tridiagonal { d, e, reflectors }
+    }
+
+    /// The reflector `v_j` (entries `j+1..k`).
+    fn reflector(&self, j: usize) -> &[f64] {
+        let k = self.k();
+        &self.reflectors[j * k + j + 1..(j + 1) * k]
     }
 
     fn k(&self) -> usize {
@@ -136,101 +86,72 @@ impl Tridiagonal {
         cnt
     }
 
-    /// `(λ_min, λ_max)`.
+    /// `(λ_min, λ_max)`. The two searches run in lockstep, so that their chains of
+    /// dependent divisions ([`Self::resolvent_traces`], [`Self::counts`]) pipeline; each
+    /// takes exactly the steps it would take alone.
     pub(crate) fn extremes(&self) -> (f64, f64) {
-        let k = self.k();
-        if k == 0 {
+        if self.k() == 0 {
             return (0.0, 0.0);
         }
-        (self.extreme(true), self.extreme(false))
-    }
-
-    /// `s(x) = Σⱼ 1/(λⱼ − x) = −det′/det` of `T − xI` from the LDLᵀ pivots qᵢ and their
-    /// derivatives; only called outside the spectrum (then, by interlacing, no pivot of a
-    /// leading block vanishes).
-    fn resolvent_trace(&self, x: f64) -> f64 {
-        let (mut q, mut dq, mut sum) = (1.0f64, 0.0f64, 0.0f64);
-        for i in 0..self.k() {
-            let (qi, dqi) = if i == 0 {
-                (self.d[0] - x, -1.0)
-            } else {
-                let e2 = self.e[i - 1] * self.e[i - 1];
-                let inv = 1.0 / q;
-                (self.d[i] - x - e2 * inv, -1.0 + e2 * dq * inv * inv)
-            };
-            q = qi;
-            dq = dqi;
-            sum += dqi / qi;
-        }
-        -sum
-    }
-
-    /// λ_min (`smallest`) or λ_max by safeguarded Newton steps on det(T − xI) from outside
-    /// the spectrum, to a relative width of [`RELATIVE_WIDTH`] or the backward error ε‖T‖.
-    ///
-    /// From `x` below λ₁, `x + 1/s(x)` stays below λ₁ (det has only real roots) and
-    /// `x + k/s(x)` is above it (each of the k terms of s is at most 1/(λ₁ − x)), so every
-    /// step yields a certified bracket; convergence is quadratic unless λ₁ is clustered,
-    /// when a multisection round on Sturm counts takes over. Mirrored for λ_max. Costs a
-    /// handful of O(k) passes instead of the ~17 multisection rounds of plain bisection.
-    fn extreme(&self, smallest: bool) -> f64 {
-        let k = self.k();
-        let t = if smallest { 0 } else { k - 1 };
-        let (glo, ghi) = self.gershgorin();
-        let floor = f64::EPSILON * glo.abs().max(ghi.abs()) + self.pivmin();
-        let dmin = self.d.iter().fold(f64::INFINITY, |m, &v| m.min(v));
-        let dmax = self.d.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v));
-        // [lo, hi] contains the eigenvalue; `outer` is the end outside the spectrum that the
-        // Newton steps move (count(outer) = 0 below λ₁, = k above λ_max).
-        let (mut lo, mut hi) = if smallest {
-            (glo, ghi.min(dmin + floor))
-        } else {
-            (glo.max(dmax - floor), ghi)
-        };
-        // A Gram matrix is positive semi-definite: 0 is usually a far better outer start
-        // than the Gershgorin bound, which may lie ‖T‖ below it.
-        if smallest && lo < 0.0 && 0.0 < hi && self.counts(&[0.0])[0] == 0 {
-            lo = 0.0;
-        }
-        let done = |lo: f64, hi: f64| hi - lo <= RELATIVE_WIDTH * lo.abs().max(hi.abs()) + floor;
+        let mut searches = [Search::new(self, true), Search::new(self, false)];
         for _ in 0..100 {
-            if done(lo, hi) {
+            let active = searches.map(|s| !s.done());
+            if active == [false, false] {
                 break;
             }
-            let width = hi - lo;
-            let outer = if smallest { lo } else { hi };
-            let s = self.resolvent_trace(outer);
-            let step = 1.0 / s;
-            if step.is_finite() && step != 0.0 {
-                // s > 0 below the spectrum, < 0 above it: both steps point inwards.
-                let (near, far) = (outer + step, outer + k as f64 * step);
-                if smallest {
-                    lo = lo.max(near.min(hi));
-                    hi = hi.min(far.max(lo));
-                } else {
-                    hi = hi.min(near.max(lo));
-                    lo = lo.max(far.min(hi));
+            let traces = self.resolvent_traces(&searches.map(|s| s.outer()));
+            for (search, (&on, &trace)) in searches.iter_mut().zip(active.iter().zip(&traces)) {
+                if on {
+                    search.newton_step(trace, self.k());
                 }
             }
-            if done(lo, hi) {
-                break;
-            }
-            if hi - lo > 0.25 * width {
-                // Slow progress (clustered extreme eigenvalues): one multisection round.
-                let h = (hi - lo) / 8.0;
-                let sigma: [f64; 7] = std::array::from_fn(|l| lo + (l + 1) as f64 * h);
-                let cnt = self.counts(&sigma);
-                match (0..7).find(|&l| cnt[l] > t) {
-                    Some(0) => hi = sigma[0],
-                    Some(l) => {
-                        lo = sigma[l - 1];
-                        hi = sigma[l];
-                    }
-                    None => lo = sigma[6],
+            let slow = std::array::from_fn::<_, 2, _>(|i| active[i] && searches[i].slow());
+            match slow {
+                [true, true] => {
+                    let (a, b) = (searches[0].shifts(), searches[1].shifts());
+                    let sigma: [f64; 14] =
+                        std::array::from_fn(|l| if l < 7 { a[l] } else { b[l - 7] });
+                    let cnt = self.counts(&sigma);
+                    searches[0].multisection(&a, &cnt[..7]);
+                    searches[1].multisection(&b, &cnt[7..]);
                 }
+                [true, false] | [false, true] => {
+                    let s = &mut searches[usize::from(slow[1])];
+                    let sigma = s.shifts();
+                    let cnt = self.counts(&sigma);
+                    s.multisection(&sigma, &cnt);
+                }
+                [false, false] => {}
             }
         }
-        0.5 * (lo + hi)
+        (searches[0].midpoint(), searches[1].midpoint())
+    }
+
+    /// `s(x) = Σⱼ 1/(λⱼ − x) = −det′/det` of `T − xI` at each of the `L` points, from the
+    /// LDLᵀ pivots qᵢ and their derivatives; only called outside the spectrum (then, by
+    /// interlacing, no pivot of a leading block vanishes). `L` recurrences at once, so that
+    /// their divisions pipeline.
+    fn resolvent_traces<const L: usize>(&self, x: &[f64; L]) -> [f64; L] {
+        let (mut q, mut dq, mut sum) = ([1.0f64; L], [0.0f64; L], [0.0f64; L]);
+        for i in 0..self.k() {
+            let e2 = if i > 0 {
+                self.e[i - 1] * self.e[i - 1]
+            } else {
+                0.0
+            };
+            for l in 0..L {
+                let (qi, dqi) = if i == 0 {
+                    (self.d[0] - x[l], -1.0)
+                } else {
+                    let inv = 1.0 / q[l];
+                    (self.d[i] - x[l] - e2 * inv, -1.0 + e2 * dq[l] * inv * inv)
+                };
+                q[l] = qi;
+                dq[l] = dqi;
+                sum[l] += dqi / qi;
+            }
+        }
+        sum.map(|v| -v)
     }
 
     /// Unit eigenvector of the original matrix for the eigenvalue `lambda` of T (from
@@ -262,7 +183,8 @@ impl Tridiagonal {
                 *v /= norm;
             }
         }
-        for (j, v) in self.reflectors.iter().enumerate().rev() {
+        for j in (0..k.saturating_sub(2)).rev() {
+            let v = self.reflector(j);
             let tail = &mut x[j + 1..];
             let s: f64 = 2.0 * v.iter().zip(tail.iter()).map(|(a, b)| a * b).sum::<f64>();
             for (t, a) in tail.iter_mut().zip(v) {
@@ -314,6 +236,180 @@ impl Tridiagonal {
         x
     }
 }
+
+/// One extreme-eigenvalue search of [`Tridiagonal::extremes`]: λ_min (`smallest`) or λ_max
+/// by safeguarded Newton steps on det(T − xI) from outside the spectrum, to a relative
+/// width of [`RELATIVE_WIDTH`] or the backward error ε‖T‖.
+///
+/// From `x` below λ₁, `x + 1/s(x)` stays below λ₁ (det has only real roots) and
+/// `x + k/s(x)` is above it (each of the k terms of s is at most 1/(λ₁ − x)), so every step
+/// yields a certified bracket; convergence is quadratic unless λ₁ is clustered, when a
+/// multisection round on Sturm counts takes over. Mirrored for λ_max. Costs a handful of
+/// O(k) passes instead of the ~17 multisection rounds of plain bisection.
+#[derive(Clone, Copy)]
+struct Search {
+    smallest: bool,
+    /// Index of the wanted eigenvalue in ascending order.
+    t: usize,
+    /// `[lo, hi]` contains the eigenvalue; the end outside the spectrum is the one the
+    /// Newton steps move (count(lo) = 0 below λ₁, count(hi) = k above λ_max).
+    lo: f64,
+    hi: f64,
+    /// Rounding floor of the width, ε‖T‖ + pivmin.
+    floor: f64,
+    /// Bracket width before the last Newton step.
+    width: f64,
+}
+
+impl Search {
+    fn new(tri: &Tridiagonal, smallest: bool) -> Self {
+        let k = tri.k();
+        let (glo, ghi) = tri.gershgorin();
+        let floor = f64::EPSILON * glo.abs().max(ghi.abs()) + tri.pivmin();
+        let dmin = tri.d.iter().fold(f64::INFINITY, |m, &v| m.min(v));
+        let dmax = tri.d.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v));
+        let (mut lo, hi) = if smallest {
+            (glo, ghi.min(dmin + floor))
+        } else {
+            (glo.max(dmax - floor), ghi)
+        };
+        // A Gram matrix is positive semi-definite: 0 is usually a far better outer start
+        // than the Gershgorin bound, which may lie ‖T‖ below it.
+        if smallest && lo < 0.0 && 0.0 < hi && tri.counts(&[0.0])[0] == 0 {
+            lo = 0.0;
+        }
+        Search {
+            smallest,
+            t: if smallest { 0 } else { k - 1 },
+            lo,
+            hi,
+            floor,
+            width: hi - lo,
+        }
+    }
+
+    fn done(&self) -> bool {
+        self.hi - self.lo <= RELATIVE_WIDTH * self.lo.abs().max(self.hi.abs()) + self.floor
+    }
+
+    fn outer(&self) -> f64 {
+        if self.smallest { self.lo } else { self.hi }
+    }
+
+    /// Narrows the bracket by the Newton step from the outer end, where s(outer) = `trace`.
+    fn newton_step(&mut self, trace: f64, k: usize) {
+        self.width = self.hi - self.lo;
+        let outer = self.outer();
+        let step = 1.0 / trace;
+        if step.is_finite() && step != 0.0 {
+            // s > 0 below the spectrum, < 0 above it: both steps point inwards.
+            let (near, far) = (outer + step, outer + k as f64 * step);
+            if self.smallest {
+                self.lo = self.lo.max(near.min(self.hi));
+                self.hi = self.hi.min(far.max(self.lo));
+            } else {
+                self.hi = self.hi.min(near.max(self.lo));
+                self.lo = self.lo.max(far.min(self.hi));
+            }
+        }
+    }
+
+    /// Slow progress (clustered extreme eigenvalues): the step did not quarter the bracket.
+    fn slow(&self) -> bool {
+        !self.done() && self.hi - self.lo > 0.25 * self.width
+    }
+
+    /// The seven interior points of a multisection round.
+    fn shifts(&self) -> [f64; 7] {
+        let h = (self.hi - self.lo) / 8.0;
+        std::array::from_fn(|l| self.lo + (l + 1) as f64 * h)
+    }
+
+    /// Keeps the eighth of the bracket where the count passes `t` (`cnt`: Sturm counts at
+    /// `sigma`).
+    fn multisection(&mut self, sigma: &[f64; 7], cnt: &[usize]) {
+        match (0..7).find(|&l| cnt[l] > self.t) {
+            Some(0) => self.hi = sigma[0],
+            Some(l) => {
+                self.lo = sigma[l - 1];
+                self.hi = sigma[l];
+            }
+            None => self.lo = sigma[6],
+        }
+    }
+
+    fn midpoint(&self) -> f64 {
+        0.5 * (self.lo + self.hi)
+    }
+}
+
+/// The Householder reduction of [`Tridiagonal::new`]: `(d, e, reflectors)`.
+#[inline(always)]
+fn reduce_generic<const FMA: bool>(a: &[f64], k: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    // The trailing block is kept in full symmetric storage, row-major: A₂₂v is then a sum
+    // of contiguous rows scaled by vᵢ and the rank-2 update runs along rows, both plain
+    // vectorisable loops without reductions. Twice the flops of a one-triangle update, but
+    // at p ≈ 22 the strided one-triangle version was slower.
+    let mut w = a.to_vec();
+    let mut d = vec![0.0; k];
+    let mut e = vec![0.0; k.saturating_sub(1)];
+    let mut av = vec![0.0; k];
+    let mut qv = vec![0.0; k];
+    for j in 0..k.saturating_sub(2) {
+        let m = k - j - 1;
+        d[j] = w[j * k + j];
+        // Row j right of the diagonal (= column j below it) becomes v_j in place; the
+        // trailing block is rows j+1.. .
+        let (head, trailing) = w.split_at_mut((j + 1) * k);
+        let v = &mut head[j * k + j + 1..];
+        let norm = v.iter().map(|t| t * t).sum::<f64>().sqrt();
+        if norm == 0.0 {
+            e[j] = 0.0;
+            continue;
+        }
+        let alpha = if v[0] > 0.0 { -norm } else { norm };
+        v[0] -= alpha;
+        let vnorm = v.iter().map(|t| t * t).sum::<f64>().sqrt();
+        for t in v.iter_mut() {
+            *t /= vnorm;
+        }
+        // A₂₂ ← H A₂₂ H = A₂₂ − v qᵀ − q vᵀ with q = 2(A₂₂v − (vᵀA₂₂v) v).
+        let (av, qv) = (&mut av[..m], &mut qv[..m]);
+        av.fill(0.0);
+        for (c, &vc) in v.iter().enumerate() {
+            let row = &trailing[c * k + j + 1..(c + 1) * k];
+            for (o, &x) in av.iter_mut().zip(row) {
+                *o = madd::<FMA>(x, vc, *o);
+            }
+        }
+        let vav: f64 = av.iter().zip(v.iter()).map(|(a, b)| a * b).sum();
+        for ((qr, a), b) in qv.iter_mut().zip(av.iter()).zip(v.iter()) {
+            *qr = 2.0 * (a - vav * b);
+        }
+        for c in 0..m {
+            let (vc, qc) = (v[c], qv[c]);
+            let row = &mut trailing[c * k + j + 1..(c + 1) * k];
+            for ((o, &vr), &qr) in row.iter_mut().zip(v.iter()).zip(qv.iter()) {
+                *o = madd::<FMA>(-qr, vc, madd::<FMA>(-vr, qc, *o));
+            }
+        }
+        e[j] = alpha;
+    }
+    if k >= 2 {
+        d[k - 2] = w[(k - 2) * k + k - 2];
+        e[k - 2] = w[(k - 1) * k + k - 2];
+    }
+    if k >= 1 {
+        d[k - 1] = w[(k - 1) * k + k - 1];
+    }
+    (d, e, w)
+}
+
+crate::kernels::dispatch!(
+    /// [`reduce_generic`] with FMA and wide vectors where the CPU has them.
+    reduce, reduce_generic, (a: &[f64], k: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>),
+    avx512: <true>, avx2: <true>, base: <false>
+);
 
 #[cfg(test)]
 mod tests {
