@@ -514,6 +514,15 @@ fn resolve_estimator(
     Ok((t.estimator, Some(t)))
 }
 
+/// The SVR's tube half-width ε [units of the target: prime force or moment], given or chosen by
+/// cross-validation; `None` for the other estimators.
+pub fn svr_epsilon(e: &Estimator) -> Option<f64> {
+    match *e {
+        Estimator::Svr { epsilon, .. } => Some(epsilon),
+        _ => None,
+    }
+}
+
 fn hyper_of(e: &Estimator) -> Vec<(&'static str, f64)> {
     match *e {
         Estimator::Lsq | Estimator::BoundedLsq => vec![],

@@ -55,6 +55,7 @@ pub fn report_json(out: &FitOutput) -> Value {
                 "objective": d.fit.objective,
                 "iterations": d.fit.iterations,
                 "hyper_parameter": d.tuning.as_ref().map(|t| t.best),
+                "epsilon": crate::fit::svr_epsilon(&d.fit.estimator),
             }),
         );
     }

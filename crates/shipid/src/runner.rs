@@ -31,6 +31,10 @@ pub struct DofSummary {
     pub condition_number: Option<f64>,
     pub scaled_condition_number: Option<f64>,
     pub hyper_parameter: Option<f64>,
+    /// The SVR's ε (given or tuned) [target units]; absent for the other estimators and in
+    /// results written before 0.2.1.
+    #[serde(default)]
+    pub epsilon: Option<f64>,
     pub objective: f64,
 }
 
@@ -205,6 +209,7 @@ pub fn run_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
                 condition_number: d.condition_number,
                 scaled_condition_number: d.scaled_condition_number,
                 hyper_parameter: d.tuning.as_ref().map(|t| t.best),
+                epsilon: crate::fit::svr_epsilon(&d.fit.estimator),
                 objective: d.fit.objective,
             })
             .collect(),
@@ -308,6 +313,7 @@ fn run_gp_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
                 condition_number: None,
                 scaled_condition_number: None,
                 hyper_parameter: None,
+                epsilon: None,
                 objective: -o.log_marginal_likelihood,
             })
             .collect(),

@@ -62,6 +62,18 @@ fn case_columns(t: &mut Table, rows: &[(&Case, &CaseResult)]) {
             }),
         );
     }
+    // The SVR's second hyper-parameter (hyper_* holds its C): tuned per DOF unless given.
+    for (key, dof) in [("X", 0usize), ("Y", 1), ("N", 2)] {
+        t.push_num(
+            &format!("epsilon_{key}"),
+            num(&|c, r| {
+                r.dofs
+                    .get(dof)
+                    .and_then(|d| d.epsilon)
+                    .or(c.estimator.epsilon)
+            }),
+        );
+    }
     t.push_text("case_status", text(&|_, r| r.status.clone()));
     t.push_num("fit_time_s", num(&|_, r| r.fit_time_s));
 }

@@ -335,3 +335,53 @@ fn a_sparse_gp_case_needs_no_set_and_is_validated_and_drawn_like_the_polynomial_
         "set, estimator, solver columns"
     );
 }
+
+/// The summary's `epsilon_X/Y/N` columns hold the ε each SVR fit used, the value its model file
+/// records: given, the default share of each target's RMS, or the cross-validation's choice. Before
+/// 0.2.1 the summary had only C (`hyper_*`), and a tuned ε was in the model files alone.
+#[test]
+fn the_summary_holds_the_epsilon_every_svr_fit_used() {
+    let study = load_study(&common::root().join(FIXTURES).join("svr_epsilon.toml")).unwrap();
+    assert_eq!(study.cases.len(), 4);
+    let dir = tempfile::tempdir().unwrap();
+    let results = run_and_write(&study, dir.path(), 2, false, false).unwrap();
+    assert!(results.iter().all(|r| r.status == "ok"), "{results:?}");
+    let summary = Table::read_csv(&dir.path().join("summary.csv")).unwrap();
+    let cell = |name: &str, row: usize| summary.column(name).unwrap().cell(row);
+    let hyper_of_model = |case: &str| -> toml::Table {
+        let text = std::fs::read_to_string(dir.path().join("cases").join(case).join("model.toml"))
+            .unwrap();
+        let model: toml::Table = toml::from_str(&text).unwrap();
+        model["estimator"]["hyper"].as_table().unwrap().clone()
+    };
+    let mut epsilons = Vec::new();
+    for (row, case) in study.cases.iter().enumerate() {
+        assert_eq!(
+            cell("case", row),
+            case.id,
+            "one test recording: one row per case"
+        );
+        let per_dof: Vec<String> = ["X", "Y", "N"]
+            .iter()
+            .map(|k| cell(&format!("epsilon_{k}"), row))
+            .collect();
+        if case.estimator.name == "lsq" {
+            assert_eq!(per_dof, ["", "", ""], "LSQ has no ε");
+            continue;
+        }
+        let hyper = hyper_of_model(&case.id);
+        let shown: Vec<f64> = per_dof.iter().map(|v| v.parse().unwrap()).collect();
+        for (k, shown) in ["X", "Y", "N"].iter().zip(&shown) {
+            let used = hyper[&format!("epsilon_{k}")].as_float().unwrap();
+            assert_eq!(*shown, used, "{} epsilon_{k}", case.id);
+        }
+        epsilons.push(shown);
+    }
+    // Given: the same ε for every DOF. Default and tuned: per DOF, from each target's scale, so
+    // X, Y and N differ; and the tuned choice is not the default everywhere.
+    assert_eq!(epsilons[0], [2e-6; 3]);
+    for e in &epsilons[1..] {
+        assert!(e[0] != e[1] && e[1] != e[2], "{e:?}");
+    }
+    assert_ne!(epsilons[1], epsilons[2]);
+}

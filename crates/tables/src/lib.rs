@@ -221,7 +221,8 @@ pub struct Tolerance {
 
 /// Differences between a fresh table and a reference one. Text columns must match exactly; numeric
 /// columns within their tolerance (`default` when not listed; `None` in `per_column` ignores a column);
-/// a value present on one side only is a difference.
+/// a value present on one side only is a difference, and so is a column the reference lacks (a
+/// column added since the reference was stored would otherwise go unchecked until the next bless).
 pub fn compare(
     fresh: &Table,
     reference: &Table,
@@ -236,6 +237,13 @@ pub fn compare(
             reference.rows()
         ));
         return diffs;
+    }
+    for (name, _) in &fresh.columns {
+        if reference.column(name).is_none() && per_column.get(name) != Some(&None) {
+            diffs.push(format!(
+                "column `{name}` is not in the reference (new since it was stored?)"
+            ));
+        }
     }
     for (name, rcol) in &reference.columns {
         let tol = match per_column.get(name) {
@@ -305,6 +313,24 @@ mod tests {
         );
         let ignore = BTreeMap::from([("mrae".to_string(), None)]);
         assert!(compare(&fresh, &sample(), &ignore, Tolerance { abs: 0.0, rel: 0.0 }).is_empty());
+    }
+
+    #[test]
+    fn a_column_missing_from_either_side_is_a_difference_unless_ignored() {
+        let exact = Tolerance { abs: 0.0, rel: 0.0 };
+        let mut wider = sample();
+        wider.push_num("epsilon", vec![Some(1.0), None, Some(2.0)]);
+        let none = BTreeMap::new();
+        assert_eq!(
+            compare(&wider, &sample(), &none, exact),
+            vec!["column `epsilon` is not in the reference (new since it was stored?)".to_string()]
+        );
+        assert_eq!(
+            compare(&sample(), &wider, &none, exact),
+            vec!["column `epsilon` is missing".to_string()]
+        );
+        let ignore = BTreeMap::from([("epsilon".to_string(), None)]);
+        assert!(compare(&wider, &sample(), &ignore, exact).is_empty());
     }
 
     #[test]
