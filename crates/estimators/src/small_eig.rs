@@ -58,6 +58,15 @@ impl Tridiagonal {
         (lo - pad, hi + pad)
     }
 
+    /// `e²ᵢ₋₁`, the squared coupling of row i to the one above it (0 for the first row).
+    fn coupling_squared(&self, i: usize) -> f64 {
+        if i > 0 {
+            self.e[i - 1] * self.e[i - 1]
+        } else {
+            0.0
+        }
+    }
+
     fn pivmin(&self) -> f64 {
         f64::MIN_POSITIVE * self.e.iter().fold(1.0f64, |m, v| m.max(v * v))
     }
@@ -69,11 +78,7 @@ impl Tridiagonal {
         let mut q = [0.0; L];
         let mut cnt = [0usize; L];
         for i in 0..self.k() {
-            let e2 = if i > 0 {
-                self.e[i - 1] * self.e[i - 1]
-            } else {
-                0.0
-            };
+            let e2 = self.coupling_squared(i);
             for l in 0..L {
                 let mut v = self.d[i] - sigma[l] - if i > 0 { e2 / q[l] } else { 0.0 };
                 if v.abs() <= pivmin {
@@ -134,11 +139,7 @@ impl Tridiagonal {
     fn resolvent_traces<const L: usize>(&self, x: &[f64; L]) -> [f64; L] {
         let (mut q, mut dq, mut sum) = ([1.0f64; L], [0.0f64; L], [0.0f64; L]);
         for i in 0..self.k() {
-            let e2 = if i > 0 {
-                self.e[i - 1] * self.e[i - 1]
-            } else {
-                0.0
-            };
+            let e2 = self.coupling_squared(i);
             for l in 0..L {
                 let (qi, dqi) = if i == 0 {
                     (self.d[0] - x[l], -1.0)

@@ -48,32 +48,24 @@ fn case_columns(t: &mut Table, rows: &[(&Case, &CaseResult)]) {
         }),
     );
     t.push_text("tuned", text(&|c, _| c.estimator.tune.to_string()));
-    for (key, dof) in [("X", 0usize), ("Y", 1), ("N", 2)] {
-        t.push_num(
-            &format!("hyper_{key}"),
-            num(&|c, r| {
-                r.dofs
-                    .get(dof)
-                    .and_then(|d| d.hyper_parameter)
-                    .or(c.estimator.lambda)
-                    .or(c.estimator.alpha)
-                    .or(c.estimator.c)
-                    .or(c.estimator.similarity)
-            }),
-        );
-    }
+    // One column per DOF: the value of its fit, else what the case gave (a failed case has no fits).
+    let per_dof = |t: &mut Table,
+                   prefix: &str,
+                   fitted: &dyn Fn(&crate::runner::DofSummary) -> Option<f64>,
+                   given: &dyn Fn(&Case) -> Option<f64>| {
+        for (key, dof) in [("X", 0usize), ("Y", 1), ("N", 2)] {
+            t.push_num(
+                &format!("{prefix}_{key}"),
+                num(&|c, r| r.dofs.get(dof).and_then(fitted).or_else(|| given(c))),
+            );
+        }
+    };
+    per_dof(t, "hyper", &|d| d.hyper_parameter, &|c| {
+        let e = &c.estimator;
+        e.lambda.or(e.alpha).or(e.c).or(e.similarity)
+    });
     // The SVR's second hyper-parameter (hyper_* holds its C): tuned per DOF unless given.
-    for (key, dof) in [("X", 0usize), ("Y", 1), ("N", 2)] {
-        t.push_num(
-            &format!("epsilon_{key}"),
-            num(&|c, r| {
-                r.dofs
-                    .get(dof)
-                    .and_then(|d| d.epsilon)
-                    .or(c.estimator.epsilon)
-            }),
-        );
-    }
+    per_dof(t, "epsilon", &|d| d.epsilon, &|c| c.estimator.epsilon);
     t.push_text("case_status", text(&|_, r| r.status.clone()));
     t.push_num("fit_time_s", num(&|_, r| r.fit_time_s));
 }
