@@ -1,5 +1,5 @@
 //! Extreme eigenvalues of a small symmetric matrix (the p × p Gram, p ≲ 70) and an
-//! eigenvector of the smallest: Householder tridiagonalisation, safeguarded Newton steps on
+//! eigenvector of the smallest: Householder tridiagonalisation, safeguarded Laguerre steps on
 //! the characteristic polynomial (bisection on Sturm counts where they stall), inverse
 //! iteration on the tridiagonal matrix.
 //!
@@ -92,11 +92,17 @@ impl Tridiagonal {
     }
 
     /// `(λ_min, λ_max)`. The two searches run in lockstep, so that their chains of
-    /// dependent divisions ([`Self::resolvent_traces`], [`Self::counts`]) pipeline; each
+    /// dependent divisions ([`Self::resolvent_moments`], [`Self::counts`]) pipeline; each
     /// takes exactly the steps it would take alone.
     pub(crate) fn extremes(&self) -> (f64, f64) {
+        self.extremes_with_work().0
+    }
+
+    /// [`Self::extremes`] and the passes it took: `(moment passes, Sturm-count rounds)`.
+    fn extremes_with_work(&self) -> ((f64, f64), (usize, usize)) {
+        let mut work = (0, 0);
         if self.k() == 0 {
-            return (0.0, 0.0);
+            return ((0.0, 0.0), work);
         }
         let mut searches = [Search::new(self, true), Search::new(self, false)];
         for _ in 0..100 {
@@ -104,15 +110,17 @@ impl Tridiagonal {
             if active == [false, false] {
                 break;
             }
-            let traces = self.resolvent_traces(&searches.map(|s| s.outer()));
-            for (search, (&on, &trace)) in searches.iter_mut().zip(active.iter().zip(&traces)) {
+            work.0 += 1;
+            let moments = self.resolvent_moments(&searches.map(|s| s.outer()));
+            for (search, (&on, &(s1, s2))) in searches.iter_mut().zip(active.iter().zip(&moments)) {
                 if on {
-                    search.newton_step(trace, self.k());
+                    search.step(s1, s2, self.k());
                 }
             }
             let slow = std::array::from_fn::<_, 2, _>(|i| active[i] && searches[i].slow());
             match slow {
                 [true, true] => {
+                    work.1 += 1;
                     let (a, b) = (searches[0].shifts(), searches[1].shifts());
                     let sigma: [f64; 14] =
                         std::array::from_fn(|l| if l < 7 { a[l] } else { b[l - 7] });
@@ -121,6 +129,7 @@ impl Tridiagonal {
                     searches[1].multisection(&b, &cnt[7..]);
                 }
                 [true, false] | [false, true] => {
+                    work.1 += 1;
                     let s = &mut searches[usize::from(slow[1])];
                     let sigma = s.shifts();
                     let cnt = self.counts(&sigma);
@@ -129,30 +138,43 @@ impl Tridiagonal {
                 [false, false] => {}
             }
         }
-        (searches[0].midpoint(), searches[1].midpoint())
+        ((searches[0].midpoint(), searches[1].midpoint()), work)
     }
 
-    /// `s(x) = Σⱼ 1/(λⱼ − x) = −det′/det` of `T − xI` at each of the `L` points, from the
-    /// LDLᵀ pivots qᵢ and their derivatives; only called outside the spectrum (then, by
-    /// interlacing, no pivot of a leading block vanishes). `L` recurrences at once, so that
-    /// their divisions pipeline.
-    fn resolvent_traces<const L: usize>(&self, x: &[f64; L]) -> [f64; L] {
-        let (mut q, mut dq, mut sum) = ([1.0f64; L], [0.0f64; L], [0.0f64; L]);
+    /// `(s₁(x), s₂(x))` with `s₁ = Σⱼ 1/(λⱼ − x) = −det′/det` and `s₂ = Σⱼ 1/(λⱼ − x)² = s₁′` of
+    /// `T − xI` at each of the `L` points, from the LDLᵀ pivots qᵢ and their first two
+    /// derivatives (`s₁ = −Σ qᵢ′/qᵢ`, `s₂ = Σ (qᵢ′/qᵢ)² − qᵢ″/qᵢ`); only called outside the
+    /// spectrum (then, by interlacing, no pivot of a leading block vanishes). One division
+    /// per row and point, and `L` recurrences at once, so that the divisions pipeline.
+    fn resolvent_moments<const L: usize>(&self, x: &[f64; L]) -> [(f64, f64); L] {
+        let (mut inv, mut dq, mut ddq) = ([0.0f64; L], [0.0f64; L], [0.0f64; L]);
+        let (mut s1, mut s2) = ([0.0f64; L], [0.0f64; L]);
         for i in 0..self.k() {
             let e2 = self.coupling_squared(i);
             for l in 0..L {
-                let (qi, dqi) = if i == 0 {
-                    (self.d[0] - x[l], -1.0)
+                // qᵢ = dᵢ − x − e²/qᵢ₋₁, so qᵢ′ = −1 + e² qᵢ₋₁′/qᵢ₋₁² and
+                // qᵢ″ = e² (qᵢ₋₁″ − 2 qᵢ₋₁′²/qᵢ₋₁)/qᵢ₋₁².
+                let (q, d1, d2) = if i == 0 {
+                    (self.d[0] - x[l], -1.0, 0.0)
                 } else {
-                    let inv = 1.0 / q[l];
-                    (self.d[i] - x[l] - e2 * inv, -1.0 + e2 * dq[l] * inv * inv)
+                    let iv = inv[l];
+                    let t = e2 * iv * iv;
+                    (
+                        self.d[i] - x[l] - e2 * iv,
+                        -1.0 + t * dq[l],
+                        t * (ddq[l] - 2.0 * dq[l] * dq[l] * iv),
+                    )
                 };
-                q[l] = qi;
-                dq[l] = dqi;
-                sum[l] += dqi / qi;
+                let iq = 1.0 / q;
+                let ratio = d1 * iq;
+                s1[l] -= ratio;
+                s2[l] += ratio * ratio - d2 * iq;
+                inv[l] = iq;
+                dq[l] = d1;
+                ddq[l] = d2;
             }
         }
-        sum.map(|v| -v)
+        std::array::from_fn(|l| (s1[l], s2[l]))
     }
 
     /// Unit eigenvector of the original matrix for the eigenvalue `lambda` of T (from
@@ -239,26 +261,26 @@ impl Tridiagonal {
 }
 
 /// One extreme-eigenvalue search of [`Tridiagonal::extremes`]: λ_min (`smallest`) or λ_max
-/// by safeguarded Newton steps on det(T − xI) from outside the spectrum, to a relative
+/// by safeguarded Laguerre steps on det(T − xI) from outside the spectrum, to a relative
 /// width of [`RELATIVE_WIDTH`] or the backward error ε‖T‖.
 ///
-/// From `x` below λ₁, `x + 1/s(x)` stays below λ₁ (det has only real roots) and
-/// `x + k/s(x)` is above it (each of the k terms of s is at most 1/(λ₁ − x)), so every step
-/// yields a certified bracket; convergence is quadratic unless λ₁ is clustered, when a
-/// multisection round on Sturm counts takes over. Mirrored for λ_max. Costs a handful of
-/// O(k) passes instead of the ~17 multisection rounds of plain bisection.
+/// From `x` outside the spectrum, the first two moments of the resolvent give a certified
+/// bracket around the nearest eigenvalue ([`Search::step`]) whose both ends converge
+/// (cubically and quadratically) unless that eigenvalue is clustered, when a multisection
+/// round on Sturm counts takes over. Costs three or four O(k) passes instead of the ~17
+/// multisection rounds of plain bisection.
 #[derive(Clone, Copy)]
 struct Search {
     smallest: bool,
     /// Index of the wanted eigenvalue in ascending order.
     t: usize,
     /// `[lo, hi]` contains the eigenvalue; the end outside the spectrum is the one the
-    /// Newton steps move (count(lo) = 0 below λ₁, count(hi) = k above λ_max).
+    /// Laguerre steps move (count(lo) = 0 below λ₁, count(hi) = k above λ_max).
     lo: f64,
     hi: f64,
     /// Rounding floor of the width, ε‖T‖ + pivmin.
     floor: f64,
-    /// Bracket width before the last Newton step.
+    /// Bracket width before the last Laguerre step.
     width: f64,
 }
 
@@ -297,21 +319,37 @@ impl Search {
         if self.smallest { self.lo } else { self.hi }
     }
 
-    /// Narrows the bracket by the Newton step from the outer end, where s(outer) = `trace`.
-    fn newton_step(&mut self, trace: f64, k: usize) {
+    /// Narrows the bracket from the outer end x, where `s1 = Σ 1/(λⱼ − x)` and
+    /// `s2 = Σ 1/(λⱼ − x)²`. With `a = |s1|` and `t = 1/|λ − x|` for the wanted (nearest)
+    /// eigenvalue λ, the largest of the k terms:
+    /// * `t ≤ (a + D)/k`, `D = √((k − 1)(k s2 − a²))` (Cauchy–Schwarz on the other k − 1
+    ///   terms): λ is at least `k/(a + D)` away — Laguerre's step, cubically convergent;
+    /// * `t ≥ s2/a` (each term at most t): λ is at most `a/s2` away, which converges
+    ///   quadratically as well (`k/a`, the Newton form, only linearly).
+    ///
+    /// Both hold exactly when `a²/k ≤ s2 ≤ a²`; rounded moments outside that range fall back
+    /// to the Newton bounds `1/a` and `k/a`.
+    fn step(&mut self, s1: f64, s2: f64, k: usize) {
         self.width = self.hi - self.lo;
+        let a = s1.abs();
+        let kf = k as f64;
+        let (near, far) = if a * a <= kf * s2 && s2 <= a * a {
+            let d = ((kf - 1.0) * (kf * s2 - a * a)).max(0.0).sqrt();
+            (kf / (a + d), a / s2)
+        } else {
+            (1.0 / a, kf / a)
+        };
+        if !(near.is_finite() && far.is_finite() && near > 0.0) {
+            return;
+        }
         let outer = self.outer();
-        let step = 1.0 / trace;
-        if step.is_finite() && step != 0.0 {
-            // s > 0 below the spectrum, < 0 above it: both steps point inwards.
-            let (near, far) = (outer + step, outer + k as f64 * step);
-            if self.smallest {
-                self.lo = self.lo.max(near.min(self.hi));
-                self.hi = self.hi.min(far.max(self.lo));
-            } else {
-                self.hi = self.hi.min(near.max(self.lo));
-                self.lo = self.lo.max(far.min(self.hi));
-            }
+        // s1 > 0 below the spectrum, < 0 above it: both steps point inwards.
+        if self.smallest {
+            self.lo = self.lo.max((outer + near).min(self.hi));
+            self.hi = self.hi.min((outer + far).max(self.lo));
+        } else {
+            self.hi = self.hi.min((outer - near).max(self.lo));
+            self.lo = self.lo.max((outer - far).min(self.hi));
         }
     }
 
@@ -369,10 +407,12 @@ fn reduce_generic<const FMA: bool>(a: &[f64], k: usize) -> (Vec<f64>, Vec<f64>, 
             continue;
         }
         let alpha = if v[0] > 0.0 { -norm } else { norm };
+        // ‖v − αe₁‖² = ‖v‖² − 2αv₀ + α² = 2‖v‖(‖v‖ + |v₀|): α has v₀'s opposite sign, so
+        // the sum has no cancellation and needs no second pass.
+        let inv_vnorm = 1.0 / (2.0 * norm * (norm + v[0].abs())).sqrt();
         v[0] -= alpha;
-        let vnorm = v.iter().map(|t| t * t).sum::<f64>().sqrt();
         for t in v.iter_mut() {
-            *t /= vnorm;
+            *t *= inv_vnorm;
         }
         // A₂₂ ← H A₂₂ H = A₂₂ − v qᵀ − q vᵀ with q = 2(A₂₂v − (vᵀA₂₂v) v).
         let (av, qv) = (&mut av[..m], &mut qv[..m]);
@@ -463,6 +503,21 @@ mod tests {
         }
     }
 
+    #[test]
+    fn separated_extremes_take_few_passes() {
+        // Both ends of the Laguerre bracket converge superlinearly, so a well-separated
+        // extreme eigenvalue needs three or four moment passes and at most one Sturm round
+        // (the Newton bracket's inner end converged only linearly: six passes and three or
+        // four rounds on these matrices).
+        for (k, seed) in [(9, 0.4), (15, 0.5), (22, 0.9), (40, 1.3)] {
+            let (_, (passes, rounds)) = Tridiagonal::new(&sample(k, seed), k).extremes_with_work();
+            assert!(
+                passes <= 4 && rounds <= 1,
+                "k={k}: {passes} passes, {rounds} rounds"
+            );
+        }
+    }
+
     /// `Q diag(λ) Qᵀ` for a fixed orthogonal Q (Householder reflector of a dense vector).
     fn rotated(lambda: &[f64]) -> Vec<f64> {
         let k = lambda.len();
@@ -499,7 +554,7 @@ mod tests {
 
     #[test]
     fn clustered_extreme_eigenvalues_fall_back_to_multisection() {
-        // Newton on det converges only linearly into a cluster; the Sturm rounds finish.
+        // Laguerre steps on det converge only linearly into a cluster; the Sturm rounds finish.
         check_extremes(&[
             1e-6,
             1e-6 * (1.0 + 1e-12),
