@@ -26,12 +26,12 @@
 //! the general path, which handles (and reports) every such case. Correctness never
 //! depends on this path; it only decides how fast the common case is.
 
-use faer::{Mat, MatRef};
+use faer::MatRef;
 
 use crate::error::EstimatorError;
 use crate::fit::status_from;
 use crate::kernels;
-use crate::linalg::{cholesky, cholesky_solve, col_of};
+use crate::linalg::{RowCholesky, col_of};
 use crate::small_eig::Tridiagonal;
 use crate::types::{Bounds, Estimator, Fit, Solver};
 
@@ -98,10 +98,9 @@ pub(crate) fn try_lsq(
     if emin.partial_cmp(&(emax / SEMINORMAL_LIMIT)) != Some(std::cmp::Ordering::Greater) {
         return None;
     }
-    let gm = Mat::<f64>::from_fn(p, p, |i, j| g[i * p + j]);
-    let l = cholesky(gm.as_ref(), 0.0)?;
+    let l = RowCholesky::new(&g, p, 0.0)?;
     let mut gamma = b;
-    cholesky_solve(&l, &mut gamma);
+    l.solve(&mut gamma);
     let beta1: Vec<f64> = gamma.iter().zip(&scales).map(|(x, s)| x / s).collect();
     // ‖Zv‖²/n on Z itself is accurate to about (ε κ(G))² relative, the Gram's λ_min only
     // to ε κ(G); v does not depend on β, so the refinement pass computes it on the way.
@@ -118,7 +117,7 @@ pub(crate) fn try_lsq(
         .zip(&inv_root)
         .map(|(v, ir)| v * ir * inv_root_n)
         .collect();
-    cholesky_solve(&l, &mut dx);
+    l.solve(&mut dx);
     for (x, d) in gamma.iter_mut().zip(&dx) {
         *x += d;
     }
