@@ -21,23 +21,30 @@ const RELATIVE_WIDTH: f64 = 1e-10;
 pub(crate) struct Tridiagonal {
     d: Vec<f64>,
     e: Vec<f64>,
-    /// Row-major `k × k` work matrix whose row `j`, entries `j+1..k`, holds the unit vector
-    /// `v_j` of `H_j = I − 2 v_j v_jᵀ` (for `j < k − 2`; all zero when the column was already
-    /// reduced): where the reduction read the column from, so it needs no other storage.
+    /// Row-major work matrix (row length `stride`) whose row `j`, entries `j+1..k`, holds
+    /// the unit vector `v_j` of `H_j = I − 2 v_j v_jᵀ` (for `j < k − 2`; all zero when the
+    /// column was already reduced): where the reduction read the column from, so it needs
+    /// no other storage.
     reflectors: Vec<f64>,
+    stride: usize,
 }
 
 impl Tridiagonal {
     /// `a`: symmetric `k × k`, full storage (row- or column-major alike).
     pub(crate) fn new(a: &[f64], k: usize) -> Self {
-        let (d, e, reflectors) = reduce(a, k);
-        Tridiagonal { d, e, reflectors }
+        let (d, e, reflectors, stride) = reduce(a, k);
+        Tridiagonal {
+            d,
+            e,
+            reflectors,
+            stride,
+        }
     }
 
     /// The reflector `v_j` (entries `j+1..k`).
     fn reflector(&self, j: usize) -> &[f64] {
-        let k = self.k();
-        &self.reflectors[j * k + j + 1..(j + 1) * k]
+        let start = j * self.stride;
+        &self.reflectors[start + j + 1..start + self.k()]
     }
 
     fn k(&self) -> usize {
@@ -382,26 +389,50 @@ impl Search {
     }
 }
 
-/// The Householder reduction of [`Tridiagonal::new`]: `(d, e, reflectors)`.
+/// `Σ aᵢbᵢ` for slices whose common length is a multiple of `W`, in `W` lane-wise partial
+/// sums (vector FMAs, no chain of dependent scalar additions).
 #[inline(always)]
-fn reduce_generic<const FMA: bool>(a: &[f64], k: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
-    // The trailing block is kept in full symmetric storage, row-major: A₂₂v is then a sum
-    // of contiguous rows scaled by vᵢ and the rank-2 update runs along rows, both plain
-    // vectorisable loops without reductions. Twice the flops of a one-triangle update, but
-    // at p ≈ 22 the strided one-triangle version was slower.
-    let mut w = a.to_vec();
+fn dot_chunks<const W: usize, const FMA: bool>(a: &[f64], b: &[f64]) -> f64 {
+    let mut acc = [0.0; W];
+    for (x, y) in a.chunks_exact(W).zip(b.chunks_exact(W)) {
+        for l in 0..W {
+            acc[l] = madd::<FMA>(x[l], y[l], acc[l]);
+        }
+    }
+    acc.iter().sum()
+}
+
+/// The Householder reduction of [`Tridiagonal::new`]: `(d, e, reflectors, stride)`.
+///
+/// The trailing block is kept in full symmetric storage, row-major, so that `A₂₂v` is a dot
+/// product per row and the rank-2 update runs along rows. Rows are `W − 1` entries longer
+/// than `k` and zero there, and `v`, `A₂₂v` and `q` are zero past their `m` live entries, so
+/// every loop runs over whole `W`-wide chunks of the live span: no remainder loops, which at
+/// p ≈ 22 cost more than the arithmetic, and the padding stays zero (every update it gets
+/// is a product with a zero).
+#[inline(always)]
+fn reduce_generic<const FMA: bool, const W: usize>(
+    a: &[f64],
+    k: usize,
+) -> (Vec<f64>, Vec<f64>, Vec<f64>, usize) {
+    let stride = k + W - 1;
+    let mut w = vec![0.0; k * stride];
+    for (row, src) in w.chunks_exact_mut(stride).zip(a.chunks_exact(k)) {
+        row[..k].copy_from_slice(src);
+    }
     let mut d = vec![0.0; k];
     let mut e = vec![0.0; k.saturating_sub(1)];
-    let mut av = vec![0.0; k];
-    let mut qv = vec![0.0; k];
+    let mut av = vec![0.0; k + W];
+    let mut qv = vec![0.0; k + W];
     for j in 0..k.saturating_sub(2) {
         let m = k - j - 1;
-        d[j] = w[j * k + j];
+        let span = m.div_ceil(W) * W;
+        d[j] = w[j * stride + j];
         // Row j right of the diagonal (= column j below it) becomes v_j in place; the
-        // trailing block is rows j+1.. .
-        let (head, trailing) = w.split_at_mut((j + 1) * k);
-        let v = &mut head[j * k + j + 1..];
-        let norm = v.iter().map(|t| t * t).sum::<f64>().sqrt();
+        // trailing block is rows j+1.. . Entries past k in the span are the row's padding.
+        let (head, trailing) = w.split_at_mut((j + 1) * stride);
+        let v = &mut head[j * stride + j + 1..j * stride + j + 1 + span];
+        let norm = dot_chunks::<W, FMA>(v, v).sqrt();
         if norm == 0.0 {
             e[j] = 0.0;
             continue;
@@ -415,21 +446,19 @@ fn reduce_generic<const FMA: bool>(a: &[f64], k: usize) -> (Vec<f64>, Vec<f64>, 
             *t *= inv_vnorm;
         }
         // A₂₂ ← H A₂₂ H = A₂₂ − v qᵀ − q vᵀ with q = 2(A₂₂v − (vᵀA₂₂v) v).
-        let (av, qv) = (&mut av[..m], &mut qv[..m]);
-        av.fill(0.0);
-        for (c, &vc) in v.iter().enumerate() {
-            let row = &trailing[c * k + j + 1..(c + 1) * k];
-            for (o, &x) in av.iter_mut().zip(row) {
-                *o = madd::<FMA>(x, vc, *o);
-            }
+        let (av, qv) = (&mut av[..span], &mut qv[..span]);
+        for (c, o) in av[..m].iter_mut().enumerate() {
+            let row = &trailing[c * stride + j + 1..c * stride + j + 1 + span];
+            *o = dot_chunks::<W, FMA>(row, v);
         }
-        let vav: f64 = av.iter().zip(v.iter()).map(|(a, b)| a * b).sum();
+        av[m..].fill(0.0);
+        let vav = dot_chunks::<W, FMA>(av, v);
         for ((qr, a), b) in qv.iter_mut().zip(av.iter()).zip(v.iter()) {
             *qr = 2.0 * (a - vav * b);
         }
         for c in 0..m {
             let (vc, qc) = (v[c], qv[c]);
-            let row = &mut trailing[c * k + j + 1..(c + 1) * k];
+            let row = &mut trailing[c * stride + j + 1..c * stride + j + 1 + span];
             for ((o, &vr), &qr) in row.iter_mut().zip(v.iter()).zip(qv.iter()) {
                 *o = madd::<FMA>(-qr, vc, madd::<FMA>(-vr, qc, *o));
             }
@@ -437,19 +466,19 @@ fn reduce_generic<const FMA: bool>(a: &[f64], k: usize) -> (Vec<f64>, Vec<f64>, 
         e[j] = alpha;
     }
     if k >= 2 {
-        d[k - 2] = w[(k - 2) * k + k - 2];
-        e[k - 2] = w[(k - 1) * k + k - 2];
+        d[k - 2] = w[(k - 2) * stride + k - 2];
+        e[k - 2] = w[(k - 1) * stride + k - 2];
     }
     if k >= 1 {
-        d[k - 1] = w[(k - 1) * k + k - 1];
+        d[k - 1] = w[(k - 1) * stride + k - 1];
     }
-    (d, e, w)
+    (d, e, w, stride)
 }
 
 crate::kernels::dispatch!(
     /// [`reduce_generic`] with FMA and wide vectors where the CPU has them.
-    reduce, reduce_generic, (a: &[f64], k: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>),
-    avx512: <true>, avx2: <true>, base: <false>
+    reduce, reduce_generic, (a: &[f64], k: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>, usize),
+    avx512: <true, 8>, avx2: <true, 4>, base: <false, 2>
 );
 
 #[cfg(test)]
@@ -500,6 +529,62 @@ mod tests {
             assert!(res <= tol(emin), "k={k}: residual {res:e}");
             let norm: f64 = v.iter().map(|x| x * x).sum::<f64>().sqrt();
             assert!((norm - 1.0).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn every_instruction_set_width_reduces_to_the_same_tridiagonal() {
+        // The dispatched reduction runs one of three chunk widths (AVX-512 8, AVX2 4,
+        // baseline 2, the last without FMA); each must cover every live entry whatever
+        // k mod W, and leave the padding zero.
+        for k in 1..=25 {
+            let a = sample(k, 0.2 + 0.03 * k as f64);
+            let m = Mat::<f64>::from_fn(k, k, |i, j| a[i * k + j]);
+            let ev = m
+                .as_ref()
+                .self_adjoint_eigenvalues(faer::Side::Lower)
+                .unwrap();
+            let norm = ev[k - 1].abs().max(ev[0].abs());
+            let variants = [
+                reduce_generic::<true, 8>(&a, k),
+                reduce_generic::<true, 4>(&a, k),
+                reduce_generic::<false, 2>(&a, k),
+            ];
+            for (d, e, reflectors, stride) in variants {
+                for (row, chunk) in reflectors.chunks_exact(stride).enumerate() {
+                    assert!(
+                        chunk[k..].iter().all(|&v| v == 0.0),
+                        "k={k}: row {row} padding"
+                    );
+                }
+                let t = Tridiagonal {
+                    d,
+                    e,
+                    reflectors,
+                    stride,
+                };
+                let (emin, emax) = t.extremes();
+                // Backward stable to a few ε‖A‖; the search stops at RELATIVE_WIDTH.
+                let tol = |v: f64| 1e3 * f64::EPSILON * norm + RELATIVE_WIDTH * v.abs();
+                assert!(
+                    (emin - ev[0]).abs() <= tol(ev[0]),
+                    "k={k} stride {stride}: {emin:e} vs {:e}",
+                    ev[0]
+                );
+                assert!(
+                    (emax - ev[k - 1]).abs() <= tol(ev[k - 1]),
+                    "k={k} stride {stride}: {emax:e} vs {:e}",
+                    ev[k - 1]
+                );
+                let v = t.eigenvector(emin).unwrap();
+                let res = (0..k)
+                    .map(|i| {
+                        let av: f64 = (0..k).map(|j| a[i * k + j] * v[j]).sum();
+                        (av - emin * v[i]).abs()
+                    })
+                    .fold(0.0, f64::max);
+                assert!(res <= tol(emin), "k={k} stride {stride}: residual {res:e}");
+            }
         }
     }
 
