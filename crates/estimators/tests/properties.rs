@@ -271,11 +271,13 @@ fn bounds_are_respected_and_active_bounds_bind() {
         let gmax = g0.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let d = max_abs_diff(&g0, &g1) / gmax;
         if let Estimator::Svr { .. } = est {
-            // The interior point stops at a relative gap of 1e-8, and strong convexity
-            // (modulus 1) only bounds its distance by √(2·gap); the fast solver ends on
-            // an exact KKT point, so it is the lower of the two.
+            // The interior point stops at a relative gap of about 1e-11 (the tight
+            // tolerances of the QP path), and strong convexity (modulus 1) only bounds its
+            // distance by √(2·gap); the fast solver ends on a KKT point to rounding. So the
+            // objectives agree far inside the 1e-6 contract, the coefficients less closely.
             assert!(d < 1e-4, "{est:?}: {d:e}");
-            assert!(fits[0].objective <= fits[1].objective * (1.0 + 1e-12));
+            let (fast, qp) = (fits[0].objective, fits[1].objective);
+            assert!((fast - qp).abs() <= 1e-9 * qp.abs(), "{fast:e} vs {qp:e}");
         } else {
             assert!(d < 1e-6, "{est:?}: {d:e}");
         }
