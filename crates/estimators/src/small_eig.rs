@@ -111,17 +111,30 @@ impl Tridiagonal {
         if self.k() == 0 {
             return ((0.0, 0.0), work);
         }
-        let mut searches = [Search::new(self, true), Search::new(self, false)];
+        let start = Start::new(self);
+        let mut searches = [Search::new(&start, true), Search::new(&start, false)];
         for _ in 0..100 {
             let active = searches.map(|s| !s.done());
             if active == [false, false] {
                 break;
             }
             work.0 += 1;
-            let moments = self.resolvent_moments(&searches.map(|s| s.outer()));
-            for (search, (&on, &(s1, s2))) in searches.iter_mut().zip(active.iter().zip(&moments)) {
-                if on {
-                    search.step(s1, s2, self.k());
+            let moments = self.resolvent_moments(&searches.map(|s| s.outer()), start.pivmin);
+            for (search, (&on, &(s1, s2, below))) in
+                searches.iter_mut().zip(active.iter().zip(&moments))
+            {
+                if !on {
+                    continue;
+                }
+                match search.unverified.take() {
+                    // 0 was not below the spectrum after all (a Gram with a rounding-level
+                    // negative eigenvalue): back to the Gershgorin start; the step from 0
+                    // does not hold.
+                    Some(gershgorin_lo) if !below => {
+                        search.lo = gershgorin_lo;
+                        search.width = search.hi - search.lo;
+                    }
+                    _ => search.step(s1, s2, self.k()),
                 }
             }
             let slow = std::array::from_fn::<_, 2, _>(|i| active[i] && searches[i].slow());
@@ -148,14 +161,21 @@ impl Tridiagonal {
         ((searches[0].midpoint(), searches[1].midpoint()), work)
     }
 
-    /// `(s₁(x), s₂(x))` with `s₁ = Σⱼ 1/(λⱼ − x) = −det′/det` and `s₂ = Σⱼ 1/(λⱼ − x)² = s₁′` of
-    /// `T − xI` at each of the `L` points, from the LDLᵀ pivots qᵢ and their first two
-    /// derivatives (`s₁ = −Σ qᵢ′/qᵢ`, `s₂ = Σ (qᵢ′/qᵢ)² − qᵢ″/qᵢ`); only called outside the
-    /// spectrum (then, by interlacing, no pivot of a leading block vanishes). One division
-    /// per row and point, and `L` recurrences at once, so that the divisions pipeline.
-    fn resolvent_moments<const L: usize>(&self, x: &[f64; L]) -> [(f64, f64); L] {
+    /// `(s₁(x), s₂(x), below)` with `s₁ = Σⱼ 1/(λⱼ − x) = −det′/det` and
+    /// `s₂ = Σⱼ 1/(λⱼ − x)² = s₁′` of `T − xI` at each of the `L` points, from the LDLᵀ pivots
+    /// qᵢ and their first two derivatives (`s₁ = −Σ qᵢ′/qᵢ`, `s₂ = Σ (qᵢ′/qᵢ)² − qᵢ″/qᵢ`);
+    /// `below`: every pivot above `pivmin`, i.e. the Sturm count of [`Self::counts`] is 0
+    /// and x lies below the spectrum. Only meaningful outside the spectrum (then, by
+    /// interlacing, no pivot of a leading block vanishes). One division per row and point,
+    /// and `L` recurrences at once, so that the divisions pipeline.
+    fn resolvent_moments<const L: usize>(
+        &self,
+        x: &[f64; L],
+        pivmin: f64,
+    ) -> [(f64, f64, bool); L] {
         let (mut inv, mut dq, mut ddq) = ([0.0f64; L], [0.0f64; L], [0.0f64; L]);
         let (mut s1, mut s2) = ([0.0f64; L], [0.0f64; L]);
+        let mut below = [true; L];
         for i in 0..self.k() {
             let e2 = self.coupling_squared(i);
             for l in 0..L {
@@ -172,6 +192,7 @@ impl Tridiagonal {
                         t * (ddq[l] - 2.0 * dq[l] * dq[l] * iv),
                     )
                 };
+                below[l] &= q > pivmin;
                 let iq = 1.0 / q;
                 let ratio = d1 * iq;
                 s1[l] -= ratio;
@@ -181,7 +202,7 @@ impl Tridiagonal {
                 ddq[l] = d2;
             }
         }
-        std::array::from_fn(|l| (s1[l], s2[l]))
+        std::array::from_fn(|l| (s1[l], s2[l], below[l]))
     }
 
     /// Unit eigenvector of the original matrix for the eigenvalue `lambda` of T (from
@@ -289,32 +310,57 @@ struct Search {
     floor: f64,
     /// Bracket width before the last Laguerre step.
     width: f64,
+    /// The Gershgorin lower bound while `lo` is a tentative 0 that the first moment pass
+    /// has yet to prove below the spectrum.
+    unverified: Option<f64>,
+}
+
+/// What both searches start from, computed once.
+struct Start {
+    k: usize,
+    gershgorin: (f64, f64),
+    pivmin: f64,
+    dmin: f64,
+    dmax: f64,
+}
+
+impl Start {
+    fn new(tri: &Tridiagonal) -> Self {
+        Start {
+            k: tri.k(),
+            gershgorin: tri.gershgorin(),
+            pivmin: tri.pivmin(),
+            dmin: tri.d.iter().fold(f64::INFINITY, |m, &v| m.min(v)),
+            dmax: tri.d.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v)),
+        }
+    }
 }
 
 impl Search {
-    fn new(tri: &Tridiagonal, smallest: bool) -> Self {
-        let k = tri.k();
-        let (glo, ghi) = tri.gershgorin();
-        let floor = f64::EPSILON * glo.abs().max(ghi.abs()) + tri.pivmin();
-        let dmin = tri.d.iter().fold(f64::INFINITY, |m, &v| m.min(v));
-        let dmax = tri.d.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v));
+    fn new(start: &Start, smallest: bool) -> Self {
+        let (glo, ghi) = start.gershgorin;
+        let floor = f64::EPSILON * glo.abs().max(ghi.abs()) + start.pivmin;
         let (mut lo, hi) = if smallest {
-            (glo, ghi.min(dmin + floor))
+            (glo, ghi.min(start.dmin + floor))
         } else {
-            (glo.max(dmax - floor), ghi)
+            (glo.max(start.dmax - floor), ghi)
         };
         // A Gram matrix is positive semi-definite: 0 is usually a far better outer start
-        // than the Gershgorin bound, which may lie ‖T‖ below it.
-        if smallest && lo < 0.0 && 0.0 < hi && tri.counts(&[0.0])[0] == 0 {
+        // than the Gershgorin bound, which may lie ‖T‖ below it. The first moment pass
+        // checks that it is below the spectrum (its pivots are the Sturm count's).
+        let mut unverified = None;
+        if smallest && lo < 0.0 && 0.0 < hi {
+            unverified = Some(lo);
             lo = 0.0;
         }
         Search {
             smallest,
-            t: if smallest { 0 } else { k - 1 },
+            t: if smallest { 0 } else { start.k - 1 },
             lo,
             hi,
             floor,
             width: hi - lo,
+            unverified,
         }
     }
 
@@ -635,6 +681,16 @@ mod tests {
             (emax - hi).abs() <= tol(hi),
             "{lambda:?}: {emax:e} vs {hi:e}"
         );
+    }
+
+    #[test]
+    fn a_zero_start_inside_the_spectrum_falls_back_to_gershgorin() {
+        // λ_min's search starts tentatively at 0 (below the spectrum of any Gram matrix);
+        // the first moment pass must catch a symmetric matrix with negative eigenvalues,
+        // or a Gram whose rounding left one just below 0.
+        check_extremes(&[-0.3, 0.2, 1.0, 2.0]);
+        check_extremes(&[-1e-13, 1e-3, 0.5, 1.0, 1.5]);
+        check_extremes(&[-2.0, -1.0, -0.5]);
     }
 
     #[test]
