@@ -31,37 +31,34 @@ fn lanes<const L: usize>(c: &[f64], r: usize) -> [f64; L] {
     v
 }
 
-/// One T×T register tile of [`cross_products_generic`] over rows `start..end`: `s[i][j] += Σ
-/// wᵣ aᵢᵣ bⱼᵣ` lane-wise. A diagonal tile (`DIAG`, `a` = `b`) loads its columns once and forms only
-/// the products i ≤ j (10 of 16 at T = 4); the others are left as they are.
+/// One TA×TB register tile of [`cross_products_generic`] over rows `start..end`: `s[i][j] +=
+/// Σ wᵣ aᵢᵣ bⱼᵣ` lane-wise. A diagonal tile (`DIAG`, `a` = `b`, TA = TB) loads its columns once
+/// and forms only the products i ≤ j (10 of 16 at 4 × 4); the others are left as they are.
 #[inline(always)]
-fn tile<const T: usize, const L: usize, const FMA: bool, const DIAG: bool>(
-    mut s: [[[f64; L]; T]; T],
-    a: [&[f64]; T],
-    b: [&[f64]; T],
+fn tile<const TA: usize, const TB: usize, const L: usize, const FMA: bool, const DIAG: bool>(
+    mut s: [[[f64; L]; TB]; TA],
+    a: [&[f64]; TA],
+    b: [&[f64]; TB],
     root_weights: Option<&[f64]>,
     start: usize,
     end: usize,
-) -> [[[f64; L]; T]; T] {
+) -> [[[f64; L]; TB]; TA] {
     let mut r = start;
     while r < end {
-        let bv: [[f64; L]; T] = std::array::from_fn(|t| lanes::<L>(b[t], r));
-        let mut av: [[f64; L]; T] = if DIAG {
-            bv
-        } else {
-            std::array::from_fn(|t| lanes::<L>(a[t], r))
-        };
+        let bv: [[f64; L]; TB] = std::array::from_fn(|t| lanes::<L>(b[t], r));
+        let mut av: [[f64; L]; TA] =
+            std::array::from_fn(|t| if DIAG { bv[t] } else { lanes::<L>(a[t], r) });
         if let Some(rw) = root_weights {
             // (√wᵢ aᵢ)(√wᵢ bᵢ) = wᵢ aᵢ bᵢ: one side carries the weight.
             let wl = lanes::<L>(rw, r);
-            for t in 0..T {
+            for t in 0..TA {
                 for l in 0..L {
                     av[t][l] *= wl[l] * wl[l];
                 }
             }
         }
-        for i in 0..T {
-            for j in (if DIAG { i } else { 0 })..T {
+        for i in 0..TA {
+            for j in (if DIAG { i } else { 0 })..TB {
                 for l in 0..L {
                     s[i][j][l] = madd::<FMA>(av[i][l], bv[j][l], s[i][j][l]);
                 }
@@ -72,8 +69,41 @@ fn tile<const T: usize, const L: usize, const FMA: bool, const DIAG: bool>(
     s
 }
 
+/// The tiles of the last column block when it has `W < T` columns, over rows `start..end`:
+/// T×W against each of the `full` whole blocks (`acc[a]`), W×W on itself (`acc[full]`), the
+/// accumulators in the first rows and columns of T×T slots.
+#[inline(always)]
+fn narrow_tiles<const T: usize, const W: usize, const L: usize, const FMA: bool>(
+    acc: &mut [[[[f64; L]; T]; T]],
+    cols: &[&[f64]],
+    full: usize,
+    root_weights: Option<&[f64]>,
+    start: usize,
+    end: usize,
+) {
+    let b: [&[f64]; W] = std::array::from_fn(|t| &cols[full * T + t][..end]);
+    for (a_block, slot) in acc.iter_mut().enumerate() {
+        if a_block < full {
+            let a: [&[f64]; T] = std::array::from_fn(|t| &cols[a_block * T + t][..end]);
+            let s = std::array::from_fn(|i| std::array::from_fn(|j| slot[i][j]));
+            let s = tile::<T, W, L, FMA, false>(s, a, b, root_weights, start, end);
+            for i in 0..T {
+                slot[i][..W].copy_from_slice(&s[i]);
+            }
+        } else {
+            let s = std::array::from_fn(|i| std::array::from_fn(|j| slot[i][j]));
+            let s = tile::<W, W, L, FMA, true>(s, b, b, root_weights, start, end);
+            for i in 0..W {
+                slot[i][..W].copy_from_slice(&s[i]);
+            }
+        }
+    }
+}
+
 /// Upper triangle (row-major pairs `i ≤ j`) of `AᵀA` for the columns of `A`, all of
-/// length `n`. T×T register tiles of column pairs, L lanes per accumulator.
+/// length `n`. T×T register tiles of column pairs, L lanes per accumulator; a last block
+/// of fewer than T columns gets tiles of its own width, so no product is formed twice or
+/// thrown away (at 23 columns and T = 4, padding would cost 300 tile products for 276).
 #[inline(always)]
 fn cross_products_generic<const T: usize, const L: usize, const FMA: bool>(
     cols: &[&[f64]],
@@ -81,31 +111,49 @@ fn cross_products_generic<const T: usize, const L: usize, const FMA: bool>(
     root_weights: Option<&[f64]>,
 ) -> Vec<f64> {
     let m = cols.len();
-    let tiles = m.div_ceil(T);
-    // Columns past the last are padded with copies of the last column; their products
-    // are computed and discarded, which is cheaper than separate remainder kernels.
-    let col = |k: usize| cols[k.min(m - 1)];
-    let pairs: Vec<(usize, usize)> = (0..tiles)
-        .flat_map(|a| (a..tiles).map(move |b| (a, b)))
+    let full_blocks = m / T;
+    let width = m % T;
+    let pairs: Vec<(usize, usize)> = (0..full_blocks)
+        .flat_map(|a| (a..full_blocks).map(move |b| (a, b)))
         .collect();
     let mut acc = vec![[[[0.0f64; L]; T]; T]; pairs.len()];
+    let mut narrow = vec![[[[0.0f64; L]; T]; T]; if width > 0 { full_blocks + 1 } else { 0 }];
     let full = n - n % L;
     let mut start = 0;
     while start < full {
         let end = (start + BLOCK_ROWS).min(full);
         for (pair, s_out) in pairs.iter().zip(acc.iter_mut()) {
-            let a: [&[f64]; T] = std::array::from_fn(|t| &col(pair.0 * T + t)[..end]);
-            let b: [&[f64]; T] = std::array::from_fn(|t| &col(pair.1 * T + t)[..end]);
+            let a: [&[f64]; T] = std::array::from_fn(|t| &cols[pair.0 * T + t][..end]);
+            let b: [&[f64]; T] = std::array::from_fn(|t| &cols[pair.1 * T + t][..end]);
             *s_out = if pair.0 == pair.1 {
-                tile::<T, L, FMA, true>(*s_out, a, a, root_weights, start, end)
+                tile::<T, T, L, FMA, true>(*s_out, a, a, root_weights, start, end)
             } else {
-                tile::<T, L, FMA, false>(*s_out, a, b, root_weights, start, end)
+                tile::<T, T, L, FMA, false>(*s_out, a, b, root_weights, start, end)
             };
+        }
+        let args = (&mut narrow[..], cols, full_blocks, root_weights, start, end);
+        // `width < T`; the arms for widths a parameter set cannot have are never taken.
+        match width {
+            0 => {}
+            1 => narrow_tiles::<T, 1, L, FMA>(args.0, args.1, args.2, args.3, args.4, args.5),
+            2 if T > 2 => {
+                narrow_tiles::<T, 2, L, FMA>(args.0, args.1, args.2, args.3, args.4, args.5)
+            }
+            3 if T > 3 => {
+                narrow_tiles::<T, 3, L, FMA>(args.0, args.1, args.2, args.3, args.4, args.5)
+            }
+            _ => unreachable!("column block width {width} ≥ tile size {T}"),
         }
         start = end;
     }
     let mut out = vec![0.0; m * m];
-    for (pair, s) in pairs.iter().zip(&acc) {
+    let last = full_blocks;
+    let slots = pairs
+        .iter()
+        .copied()
+        .zip(&acc)
+        .chain((0..narrow.len()).map(|a| (a, last)).zip(&narrow));
+    for (pair, s) in slots {
         for i in 0..T {
             for j in 0..T {
                 let (ci, cj) = (pair.0 * T + i, pair.1 * T + j);
@@ -475,6 +523,42 @@ mod tests {
             check_passes::<4, 8, 8, true>(n);
             check_passes::<3, 4, 4, true>(n);
             check_passes::<2, 2, 2, false>(n);
+        }
+    }
+
+    /// The cross products at every column count from 1 to 13 (every width of a narrow last
+    /// block, for each instruction set's tile size) and at row counts below one vector, in
+    /// one block and across several, with and without weights, against plain loops.
+    #[test]
+    fn cross_products_cover_every_column_count() {
+        for m in 1..=13 {
+            for n in [1, 7, 37, 300, 1332] {
+                check_cross::<4, 8, true>(n, m);
+                check_cross::<3, 4, true>(n, m);
+                check_cross::<2, 2, false>(n, m);
+            }
+        }
+    }
+
+    fn check_cross<const T: usize, const L: usize, const FMA: bool>(n: usize, m: usize) {
+        let data = columns(n, m + 1);
+        let cols: Vec<&[f64]> = data[..m].iter().map(|c| c.as_slice()).collect();
+        let root_w: Vec<f64> = data[m].iter().map(|v| 1.0 + 0.5 * v).collect();
+        for weighted in [false, true] {
+            let w = |i: usize| if weighted { root_w[i] * root_w[i] } else { 1.0 };
+            let rw = weighted.then_some(root_w.as_slice());
+            let cross = cross_products_generic::<T, L, FMA>(&cols, n, rw);
+            for a in 0..m {
+                for b in 0..m {
+                    let want = if a <= b {
+                        (0..n).map(|i| cols[a][i] * w(i) * cols[b][i]).sum::<f64>()
+                    } else {
+                        0.0
+                    };
+                    let what = format!("T={T} m={m} weighted={weighted} ({a}, {b})");
+                    close(cross[a * m + b], want, &what, n);
+                }
+            }
         }
     }
 
