@@ -131,17 +131,13 @@ fn cross_products_generic<const T: usize, const L: usize, const FMA: bool>(
                 tile::<T, T, L, FMA, false>(*s_out, a, b, root_weights, start, end)
             };
         }
-        let args = (&mut narrow[..], cols, full_blocks, root_weights, start, end);
+        let (nw, rw) = (&mut narrow[..], root_weights);
         // `width < T`; the arms for widths a parameter set cannot have are never taken.
         match width {
             0 => {}
-            1 => narrow_tiles::<T, 1, L, FMA>(args.0, args.1, args.2, args.3, args.4, args.5),
-            2 if T > 2 => {
-                narrow_tiles::<T, 2, L, FMA>(args.0, args.1, args.2, args.3, args.4, args.5)
-            }
-            3 if T > 3 => {
-                narrow_tiles::<T, 3, L, FMA>(args.0, args.1, args.2, args.3, args.4, args.5)
-            }
+            1 => narrow_tiles::<T, 1, L, FMA>(nw, cols, full_blocks, rw, start, end),
+            2 if T > 2 => narrow_tiles::<T, 2, L, FMA>(nw, cols, full_blocks, rw, start, end),
+            3 if T > 3 => narrow_tiles::<T, 3, L, FMA>(nw, cols, full_blocks, rw, start, end),
             _ => unreachable!("column block width {width} ≥ tile size {T}"),
         }
         start = end;

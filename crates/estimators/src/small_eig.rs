@@ -79,9 +79,9 @@ impl Tridiagonal {
     }
 
     /// Number of eigenvalues below each of the `L` shifts (Sturm counts of the LDLᵀ
-    /// pivots). `L` independent recurrences at once, so that their divisions pipeline.
-    fn counts<const L: usize>(&self, sigma: &[f64; L]) -> [usize; L] {
-        let pivmin = self.pivmin();
+    /// pivots, `pivmin` = [`Self::pivmin`], computed once per search). `L` independent
+    /// recurrences at once, so that their divisions pipeline.
+    fn counts<const L: usize>(&self, sigma: &[f64; L], pivmin: f64) -> [usize; L] {
         let mut q = [0.0; L];
         let mut cnt = [0usize; L];
         for i in 0..self.k() {
@@ -144,7 +144,7 @@ impl Tridiagonal {
                     let (a, b) = (searches[0].shifts(), searches[1].shifts());
                     let sigma: [f64; 14] =
                         std::array::from_fn(|l| if l < 7 { a[l] } else { b[l - 7] });
-                    let cnt = self.counts(&sigma);
+                    let cnt = self.counts(&sigma, start.pivmin);
                     searches[0].multisection(&a, &cnt[..7]);
                     searches[1].multisection(&b, &cnt[7..]);
                 }
@@ -152,7 +152,7 @@ impl Tridiagonal {
                     work.1 += 1;
                     let s = &mut searches[usize::from(slow[1])];
                     let sigma = s.shifts();
-                    let cnt = self.counts(&sigma);
+                    let cnt = self.counts(&sigma, start.pivmin);
                     s.multisection(&sigma, &cnt);
                 }
                 [false, false] => {}
