@@ -3,9 +3,9 @@
 
 use faer::{Mat, MatRef};
 
+use crate::dense::linalg::{Tall, col_of, condition_from_singular_values, singular_values};
 use crate::error::EstimatorError;
 use crate::fit::check_coefficients;
-use crate::linalg::{Tall, col_of, condition_from_singular_values, singular_values};
 use crate::problem::{column_scales, validate_design};
 
 /// Variance inflation factor of every column: `VIF_j = 1/(1 − R²_j)`, with `R²_j` from

@@ -3,18 +3,18 @@
 
 use faer::{Mat, MatRef};
 
-use crate::direct;
-use crate::error::EstimatorError;
-use crate::fast::{self, Solution};
-use crate::kernels;
-use crate::linalg::col_of;
-use crate::linalg::{
+use crate::dense::kernels;
+use crate::dense::linalg::col_of;
+use crate::dense::linalg::{
     condition_from_singular_values, singular_values, sym_eig_extremes, sym_eig_min_vector,
 };
+use crate::error::EstimatorError;
 use crate::problem::{
     Problem, check_finite, column_scales, validate_design, validate_problem_data,
 };
-use crate::qp;
+use crate::solvers::direct;
+use crate::solvers::fast::{self, Solution};
+use crate::solvers::qp;
 use crate::types::{Bounds, Estimator, Fit, ILL_CONDITIONED_THRESHOLD, Solver, Status};
 
 /// Fits one degree of freedom: `y ≈ Φβ` with the given estimator, optional bounds on the

@@ -86,18 +86,12 @@
 //! assert!((f.coefficients[1] + 0.5).abs() < 1e-10);
 //! ```
 
-mod active_set;
+mod dense;
 mod diagnostics;
-mod direct;
 mod error;
-mod fast;
 mod fit;
-mod kernels;
-mod linalg;
 mod problem;
-mod qp;
-mod small_eig;
-mod svr;
+mod solvers;
 mod tuning;
 mod types;
 

@@ -4,11 +4,11 @@ use std::cell::OnceCell;
 
 use faer::{Mat, MatRef};
 
-use crate::error::EstimatorError;
-use crate::linalg::{
+use crate::dense::linalg::{
     LsFactor, Tall, cholesky_qr2, col_of, gram, householder_factor, residual, sym_eig_extremes,
     zt_v,
 };
+use crate::error::EstimatorError;
 use crate::types::{Bounds, Estimator};
 
 /// Checks shape and finiteness of a design and a target (the design's columns before the target).

@@ -8,9 +8,9 @@
 use faer::MatRef;
 use serde::{Deserialize, Serialize};
 
+use crate::dense::linalg::{Tall, col_of};
 use crate::error::EstimatorError;
 use crate::fit::fit_problem;
-use crate::linalg::{Tall, col_of};
 use crate::problem::{Problem, validate_data};
 use crate::types::{Bounds, Estimator, Solver};
 

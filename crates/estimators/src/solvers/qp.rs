@@ -28,10 +28,10 @@ use clarabel::solver::{
     ZeroConeT,
 };
 
+use crate::dense::linalg::col;
 use crate::error::EstimatorError;
-use crate::fast::Solution;
-use crate::linalg::col;
 use crate::problem::Problem;
+use crate::solvers::fast::Solution;
 use crate::types::{Estimator, Status};
 
 /// Triplet lists in clarabel's `Ax + s = b` convention.

@@ -1,5 +1,5 @@
 //! Fused passes over the columns of a raw design for the direct least-squares path
-//! ([`crate::direct`]): the cross-product matrix of `[Φ y]` in one pass, and the residual
+//! ([`crate::solvers::direct`]): the cross-product matrix of `[Φ y]` in one pass, and the residual
 //! `y − Φβ` with `Φᵀr` and `‖r‖²` (plus `‖Φv‖²`) in another; `‖y − Φβ‖²` alone for
 //! [`crate::fit`]'s objective; and the products `Φᵀv`, `Φv` of the SVR interior point's
 //! iterations.

@@ -45,11 +45,13 @@
 
 use faer::Mat;
 
-use crate::active_set::{self, BoxL1};
+use crate::dense::linalg::{
+    SmallQr, Tall, cholesky, cholesky_solve, col, gram, mat_vec, residual, zt_v,
+};
 use crate::error::EstimatorError;
-use crate::fast::{Solution, is_unbounded, max_active_set_iterations};
-use crate::linalg::{SmallQr, Tall, cholesky, cholesky_solve, col, gram, mat_vec, residual, zt_v};
 use crate::problem::Problem;
+use crate::solvers::active_set::{self, BoxL1};
+use crate::solvers::fast::{Solution, is_unbounded, max_active_set_iterations};
 use crate::types::Status;
 
 mod ipm;

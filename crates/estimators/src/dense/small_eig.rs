@@ -8,7 +8,7 @@
 //! only needs λ_min, λ_max and one eigenvector, which this does in a few µs with the same
 //! backward stability (eigenvalues of the tridiagonal matrix to about ε‖G‖).
 
-use crate::kernels::madd;
+use crate::dense::kernels::madd;
 
 /// Relative width of the bracket at which the extreme-eigenvalue search stops: the callers need κ = √(λ_max/λ_min)
 /// to 1e-6 relative (what [`crate::fit`]'s condition number promises against the SVD), and
@@ -521,7 +521,7 @@ fn reduce_generic<const FMA: bool, const W: usize>(
     (d, e, w, stride)
 }
 
-crate::kernels::dispatch!(
+crate::dense::kernels::dispatch!(
     /// [`reduce_generic`] with FMA and wide vectors where the CPU has them.
     reduce, reduce_generic, (a: &[f64], k: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>, usize),
     avx512: <true, 8>, avx2: <true, 4>, base: <false, 2>

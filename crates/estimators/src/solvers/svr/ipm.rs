@@ -34,8 +34,8 @@
 // The per-sample and per-bound arrays are indexed in step; index loops say that best.
 #![allow(clippy::needless_range_loop)]
 
-use crate::kernels;
-use crate::linalg::{cholesky, cholesky_solve, col, residual, zt_v};
+use crate::dense::kernels;
+use crate::dense::linalg::{cholesky, cholesky_solve, col, residual, zt_v};
 
 use super::Data;
 
@@ -885,7 +885,7 @@ pub(super) fn solve(
     stop: impl FnMut(&Iterate) -> bool,
 ) -> Iterate {
     // The per-sample loops are most of the work; compiled for the widest vector unit
-    // available (chosen at run time), as the kernels of [`crate::kernels`] are.
+    // available (chosen at run time), as the kernels of [`crate::dense::kernels`] are.
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx512f") {

@@ -20,7 +20,7 @@
 
 use faer::{Mat, MatRef};
 
-use crate::linalg::{SmallQr, cholesky, cholesky_solve};
+use crate::dense::linalg::{SmallQr, cholesky, cholesky_solve};
 
 /// The problem data. `ls`, when given, must satisfy `H = AᵀA` and `b = Aᵀc`.
 pub(crate) struct BoxL1<'a> {

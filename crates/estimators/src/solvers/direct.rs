@@ -9,7 +9,7 @@
 //! 2. `G = ZᵀZ/n = S⁻¹ΦᵀΦS⁻¹/n` and `b = Zᵀy/n` by scaling the cross products
 //!    symmetrically: the same documented scaled problem as the general path, without
 //!    forming Z.
-//! 3. Extreme eigenvalues of G ([`crate::small_eig`]); the path applies when κ(Z) ≤ 1e5, the
+//! 3. Extreme eigenvalues of G ([`crate::dense::small_eig`]); the path applies when κ(Z) ≤ 1e5, the
 //!    general path's own limit for the semi-normal equations, and when G has a Cholesky
 //!    factor.
 //! 4. Corrected semi-normal equations (Björck 1987): `Gγ₁ = b`, then one refinement step
@@ -28,11 +28,11 @@
 
 use faer::MatRef;
 
+use crate::dense::kernels;
+use crate::dense::linalg::{RowCholesky, col_of};
+use crate::dense::small_eig::Tridiagonal;
 use crate::error::EstimatorError;
 use crate::fit::status_from;
-use crate::kernels;
-use crate::linalg::{RowCholesky, col_of};
-use crate::small_eig::Tridiagonal;
 use crate::types::{Bounds, Estimator, Fit, Solver};
 
 /// Below this κ(G) = κ(Z)² the Gram eigenvalues give κ(Z) to better than 1e-6 (the

@@ -9,19 +9,19 @@
 //!   is used instead.
 //! * Bounded LSQ: the semi-normal solution when it lies inside the box (then it is the
 //!   bounded minimiser too), otherwise:
-//! * Bounds and the ℓ1 penalty: the exact active-set method of [`crate::active_set`],
+//! * Bounds and the ℓ1 penalty: the exact active-set method of [`crate::solvers::active_set`],
 //!   least-squares mode (QR of R's free columns) for bounded LSQ, Gram mode for Lasso and
 //!   bounded Ridge, with a least-squares-mode rerun when a Lasso face was singular.
-//! * SVR: [`crate::svr`].
+//! * SVR: [`crate::solvers::svr`].
 
 use faer::Mat;
 
-use crate::active_set::{self, BoxL1};
-use crate::error::EstimatorError;
-use crate::linalg::{
+use crate::dense::linalg::{
     LsFactor, SmallQr, cholesky, cholesky_solve, gram, min_norm_lstsq, residual, zt_v,
 };
+use crate::error::EstimatorError;
 use crate::problem::Problem;
+use crate::solvers::active_set::{self, BoxL1};
 use crate::types::{Estimator, Status};
 
 /// A solution in the scaled space, before unscaling and status refinement.
@@ -51,7 +51,7 @@ pub(crate) fn solve(
         Estimator::Ridge { lambda } => ridge(pb, lambda, lo, hi),
         Estimator::Lasso { alpha: 0.0 } => lsq(pb, lo, hi),
         Estimator::Lasso { alpha } => lasso(pb, alpha, lo, hi),
-        Estimator::Svr { c, epsilon } => crate::svr::solve(pb, c, epsilon, lo, hi),
+        Estimator::Svr { c, epsilon } => crate::solvers::svr::solve(pb, c, epsilon, lo, hi),
     }
 }
 
