@@ -5,8 +5,7 @@ use faer::{Mat, MatRef};
 
 use crate::dense::linalg::{Tall, col_of, condition_from_singular_values, singular_values};
 use crate::error::EstimatorError;
-use crate::fit::check_coefficients;
-use crate::problem::{column_scales, validate_design};
+use crate::problem::{check_coefficients, column_scales, validate_design};
 
 /// Variance inflation factor of every column: `VIF_j = 1/(1 − R²_j)`, with `R²_j` from
 /// regressing column j on all other non-constant columns *and an intercept* (the standard

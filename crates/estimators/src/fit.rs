@@ -10,12 +10,13 @@ use crate::dense::linalg::{
 };
 use crate::error::EstimatorError;
 use crate::problem::{
-    Problem, check_finite, column_scales, validate_design, validate_problem_data,
+    Problem, check_coefficients, column_scales, validate_design, validate_problem_data,
 };
 use crate::solvers::direct;
-use crate::solvers::fast::{self, Solution};
+use crate::solvers::fast;
 use crate::solvers::qp;
-use crate::types::{Bounds, Estimator, Fit, ILL_CONDITIONED_THRESHOLD, Solver, Status};
+use crate::solvers::solution::Solution;
+use crate::types::{Bounds, Estimator, Fit, Solver, Status, status_from};
 
 /// Fits one degree of freedom: `y ≈ Φβ` with the given estimator, optional bounds on the
 /// unscaled coefficients, and solver family.
@@ -79,19 +80,6 @@ fn ls_objective(
         Estimator::Ridge { lambda } => half_mse + 0.5 * lambda * gamma.map(|g| g * g).sum::<f64>(),
         Estimator::Lasso { alpha } => half_mse + alpha * gamma.map(|g| g.abs()).sum::<f64>(),
         _ => half_mse,
-    }
-}
-
-/// The solver's status, turned into `IllConditioned` when the effective condition number
-/// exceeds [`ILL_CONDITIONED_THRESHOLD`] (or is NaN).
-pub(crate) fn status_from(status: Status, condition_number: Option<f64>) -> Status {
-    match (status, condition_number) {
-        (Status::Ok, Some(k)) if k.is_nan() || k > ILL_CONDITIONED_THRESHOLD => {
-            Status::IllConditioned {
-                condition_number: k,
-            }
-        }
-        (s, _) => s,
     }
 }
 
@@ -243,15 +231,4 @@ pub fn predict(design: MatRef<'_, f64>, beta: &[f64]) -> Result<Vec<f64>, Estima
         }
     }
     Ok(out)
-}
-
-pub(crate) fn check_coefficients(beta: &[f64], p: usize) -> Result<(), EstimatorError> {
-    if beta.len() != p {
-        return Err(EstimatorError::LengthMismatch {
-            what: "coefficients (columns of the design)",
-            expected: p,
-            got: beta.len(),
-        });
-    }
-    check_finite("coefficients", beta)
 }

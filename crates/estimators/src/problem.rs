@@ -127,6 +127,19 @@ pub(crate) fn check_finite(what: &'static str, v: &[f64]) -> Result<(), Estimato
     }
 }
 
+/// Coefficients given by the caller (to evaluate or predict with): one per design column,
+/// all finite.
+pub(crate) fn check_coefficients(beta: &[f64], p: usize) -> Result<(), EstimatorError> {
+    if beta.len() != p {
+        return Err(EstimatorError::LengthMismatch {
+            what: "coefficients (columns of the design)",
+            expected: p,
+            got: beta.len(),
+        });
+    }
+    check_finite("coefficients", beta)
+}
+
 /// Root mean square of every column: the column scales `s_j` of the documented objectives.
 pub fn column_scales(design: MatRef<'_, f64>) -> Result<Vec<f64>, EstimatorError> {
     validate_design(design)?;

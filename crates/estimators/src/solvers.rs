@@ -7,4 +7,5 @@ pub(crate) mod active_set;
 pub(crate) mod direct;
 pub(crate) mod fast;
 pub(crate) mod qp;
+pub(crate) mod solution;
 pub(crate) mod svr;

@@ -182,6 +182,20 @@ impl Bounds {
     }
 }
 
+/// The solver's status, turned into `IllConditioned` when the effective condition number
+/// exceeds [`ILL_CONDITIONED_THRESHOLD`] (or is NaN). Here rather than with the fit logic
+/// because the direct LSQ path, below it, judges its fits by the same rule.
+pub(crate) fn status_from(status: Status, condition_number: Option<f64>) -> Status {
+    match (status, condition_number) {
+        (Status::Ok, Some(k)) if k.is_nan() || k > ILL_CONDITIONED_THRESHOLD => {
+            Status::IllConditioned {
+                condition_number: k,
+            }
+        }
+        (s, _) => s,
+    }
+}
+
 /// Outcome of a solve. Only `Ok` and `IllConditioned` carry a solution that met the
 /// solver's own accuracy criterion; the others carry the best iterate found.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

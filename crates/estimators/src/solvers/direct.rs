@@ -32,8 +32,7 @@ use crate::dense::kernels;
 use crate::dense::linalg::{RowCholesky, col_of};
 use crate::dense::small_eig::Tridiagonal;
 use crate::error::EstimatorError;
-use crate::fit::status_from;
-use crate::types::{Bounds, Estimator, Fit, Solver};
+use crate::types::{Bounds, Estimator, Fit, Solver, Status, status_from};
 
 /// Below this κ(G) = κ(Z)² the Gram eigenvalues give κ(Z) to better than 1e-6 (the
 /// threshold of [`crate::fit`]'s condition number).
@@ -149,7 +148,7 @@ pub(crate) fn try_lsq(
     Some(Ok(Fit {
         coefficients: beta,
         objective: 0.5 * rr / nf,
-        status: status_from(crate::types::Status::Ok, Some(kappa)),
+        status: status_from(Status::Ok, Some(kappa)),
         iterations: 2,
         solver: Solver::Fast,
         estimator: *estimator,

@@ -22,22 +22,8 @@ use crate::dense::linalg::{
 use crate::error::EstimatorError;
 use crate::problem::Problem;
 use crate::solvers::active_set::{self, BoxL1};
+use crate::solvers::solution::{Solution, is_unbounded, max_active_set_iterations};
 use crate::types::{Estimator, Status};
-
-/// A solution in the scaled space, before unscaling and status refinement.
-pub(crate) struct Solution {
-    pub(crate) gamma: Vec<f64>,
-    pub(crate) status: Status,
-    pub(crate) iterations: usize,
-}
-
-pub(crate) fn is_unbounded(lo: &[f64], hi: &[f64]) -> bool {
-    lo.iter().all(|&l| l == f64::NEG_INFINITY) && hi.iter().all(|&h| h == f64::INFINITY)
-}
-
-pub(crate) fn max_active_set_iterations(q: usize) -> usize {
-    100 * (q + 1)
-}
 
 pub(crate) fn solve(
     pb: &Problem,

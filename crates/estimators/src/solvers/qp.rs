@@ -31,7 +31,7 @@ use clarabel::solver::{
 use crate::dense::linalg::col;
 use crate::error::EstimatorError;
 use crate::problem::Problem;
-use crate::solvers::fast::Solution;
+use crate::solvers::solution::Solution;
 use crate::types::{Estimator, Status};
 
 /// Triplet lists in clarabel's `Ax + s = b` convention.

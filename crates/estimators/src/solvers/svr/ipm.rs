@@ -37,7 +37,7 @@
 use crate::dense::kernels;
 use crate::dense::linalg::{cholesky, cholesky_solve, col, residual, zt_v};
 
-use super::Data;
+use super::data::Data;
 
 /// Outcome of [`solve`]: the iterate and its multipliers θ (for the exact finish).
 pub(super) struct Iterate {
