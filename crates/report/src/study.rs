@@ -1,0 +1,775 @@
+//! The page of a study output folder.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::Path;
+
+use serde_json::Value;
+
+use crate::data::{Csv, figures_html, read_json_optional, read_text_optional, read_toml_optional};
+use crate::html::{
+    badge, cell, esc, facts, id_of, json_html, label, num, page, parse_num, status_class, th,
+    toml_block, warnings_box,
+};
+use crate::{ReportError, RunMeta};
+
+/// Test-level metrics whose median over a case's tests the summary table shows, when present.
+const MEDIANS: [&str; 3] = ["position_rmse_over_l", "heading_rmse_deg", "mrae"];
+
+struct Case {
+    id: String,
+    /// Indices of its rows in summary.csv.
+    rows: Vec<usize>,
+}
+
+/// The HTML page of the study output folder `dir` (layout in the crate docs). `summary.csv` is
+/// required; everything else is shown when present.
+pub fn study_page(dir: &Path, meta: &RunMeta) -> Result<String, ReportError> {
+    let summary = Csv::read(&dir.join("summary.csv"))?;
+    let case_col = summary.case_col()?;
+    let coefficients = Csv::read_optional(&dir.join("coefficients.csv"))?;
+    let diagnostics = Csv::read_optional(&dir.join("diagnostics.csv"))?;
+    let study = read_toml_optional(&dir.join("study.toml"))?;
+    let run = read_json_optional(&dir.join("run.json"))?;
+    let run_obj = run.as_ref().and_then(Value::as_object);
+    let mut notes: Vec<String> = Vec::new();
+
+    // Cases in the order of summary.csv, then any case folder without a row.
+    let mut cases: Vec<Case> = Vec::new();
+    let mut index: BTreeMap<String, usize> = BTreeMap::new();
+    for (i, r) in summary.rows.iter().enumerate() {
+        let id = r.get(case_col).cloned().unwrap_or_default();
+        let k = *index.entry(id.clone()).or_insert_with(|| {
+            cases.push(Case {
+                id,
+                rows: Vec::new(),
+            });
+            cases.len() - 1
+        });
+        cases[k].rows.push(i);
+    }
+    let cases_dir = dir.join("cases");
+    if let Ok(rd) = std::fs::read_dir(&cases_dir) {
+        let mut extra: Vec<String> = rd
+            .flatten()
+            .filter(|e| e.path().is_dir())
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|id| !index.contains_key(id))
+            .collect();
+        extra.sort();
+        for id in extra {
+            notes.push(format!(
+                "case {id} has a folder under cases/ but no row in summary.csv"
+            ));
+            cases.push(Case { id, rows: vec![] });
+        }
+    }
+
+    // Per-case files.
+    let mut configs = Vec::new();
+    for c in &cases {
+        let d = cases_dir.join(&c.id);
+        let config = read_toml_optional(&d.join("config.toml"))?;
+        let result = read_json_optional(&d.join("result.json"))?;
+        let model = read_text_optional(&d.join("model.toml"))?;
+        configs.push((config, result, model));
+    }
+    let first_config = configs.iter().find_map(|c| c.0.as_ref().map(|c| &c.1));
+
+    // Columns: those before `test` describe the case, the others the test.
+    let ncol = summary.headers.len();
+    let case_cols: Vec<usize> = match summary.col("test") {
+        Some(t) => (0..t).filter(|&j| j != case_col).collect(),
+        None => (0..ncol)
+            .filter(|&j| {
+                j != case_col
+                    && cases.iter().all(|c| {
+                        c.rows
+                            .windows(2)
+                            .all(|w| summary.rows[w[0]][j] == summary.rows[w[1]][j])
+                    })
+            })
+            .collect(),
+    };
+    let test_cols: Vec<usize> = (0..ncol)
+        .filter(|j| *j != case_col && !case_cols.contains(j))
+        .collect();
+    let first_value = |c: &Case, j: usize| -> String {
+        c.rows
+            .first()
+            .map(|&i| summary.rows[i][j].clone())
+            .unwrap_or_default()
+    };
+    let with_rows: Vec<&Case> = cases.iter().filter(|c| !c.rows.is_empty()).collect();
+    // Case columns with a value somewhere; those equal for every case go to one line above the table.
+    let mut common: Vec<(String, String)> = Vec::new();
+    let mut varying: Vec<usize> = Vec::new();
+    for &j in &case_cols {
+        let values: Vec<String> = with_rows.iter().map(|c| first_value(c, j)).collect();
+        if values.iter().all(|v| v.trim().is_empty()) {
+            continue;
+        }
+        let status_col = summary.headers[j] == "case_status";
+        if with_rows.len() > 1 && !status_col && values.windows(2).all(|w| w[0] == w[1]) {
+            common.push((summary.headers[j].clone(), values[0].clone()));
+        } else {
+            varying.push(j);
+        }
+    }
+    let status_col = summary.col("case_status");
+    let test_status_col = summary.col("status").filter(|j| test_cols.contains(j));
+    let test_name_col = summary.col("test");
+
+    // ---- header
+    let str_of = |keys: &[&str]| -> Option<String> {
+        let o = run_obj?;
+        keys.iter().find_map(|k| match o.get(*k)? {
+            Value::String(s) => Some(s.clone()),
+            Value::Null => None,
+            v => Some(v.to_string()),
+        })
+    };
+    let study_str = |key: &str| -> Option<String> {
+        study
+            .as_ref()
+            .and_then(|(_, t)| t.get(key))
+            .and_then(|v| v.as_str())
+            .map(str::to_string)
+    };
+    let config_str = |key: &str| -> Option<String> {
+        first_config
+            .and_then(|t| t.get(key))
+            .and_then(|v| v.as_str())
+            .map(str::to_string)
+    };
+    let name = meta
+        .name
+        .clone()
+        .or_else(|| str_of(&["study_name", "name"]))
+        .or_else(|| study_str("name"))
+        .or_else(|| config_str("study"))
+        .unwrap_or_else(|| {
+            dir.file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "study".into())
+        });
+    let mut used_keys: Vec<&str> = vec!["study_name", "name", "warnings"];
+    let mut header: Vec<(String, String)> = Vec::new();
+    let version = meta
+        .tool_version
+        .clone()
+        .or_else(|| str_of(&["tool_version", "shipid_version", "version"]))
+        .or_else(|| config_str("shipid_version"));
+    used_keys.extend(["tool_version", "shipid_version", "version"]);
+    header.push((
+        "tool version".into(),
+        version.map_or("unknown".into(), |v| format!("shipid {v}")),
+    ));
+    if let Some(f) = meta
+        .study_file
+        .as_ref()
+        .map(|p| p.display().to_string())
+        .or_else(|| str_of(&["study_file", "study"]))
+    {
+        header.push(("study file".into(), f));
+    }
+    used_keys.extend(["study_file", "study"]);
+    let dataset = meta
+        .dataset
+        .as_ref()
+        .map(|p| p.display().to_string())
+        .or_else(|| str_of(&["dataset", "data_set"]))
+        .or_else(|| study_str("dataset"))
+        .or_else(|| config_str("dataset"));
+    used_keys.extend(["dataset", "data_set"]);
+    header.push((
+        "data set".into(),
+        dataset.unwrap_or_else(|| "unknown".into()),
+    ));
+    for k in ["started", "finished"] {
+        if let Some(v) = str_of(&[k]) {
+            header.push((k.into(), v));
+        }
+        used_keys.push(k);
+    }
+    header.push(("output folder".into(), dir.display().to_string()));
+    header.extend(meta.details.iter().cloned());
+
+    // ---- warnings
+    let mut warnings: Vec<String> = meta.warnings.clone();
+    if let Some(Value::Array(ws)) = run_obj.and_then(|o| o.get("warnings")) {
+        for w in ws {
+            warnings.push(match w {
+                Value::String(s) => s.clone(),
+                v => v.to_string(),
+            });
+        }
+    }
+    warnings.extend(notes);
+    let mut seen = std::collections::HashSet::new();
+    warnings.retain(|w| seen.insert(w.clone()));
+
+    let mut b = String::new();
+    let _ = write!(
+        b,
+        "<header class=\"top\"><h1><span class=\"kind\">Study</span> {}</h1>",
+        esc(&name)
+    );
+    if let Some(d) = study_str("description") {
+        let _ = write!(b, "<p class=\"sub\">{}</p>", esc(&d));
+    }
+    b.push_str(&facts(&header));
+    b.push_str(
+        "<nav class=\"toc\"><a href=\"#status\">Status</a><a href=\"#summary\">Summary</a>\
+         <a href=\"#figures\">Figures</a><a href=\"#cases\">Cases</a>\
+         <a href=\"#configuration\">Run configuration</a></nav></header>",
+    );
+    b.push_str(&warnings_box(&warnings));
+
+    // ---- status counts
+    let mut case_counts: BTreeMap<String, usize> = BTreeMap::new();
+    let mut test_counts: BTreeMap<String, usize> = BTreeMap::new();
+    for c in &cases {
+        let st = match (status_col, c.rows.is_empty()) {
+            (Some(j), false) => first_value(c, j),
+            _ => "no row".into(),
+        };
+        *case_counts.entry(st).or_default() += 1;
+        if let Some(j) = test_status_col {
+            for &i in &c.rows {
+                let has_test = test_name_col.is_none_or(|t| !summary.rows[i][t].is_empty());
+                if has_test {
+                    *test_counts.entry(summary.rows[i][j].clone()).or_default() += 1;
+                }
+            }
+        }
+    }
+    b.push_str("<section id=\"status\"><h2>Status</h2><div class=\"counts\">");
+    count_box(&mut b, "cases", cases.len(), "");
+    for (k, v) in &case_counts {
+        count_box(&mut b, &format!("cases {k}"), *v, status_class(k));
+    }
+    if !test_counts.is_empty() {
+        count_box(&mut b, "tests", test_counts.values().sum(), "");
+        for (k, v) in &test_counts {
+            count_box(&mut b, &format!("tests {k}"), *v, status_class(k));
+        }
+    }
+    b.push_str("</div>");
+    if let Some(o) = run_obj {
+        let rest: serde_json::Map<String, Value> = o
+            .iter()
+            .filter(|(k, _)| !used_keys.contains(&k.as_str()))
+            .map(|(k, v)| (k.clone(), v.clone()))
+            .collect();
+        if !rest.is_empty() {
+            let _ = write!(
+                b,
+                "<h3>Run record <code>run.json</code></h3>{}",
+                json_html(&Value::Object(rest))
+            );
+        }
+    }
+    b.push_str("</section>");
+
+    // ---- summary table
+    b.push_str("<section id=\"summary\"><h2>Summary</h2>");
+    if !common.is_empty() {
+        b.push_str("<p class=\"common\">All cases: ");
+        let parts: Vec<String> = common
+            .iter()
+            .map(|(k, v)| format!("{} <code>{}</code>", esc(&label(k)), esc(v)))
+            .collect();
+        b.push_str(&parts.join(" · "));
+        b.push_str("</p>");
+    }
+    let medians: Vec<usize> = MEDIANS
+        .iter()
+        .filter_map(|m| summary.col(m))
+        .filter(|j| test_cols.contains(j))
+        .collect();
+    b.push_str(
+        "<div class=\"tablewrap\"><table class=\"summary\"><thead><tr><th title=\"case\">case</th>",
+    );
+    for &j in &varying {
+        b.push_str(&th(&summary.headers[j]));
+    }
+    if test_status_col.is_some() {
+        b.push_str("<th>tests</th>");
+    }
+    for &j in &medians {
+        let _ = write!(
+            b,
+            "<th title=\"median over the case's tests of {}\">median {}</th>",
+            esc(&summary.headers[j]),
+            esc(&label(&summary.headers[j]))
+        );
+    }
+    b.push_str("</tr></thead><tbody>");
+    for c in &cases {
+        let mut worst = "good";
+        if let Some(j) = status_col {
+            worst = worse(worst, status_class(&first_value(c, j)));
+        }
+        let mut tcount: BTreeMap<String, usize> = BTreeMap::new();
+        if let Some(j) = test_status_col {
+            for &i in &c.rows {
+                if test_name_col.is_none_or(|t| !summary.rows[i][t].is_empty()) {
+                    let st = &summary.rows[i][j];
+                    worst = worse(worst, status_class(st));
+                    *tcount.entry(st.clone()).or_default() += 1;
+                }
+            }
+        }
+        if c.rows.is_empty() {
+            worst = "bad";
+        }
+        let _ = write!(
+            b,
+            "<tr id=\"{}\" data-case-id=\"{}\" class=\"{worst}\"><td class=\"id\"><a href=\"#{}\">{}</a></td>",
+            esc(&id_of("case-", &c.id)),
+            esc(&c.id),
+            esc(&id_of("details-", &c.id)),
+            esc(&c.id)
+        );
+        for &j in &varying {
+            let v = first_value(c, j);
+            if Some(j) == status_col {
+                let _ = write!(b, "<td>{}</td>", badge(&v));
+            } else {
+                b.push_str(&cell(&v));
+            }
+        }
+        if test_status_col.is_some() {
+            let parts: Vec<String> = tcount
+                .iter()
+                .map(|(k, v)| format!("{v}&nbsp;{}", badge(k)))
+                .collect();
+            let _ = write!(b, "<td class=\"nw\">{}</td>", parts.join(" "));
+        }
+        for &j in &medians {
+            let mut xs: Vec<f64> = c
+                .rows
+                .iter()
+                .filter_map(|&i| parse_num(summary.rows[i][j].trim()))
+                .filter(|x| x.is_finite())
+                .collect();
+            match median(&mut xs) {
+                Some(m) => {
+                    let _ = write!(
+                        b,
+                        "<td class=\"n\" title=\"{} of {} tests\">{}</td>",
+                        m,
+                        xs.len(),
+                        esc(&num(m))
+                    );
+                }
+                None => b.push_str("<td class=\"empty\"></td>"),
+            }
+        }
+        b.push_str("</tr>");
+    }
+    b.push_str("</tbody></table></div>");
+    b.push_str("</section>");
+
+    // ---- figures
+    b.push_str("<section id=\"figures\"><h2>Figures</h2>");
+    let fig_dir = dir.join("figures");
+    let mut fig_notes = Vec::new();
+    if fig_dir.is_dir() {
+        let (html, n) = figures_html(&fig_dir, "fig", &mut fig_notes)?;
+        if n == 0 {
+            b.push_str("<p class=\"muted\">No figures in <code>figures/</code>.</p>");
+        }
+        b.push_str(&html);
+    } else {
+        b.push_str(
+            "<p class=\"muted\">No <code>figures/</code> folder (<code>shipid plot</code> draws them).</p>",
+        );
+    }
+    if !fig_notes.is_empty() {
+        b.push_str(&warnings_box(&fig_notes).replace("id=\"warnings\" ", ""));
+    }
+    b.push_str("</section>");
+
+    // ---- per case
+    b.push_str("<section id=\"cases\"><h2>Cases</h2>");
+    for (c, (config, result, model)) in cases.iter().zip(&configs) {
+        case_details(
+            &mut b,
+            c,
+            &summary,
+            &test_cols,
+            coefficients.as_ref(),
+            diagnostics.as_ref(),
+            config.as_ref().map(|c| c.0.as_str()),
+            result.as_ref(),
+            model.as_deref(),
+            status_col.map(|j| first_value(c, j)),
+        )?;
+    }
+    b.push_str("</section>");
+
+    // ---- configuration
+    b.push_str("<section id=\"configuration\"><h2>Run configuration</h2>");
+    match &study {
+        Some((text, _)) => {
+            b.push_str("<p class=\"muted\">The resolved study, <code>study.toml</code>:</p>");
+            b.push_str(&toml_block(text));
+        }
+        None => b.push_str(
+            "<p class=\"muted\">The folder has no <code>study.toml</code>; each case's resolved \
+             configuration is in its details above.</p>",
+        ),
+    }
+    if let Some(r) = &run {
+        let pretty = serde_json::to_string_pretty(r).unwrap_or_default();
+        let _ = write!(
+            b,
+            "<details><summary><code>run.json</code></summary><pre class=\"code\">{}</pre></details>",
+            esc(&pretty)
+        );
+    }
+    b.push_str("</section>");
+    b.push_str("<footer>Written by shipid-report from the files of the output folder; the page has no script and loads nothing.</footer>");
+    Ok(page(&format!("{name} — shipid study report"), &b))
+}
+
+fn count_box(b: &mut String, what: &str, n: usize, class: &str) {
+    let _ = write!(
+        b,
+        "<div class=\"count {class}\"><span class=\"v\">{n}</span>{}</div>",
+        esc(what)
+    );
+}
+
+fn worse(a: &'static str, b: &'static str) -> &'static str {
+    let rank = |s: &str| match s {
+        "bad" => 2,
+        "warn" => 1,
+        _ => 0,
+    };
+    if rank(b) > rank(a) { b } else { a }
+}
+
+fn median(xs: &mut [f64]) -> Option<f64> {
+    if xs.is_empty() {
+        return None;
+    }
+    xs.sort_by(f64::total_cmp);
+    let n = xs.len();
+    Some(if n % 2 == 1 {
+        xs[n / 2]
+    } else {
+        0.5 * (xs[n / 2 - 1] + xs[n / 2])
+    })
+}
+
+/// Columns of the manoeuvre metrics (recorded, predicted, relative error), shown apart.
+fn is_metric(name: &str) -> bool {
+    name.ends_with("_recorded") || name.ends_with("_predicted") || name.ends_with("_rel_error")
+}
+
+/// The manoeuvre metrics of a case's tests, one row per test and metric with a value: recorded,
+/// predicted, relative error (columns `<metric>_recorded`, `_predicted`, `_rel_error`).
+fn metric_table(b: &mut String, csv: &Csv, rows: &[usize], metric_cols: &[usize]) {
+    let mut metrics: Vec<&str> = Vec::new();
+    for &j in metric_cols {
+        let h = csv.headers[j].as_str();
+        let m = h
+            .strip_suffix("_recorded")
+            .or_else(|| h.strip_suffix("_predicted"))
+            .or_else(|| h.strip_suffix("_rel_error"))
+            .unwrap_or(h);
+        if !metrics.contains(&m) {
+            metrics.push(m);
+        }
+    }
+    let test = csv.col("test");
+    let mut body = String::new();
+    for &i in rows {
+        for m in &metrics {
+            let v: Vec<&str> = ["_recorded", "_predicted", "_rel_error"]
+                .iter()
+                .map(|suf| {
+                    csv.col(&format!("{m}{suf}"))
+                        .map_or("", |j| csv.rows[i][j].as_str())
+                })
+                .collect();
+            if v.iter().all(|x| x.trim().is_empty()) {
+                continue;
+            }
+            let _ = write!(
+                body,
+                "<tr><td>{}</td><td>{}</td>",
+                esc(test.map_or("", |t| csv.rows[i][t].as_str())),
+                esc(&label(m))
+            );
+            for x in v {
+                body.push_str(&cell(x));
+            }
+            body.push_str("</tr>");
+        }
+    }
+    if body.is_empty() {
+        return;
+    }
+    b.push_str(
+        "<h3>Manoeuvre metrics</h3><div class=\"tablewrap fit\"><table class=\"metrics narrow\"><thead><tr>\
+         <th>test</th><th>metric</th><th>recorded</th><th>predicted</th><th>rel. error</th></tr></thead><tbody>",
+    );
+    b.push_str(&body);
+    b.push_str("</tbody></table></div>");
+}
+
+/// A table of the given columns of some rows, leaving out columns empty in all of them.
+fn sub_table(b: &mut String, csv: &Csv, rows: &[usize], cols: &[usize], class: &str) {
+    let cols: Vec<usize> = cols
+        .iter()
+        .copied()
+        .filter(|&j| rows.iter().any(|&i| !csv.rows[i][j].trim().is_empty()))
+        .collect();
+    if cols.is_empty() || rows.is_empty() {
+        return;
+    }
+    let _ = write!(
+        b,
+        "<div class=\"tablewrap\"><table class=\"{class}\"><thead><tr>"
+    );
+    for &j in &cols {
+        b.push_str(&th(&csv.headers[j]));
+    }
+    b.push_str("</tr></thead><tbody>");
+    for &i in rows {
+        b.push_str("<tr>");
+        for &j in &cols {
+            let v = &csv.rows[i][j];
+            if csv.headers[j].ends_with("status") {
+                let _ = write!(b, "<td>{}</td>", badge(v));
+            } else {
+                b.push_str(&cell(v));
+            }
+        }
+        b.push_str("</tr>");
+    }
+    b.push_str("</tbody></table></div>");
+}
+
+#[allow(clippy::too_many_arguments)]
+fn case_details(
+    b: &mut String,
+    c: &Case,
+    summary: &Csv,
+    test_cols: &[usize],
+    coefficients: Option<&Csv>,
+    diagnostics: Option<&Csv>,
+    config: Option<&str>,
+    result: Option<&Value>,
+    model: Option<&str>,
+    status: Option<String>,
+) -> Result<(), ReportError> {
+    let status = status
+        .or_else(|| {
+            result
+                .and_then(|r| r.get("status"))
+                .and_then(Value::as_str)
+                .map(str::to_string)
+        })
+        .unwrap_or_default();
+    let mut tcount: BTreeMap<&str, usize> = BTreeMap::new();
+    if let (Some(t), Some(j)) = (summary.col("test"), summary.col("status")) {
+        for &i in &c.rows {
+            if !summary.rows[i][t].is_empty() {
+                *tcount.entry(summary.rows[i][j].as_str()).or_default() += 1;
+            }
+        }
+    }
+    let tests: Vec<String> = tcount
+        .iter()
+        .map(|(k, v)| format!("{v} {}", esc(k)))
+        .collect();
+    let _ = write!(
+        b,
+        "<details id=\"{}\" data-case-id=\"{}\"><summary><code>{}</code> {} <span class=\"muted\">{}</span></summary>",
+        esc(&id_of("details-", &c.id)),
+        esc(&c.id),
+        esc(&c.id),
+        badge(&status),
+        if tests.is_empty() {
+            String::new()
+        } else {
+            format!("tests: {}", tests.join(", "))
+        }
+    );
+    if let Some(r) = result.and_then(Value::as_object) {
+        let mut f: Vec<(String, String)> = Vec::new();
+        if let Some(m) = r.get("message").and_then(Value::as_str) {
+            f.push(("message".into(), m.to_string()));
+        }
+        if let Some(n) = r.get("samples").and_then(Value::as_f64) {
+            f.push(("training samples".into(), num(n)));
+        }
+        if let Some(t) = r.get("fit_time_s").and_then(Value::as_f64) {
+            f.push(("fit time [s]".into(), num(t)));
+        }
+        if !f.is_empty() {
+            b.push_str(&facts(&f));
+        }
+    }
+    // Tests: replay columns, then manoeuvre metrics.
+    let (metric, replay): (Vec<usize>, Vec<usize>) = test_cols
+        .iter()
+        .partition(|&&j| is_metric(&summary.headers[j]));
+    let rows: Vec<usize> = c
+        .rows
+        .iter()
+        .copied()
+        .filter(|&i| {
+            summary
+                .col("test")
+                .is_none_or(|t| !summary.rows[i][t].is_empty())
+        })
+        .collect();
+    if !rows.is_empty() {
+        b.push_str("<h3>Tests</h3>");
+        sub_table(b, summary, &rows, &replay, "tests");
+        if !metric.is_empty() {
+            metric_table(b, summary, &rows, &metric);
+        }
+    }
+    // Coefficients with their VIF beside the per-DOF diagnostics.
+    b.push_str("<div class=\"side\">");
+    if let Some(t) = coefficients {
+        coefficient_table(b, c, t, diagnostics)?;
+    }
+    if let Some(d) = diagnostics {
+        dof_table(b, c, d)?;
+    }
+    b.push_str("</div>");
+    for (file, text) in [("config.toml", config), ("model.toml", model)] {
+        if let Some(text) = text {
+            let _ = write!(
+                b,
+                "<details><summary><code>cases/{}/{file}</code></summary>{}</details>",
+                esc(&c.id),
+                toml_block(text)
+            );
+        }
+    }
+    b.push_str("</details>");
+    Ok(())
+}
+
+/// Column indices of a long table (case, dof, term, quantity, value), an error naming the file when
+/// one is missing.
+fn long_cols(t: &Csv) -> Result<[usize; 5], ReportError> {
+    let case = t.case_col()?;
+    let mut out = [case, 0, 0, 0, 0];
+    for (k, name) in ["dof", "term", "quantity", "value"].iter().enumerate() {
+        out[k + 1] = t.col(name).ok_or_else(|| ReportError::Invalid {
+            path: t.path.clone(),
+            message: format!("no column `{name}`"),
+        })?;
+    }
+    Ok(out)
+}
+
+fn coefficient_table(
+    b: &mut String,
+    c: &Case,
+    t: &Csv,
+    diagnostics: Option<&Csv>,
+) -> Result<(), ReportError> {
+    let [case, dof, term, quantity, value] = long_cols(t)?;
+    let mut vif: BTreeMap<(String, String), String> = BTreeMap::new();
+    if let Some(d) = diagnostics {
+        let [dc, dd, dt, dq, dv] = long_cols(d)?;
+        for r in d.rows.iter().filter(|r| r[dc] == c.id && r[dq] == "vif") {
+            vif.insert((r[dd].clone(), r[dt].clone()), r[dv].clone());
+        }
+    }
+    let rows: Vec<&Vec<String>> = t.rows.iter().filter(|r| r[case] == c.id).collect();
+    if rows.is_empty() {
+        return Ok(());
+    }
+    let quantities: Vec<&str> = {
+        let mut q: Vec<&str> = rows.iter().map(|r| r[quantity].as_str()).collect();
+        q.sort_unstable();
+        q.dedup();
+        q
+    };
+    let show_quantity = quantities.len() > 1 || quantities.first() != Some(&"coefficient");
+    b.push_str("<div><h3>Coefficients</h3><div class=\"tablewrap fit\"><table class=\"coefficients narrow\"><thead><tr>");
+    b.push_str(&th("dof"));
+    b.push_str(&th("term"));
+    if show_quantity {
+        b.push_str(&th("quantity"));
+    }
+    b.push_str(&th("value"));
+    if !vif.is_empty() {
+        b.push_str(&th("vif"));
+    }
+    b.push_str("</tr></thead><tbody>");
+    for r in rows {
+        let _ = write!(
+            b,
+            "<tr><td>{}</td><td><code>{}</code></td>",
+            esc(&r[dof]),
+            esc(&r[term])
+        );
+        if show_quantity {
+            let _ = write!(b, "<td>{}</td>", esc(&r[quantity]));
+        }
+        b.push_str(&cell(&r[value]));
+        if !vif.is_empty() {
+            b.push_str(&cell(
+                vif.get(&(r[dof].clone(), r[term].clone()))
+                    .map_or("", String::as_str),
+            ));
+        }
+        b.push_str("</tr>");
+    }
+    b.push_str("</tbody></table></div></div>");
+    Ok(())
+}
+
+/// Per-DOF quantities of diagnostics.csv (rows without a term): one row per DOF.
+fn dof_table(b: &mut String, c: &Case, d: &Csv) -> Result<(), ReportError> {
+    let [case, dof, term, quantity, value] = long_cols(d)?;
+    let mut dofs: Vec<String> = Vec::new();
+    let mut qs: Vec<String> = Vec::new();
+    let mut v: BTreeMap<(String, String), String> = BTreeMap::new();
+    for r in d
+        .rows
+        .iter()
+        .filter(|r| r[case] == c.id && r[term].trim().is_empty())
+    {
+        if !dofs.contains(&r[dof]) {
+            dofs.push(r[dof].clone());
+        }
+        if !qs.contains(&r[quantity]) {
+            qs.push(r[quantity].clone());
+        }
+        v.insert((r[dof].clone(), r[quantity].clone()), r[value].clone());
+    }
+    if dofs.is_empty() {
+        return Ok(());
+    }
+    b.push_str("<div><h3>Fit diagnostics per DOF</h3><div class=\"tablewrap fit\"><table class=\"dofs narrow\"><thead><tr>");
+    b.push_str(&th("dof"));
+    for q in &qs {
+        b.push_str(&th(q));
+    }
+    b.push_str("</tr></thead><tbody>");
+    for x in &dofs {
+        let _ = write!(b, "<tr><td>{}</td>", esc(x));
+        for q in &qs {
+            b.push_str(&cell(
+                v.get(&(x.clone(), q.clone())).map_or("", String::as_str),
+            ));
+        }
+        b.push_str("</tr>");
+    }
+    b.push_str("</tbody></table></div></div>");
+    Ok(())
+}
