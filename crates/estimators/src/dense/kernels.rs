@@ -420,11 +420,16 @@ fn residual_norm_generic<const L: usize, const U: usize, const FMA: bool>(
     lane_sum(&rr)
 }
 
+// One copy of the run-time instruction-set choice for every kernel of the crate (the SVR
+// interior point's per-sample loops included): an unsafe call guarded by a feature test is
+// easy to get subtly wrong, so it is written once. `$generic` must be `#[inline(always)]`
+// so that it is compiled inside each `target_feature` wrapper.
 macro_rules! dispatch {
-    ($(#[$doc:meta])* $name:ident, $generic:ident, ($($arg:ident: $ty:ty),*) -> $ret:ty,
-     avx512: <$($p512:tt),*>, avx2: <$($p2:tt),*>, base: <$($pb:tt),*>) => {
+    ($(#[$doc:meta])* $vis:vis fn $name:ident, $generic:ident,
+     ($($arg:ident: $ty:ty),*) -> $ret:ty,
+     avx512: <$($p512:literal),*>, avx2: <$($p2:literal),*>, base: <$($pb:literal),*>) => {
         $(#[$doc])*
-        pub(crate) fn $name($($arg: $ty),*) -> $ret {
+        $vis fn $name($($arg: $ty),*) -> $ret {
             #[cfg(target_arch = "x86_64")]
             {
                 if std::arch::is_x86_feature_detected!("avx512f") {
@@ -457,33 +462,33 @@ dispatch!(
     /// Upper triangle of `AᵀWA` (entry `(i, j)`, `i ≤ j`, at `i·m + j`; the rest is 0) for
     /// the `m` columns `cols`, each of length `n`, and `W = diag(root_weights)²` (identity
     /// without), so that a weighted Gram needs no scaled copy of A.
-    cross_products, cross_products_generic,
+    pub(crate) fn cross_products, cross_products_generic,
     (cols: &[&[f64]], n: usize, root_weights: Option<&[f64]>) -> Vec<f64>,
     avx512: <4, 8, true>, avx2: <3, 4, true>, base: <2, 2, false>
 );
 
 dispatch!(
     /// `(Φᵀr, ‖r‖², ‖Φw‖²)` for `r = y − Φβ` in one pass over Φ (the last 0 without `w`).
-    refinement, refinement_generic,
+    pub(crate) fn refinement, refinement_generic,
     (cols: &[&[f64]], y: &[f64], beta: &[f64], w: Option<&[f64]>) -> (Vec<f64>, f64, f64),
     avx512: <8, 8, true>, avx2: <4, 4, true>, base: <2, 2, false>
 );
 
 dispatch!(
     /// `‖y − Φβ‖²` in one pass over Φ.
-    residual_norm, residual_norm_generic, (cols: &[&[f64]], y: &[f64], beta: &[f64]) -> f64,
+    pub(crate) fn residual_norm, residual_norm_generic, (cols: &[&[f64]], y: &[f64], beta: &[f64]) -> f64,
     avx512: <8, 4, true>, avx2: <4, 4, true>, base: <2, 2, false>
 );
 
 dispatch!(
     /// `Φᵀv` in one pass over Φ.
-    transposed_product, transposed_product_generic, (cols: &[&[f64]], v: &[f64]) -> Vec<f64>,
+    pub(crate) fn transposed_product, transposed_product_generic, (cols: &[&[f64]], v: &[f64]) -> Vec<f64>,
     avx512: <8, 4, true>, avx2: <4, 4, true>, base: <2, 2, false>
 );
 
 dispatch!(
     /// `Φv` into `out` in one pass over Φ.
-    combination, combination_generic, (cols: &[&[f64]], v: &[f64], out: &mut [f64]) -> (),
+    pub(crate) fn combination, combination_generic, (cols: &[&[f64]], v: &[f64], out: &mut [f64]) -> (),
     avx512: <8, 4, true>, avx2: <4, 4, true>, base: <2, 2, false>
 );
 

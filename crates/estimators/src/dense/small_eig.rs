@@ -523,7 +523,7 @@ fn reduce_generic<const FMA: bool, const W: usize>(
 
 crate::dense::kernels::dispatch!(
     /// [`reduce_generic`] with FMA and wide vectors where the CPU has them.
-    reduce, reduce_generic, (a: &[f64], k: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>, usize),
+    pub(crate) fn reduce, reduce_generic, (a: &[f64], k: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>, usize),
     avx512: <true, 8>, avx2: <true, 4>, base: <false, 2>
 );
 

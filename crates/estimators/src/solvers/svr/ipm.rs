@@ -872,58 +872,23 @@ impl State<'_> {
     }
 }
 
-/// Runs the interior-point iteration until `stop` accepts an iterate or the iteration
-/// limit is reached. `stop(iterate)` is called after every iteration once the mean
-/// complementarity has fallen below `1e-6` of its start; it returns true to finish.
-pub(super) fn solve(
-    pb: &Data,
-    c: f64,
-    eps: f64,
-    lo: &[f64],
-    hi: &[f64],
-    scale: f64,
-    stop: impl FnMut(&Iterate) -> bool,
-) -> Iterate {
-    // The per-sample loops are most of the work; compiled for the widest vector unit
-    // available (chosen at run time), as the kernels of [`crate::dense::kernels`] are.
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            #[target_feature(enable = "avx512f,avx2,fma")]
-            fn avx512(
-                pb: &Data,
-                c: f64,
-                eps: f64,
-                lo: &[f64],
-                hi: &[f64],
-                scale: f64,
-                stop: impl FnMut(&Iterate) -> bool,
-            ) -> Iterate {
-                solve_generic(pb, c, eps, lo, hi, scale, stop)
-            }
-            // SAFETY: the CPU supports AVX-512F (checked just above).
-            return unsafe { avx512(pb, c, eps, lo, hi, scale, stop) };
-        }
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
-            #[target_feature(enable = "avx2,fma")]
-            fn avx2(
-                pb: &Data,
-                c: f64,
-                eps: f64,
-                lo: &[f64],
-                hi: &[f64],
-                scale: f64,
-                stop: impl FnMut(&Iterate) -> bool,
-            ) -> Iterate {
-                solve_generic(pb, c, eps, lo, hi, scale, stop)
-            }
-            // SAFETY: the CPU supports AVX2 and FMA (checked just above).
-            return unsafe { avx2(pb, c, eps, lo, hi, scale, stop) };
-        }
-    }
-    solve_generic(pb, c, eps, lo, hi, scale, stop)
-}
+crate::dense::kernels::dispatch!(
+    /// Runs the interior-point iteration until `stop` accepts an iterate or the iteration
+    /// limit is reached. `stop(iterate)` is called after every iteration once the mean
+    /// complementarity has fallen below `1e-6` of its start; it returns true to finish.
+    /// The per-sample loops are most of the work, hence the widest vector unit available.
+    pub(super) fn solve, solve_generic,
+    (
+        pb: &Data,
+        c: f64,
+        eps: f64,
+        lo: &[f64],
+        hi: &[f64],
+        scale: f64,
+        stop: impl FnMut(&Iterate) -> bool
+    ) -> Iterate,
+    avx512: <>, avx2: <>, base: <>
+);
 
 #[inline(always)]
 fn solve_generic(
