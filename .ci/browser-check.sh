@@ -6,7 +6,8 @@
 # - the shipped page must hold no <script> and load nothing from elsewhere;
 # - SCREENSHOT.png: the page at 1400×2000 (look at it);
 # - a copy of the page with a small measuring script appended is rendered and its DOM dumped; the
-#   script writes each <figure>'s SVG size (getBoundingClientRect) and the case ids of the summary
+#   script writes each <figure>'s SVG size (getBoundingClientRect; 0 × 0 when it is not shown, e.g.
+#   inside a closed <details>) and the case ids of the summary
 #   table's rows (`table.summary tr[data-case-id]`) into the DOM. Fails when a case id of
 #   EXPECTED_CASE_IDS_FILE (one per line; blank lines ignored) is not in the summary table, when a
 #   figure's SVG has zero width or height, or when there are fewer than MIN_FIGURES figures (default 0).
@@ -71,7 +72,9 @@ cat >>"$copy" <<'JS'
   var lines = [];
   document.querySelectorAll('figure').forEach(function (f, i) {
     var s = f.querySelector('svg');
-    var r = s ? s.getBoundingClientRect() : { width: 0, height: 0 };
+    // An SVG that is not shown (in a closed <details>, display:none) counts as 0 × 0.
+    var shown = s && (!s.checkVisibility || s.checkVisibility({ visibilityProperty: true }));
+    var r = shown ? s.getBoundingClientRect() : { width: 0, height: 0 };
     lines.push('FIGURE\t' + (f.getAttribute('data-file') || ('#' + i)) + '\t' +
       r.width.toFixed(1) + '\t' + r.height.toFixed(1));
   });

@@ -19,7 +19,11 @@ impl Csv {
             path: path.to_path_buf(),
             source,
         };
-        let mut r = csv::ReaderBuilder::new().from_path(path).map_err(err)?;
+        let file = std::fs::File::open(path).map_err(|source| ReportError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let mut r = csv::ReaderBuilder::new().from_reader(std::io::BufReader::new(file));
         let headers = r
             .headers()
             .map_err(err)?

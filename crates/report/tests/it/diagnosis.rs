@@ -1,0 +1,48 @@
+use shipid_report::{DiagnosisFiles, RunMeta, diagnosis_page};
+
+use crate::{assert_self_contained, fixture, meta, summary_case_ids};
+
+#[test]
+fn verdict_evidence_candidates_recordings_and_model() {
+    let files = DiagnosisFiles::in_dir(&fixture("diagnosis-hsva"));
+    assert!(files.figures.is_none());
+    assert!(files.model.as_ref().unwrap().ends_with("report.model.toml"));
+    let m = RunMeta {
+        dataset: Some("data/kvlcc2-hsva/dataset.toml".into()),
+        details: vec![("base model".into(), "mmg:kvlcc2".into())],
+        ..meta()
+    };
+    let html = diagnosis_page(&files, &m).unwrap();
+    assert_self_contained(&html);
+    assert!(html.contains("<div class=\"word\">asymmetry</div>"));
+    assert!(html.contains("explains 39 % of the held-out mismatch"));
+    assert!(html.contains("0.3251 L → 0.1982 L (-39 %)"));
+    assert!(html.contains("offset ± 0.02893"));
+    assert!(html.contains("data/kvlcc2-hsva/dataset.toml") && html.contains("mmg:kvlcc2"));
+    // 10 candidates, two accepted.
+    let c = html.find("<table class=\"candidates\"").unwrap();
+    let c = &html[c..c + html[c..].find("</table>").unwrap()];
+    assert_eq!(c.matches("<tr").count(), 11);
+    assert_eq!(c.matches(">accepted</span>").count(), 2);
+    // One summary row per recording; those made worse are marked.
+    let recs = summary_case_ids(&html);
+    assert_eq!(recs.len(), 13);
+    assert!(recs.contains(&"z10_10_ps.csv".to_string()));
+    assert!(html.contains("data-case-id=\"z10_10_ps.csv\" class=\"warn\""));
+    // The augmented model file.
+    assert!(html.contains("[ship]") || html.contains("<span class=\"h\">[ship]</span>"));
+    assert!(html.contains("No figures"));
+}
+
+#[test]
+fn a_verdict_of_none_with_figures_and_no_model() {
+    let files = DiagnosisFiles::in_dir(&fixture("diagnosis-none"));
+    assert!(files.model.is_none());
+    let html = diagnosis_page(&files, &meta()).unwrap();
+    assert_self_contained(&html);
+    assert!(html.contains("<div class=\"word\">none</div>"));
+    assert!(html.contains("No augmented model file"));
+    assert_eq!(html.matches("<figure ").count(), 1);
+    assert!(html.contains("Equation-error residuals — tc35_sb"));
+    assert_eq!(summary_case_ids(&html).len(), 6);
+}

@@ -1,0 +1,198 @@
+use std::fs;
+
+use shipid_report::{RunMeta, study_page, write_report};
+
+use crate::{assert_self_contained, fixture, meta, summary_case_ids};
+
+fn page() -> String {
+    study_page(&fixture("study"), &meta()).unwrap()
+}
+
+#[test]
+fn every_case_has_a_row_with_its_id_and_a_details_block() {
+    let html = page();
+    let expected: Vec<String> = fs::read_to_string(fixture("study.case-ids"))
+        .unwrap()
+        .lines()
+        .map(str::to_string)
+        .collect();
+    assert_eq!(summary_case_ids(&html), expected);
+    for id in &expected {
+        assert!(html.contains(&format!("<tr id=\"case-{id}\" data-case-id=\"{id}\"")));
+        assert!(html.contains(&format!(
+            "<details id=\"details-{id}\" data-case-id=\"{id}\""
+        )));
+        assert!(html.contains(&format!("href=\"#details-{id}\"")));
+    }
+}
+
+#[test]
+fn header_shows_version_study_data_set_and_run_record() {
+    let html = page();
+    assert_self_contained(&html);
+    assert!(html.contains("<title>truncation — shipid study report</title>"));
+    assert!(
+        html.contains("shipid 9.9.9-test"),
+        "the caller's version wins"
+    );
+    assert!(html.contains("studies/truncation.toml"));
+    assert!(html.contains("data/kvlcc2-mmg/dataset.toml"));
+    assert!(html.contains("2026-11-24T06:49:01Z"));
+    // study.toml as the run configuration, its description under the title.
+    assert!(html.contains("Overshoot truncation sweep"));
+    assert!(html.contains("<span class=\"h\">[training]</span>"));
+    // run.json's warning in the warnings box.
+    let w = html.find("id=\"warnings\"").expect("warnings box");
+    assert!(html[w..].contains("figure forces_x.svg could not be drawn: no data"));
+}
+
+#[test]
+fn status_counts_and_summary_numbers() {
+    let html = page();
+    // 3 cases ok; 18 tests of which 5 diverged (case os1).
+    for (n, what) in [
+        (3, "cases"),
+        (3, "cases ok"),
+        (18, "tests"),
+        (5, "tests diverged"),
+        (13, "tests ok"),
+    ] {
+        assert!(
+            html.contains(&format!("<span class=\"v\">{n}</span>{what}</div>")),
+            "{n} {what}"
+        );
+    }
+    // Units from the column names, four significant digits, the constant columns above the table.
+    assert!(html.contains(">fit time [s]</th>"));
+    assert!(html.contains(">position RMSE ÷ L</th>"));
+    assert!(html.contains("All cases: set <code>reduced32</code>"));
+    assert!(
+        html.contains(">11.76</td>"),
+        "position RMSE of os1 on zz10_10_ps, 11.761…"
+    );
+    assert!(html.contains("title=\"11.761444794293999\""));
+    // The case with diverged tests is marked.
+    assert!(
+        html.contains("data-case-id=\"reduced32_lsq_fast_zz35_35_ps_os1-01228642\" class=\"bad\"")
+    );
+}
+
+#[test]
+fn figures_are_inline_svg_with_captions() {
+    let html = page();
+    assert_eq!(html.matches("<figure ").count(), 1);
+    assert!(html.contains("<figure data-file=\"vif_reduced32.svg\"><svg "));
+    assert!(html.contains("Variance inflation factor per term — reduced32"));
+    assert!(!html.contains("<?xml"));
+}
+
+#[test]
+fn per_case_details_hold_tests_metrics_coefficients_and_files() {
+    let html = page();
+    let id = "reduced32_lsq_fast_zz35_35_ps_os2-122d3577";
+    let start = html.find(&format!("<details id=\"details-{id}\"")).unwrap();
+    let end = start
+        + html[start..]
+            .find("</details>\n")
+            .unwrap_or(html.len() - start);
+    let d = &html[start..end];
+    for s in [
+        "<h3>Tests</h3>",
+        "<h3>Manoeuvre metrics</h3>",
+        "<h3>Coefficients</h3>",
+        "Fit diagnostics per DOF",
+        "config.toml",
+        "model.toml",
+        "training samples",
+    ] {
+        assert!(d.contains(s), "{s}");
+    }
+}
+
+#[test]
+fn the_folder_alone_is_enough_and_meta_fills_gaps() {
+    // Without run.json and study.toml: version and data set from the cases' config.toml.
+    let dir = tempfile::tempdir().unwrap();
+    copy_dir(&fixture("study"), dir.path());
+    fs::remove_file(dir.path().join("run.json")).unwrap();
+    fs::remove_file(dir.path().join("study.toml")).unwrap();
+    fs::remove_dir_all(dir.path().join("figures")).unwrap();
+    let html = study_page(dir.path(), &RunMeta::default()).unwrap();
+    assert!(
+        html.contains("<span class=\"kind\">Study</span> truncation"),
+        "name from config.toml"
+    );
+    assert!(html.contains("shipid 0.2.1"));
+    assert!(html.contains("studies/../data/kvlcc2-mmg/dataset.toml"));
+    assert!(html.contains("no <code>study.toml</code>"));
+    assert!(!html.contains("id=\"warnings\""));
+    assert_eq!(summary_case_ids(&html).len(), 3);
+    // The caller's warnings are shown.
+    let m = RunMeta {
+        warnings: vec!["one & <two>".into()],
+        ..Default::default()
+    };
+    let html = study_page(dir.path(), &m).unwrap();
+    assert!(html.contains("<li>one &amp; &lt;two&gt;</li>"));
+}
+
+#[test]
+fn strings_from_the_data_are_escaped() {
+    let dir = tempfile::tempdir().unwrap();
+    let id = "case <b>&\"x'";
+    fs::write(
+        dir.path().join("summary.csv"),
+        format!("case,set,case_status,fit_time_s,test,status,position_rmse_over_l\n\"{}\",s<1>,ok,0.5,t<script>,ok,0.25\n", id.replace('"', "\"\"")),
+    )
+    .unwrap();
+    fs::create_dir_all(dir.path().join("figures")).unwrap();
+    fs::write(
+        dir.path().join("figures/evil.svg"),
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="20" height="10" onload="alert(1)"><script>alert(2)</script><a href="javascript:alert(3)"><text>x</text></a></svg>"#,
+    )
+    .unwrap();
+    fs::write(dir.path().join("figures/broken.svg"), "<svg><g></svg>").unwrap();
+    let m = RunMeta {
+        name: Some("<i>name</i>".into()),
+        ..Default::default()
+    };
+    let html = study_page(dir.path(), &m).unwrap();
+    assert_self_contained(&html);
+    assert!(!html.contains("<b>") && !html.contains("<i>") && !html.contains("t<script>"));
+    assert!(!html.contains("alert") && !html.contains("javascript:"));
+    assert!(html.contains("&lt;i&gt;name&lt;/i&gt;"));
+    assert_eq!(summary_case_ids(&html), vec![id.to_string()]);
+    assert!(html.contains("figure ") && html.contains("broken.svg left out"));
+    assert_eq!(html.matches("<figure ").count(), 1);
+}
+
+#[test]
+fn write_report_replaces_the_page_atomically() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write_report(dir.path(), "first").unwrap();
+    assert_eq!(p, dir.path().join("report.html"));
+    let p = write_report(dir.path(), "second").unwrap();
+    assert_eq!(fs::read_to_string(&p).unwrap(), "second");
+    let names: Vec<String> = fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(
+        names,
+        vec!["report.html".to_string()],
+        "no temporary file left"
+    );
+}
+
+pub fn copy_dir(from: &std::path::Path, to: &std::path::Path) {
+    fs::create_dir_all(to).unwrap();
+    for e in fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        let target = to.join(e.file_name());
+        if e.path().is_dir() {
+            copy_dir(&e.path(), &target);
+        } else {
+            fs::copy(e.path(), target).unwrap();
+        }
+    }
+}
