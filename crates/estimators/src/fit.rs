@@ -9,6 +9,7 @@ use crate::dense::linalg::{
     condition_from_singular_values, singular_values, sym_eig_extremes, sym_eig_min_vector,
 };
 use crate::error::EstimatorError;
+use crate::params::{CheckedParams, Params};
 use crate::problem::{
     Problem, check_coefficients, column_scales, validate_design, validate_problem_data,
 };
@@ -19,7 +20,8 @@ use crate::solvers::solution::Solution;
 use crate::types::{Bounds, Estimator, Fit, Solver, Status, status_from};
 
 /// Fits one degree of freedom: `y ≈ Φβ` with the given estimator, optional bounds on the
-/// unscaled coefficients, and solver family.
+/// unscaled coefficients, and solver family: [`Params::check`] and [`CheckedParams::fit`]
+/// in one call.
 ///
 /// Errors are returned only for invalid input (empty design, length mismatches, NaN or
 /// infinite values, invalid bounds or hyper-parameters); how the solve went is in
@@ -31,30 +33,53 @@ pub fn fit(
     bounds: Option<&Bounds>,
     solver: Solver,
 ) -> Result<Fit, EstimatorError> {
-    estimator.validate()?;
-    if solver == Solver::Fast
-        && matches!(
-            estimator,
-            Estimator::Lsq
-                | Estimator::BoundedLsq
-                | Estimator::Ridge { lambda: 0.0 }
-                | Estimator::Lasso { alpha: 0.0 }
-        )
-        && let Some(result) = direct::try_lsq(design, y, estimator, bounds)
-    {
-        return result;
+    let params = Params {
+        estimator: *estimator,
+        bounds: bounds.cloned(),
+        solver,
+    };
+    match params.check() {
+        Ok(checked) => checked.fit(design, y),
+        Err(e @ EstimatorError::InvalidHyperParameter { .. }) => Err(e),
+        // This entry point has always judged the bounds after the data, and their lengths
+        // against the design before their pairs: a call with several faults still reports
+        // the one it reported before the checked parameters existed.
+        Err(e) => {
+            validate_problem_data(design, y)?;
+            Err(bounds
+                .and_then(|b| b.validate(design.ncols()).err())
+                .unwrap_or(e))
+        }
     }
-    let pb = Problem::new(design, y)?;
-    if let Some(b) = bounds {
-        b.validate(pb.p)?;
+}
+
+impl CheckedParams {
+    /// Fits one degree of freedom with these settings (see [`fit`]); the data are checked
+    /// here, the settings were checked by [`Params::check`].
+    pub fn fit(&self, design: MatRef<'_, f64>, y: &[f64]) -> Result<Fit, EstimatorError> {
+        let estimator = self.estimator();
+        if self.solver() == Solver::Fast
+            && matches!(
+                estimator,
+                Estimator::Lsq
+                    | Estimator::BoundedLsq
+                    | Estimator::Ridge { lambda: 0.0 }
+                    | Estimator::Lasso { alpha: 0.0 }
+            )
+            && let Some(result) = direct::try_lsq(design, y, self)
+        {
+            return result;
+        }
+        let pb = Problem::new(design, y)?;
+        self.check_columns(pb.p)?;
+        let mut f = fit_problem(&pb, self)?;
+        if !matches!(estimator, Estimator::Svr { .. }) {
+            // The same evaluation as `objective()`, so that the two agree to the last bit
+            // on this path (the direct path's J agrees to rounding).
+            f.objective = ls_objective(design, y, estimator, &f.coefficients, &pb.scales);
+        }
+        Ok(f)
     }
-    let mut f = fit_problem(&pb, estimator, bounds, solver)?;
-    if !matches!(estimator, Estimator::Svr { .. }) {
-        // The same evaluation as `objective()`, so that the two agree to the last bit on
-        // this path (the direct path's J agrees to rounding).
-        f.objective = ls_objective(design, y, estimator, &f.coefficients, &pb.scales);
-    }
-    Ok(f)
 }
 
 /// `(1/2n)‖y − Φβ‖²` on the raw design, by the same kernel as the direct LSQ path.
@@ -83,13 +108,9 @@ fn ls_objective(
     }
 }
 
-/// `fit` on an already validated problem (inputs, estimator and bounds checked).
-pub(crate) fn fit_problem(
-    pb: &Problem,
-    estimator: &Estimator,
-    bounds: Option<&Bounds>,
-    solver: Solver,
-) -> Result<Fit, EstimatorError> {
+/// `fit` on an already validated problem (the bounds' length checked against it).
+pub(crate) fn fit_problem(pb: &Problem, params: &CheckedParams) -> Result<Fit, EstimatorError> {
+    let (estimator, bounds, solver) = (params.estimator(), params.bounds(), params.solver());
     let (lo, hi) = pb.scaled_bounds(bounds);
     let sol = if pb.q() == 0 {
         Solution {

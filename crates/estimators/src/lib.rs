@@ -90,6 +90,7 @@ mod dense;
 mod diagnostics;
 mod error;
 mod fit;
+mod params;
 mod problem;
 mod solvers;
 mod tuning;
@@ -98,6 +99,7 @@ mod types;
 pub use diagnostics::{condition_number, contributions, scaled_condition_number, vif};
 pub use error::EstimatorError;
 pub use fit::{fit, objective, predict};
+pub use params::{CheckedParams, Params};
 pub use problem::column_scales;
 pub use tuning::{
     CvPoint, Family, Folds, Tuning, default_epsilon_grid, default_grid, log_grid, tune, tune_svr,

@@ -11,6 +11,7 @@ use serde::{Deserialize, Serialize};
 use crate::dense::linalg::{Tall, col_of};
 use crate::error::EstimatorError;
 use crate::fit::fit_problem;
+use crate::params::Params;
 use crate::problem::{Problem, validate_data};
 use crate::types::{Bounds, Estimator, Solver};
 
@@ -261,13 +262,31 @@ fn cross_validate(
     if candidates.is_empty() {
         return Err(EstimatorError::EmptyGrid);
     }
-    for cand in candidates {
-        cand.estimator.validate()?;
-    }
     let (n, p) = (design.nrows(), design.ncols());
-    if let Some(b) = bounds {
-        b.validate(p)?;
+    let mut params = Vec::with_capacity(candidates.len());
+    for (g, cand) in candidates.iter().enumerate() {
+        let checked = Params {
+            estimator: cand.estimator,
+            bounds: bounds.cloned(),
+            solver,
+        }
+        .check();
+        match checked {
+            Ok(c) => params.push(c),
+            Err(e @ EstimatorError::InvalidHyperParameter { .. }) => return Err(e),
+            // Tuning has always judged every grid value before the bounds, and the
+            // bounds' lengths against the design before their pairs: a call with several
+            // faults still reports the one it reported before the checked parameters.
+            Err(e) => {
+                for later in &candidates[g + 1..] {
+                    later.estimator.validate()?;
+                }
+                return Err(bounds.and_then(|b| b.validate(p).err()).unwrap_or(e));
+            }
+        }
     }
+    // Every candidate carries the same bounds.
+    params[0].check_columns(p)?;
     let sets = folds.validation_sets(n)?;
 
     let mut sse = vec![0.0; candidates.len()];
@@ -289,8 +308,8 @@ fn cross_validate(
         }
         let yt: Vec<f64> = train.iter().map(|&i| y[i]).collect();
         let pb = Problem::new(xt.as_ref(), &yt)?;
-        for (g, cand) in candidates.iter().enumerate() {
-            let f = fit_problem(&pb, &cand.estimator, bounds, solver)?;
+        for (g, checked) in params.iter().enumerate() {
+            let f = fit_problem(&pb, checked)?;
             if !f.status.is_solved() {
                 failed[g] += 1;
             }

@@ -114,7 +114,7 @@ impl Bounds {
     /// Checked constructor: equal lengths, no NaN, `lower ≤ upper`, `lower < +∞`, `upper > −∞`.
     pub fn new(lower: Vec<f64>, upper: Vec<f64>) -> Result<Self, EstimatorError> {
         let b = Bounds { lower, upper };
-        b.validate(b.lower.len())?;
+        b.validate_pairs()?;
         Ok(b)
     }
 
@@ -149,6 +149,7 @@ impl Bounds {
                 .all(|(&b, (&l, &u))| l <= b && b <= u)
     }
 
+    /// Against a design of `p` columns: the lengths first, then the pairs.
     pub(crate) fn validate(&self, p: usize) -> Result<(), EstimatorError> {
         if self.lower.len() != p {
             return Err(EstimatorError::LengthMismatch {
@@ -157,10 +158,15 @@ impl Bounds {
                 got: self.lower.len(),
             });
         }
-        if self.upper.len() != p {
+        self.validate_pairs()
+    }
+
+    /// Without a design: upper bounds as many as lower bounds, and every pair usable.
+    pub(crate) fn validate_pairs(&self) -> Result<(), EstimatorError> {
+        if self.upper.len() != self.lower.len() {
             return Err(EstimatorError::LengthMismatch {
                 what: "upper bounds",
-                expected: p,
+                expected: self.lower.len(),
                 got: self.upper.len(),
             });
         }

@@ -32,7 +32,8 @@ use crate::dense::kernels;
 use crate::dense::linalg::{RowCholesky, col_of};
 use crate::dense::small_eig::Tridiagonal;
 use crate::error::EstimatorError;
-use crate::types::{Bounds, Estimator, Fit, Solver, Status, status_from};
+use crate::params::CheckedParams;
+use crate::types::{Fit, Solver, Status, status_from};
 
 /// Below this κ(G) = κ(Z)² the Gram eigenvalues give κ(Z) to better than 1e-6 (the
 /// threshold of [`crate::fit`]'s condition number).
@@ -40,15 +41,15 @@ const GRAM_EIGENVALUES_SUFFICE: f64 = 1e8;
 /// κ(G) limit of the semi-normal equations (κ(Z) ≤ 1e5), as in `fast::seminormal_lsq`.
 const SEMINORMAL_LIMIT: f64 = 1e10;
 
-/// The direct LSQ fit, or `None` when the general path must decide. Called after the
-/// estimator has been validated; bounds are validated here once the data are known to be
-/// valid, so that errors come in the same order as on the general path.
+/// The direct LSQ fit, or `None` when the general path must decide. The bounds' length is
+/// checked here once the data are known to be valid, so that errors come in the same order
+/// as on the general path.
 pub(crate) fn try_lsq(
     design: MatRef<'_, f64>,
     y: &[f64],
-    estimator: &Estimator,
-    bounds: Option<&Bounds>,
+    params: &CheckedParams,
 ) -> Option<Result<Fit, EstimatorError>> {
+    let (estimator, bounds) = (params.estimator(), params.bounds());
     let (n, p) = (design.nrows(), design.ncols());
     if p == 0 || n <= p || y.len() != n {
         return None;
@@ -69,9 +70,7 @@ pub(crate) fn try_lsq(
     if !(yy.is_finite() && yy <= 1e290) {
         return None;
     }
-    if let Some(b) = bounds
-        && let Err(e) = b.validate(p)
-    {
+    if let Err(e) = params.check_columns(p) {
         return Some(Err(e));
     }
     let nf = n as f64;
