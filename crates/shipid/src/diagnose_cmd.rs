@@ -3,18 +3,18 @@
 
 use std::path::{Path, PathBuf};
 
-use plotters::prelude::*;
+use shipid_diagnose::{
+    BaseRange, DiagnoseInput, DiagnoseOptions, Located, Report, diagnose, model_level,
+    normalised_residuals,
+};
+use shipid_figures::diagnosis::{residual_figure, track_figure};
 use shipid_io::Dataset;
 use shipid_io::write::write_atomic;
 use shipid_model::{AugmentedModelFile, EffectEntry, ModelFile};
-use shipid_sim::{Dynamics, Effect, WithEffects};
+use shipid_pipeline::model_file::load_model_parts;
+use shipid_pipeline::range::{identification_range, training_data};
+use shipid_sim::{Effect, WithEffects};
 
-use crate::diagnose::{
-    DiagnoseInput, DiagnoseOptions, Report, SegmentTrack, diagnose, model_level,
-};
-use crate::range::{identification_range, training_data};
-use crate::simulate_cmd::load_model_parts;
-use crate::validate::interp;
 use crate::{CliError, Outcome, bad_input, failed};
 
 /// The model's own level: segment replays on the recordings it was trained on.
@@ -58,7 +58,7 @@ pub fn run(
     let range = training.as_ref().and_then(identification_range);
     let level = training.as_ref().and_then(|t| own_level(t, &input, &opts));
     input.model_level_over_l = level.as_ref().map(|l| l.0);
-    input.identification_range = crate::diagnose::BaseRange::of(range.as_ref(), base.sparse_gp());
+    input.identification_range = BaseRange::of(range.as_ref(), base.sparse_gp());
     let report = diagnose(&input, &ds, &opts).ok_or_else(|| {
         bad_input(format!(
             "{}: no recording with at least 20 samples to diagnose",
@@ -71,6 +71,12 @@ pub fn run(
         dataset,
         level.as_ref().map(|l| l.1.as_str()),
     );
+    // With --plots the folder gets the JSON report too (unless --json puts it elsewhere): the HTML page
+    // is built from it.
+    let json_out = json_out
+        .map(Path::to_path_buf)
+        .or_else(|| plots.map(|d| d.join("report.json")));
+    let json_out = json_out.as_deref();
     if let Some(p) = json_out {
         let text = serde_json::to_string_pretty(&report).map_err(failed)?;
         write_atomic(p, text.as_bytes()).map_err(failed)?;
@@ -79,10 +85,12 @@ pub fn run(
     let augmented_path = model_out
         .map(Path::to_path_buf)
         .or_else(|| json_out.map(|p| p.with_extension("model.toml")));
+    let mut augmented_written = None;
     if !report.effects.is_empty() {
         match &augmented_path {
             Some(p) => {
                 write_augmented(model_spec, &report, dataset, p)?;
+                augmented_written = Some(p.clone());
                 println!("augmented model: {}", p.display());
             }
             None => println!("(give --model-out FILE to write the augmented model)"),
@@ -100,10 +108,10 @@ pub fn run(
         let before = WithEffects::new(base.as_ref(), &base_effects).map_err(failed)?;
         let after = WithEffects::new(base.as_ref(), &all).map_err(failed)?;
         std::fs::create_dir_all(dir).map_err(failed)?;
-        let residuals = crate::diagnose::normalised_residuals(&input, &ds, &opts);
+        let residuals = normalised_residuals(&input, &ds, &opts);
         for (file, t, e) in &residuals {
             let path = dir.join(format!("{}-residuals.svg", file.trim_end_matches(".csv")));
-            let windows: Vec<&crate::diagnose::Located> = report
+            let windows: Vec<&Located> = report
                 .located
                 .iter()
                 .filter(|l| &l.recording == file)
@@ -124,6 +132,24 @@ pub fn run(
             .map_err(|e| failed(anyhow::anyhow!("{}: {e}", path.display())))?;
         }
         println!("figures: {}", dir.display());
+        let files = shipid_report::DiagnosisFiles {
+            report: json_out.map_or_else(|| dir.join("report.json"), Path::to_path_buf),
+            figures: Some(dir.to_path_buf()),
+            model: augmented_written,
+        };
+        let meta = shipid_report::RunMeta {
+            tool_version: Some(env!("CARGO_PKG_VERSION").into()),
+            name: Some(format!("diagnosis of {model_spec}")),
+            dataset: Some(dataset.to_path_buf()),
+            details: vec![("model".into(), model_spec.into())],
+            ..shipid_report::RunMeta::default()
+        };
+        match shipid_report::diagnosis_page(&files, &meta)
+            .and_then(|html| shipid_report::write_report(dir, &html))
+        {
+            Ok(p) => println!("report: {}", p.display()),
+            Err(e) => eprintln!("warning: report: {e}"),
+        }
     }
     Ok(Outcome::Ok)
 }
@@ -270,208 +296,3 @@ fn write_augmented(
     write_atomic(out, text.as_bytes()).map_err(failed)
 }
 
-/// Track of a recording with the segment replays of the model before and after the diagnosis, and
-/// below it the replays' position error over time: on a track many ship lengths long a mismatch of a
-/// few hundredths of L is invisible, its size over time is not.
-fn track_figure(
-    path: &Path,
-    name: &str,
-    rec: &shipid_io::Recording,
-    before: &dyn Dynamics,
-    after: &dyn Dynamics,
-    horizon_s: f64,
-) -> anyhow::Result<()> {
-    let b = crate::diagnose::segment_tracks(before, rec, horizon_s);
-    let a = crate::diagnose::segment_tracks(after, rec, horizon_s);
-    let l = before.ship().lpp;
-    let pts = |s: &SegmentTrack| -> Vec<(f64, f64)> {
-        s.x0.iter()
-            .zip(&s.y0)
-            .map(|(n, e)| (e / l, n / l))
-            .collect()
-    };
-    let mut xs: Vec<f64> = rec.y0.iter().map(|v| v / l).collect();
-    let mut ys: Vec<f64> = rec.x0.iter().map(|v| v / l).collect();
-    for s in b.iter().chain(&a) {
-        xs.extend(s.y0.iter().map(|v| v / l));
-        ys.extend(s.x0.iter().map(|v| v / l));
-    }
-    let range = |v: &[f64]| {
-        let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let pad = 0.05 * (hi - lo).max(1.0);
-        (lo - pad, hi + pad)
-    };
-    let (mut x0, mut x1) = range(&xs);
-    let (mut y0, mut y1) = range(&ys);
-    // Equal scales on both axes (a track is a shape): widen the narrower range about its centre to the
-    // plotting area's aspect (about 835 × 715 px inside the labels).
-    let aspect = 835.0 / 715.0;
-    let (w, h) = (x1 - x0, y1 - y0);
-    if w / h < aspect {
-        let c = 0.5 * (x0 + x1);
-        (x0, x1) = (c - 0.5 * h * aspect, c + 0.5 * h * aspect);
-    } else {
-        let c = 0.5 * (y0 + y1);
-        (y0, y1) = (c - 0.5 * w / aspect, c + 0.5 * w / aspect);
-    }
-    let root = SVGBackend::new(path, (900, 1120)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let (top, bottom) = root.split_vertically(800);
-    let mut chart = ChartBuilder::on(&top)
-        .caption(
-            format!("{name}: recorded track and {horizon_s:.0} s segment replays"),
-            ("sans-serif", 20),
-        )
-        .margin(15)
-        .x_label_area_size(40)
-        .y_label_area_size(50)
-        .build_cartesian_2d(x0..x1, y0..y1)?;
-    chart
-        .configure_mesh()
-        .x_desc("east y0 / L")
-        .y_desc("north x0 / L")
-        .draw()?;
-    chart
-        .draw_series(LineSeries::new(
-            rec.x0.iter().zip(&rec.y0).map(|(n, e)| (e / l, n / l)),
-            BLACK.stroke_width(2),
-        ))?
-        .label("recorded")
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
-    let red = RGBColor(214, 39, 40);
-    let blue = RGBColor(31, 119, 180);
-    let sides = [
-        (&b, red, "model (before)"),
-        (&a, blue, "model + effect (after)"),
-    ];
-    for (tracks, colour, label) in sides {
-        for (i, s) in tracks.iter().enumerate() {
-            let series = chart.draw_series(LineSeries::new(pts(s), colour.stroke_width(1)))?;
-            if i == 0 {
-                series
-                    .label(label)
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
-            }
-        }
-    }
-    chart
-        .configure_series_labels()
-        .border_style(BLACK)
-        .background_style(WHITE.mix(0.6))
-        .draw()?;
-
-    // Distance between each replay and the recorded position at the same time, ÷ L.
-    let errors = |tracks: &[SegmentTrack]| -> Vec<Vec<(f64, f64)>> {
-        tracks
-            .iter()
-            .map(|s| {
-                s.t_s
-                    .iter()
-                    .zip(s.x0.iter().zip(&s.y0))
-                    .map(|(&t, (&n, &e))| {
-                        let dn = n - interp(&rec.t, &rec.x0, t);
-                        let de = e - interp(&rec.t, &rec.y0, t);
-                        (t, dn.hypot(de) / l)
-                    })
-                    .collect()
-            })
-            .collect()
-    };
-    let (eb, ea) = (errors(&b), errors(&a));
-    let top_error = eb
-        .iter()
-        .chain(&ea)
-        .flatten()
-        .map(|p| p.1)
-        .filter(|v| v.is_finite())
-        .fold(0.0f64, f64::max)
-        .max(1e-3);
-    let t_end = rec.t.last().copied().unwrap_or(1.0).max(1e-3);
-    let mut err_chart = ChartBuilder::on(&bottom)
-        .caption(
-            "position error of the segment replays ÷ L",
-            ("sans-serif", 16),
-        )
-        .margin(15)
-        .x_label_area_size(40)
-        .y_label_area_size(50)
-        .build_cartesian_2d(0.0..t_end, 0.0..1.05 * top_error)?;
-    err_chart
-        .configure_mesh()
-        .x_desc("t [s]")
-        .y_desc("|Δ position| / L")
-        .draw()?;
-    for (segs, colour) in [(&eb, red), (&ea, blue)] {
-        for seg in segs.iter() {
-            err_chart.draw_series(LineSeries::new(
-                seg.iter().copied().filter(|p| p.1.is_finite()),
-                colour.stroke_width(1),
-            ))?;
-        }
-    }
-    root.present()?;
-    Ok(())
-}
-
-/// Equation-error residuals of one recording over time (each DOF ÷ its noise scale), with the located
-/// windows shaded.
-fn residual_figure(
-    path: &Path,
-    name: &str,
-    t: &[f64],
-    e: &[[f64; 3]],
-    windows: &[&crate::diagnose::Located],
-) -> anyhow::Result<()> {
-    let root = SVGBackend::new(path, (1000, 800)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let (t0, t1) = (
-        t.first().copied().unwrap_or(0.0),
-        t.last()
-            .copied()
-            .unwrap_or(1.0)
-            .max(t.first().copied().unwrap_or(0.0) + 1.0),
-    );
-    let panels = root.split_evenly((3, 1));
-    let dofs = ["surge", "sway", "yaw"];
-    for (d, panel) in panels.iter().enumerate() {
-        let lim = e
-            .iter()
-            .map(|x| x[d].abs())
-            .fold(1.0f64, f64::max)
-            .min(10.0);
-        let mut chart = ChartBuilder::on(panel)
-            .caption(
-                if d == 0 {
-                    format!(
-                        "{name}: equation-error residual ÷ noise scale (shaded: located mismatch)"
-                    )
-                } else {
-                    String::new()
-                },
-                ("sans-serif", 18),
-            )
-            .margin(10)
-            .x_label_area_size(30)
-            .y_label_area_size(50)
-            .build_cartesian_2d(t0..t1, -lim..lim)?;
-        chart
-            .configure_mesh()
-            .x_desc("t [s]")
-            .y_desc(dofs[d])
-            .draw()?;
-        let shade = RGBColor(255, 200, 120).mix(0.5);
-        for w in windows.iter().filter(|w| w.dof == dofs[d]) {
-            chart.draw_series(std::iter::once(Rectangle::new(
-                [(w.t_start, -lim), (w.t_end, lim)],
-                shade.filled(),
-            )))?;
-        }
-        chart.draw_series(LineSeries::new(
-            t.iter().zip(e).map(|(&t, x)| (t, x[d].clamp(-lim, lim))),
-            BLACK.stroke_width(1),
-        ))?;
-    }
-    root.present()?;
-    Ok(())
-}

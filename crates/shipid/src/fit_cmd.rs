@@ -7,7 +7,10 @@ use shipid_estimators::Solver;
 use shipid_io::Dataset;
 use shipid_io::write::write_atomic;
 
-use crate::fit::{EstimatorSpec, FitOutput, WindowSpec, fit_dataset, load_set};
+use shipid_pipeline::fit::{EstimatorSpec, FitOutput, WindowSpec, fit_dataset, load_set};
+use shipid_pipeline::fit_gp::{DEFAULT_SIMILARITY, fit_gp_dataset, model_text};
+use shipid_pipeline::model_file::load_model;
+
 use crate::{CliError, Outcome, failed};
 
 /// Parsed flags of `shipid fit`.
@@ -55,7 +58,7 @@ pub fn report_json(out: &FitOutput) -> Value {
                 "objective": d.fit.objective,
                 "iterations": d.fit.iterations,
                 "hyper_parameter": d.tuning.as_ref().map(|t| t.best),
-                "epsilon": crate::fit::svr_epsilon(&d.fit.estimator),
+                "epsilon": shipid_pipeline::fit::svr_epsilon(&d.fit.estimator),
             }),
         );
     }
@@ -75,7 +78,7 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     let out = fit_dataset(&ds, set, &a.estimator, &a.recordings, a.window, a.solver)?;
     let text = toml::to_string(&out.file).map_err(failed)?;
     let header = format!(
-        "# Abkowitz model identified by shipid {}.\n# Coefficients: prime system I (DOMAIN.md §1) with U0 = {} m/s, L = {} m; midship; rudder positive to starboard.\n",
+        "# Abkowitz model identified by shipid {}.\n# Coefficients: prime system I (docs/conventions.md) with U0 = {} m/s, L = {} m; midship; rudder positive to starboard.\n",
         env!("CARGO_PKG_VERSION"),
         ds.ship.u0,
         ds.ship.lpp
@@ -114,9 +117,59 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     };
     if a.validate {
         let spec = a.out.to_string_lossy();
-        if crate::validate_cmd::run(&spec, a.dataset, a.json)? == Outcome::SomeFailed {
+        let model = load_model(&spec)?;
+        if crate::print::validation(model.as_ref(), &spec, &ds, a.json) == Outcome::SomeFailed {
             outcome = Outcome::SomeFailed;
         }
     }
     Ok(outcome)
+}
+
+/// `shipid fit DATASET --estimator sparse-gp [--similarity D] --out MODEL.toml [--json] [--validate]`.
+pub fn run_gp(
+    dataset: &std::path::Path,
+    recordings: &[String],
+    window: WindowSpec,
+    similarity: Option<f64>,
+    out: &std::path::Path,
+    json: bool,
+    validate: bool,
+) -> Result<Outcome, CliError> {
+    let ds = Dataset::load(dataset)?;
+    let threshold = similarity.unwrap_or(DEFAULT_SIMILARITY);
+    let (file, _model, report) = fit_gp_dataset(&ds, recordings, window, threshold)?;
+    let text = model_text(&file).map_err(failed)?;
+    write_atomic(out, text.as_bytes()).map_err(failed)?;
+    if json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&report).unwrap_or_default()
+        );
+    } else {
+        println!(
+            "sparse GP: kept {} of {} samples (d_gen {threshold}) in {:.1} ms; trained 3 GPs in {:.3} s → {}",
+            report.kept,
+            report.candidates,
+            report.sparsify_time_s * 1e3,
+            report.train_time_s,
+            out.display()
+        );
+        for o in &report.outputs {
+            println!(
+                "  {}: log marginal likelihood {:.1}, {} iterations, {:.3} s, RMS residual over all training samples {:.3e} (target RMS {:.3e})",
+                o.name,
+                o.log_marginal_likelihood,
+                o.iterations,
+                o.train_time_s,
+                o.rms_residual_all_samples,
+                o.target_rms
+            );
+        }
+    }
+    if validate {
+        let spec = out.to_string_lossy();
+        let model = load_model(&spec)?;
+        return Ok(crate::print::validation(model.as_ref(), &spec, &ds, json));
+    }
+    Ok(Outcome::Ok)
 }

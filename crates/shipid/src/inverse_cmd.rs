@@ -7,12 +7,11 @@
 //! (Fig. 6/7: red = simulated with the predicted hydrodynamics, black dashed = given indexes).
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
-use anyhow::Result;
 use indicatif::{ProgressBar, ProgressStyle};
-use plotters::prelude::*;
+use shipid_figures::inverse::{MotionFigure, motions_figure, write_modes};
 use shipid_inverse::database::{ShipsFile, validate};
 use shipid_inverse::indexes::{
     INDEX_LABELS, Manoeuvres, MotionIndexes, N_INDEXES, SimSettings, indexes_of,
@@ -48,7 +47,7 @@ fn read_toml<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, CliError>
     toml::from_str(&text).map_err(|e| bad_input(format!("{}: {e}", path.display())))
 }
 
-fn load(ships: &Path, targets: &Path) -> Result<(VariationModes, Vec<TargetShip>), CliError> {
+pub fn load(ships: &Path, targets: &Path) -> Result<(VariationModes, Vec<TargetShip>), CliError> {
     let db: ShipsFile = read_toml(ships)?;
     validate(&db.ship).map_err(|e| bad_input(format!("{}: {e}", ships.display())))?;
     let modes = VariationModes::new(&db.ship)
@@ -74,7 +73,7 @@ fn load(ships: &Path, targets: &Path) -> Result<(VariationModes, Vec<TargetShip>
     Ok((modes, t.target))
 }
 
-fn progress(n: usize, what: &str) -> ProgressBar {
+pub fn progress(n: usize, what: &str) -> ProgressBar {
     let bar = ProgressBar::new(n as u64);
     bar.set_style(
         ProgressStyle::with_template(&format!(
@@ -85,7 +84,7 @@ fn progress(n: usize, what: &str) -> ProgressBar {
     bar
 }
 
-fn build(
+pub fn build(
     target: &TargetShip,
     modes: &VariationModes,
     n_modes: usize,
@@ -380,272 +379,3 @@ fn slug(s: &str) -> String {
         .collect()
 }
 
-fn write_modes(out: &Path, modes: &VariationModes) -> Result<()> {
-    let mut csv = String::from("mode,singular_value,contribution,cumulative,weight_std\n");
-    for (i, ((s, c), cum)) in modes
-        .singular_values
-        .iter()
-        .zip(&modes.contribution)
-        .zip(modes.cumulative())
-        .enumerate()
-    {
-        let _ = writeln!(csv, "{},{s},{c},{cum},{}", i + 1, modes.weight_std[i]);
-    }
-    write_atomic(&out.join("modes.csv"), csv.as_bytes())?;
-    let path = out.join("modes.svg");
-    let n = modes.contribution.len();
-    let root = SVGBackend::new(&path, (900, 550)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(
-            "Self and cumulative contribution of the hydrodynamic variation modes (paper 003 Fig. 3)",
-            ("sans-serif", 18),
-        )
-        .margin(15)
-        .x_label_area_size(45)
-        .y_label_area_size(60)
-        .build_cartesian_2d(0.5..n as f64 + 0.5, 0.0..100.0)?;
-    chart
-        .configure_mesh()
-        .x_desc("mode")
-        .y_desc("contribution [%]")
-        .x_label_formatter(&|x| format!("{x:.0}"))
-        .draw()?;
-    chart
-        .draw_series(modes.contribution.iter().enumerate().map(|(i, c)| {
-            let x = i as f64 + 1.0;
-            Rectangle::new(
-                [(x - 0.35, 0.0), (x + 0.35, 100.0 * c)],
-                BLUE.mix(0.6).filled(),
-            )
-        }))?
-        .label("self")
-        .legend(|(x, y)| Rectangle::new([(x, y - 5), (x + 15, y + 5)], BLUE.mix(0.6).filled()));
-    chart
-        .draw_series(LineSeries::new(
-            modes
-                .cumulative()
-                .iter()
-                .enumerate()
-                .map(|(i, c)| (i as f64 + 1.0, 100.0 * c)),
-            RED.stroke_width(2),
-        ))?
-        .label("cumulative")
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED.stroke_width(2)));
-    chart.draw_series(DashedLineSeries::new(
-        [(0.5, 95.0), (n as f64 + 0.5, 95.0)],
-        6,
-        4,
-        BLACK.into(),
-    ))?;
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::MiddleRight)
-        .background_style(WHITE.mix(0.6))
-        .border_style(BLACK)
-        .draw()?;
-    root.present()?;
-    Ok(())
-}
-
-/// Fig. 6/7: per motion, the ±35° tracks with the given advance/tactical diameter (dashed), and the two
-/// zig-zag headings with the given peak heading and its time (dashed).
-struct MotionFigure {
-    name: String,
-    given: MotionIndexes,
-    /// Simulated with the network's (clipped) weights: paper 003's result.
-    network: Option<Manoeuvres>,
-    /// Simulated with the refined weights.
-    refined: Option<Manoeuvres>,
-}
-
-const REFINED_COLOUR: RGBColor = RGBColor(31, 119, 180);
-
-fn motions_figure(path: &PathBuf, target: &TargetShip, figures: &[MotionFigure]) -> Result<()> {
-    let rows = figures.len().max(1);
-    let root = SVGBackend::new(path, (1500, 420 * rows as u32)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let l = target.lpp_m;
-    let tl = target.lpp_m / target.u0_m_s;
-    for (area_row, f) in root.split_evenly((rows, 3)).chunks(3).zip(figures) {
-        let (name, q) = (&f.name, f.given.0);
-        let sims = [(&f.network, RED), (&f.refined, REFINED_COLOUR)];
-        // Turning tracks: x = lateral / L, y = advance / L.
-        let mut c = ChartBuilder::on(&area_row[0])
-            .caption(
-                format!("{} {name}: ±35° turns", target.name),
-                ("sans-serif", 16),
-            )
-            .margin(10)
-            .x_label_area_size(35)
-            .y_label_area_size(45)
-            .build_cartesian_2d(-5.5..5.5, -1.0..6.0)?;
-        c.configure_mesh()
-            .x_desc("y0 / L")
-            .y_desc("x0 / L")
-            .draw()?;
-        for ((m, colour), label) in sims
-            .iter()
-            .zip(["network's weights (paper 003)", "refined by re-simulation"])
-            .filter_map(|((m, c), label)| m.as_ref().map(|m| ((m, *c), label)))
-        {
-            for (k, rec) in [&m.turn_p35, &m.turn_m35].into_iter().enumerate() {
-                let end = rec
-                    .psi
-                    .iter()
-                    .position(|p| (p - rec.psi[0]).abs() > std::f64::consts::PI * 1.1)
-                    .unwrap_or(rec.len());
-                let series = c.draw_series(LineSeries::new(
-                    (0..end).map(|i| (rec.y0[i] / l, rec.x0[i] / l)),
-                    colour.stroke_width(2),
-                ))?;
-                if k == 0 {
-                    series.label(label).legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
-                    });
-                }
-            }
-        }
-        for (k, (ad, dt)) in [(q[0], q[1]), (q[3], q[4])].into_iter().enumerate() {
-            let given = c.draw_series(DashedLineSeries::new(
-                [(0.0, ad), (dt, ad)],
-                5,
-                4,
-                BLACK.into(),
-            ))?;
-            if k == 0 {
-                given
-                    .label("given index (advance, tactical diameter, peak ψ and its time)")
-                    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 8, y)], BLACK));
-            }
-            c.draw_series(DashedLineSeries::new(
-                [(dt, -1.0), (dt, 6.0)],
-                5,
-                4,
-                BLACK.into(),
-            ))?;
-        }
-        c.configure_series_labels()
-            .position(SeriesLabelPosition::LowerLeft)
-            .background_style(WHITE.mix(0.6))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 11))
-            .draw()?;
-        for (k, (side, peak, t_idx)) in [(1.0, q[5], q[6]), (-1.0, q[7], q[8])]
-            .into_iter()
-            .enumerate()
-        {
-            let t_max = 16.0;
-            let mut c = ChartBuilder::on(&area_row[1 + k])
-                .caption(
-                    format!(
-                        "{name}: {}20/20 zig-zag",
-                        if side > 0.0 { "+" } else { "−" }
-                    ),
-                    ("sans-serif", 16),
-                )
-                .margin(10)
-                .x_label_area_size(35)
-                .y_label_area_size(45)
-                .build_cartesian_2d(0.0..t_max, -55.0..55.0)?;
-            c.configure_mesh()
-                .x_desc("t U0 / L")
-                .y_desc("ψ (coloured), δ (grey) [deg]")
-                .draw()?;
-            for (m, colour) in sims.iter().filter_map(|(m, c)| m.as_ref().map(|m| (m, c))) {
-                let rec = if side > 0.0 {
-                    &m.zigzag_p20
-                } else {
-                    &m.zigzag_m20
-                };
-                // Points past the axis would be drawn on its edge, as a vertical line.
-                let shown = rec.t.iter().take_while(|&&t| t / tl <= t_max).count();
-                c.draw_series(LineSeries::new(
-                    rec.t[..shown]
-                        .iter()
-                        .zip(&rec.psi)
-                        .map(|(t, p)| (t / tl, (p - rec.psi[0]).to_degrees())),
-                    colour.stroke_width(2),
-                ))?;
-                c.draw_series(LineSeries::new(
-                    rec.t[..shown]
-                        .iter()
-                        .zip(&rec.delta)
-                        .map(|(t, d)| (t / tl, d.to_degrees())),
-                    RGBColor(127, 127, 127).stroke_width(1),
-                ))?;
-            }
-            // Given: first peak ψ = ±20·ratio; the time marks the first (+20) or second (−20) peak.
-            let psi_peak = side * 20.0 * peak;
-            c.draw_series(DashedLineSeries::new(
-                [(0.0, psi_peak), (t_max, psi_peak)],
-                5,
-                4,
-                BLACK.into(),
-            ))?;
-            c.draw_series(DashedLineSeries::new(
-                [(t_idx, -55.0), (t_idx, 55.0)],
-                5,
-                4,
-                BLACK.into(),
-            ))?;
-        }
-    }
-    root.present()?;
-    Ok(())
-}
-
-/// `shipid inverse-bench`: wall time of building the simulation database of the first target.
-pub fn bench(
-    targets: &Path,
-    ships: &Path,
-    samples: usize,
-    repeats: usize,
-    seed: u64,
-) -> Result<Outcome, CliError> {
-    faer::set_global_parallelism(faer::Par::Seq);
-    let (modes, targets) = load(ships, targets)?;
-    let target = &targets[0];
-    let n_modes = modes.modes_for(0.95);
-    let settings = SimSettings::default();
-    let threads = rayon::current_num_threads();
-    println!(
-        "| target | ships | manoeuvres | threads | usable | dropped | wall time [s] | ms per ship | CPU time [s] | load average before |\n|---|---|---|---|---|---|---|---|---|---|"
-    );
-    for _ in 0..repeats.max(1) {
-        // Other processes share the cores; the 1-minute load average says how much.
-        let load = std::fs::read_to_string("/proc/loadavg")
-            .ok()
-            .and_then(|t| t.split_whitespace().next().map(str::to_string))
-            .unwrap_or_else(|| "n/a".into());
-        let cpu0 = process_cpu_s();
-        let (db, secs) = build(target, &modes, n_modes, samples, seed, &settings)?;
-        let cpu = match (cpu0, process_cpu_s()) {
-            (Some(a), Some(b)) => format!("{:.1}", b - a),
-            _ => "n/a".into(),
-        };
-        println!(
-            "| {} | {} | {} | {} | {} | {} | {:.2} | {:.2} | {cpu} | {load} |",
-            target.name,
-            samples,
-            4 * samples,
-            threads,
-            db.samples.len(),
-            db.dropped.len(),
-            secs,
-            1e3 * secs / samples as f64
-        );
-    }
-    Ok(Outcome::Ok)
-}
-
-/// User + system CPU time of this process [s] from /proc/self/stat (Linux; clock ticks of 1/100 s, the
-/// kernel's USER_HZ), or `None` elsewhere. Less sensitive than wall time to other jobs on the cores.
-fn process_cpu_s() -> Option<f64> {
-    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
-    let after = &stat[stat.rfind(')')? + 1..];
-    let f: Vec<&str> = after.split_whitespace().collect();
-    let utime: f64 = f.get(11)?.parse().ok()?;
-    let stime: f64 = f.get(12)?.parse().ok()?;
-    Some((utime + stime) / 100.0)
-}

@@ -2,26 +2,15 @@
 //! returns an [`Outcome`] or a [`CliError`]; `main` turns them into output and exit codes
 //! (0 all ok, 1 some case failed, 2 bad input).
 
-pub mod bench_diagnose;
-pub mod diagnose;
 pub mod diagnose_cmd;
-pub mod fit;
 pub mod fit_cmd;
-pub mod fit_gp;
-pub mod generate;
 pub mod import;
 pub mod inverse_cmd;
 pub mod metrics_cmd;
-pub mod output_error;
-pub mod paper001;
-pub mod plot;
-pub mod range;
-pub mod runner;
+pub mod print;
+pub mod report_cmd;
 pub mod simulate_cmd;
-pub mod spec;
-pub mod study;
 pub mod study_cmd;
-pub mod validate;
 pub mod validate_cmd;
 
 use std::fmt;
@@ -57,6 +46,26 @@ impl CliError {
         match self {
             CliError::BadInput(_) => 2,
             CliError::Failed(_) => 1,
+        }
+    }
+}
+
+impl From<shipid_pipeline::PipelineError> for CliError {
+    fn from(e: shipid_pipeline::PipelineError) -> Self {
+        if e.is_bad_input() {
+            CliError::BadInput(e.into())
+        } else {
+            CliError::Failed(e.into())
+        }
+    }
+}
+
+impl From<shipid_study::StudyError> for CliError {
+    fn from(e: shipid_study::StudyError) -> Self {
+        if e.is_bad_input() {
+            CliError::BadInput(e.into())
+        } else {
+            CliError::Failed(e.into())
         }
     }
 }

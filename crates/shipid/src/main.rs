@@ -113,6 +113,10 @@ enum Command {
         /// Rerun finished cases too.
         #[arg(long)]
         force: bool,
+        /// Exit 1 when a prediction diverged (by default a diverged prediction is a result of the
+        /// study, counted in its summary line, and the run exits 0).
+        #[arg(long)]
+        strict: bool,
     },
     /// Print a comparison table of a study's summary (markdown).
     Table {
@@ -122,6 +126,15 @@ enum Command {
         pivot: String,
         #[arg(long)]
         out: Option<PathBuf>,
+    },
+    /// Write one self-contained HTML page (DIR/report.html) for a study output folder or a diagnosis
+    /// output folder (one holding report.json); it opens offline from the file alone.
+    Report {
+        /// The output folder of `shipid run` or of `shipid diagnose --plots`.
+        dir: PathBuf,
+        /// The study file of a study folder (default: the study recorded in the folder's run.json).
+        #[arg(long)]
+        study: Option<PathBuf>,
     },
     /// Redraw the figures (SVG) of an existing study run into <out>/figures/ (no refitting).
     Plot {
@@ -159,21 +172,6 @@ enum Command {
         /// Replay segment length ÷ (L/U0).
         #[arg(long, default_value_t = 10.0)]
         horizon: f64,
-    },
-    /// Benchmark the diagnosis on generated data with concealed effects (confusion matrix, fit
-    /// improvements, recovered parameters) written to `--out`.
-    BenchDiagnose {
-        /// Base model: `sparse-gp` (paper 001's sparse GP fitted on the clean embedded data, as `shipid fit --estimator sparse-gp`), `full74` (full74 LSQ fitted on the clean embedded data and refined in the output-error sense, as `shipid fit --set full74 --refine`), `mmg:kvlcc2`, or a model file.
-        #[arg(long, default_value = shipid::bench_diagnose::GP_BASE)]
-        base: String,
-        #[arg(long, default_value = "results/diagnose")]
-        out: PathBuf,
-        /// Noise seeds per effect and magnitude.
-        #[arg(long, default_value_t = 3)]
-        seeds: u64,
-        /// Effect-free control cases.
-        #[arg(long, default_value_t = 12)]
-        controls: u64,
     },
     /// Validate a model on a data set: replayed-rudder RMSEs and closed-loop manoeuvre metrics.
     Validate {
@@ -229,19 +227,6 @@ enum Command {
         #[arg(long, default_value = "results/paper003")]
         out: PathBuf,
     },
-    /// Time the build of paper 003's simulation database (first target of the file).
-    InverseBench {
-        #[arg(default_value = "data/paper003/targets.toml")]
-        targets: PathBuf,
-        #[arg(long, default_value = "data/paper003/ships.toml")]
-        ships: PathBuf,
-        #[arg(long, default_value_t = 2603)]
-        samples: usize,
-        #[arg(long, default_value_t = 3)]
-        repeats: usize,
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-    },
 }
 
 fn run(cli: Cli) -> Result<Outcome, CliError> {
@@ -252,25 +237,25 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             effect,
             manoeuvre,
         } => {
-            let effects = shipid::generate::parse_effects(&effect)?;
+            let effects = shipid_pipeline::generate::parse_effects(&effect)?;
             let manoeuvres = if manoeuvre.is_empty() {
-                shipid::generate::default_manoeuvres()
+                shipid_pipeline::generate::default_manoeuvres()
             } else {
                 manoeuvre
                     .iter()
                     .map(|m| {
-                        shipid::spec::parse_manoeuvre(m)
+                        shipid_pipeline::spec::parse_manoeuvre(m)
                             .map_err(|e| shipid::bad_input(format!("--manoeuvre: {e}")))
                     })
                     .collect::<Result<Vec<_>, _>>()?
             };
-            let g = shipid::generate::generate_manoeuvres(noise, &effects, &manoeuvres)?;
+            let g = shipid_pipeline::generate::generate_manoeuvres(noise, &effects, &manoeuvres)?;
             let recs: Vec<_> = g.recordings.iter().collect();
             shipid_io::write::write_dataset(
                 &out,
                 &g.dataset,
                 &recs,
-                &shipid::generate::provenance(noise),
+                &shipid_pipeline::generate::provenance(noise),
             )
             .map_err(failed)?;
             eprintln!(
@@ -308,11 +293,11 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                 (Some(_), Some(_)) => {
                     return Err(shipid::bad_input("give --overshoots or --window, not both"));
                 }
-                (Some(n), None) => shipid::fit::WindowSpec::Overshoots(n),
+                (Some(n), None) => shipid_pipeline::fit::WindowSpec::Overshoots(n),
                 (None, Some(w)) => parse_window(&w)?,
-                (None, None) => shipid::fit::WindowSpec::Whole,
+                (None, None) => shipid_pipeline::fit::WindowSpec::Whole,
             };
-            let spec = shipid::fit::EstimatorSpec {
+            let spec = shipid_pipeline::fit::EstimatorSpec {
                 name: estimator.clone(),
                 lambda,
                 alpha,
@@ -323,8 +308,8 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                 similarity,
             };
             spec.validate()?;
-            if estimator == shipid::fit::GP {
-                return shipid::fit_gp::run(
+            if estimator == shipid_pipeline::fit::GP {
+                return shipid::fit_cmd::run_gp(
                     &dataset,
                     &recordings,
                     window,
@@ -370,16 +355,19 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             jobs,
             out,
             force,
+            strict,
         } => shipid::study_cmd::run(
             &study,
             out.as_deref(),
             jobs.unwrap_or_else(default_jobs),
             force,
+            strict,
         ),
         Command::Table { study, pivot, out } => {
             shipid::study_cmd::table(&study, out.as_deref(), &pivot)
         }
-        Command::Plot { study, out } => shipid::plot::run(&study, out.as_deref()),
+        Command::Plot { study, out } => shipid::study_cmd::plot(&study, out.as_deref()),
+        Command::Report { dir, study } => shipid::report_cmd::run(&dir, study.as_deref()),
         Command::Check {
             study,
             reference,
@@ -391,12 +379,6 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             dataset,
             json,
         } => shipid::validate_cmd::run(&model, &dataset, json),
-        Command::BenchDiagnose {
-            base,
-            out,
-            seeds,
-            controls,
-        } => shipid::bench_diagnose::run(&base, &out, seeds, controls),
         Command::Diagnose {
             model,
             dataset,
@@ -431,13 +413,6 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             max_resim: resimulate,
             refine_evals,
         }),
-        Command::InverseBench {
-            targets,
-            ships,
-            samples,
-            repeats,
-            seed,
-        } => shipid::inverse_cmd::bench(&targets, &ships, samples, repeats, seed),
     }
 }
 
@@ -445,7 +420,7 @@ fn default_jobs() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get())
 }
 
-fn parse_window(text: &str) -> Result<shipid::fit::WindowSpec, CliError> {
+fn parse_window(text: &str) -> Result<shipid_pipeline::fit::WindowSpec, CliError> {
     let bad = || {
         shipid::bad_input(format!(
             "--window `{text}`: expected START:END in seconds, e.g. 0:120"
@@ -459,7 +434,7 @@ fn parse_window(text: &str) -> Result<shipid::fit::WindowSpec, CliError> {
     if !(start_s.is_finite() && end_s.is_finite() && end_s > start_s) {
         return Err(bad());
     }
-    Ok(shipid::fit::WindowSpec::Time { start_s, end_s })
+    Ok(shipid_pipeline::fit::WindowSpec::Time { start_s, end_s })
 }
 
 fn main() -> ExitCode {

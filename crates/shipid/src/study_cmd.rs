@@ -3,246 +3,169 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use shipid_io::write::write_atomic;
+use shipid_report::RunMeta;
+
+use shipid_study::tables::{coefficients_table, diagnostics_table, summary_table};
+use shipid_study::{CaseResult, Study, default_out, load_study, run_study};
 use shipid_tables::{Table, Tolerance, compare};
 
-use crate::runner::{CaseResult, default_out, run_study};
-use crate::study::{Case, Study, load_study};
 use crate::{CliError, Outcome, bad_input, failed};
 
-const METRIC_KEYS: [&str; 8] = [
-    "overshoot_1",
-    "overshoot_2",
-    "t_a",
-    "t_check",
-    "advance",
-    "transfer",
-    "tactical_diameter",
-    "steady_diameter",
-];
-
-fn case_columns(t: &mut Table, rows: &[(&Case, &CaseResult)]) {
-    let text = |f: &dyn Fn(&Case, &CaseResult) -> String| {
-        rows.iter().map(|(c, r)| f(c, r)).collect::<Vec<_>>()
-    };
-    t.push_text("case", text(&|c, _| c.id.clone()));
-    t.push_text("set", text(&|c, _| c.set.clone()));
-    // A refined fit is another estimator for every reader of the tables ("lsq-oe", as in its case id).
-    t.push_text(
-        "estimator",
-        text(&|c, _| {
-            let e = &c.estimator;
-            format!("{}{}", e.name, if e.refine { "-oe" } else { "" })
-        }),
-    );
-    t.push_text("solver", text(&|c, _| c.solver.clone()));
-    t.push_text("training", text(&|c, _| c.training.join("+")));
-    t.push_text("window", text(&|c, _| c.window.label()));
-    let num = |f: &dyn Fn(&Case, &CaseResult) -> Option<f64>| {
-        rows.iter().map(|(c, r)| f(c, r)).collect::<Vec<_>>()
-    };
-    t.push_num(
-        "overshoots",
-        num(&|c, _| match c.window {
-            crate::fit::WindowSpec::Overshoots(n) => Some(n as f64),
-            _ => None,
-        }),
-    );
-    t.push_text("tuned", text(&|c, _| c.estimator.tune.to_string()));
-    // One column per DOF: the value of its fit, else what the case gave (a failed case has no fits).
-    let per_dof = |t: &mut Table,
-                   prefix: &str,
-                   fitted: &dyn Fn(&crate::runner::DofSummary) -> Option<f64>,
-                   given: &dyn Fn(&Case) -> Option<f64>| {
-        for (key, dof) in [("X", 0usize), ("Y", 1), ("N", 2)] {
-            t.push_num(
-                &format!("{prefix}_{key}"),
-                num(&|c, r| r.dofs.get(dof).and_then(fitted).or_else(|| given(c))),
-            );
-        }
-    };
-    per_dof(t, "hyper", &|d| d.hyper_parameter, &|c| {
-        let e = &c.estimator;
-        e.lambda.or(e.alpha).or(e.c).or(e.similarity)
-    });
-    // The SVR's second hyper-parameter (hyper_* holds its C): tuned per DOF unless given.
-    per_dof(t, "epsilon", &|d| d.epsilon, &|c| c.estimator.epsilon);
-    t.push_text("case_status", text(&|_, r| r.status.clone()));
-    t.push_num("fit_time_s", num(&|_, r| r.fit_time_s));
-}
-
-/// One row per case × test.
-pub fn summary_table(study: &Study, results: &[CaseResult]) -> Table {
-    let mut rows: Vec<(&Case, &CaseResult, Option<&crate::runner::TestRow>)> = Vec::new();
-    for (c, r) in study.cases.iter().zip(results) {
-        if r.tests.is_empty() {
-            rows.push((c, r, None));
-        }
-        for t in &r.tests {
-            rows.push((c, r, Some(t)));
-        }
-    }
-    let mut t = Table::default();
-    let pairs: Vec<(&Case, &CaseResult)> = rows.iter().map(|(c, r, _)| (*c, *r)).collect();
-    case_columns(&mut t, &pairs);
-    let text = |f: &dyn Fn(&crate::runner::TestRow) -> String| {
-        rows.iter()
-            .map(|(_, _, x)| x.map(f).unwrap_or_default())
-            .collect()
-    };
-    let num = |f: &dyn Fn(&crate::runner::TestRow) -> Option<f64>| {
-        rows.iter().map(|(_, _, x)| x.and_then(f)).collect()
-    };
-    t.push_text("test", text(&|x| x.test.clone()));
-    t.push_text("kind", text(&|x| x.kind.clone()));
-    t.push_text("status", text(&|x| x.status.clone()));
-    t.push_num("diverged_at_s", num(&|x| x.diverged_at_s));
-    t.push_text("replay_status", text(&|x| x.replay_status.clone()));
-    t.push_num(
-        "position_rmse_over_l",
-        num(&|x| Some(x.position_rmse_over_l)),
-    );
-    t.push_num("heading_rmse_deg", num(&|x| Some(x.heading_rmse_deg)));
-    t.push_num("u_rmse_m_s", num(&|x| Some(x.u_rmse_m_s)));
-    t.push_num("v_rmse_m_s", num(&|x| Some(x.v_rmse_m_s)));
-    t.push_num("r_rmse_deg_s", num(&|x| Some(x.r_rmse_deg_s)));
-    t.push_num(
-        "outside_identification_range",
-        num(&|x| x.outside_identification_range),
-    );
-    for (i, key) in METRIC_KEYS.iter().enumerate() {
-        t.push_num(
-            &format!("{key}_recorded"),
-            num(&|x| x.recorded.entries()[i].1),
-        );
-        t.push_num(
-            &format!("{key}_predicted"),
-            num(&|x| x.predicted.and_then(|p| p.entries()[i].1)),
-        );
-        t.push_num(
-            &format!("{key}_rel_error"),
-            num(&|x| x.relative_error.get(*key).copied()),
-        );
-    }
-    t.push_num("mrae", num(&|x| x.mrae));
-    t
-}
-
-/// Long format: case, DOF, term, value.
-pub fn coefficients_table(study: &Study, results: &[CaseResult]) -> Table {
-    long_table(study, results, |r| {
-        r.coefficients
-            .iter()
-            .map(|c| (c.dof.clone(), c.term.clone(), "coefficient".into(), c.value))
-            .collect()
-    })
-}
-
-/// Long format: VIF per term, condition numbers and residual RMS per DOF.
-pub fn diagnostics_table(study: &Study, results: &[CaseResult]) -> Table {
-    long_table(study, results, |r| {
-        let mut v: Vec<(String, String, String, Option<f64>)> = r
-            .vif
-            .iter()
-            .map(|c| (c.dof.clone(), c.term.clone(), "vif".into(), c.value))
-            .collect();
-        for d in &r.dofs {
-            v.push((
-                d.dof.clone(),
-                String::new(),
-                "condition_number".into(),
-                d.condition_number,
-            ));
-            v.push((
-                d.dof.clone(),
-                String::new(),
-                "scaled_condition_number".into(),
-                d.scaled_condition_number,
-            ));
-            v.push((
-                d.dof.clone(),
-                String::new(),
-                "residual_rms".into(),
-                Some(d.residual_rms),
-            ));
-        }
-        v
-    })
-}
-
-type LongRow = (String, String, String, Option<f64>);
-
-fn long_table(
-    study: &Study,
-    results: &[CaseResult],
-    rows_of: impl Fn(&CaseResult) -> Vec<LongRow>,
-) -> Table {
-    let mut pairs = Vec::new();
-    let mut long = Vec::new();
-    for (c, r) in study.cases.iter().zip(results) {
-        for row in rows_of(r) {
-            pairs.push((c, r));
-            long.push(row);
-        }
-    }
-    let mut t = Table::default();
-    case_columns(&mut t, &pairs);
-    t.push_text("dof", long.iter().map(|r| r.0.clone()).collect());
-    t.push_text("term", long.iter().map(|r| r.1.clone()).collect());
-    t.push_text("quantity", long.iter().map(|r| r.2.clone()).collect());
-    t.push_num("value", long.iter().map(|r| r.3).collect());
-    t
-}
-
-/// Run a study and write its tables; returns the results.
+/// Run a study and write its tables, figures, run record (`study.toml`: the study file as run;
+/// `run.json`: tool version, data set, times, status counts, warnings) and the HTML report; returns the
+/// results and the report's path (`None` when it could not be written: a warning, not a failure).
 pub fn run_and_write(
     study: &Study,
     out: &Path,
     jobs: usize,
     force: bool,
     progress: bool,
-) -> Result<Vec<CaseResult>, CliError> {
+) -> Result<(Vec<CaseResult>, Option<PathBuf>), CliError> {
+    let started = std::time::SystemTime::now();
     let results = run_study(study, out, jobs, force, progress).map_err(failed)?;
-    summary_table(study, &results)
-        .write(out, "summary")
-        .map_err(failed)?;
-    coefficients_table(study, &results)
-        .write(out, "coefficients")
-        .map_err(failed)?;
-    diagnostics_table(study, &results)
-        .write(out, "diagnostics")
-        .map_err(failed)?;
-    // Figures are a convenience: one that cannot be drawn is a warning, never a failed run.
-    for w in crate::plot::write_figures(study, out).warnings {
+    for (name, table) in [
+        ("summary", summary_table(study, &results)),
+        ("coefficients", coefficients_table(study, &results)),
+        ("diagnostics", diagnostics_table(study, &results)),
+    ] {
+        table.write(out, name).map_err(failed)?;
+    }
+    // Figures and the report are a convenience: one that cannot be made is a warning, never a
+    // failed run.
+    let mut warnings = shipid_figures::write_figures(study, out).warnings;
+    let study_text = std::fs::read_to_string(&study.path).map_err(failed)?;
+    write_atomic(&out.join("study.toml"), study_text.as_bytes()).map_err(failed)?;
+    let counts = StatusCounts::of(&results);
+    let epoch_s = |t: std::time::SystemTime| {
+        t.duration_since(std::time::UNIX_EPOCH)
+            .map_or(0.0, |d| d.as_secs_f64())
+    };
+    let run = serde_json::json!({
+        "tool_version": env!("CARGO_PKG_VERSION"),
+        "study": study.name,
+        "study_file": study.path.display().to_string(),
+        "dataset": study.dataset_path.display().to_string(),
+        "started_unix_s": epoch_s(started),
+        "finished_unix_s": epoch_s(std::time::SystemTime::now()),
+        "cases": results.len(),
+        "status_counts": {"ok": counts.ok, "diverged": counts.diverged, "fit_failed": counts.fit_failed},
+        "warnings": warnings,
+    });
+    let run_text = serde_json::to_string_pretty(&run).map_err(failed)?;
+    write_atomic(&out.join("run.json"), run_text.as_bytes()).map_err(failed)?;
+    let meta = RunMeta {
+        tool_version: Some(env!("CARGO_PKG_VERSION").into()),
+        name: Some(study.name.clone()),
+        study_file: Some(study.path.clone()),
+        dataset: Some(study.dataset_path.clone()),
+        warnings: warnings.clone(),
+        details: vec![],
+    };
+    let report = shipid_report::study_page(out, &meta)
+        .and_then(|html| shipid_report::write_report(out, &html));
+    let report = match report {
+        Ok(p) => Some(p),
+        Err(e) => {
+            warnings.push(format!("report: {e}"));
+            None
+        }
+    };
+    for w in &warnings {
         eprintln!("warning: {w}");
     }
-    Ok(results)
+    Ok((results, report))
 }
 
+/// How the cases of a run ended.
+struct StatusCounts {
+    ok: usize,
+    diverged: usize,
+    fit_failed: usize,
+}
+
+impl StatusCounts {
+    fn of(results: &[CaseResult]) -> StatusCounts {
+        let fit_failed = results.iter().filter(|r| r.fit_failed()).count();
+        let diverged = results
+            .iter()
+            .filter(|r| !r.fit_failed() && r.diverged())
+            .count();
+        StatusCounts {
+            ok: results.len() - fit_failed - diverged,
+            diverged,
+            fit_failed,
+        }
+    }
+}
+
+/// `shipid run STUDY.toml`: exit 0 when every case ended with a recorded status (a diverged prediction
+/// is a result), 1 when a case could not be computed (or, with `strict`, when one diverged).
 pub fn run(
     study_path: &Path,
     out: Option<&Path>,
     jobs: usize,
     force: bool,
+    strict: bool,
 ) -> Result<Outcome, CliError> {
+    if jobs == 0 {
+        return Err(bad_input("--jobs 0: give at least 1"));
+    }
     let study = load_study(study_path)?;
     let out = out
         .map(PathBuf::from)
         .unwrap_or_else(|| default_out(&study));
     let started = std::time::Instant::now();
-    let results = run_and_write(&study, &out, jobs, force, true)?;
-    let n_failed = results.iter().filter(|r| r.failed()).count();
+    let (results, report) = run_and_write(&study, &out, jobs, force, true)?;
+    let c = StatusCounts::of(&results);
     eprintln!(
-        "{}: {} cases ({} with a failed fit or a diverged test) in {:.1} s with {jobs} job(s); tables in {}",
+        "{}: {} cases ({} ok, {} with a diverged prediction, {} whose fit could not be computed) in {:.1} s with {jobs} job(s); tables in {}",
         study.name,
         results.len(),
-        n_failed,
+        c.ok,
+        c.diverged,
+        c.fit_failed,
         started.elapsed().as_secs_f64(),
         out.display()
     );
-    Ok(if n_failed > 0 {
+    if let Some(p) = report {
+        println!("report: {}", p.display());
+    }
+    Ok(if c.fit_failed > 0 || (strict && c.diverged > 0) {
         Outcome::SomeFailed
     } else {
         Outcome::Ok
+    })
+}
+
+/// `shipid plot STUDY.toml [--out DIR]`: the figures of an existing run (no refitting).
+pub fn plot(study_path: &Path, out: Option<&Path>) -> Result<Outcome, CliError> {
+    let study = load_study(study_path)?;
+    let out = out
+        .map(PathBuf::from)
+        .unwrap_or_else(|| default_out(&study));
+    if !out.join("coefficients.csv").is_file() {
+        return Err(bad_input(format!(
+            "{} holds no run of {} (no coefficients.csv): run `shipid run {}` first",
+            out.display(),
+            study.name,
+            study_path.display()
+        )));
+    }
+    let report = shipid_figures::write_figures(&study, &out);
+    for w in &report.warnings {
+        eprintln!("warning: {w}");
+    }
+    eprintln!(
+        "{}: {} figures in {}",
+        study.name,
+        report.written.len(),
+        out.join("figures").display()
+    );
+    Ok(if report.warnings.is_empty() {
+        Outcome::Ok
+    } else {
+        Outcome::SomeFailed
     })
 }
 
@@ -296,7 +219,7 @@ pub fn check(
 ) -> Result<Outcome, CliError> {
     let study = load_study(study_path)?;
     let fresh_dir = tempfile_dir(&study)?;
-    let results = run_and_write(&study, &fresh_dir, jobs, true, false)?;
+    let (results, _) = run_and_write(&study, &fresh_dir, jobs, true, false)?;
     let mut per_column: BTreeMap<String, Option<Tolerance>> =
         BTreeMap::from([("fit_time_s".to_string(), None)]);
     for (k, t) in &study.check {

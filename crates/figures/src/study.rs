@@ -1,0 +1,962 @@
+//! Figures of a study run (SVG, `plotters`), written into `<out>/figures/` after the tables, and by
+//! `shipid plot STUDY.toml` from an existing run's outputs (no refitting):
+//!
+//! - `trajectories_<test>.svg`: recorded track vs every case's closed-loop re-simulation;
+//! - `heading_<test>.svg`: heading and rudder vs time, recording and predictions;
+//! - `coefficient_convergence.svg` (paper 000 Fig. 16): coefficients normalised by their value at the
+//!   largest overshoot count, vs overshoots, when the study varies overshoots;
+//! - `coefficients_<set>.svg` (Fig. 18): |coefficient| per term on a log scale, grouped by case, with
+//!   a mark where the signs of a term disagree across cases;
+//! - `vif_<set>.svg` (Fig. 14/15): VIF per term (log scale);
+//! - `forces_<case>_<test>.svg` (Fig. 12/19): per-term force contributions φ_k β_k over time per DOF,
+//!   for the case with the smallest mean MRAE over its tests and its first training recording.
+//!
+//! A diverged prediction is drawn up to its divergence time, marked with an × and labelled
+//! "diverged" in the legend, never dropped. A figure that cannot be drawn is a warning, not a failure.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+use plotters::coord::types::RangedCoordf64;
+use plotters::prelude::*;
+use shipid_io::{DatasetRecording, Recording};
+use shipid_model::design::contributions;
+use shipid_model::{AbkowitzModel, Dof, ModelFile, PrimeInertia, design};
+use shipid_sim::{AbkowitzDynamics, Dynamics, GpDynamics, SimStatus};
+use shipid_tables::Table;
+
+use shipid_pipeline::fit::{WindowSpec, training_samples};
+use shipid_pipeline::model_file::load_gp_model;
+use shipid_pipeline::validate::replay;
+use shipid_study::{Case, Study};
+
+use crate::error::Result;
+use crate::fig_err;
+
+const FONT: &str = "sans-serif";
+/// Tableau 10: distinguishable line colours.
+const PALETTE: [RGBColor; 10] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
+];
+
+fn colour(i: usize) -> RGBColor {
+    PALETTE[i % PALETTE.len()]
+}
+
+/// What the figures of a run could and could not be drawn.
+#[derive(Debug, Default)]
+pub struct FigureReport {
+    pub written: Vec<PathBuf>,
+    /// One message per figure that could not be drawn.
+    pub warnings: Vec<String>,
+}
+
+pub use shipid_pipeline::validate::closed_loop;
+
+/// (DOF, term, set, estimator) of a convergence line.
+type LineKey = (String, String, String, String);
+
+/// A case of the run with what it left on disk.
+struct CaseData<'a> {
+    case: &'a Case,
+    /// The polynomial model (force decompositions and tracks).
+    model: Option<AbkowitzModel>,
+    /// A sparse-GP case's model (tracks only).
+    gp: Option<GpDynamics>,
+}
+
+/// Legend of a case: set, estimator (refined or not, with its fixed hyper-parameter), window, and the
+/// training recordings when the study has several training combinations (otherwise cases that differ
+/// only in them would share a label).
+fn case_label(study: &Study, c: &Case) -> String {
+    let e = &c.estimator;
+    let hyper = if e.tune {
+        " tuned".to_string()
+    } else if let Some(l) = e.lambda {
+        format!(" λ={l:e}")
+    } else if let Some(a) = e.alpha {
+        format!(" α={a:e}")
+    } else if let Some(c) = e.c {
+        format!(" C={c:e}")
+    } else if let Some(d) = e.similarity {
+        format!(" d_gen={d}")
+    } else {
+        String::new()
+    };
+    let several_trainings = study.cases.iter().any(|o| o.training != c.training);
+    let training = if several_trainings {
+        let names: Vec<&str> = c
+            .training
+            .iter()
+            .map(|f| f.trim_end_matches(".csv"))
+            .collect();
+        format!(" on {}", names.join("+"))
+    } else {
+        String::new()
+    };
+    // A sparse-GP case has no coefficient set.
+    let set = if c.set == shipid_study::study::NO_SET {
+        String::new()
+    } else {
+        format!("{} ", c.set)
+    };
+    format!(
+        "{}{}{}{} {}{}",
+        set,
+        e.name,
+        if e.refine { " refined" } else { "" },
+        hyper,
+        WindowSpec::label(c.window),
+        training
+    )
+}
+
+fn load_cases<'a>(study: &'a Study, out: &Path) -> Vec<CaseData<'a>> {
+    study
+        .cases
+        .iter()
+        .map(|case| {
+            let dir = out.join("cases").join(&case.id);
+            let path = dir.join("model.toml");
+            let text = std::fs::read_to_string(&path).ok();
+            let gp = text
+                .as_deref()
+                .and_then(|t| load_gp_model(&path, t).ok().flatten());
+            let model = text
+                .filter(|_| gp.is_none())
+                .and_then(|t| toml::from_str::<ModelFile>(&t).ok())
+                .and_then(|f| f.to_model().ok());
+            CaseData { case, model, gp }
+        })
+        .collect()
+}
+
+/// The case whose force decomposition is drawn: the one with the smallest mean MRAE over its test
+/// manoeuvres (its `result.json`), so the figure shows the study's best model rather than whichever
+/// case comes first (in a truncation sweep, a one-overshoot fit that diverges); the first case with a
+/// model when no case has an MRAE.
+fn best_case<'c, 'a>(cases: &'c [CaseData<'a>], out: &Path) -> Option<&'c CaseData<'a>> {
+    let mean_mrae = |c: &CaseData| -> Option<f64> {
+        let text =
+            std::fs::read_to_string(out.join("cases").join(&c.case.id).join("result.json")).ok()?;
+        let result: shipid_study::CaseResult = serde_json::from_str(&text).ok()?;
+        let m: Vec<f64> = result.tests.iter().filter_map(|t| t.mrae).collect();
+        (!m.is_empty() && result.tests.iter().all(|t| t.status == shipid_study::runner::TestStatus::Ok))
+            .then(|| m.iter().sum::<f64>() / m.len() as f64)
+    };
+    let with_model = cases.iter().filter(|c| c.model.is_some());
+    with_model
+        .clone()
+        .filter_map(|c| Some((mean_mrae(c)?, c)))
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, c)| c)
+        .or_else(|| with_model.clone().next())
+        .or_else(|| cases.first())
+}
+
+/// File-name-safe form of a name.
+fn slug(s: &str) -> String {
+    let s: String = s
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    s.trim_end_matches("_csv").to_string()
+}
+
+/// Write every figure of a run whose outputs are in `out` into `out/figures/`.
+pub fn write_figures(study: &Study, out: &Path) -> FigureReport {
+    let mut report = FigureReport::default();
+    let dir = out.join("figures");
+    if let Err(e) = std::fs::create_dir_all(&dir) {
+        report
+            .warnings
+            .push(format!("cannot create {}: {e}", dir.display()));
+        return report;
+    }
+    let cases = load_cases(study, out);
+    let r = &mut report;
+    for test in &study.tests {
+        let Some(rec) = study.dataset.recording(test) else {
+            continue;
+        };
+        let sims = predictions(study, &cases, rec);
+        attempt(
+            r,
+            dir.join(format!("trajectories_{}.svg", slug(test))),
+            &|p: &Path| trajectories(p, study, rec, &sims).map(|_| true),
+        );
+        attempt(
+            r,
+            dir.join(format!("heading_{}.svg", slug(test))),
+            &|p: &Path| heading(p, rec, &sims).map(|_| true),
+        );
+    }
+    match Table::read_csv(&out.join("coefficients.csv")) {
+        Ok(t) => {
+            let rows = long_rows(&t, "coefficient");
+            attempt(r, dir.join("coefficient_convergence.svg"), &|p: &Path| {
+                convergence(p, &rows)
+            });
+            for set in distinct(rows.iter().map(|x| x.set.clone())) {
+                attempt(
+                    r,
+                    dir.join(format!("coefficients_{}.svg", slug(&set))),
+                    &|p: &Path| bars(p, &set, &rows, BarKind::Coefficients).map(|_| true),
+                );
+            }
+        }
+        Err(e) => r.warnings.push(format!("coefficients.csv: {e}")),
+    }
+    match Table::read_csv(&out.join("diagnostics.csv")) {
+        Ok(t) => {
+            let rows = long_rows(&t, "vif");
+            for set in distinct(rows.iter().map(|x| x.set.clone())) {
+                attempt(
+                    r,
+                    dir.join(format!("vif_{}.svg", slug(&set))),
+                    &|p: &Path| bars(p, &set, &rows, BarKind::Vif).map(|_| true),
+                );
+            }
+        }
+        Err(e) => r.warnings.push(format!("diagnostics.csv: {e}")),
+    }
+    if let Some(chosen) = best_case(&cases, out)
+        && let Some(test) = chosen.case.training.first()
+    {
+        let name = format!("forces_{}_{}.svg", slug(&chosen.case.id), slug(test));
+        attempt(r, dir.join(name), &|p: &Path| {
+            forces(p, study, chosen, test).map(|_| true)
+        });
+    }
+    report
+}
+
+/// Draw one figure; `Ok(false)` means the figure does not apply to this study.
+fn attempt(report: &mut FigureReport, path: PathBuf, f: &dyn Fn(&Path) -> Result<bool>) {
+    match f(&path) {
+        Ok(true) => report.written.push(path),
+        Ok(false) => {}
+        Err(e) => report
+            .warnings
+            .push(format!("figure {}: {e:#}", path.display())),
+    }
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Time series: trajectories and heading.
+
+/// One case's prediction of a test recording, times shifted back to the recording's clock.
+struct Prediction {
+    label: String,
+    colour: RGBColor,
+    t: Vec<f64>,
+    x0: Vec<f64>,
+    y0: Vec<f64>,
+    psi: Vec<f64>,
+    delta: Vec<f64>,
+    diverged_at_s: Option<f64>,
+}
+
+fn predictions(study: &Study, cases: &[CaseData], r: &DatasetRecording) -> Vec<Prediction> {
+    let ship = &study.dataset.ship;
+    let t0 = r.recording.t.first().copied().unwrap_or(0.0);
+    cases
+        .iter()
+        .enumerate()
+        .filter_map(|(i, c)| {
+            let polynomial = c.model.clone().map(AbkowitzDynamics);
+            let model: &dyn Dynamics = match (&polynomial, &c.gp) {
+                (Some(m), _) => m,
+                (None, Some(g)) => g,
+                (None, None) => return None,
+            };
+            let sim = closed_loop(model, r, ship).unwrap_or_else(|| replay(model, &r.recording));
+            let s = sim.recording;
+            let diverged_at_s = match sim.status {
+                SimStatus::Ok => None,
+                SimStatus::Diverged { t_s, .. } => Some(t_s + t0),
+            };
+            Some(Prediction {
+                label: case_label(study, c.case),
+                colour: colour(i),
+                t: s.t.iter().map(|t| t + t0).collect(),
+                x0: s.x0,
+                y0: s.y0,
+                psi: s.psi,
+                delta: s.delta,
+                diverged_at_s,
+            })
+        })
+        .collect()
+}
+
+fn legend_label(p: &Prediction) -> String {
+    match p.diverged_at_s {
+        Some(t) => format!("{} (diverged at {t:.0} s, ×)", p.label),
+        None => p.label.clone(),
+    }
+}
+
+/// (lo, hi) of finite values, padded by `pad` of the span.
+fn range_of(values: impl Iterator<Item = f64>, pad: f64) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in values.filter(|v| v.is_finite()) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !lo.is_finite() {
+        return (0.0, 1.0);
+    }
+    let span = if hi - lo > 1e-12 * (1.0 + hi.abs()) {
+        hi - lo
+    } else {
+        1.0
+    };
+    (lo - pad * span, hi + pad * span)
+}
+
+/// Points (x, y) up to the first that is not finite or outside the box: a diverging prediction is
+/// drawn until it leaves the figure.
+fn inside(
+    pts: impl Iterator<Item = (f64, f64)>,
+    (x0, x1): (f64, f64),
+    (y0, y1): (f64, f64),
+) -> Vec<(f64, f64)> {
+    pts.take_while(|&(x, y)| {
+        x.is_finite() && y.is_finite() && x >= x0 && x <= x1 && y >= y0 && y <= y1
+    })
+    .collect()
+}
+
+/// Allowed range of a prediction: the recording's range widened by its span on each side.
+fn allowed((lo, hi): (f64, f64)) -> (f64, f64) {
+    let span = (hi - lo).max(1.0);
+    (lo - span, hi + span)
+}
+
+/// Draw a prediction's line (and its × when it diverged) on a chart.
+fn draw_prediction<'a, DB: DrawingBackend + 'a>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    p: &Prediction,
+    pts: Vec<(f64, f64)>,
+    with_legend: bool,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let c = p.colour;
+    let last = pts.last().copied();
+    let series = chart
+        .draw_series(LineSeries::new(pts, c.stroke_width(2)))
+        .map_err(|e| fig_err!("{e}"))?;
+    if with_legend {
+        if p.diverged_at_s.is_some() {
+            series.label(legend_label(p)).legend(move |(x, y)| {
+                EmptyElement::at((x, y))
+                    + PathElement::new(vec![(0, 0), (20, 0)], c.stroke_width(2))
+                    + Cross::new((10, 0), 5, c.stroke_width(2))
+            });
+        } else {
+            series.label(legend_label(p)).legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+            });
+        }
+    }
+    if p.diverged_at_s.is_some()
+        && let Some(at) = last
+    {
+        chart
+            .draw_series(std::iter::once(Cross::new(at, 7, c.stroke_width(3))))
+            .map_err(|e| fig_err!("{e}"))?;
+    }
+    Ok(())
+}
+
+fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+) -> Result<()> {
+    chart
+        .configure_series_labels()
+        .position(position)
+        .background_style(WHITE.mix(0.6))
+        .border_style(BLACK)
+        .label_font((FONT, 13))
+        .draw()
+        .map_err(|e| fig_err!("{e}"))
+}
+
+fn trajectories(
+    path: &Path,
+    study: &Study,
+    r: &DatasetRecording,
+    sims: &[Prediction],
+) -> Result<()> {
+    let l = study.dataset.ship.lpp;
+    let rec = &r.recording;
+    // North up, east right: x-axis y0/L (east), y-axis x0/L (north).
+    let east_rec = range_of(rec.y0.iter().map(|y| y / l), 0.0);
+    let north_rec = range_of(rec.x0.iter().map(|x| x / l), 0.0);
+    let (ea, na) = (allowed(east_rec), allowed(north_rec));
+    let clipped: Vec<Vec<(f64, f64)>> = sims
+        .iter()
+        .map(|p| inside(p.y0.iter().zip(&p.x0).map(|(e, n)| (e / l, n / l)), ea, na))
+        .collect();
+    let all_e = rec
+        .y0
+        .iter()
+        .map(|y| y / l)
+        .chain(clipped.iter().flatten().map(|p| p.0));
+    let all_n = rec
+        .x0
+        .iter()
+        .map(|x| x / l)
+        .chain(clipped.iter().flatten().map(|p| p.1));
+    let (mut e0, mut e1) = range_of(all_e, 0.05);
+    let (mut n0, mut n1) = range_of(all_n, 0.05);
+    // Equal scales on both axes (plot area about 820 × 640 px).
+    let (w, h) = (1000u32, 820u32);
+    let aspect = 820.0 / 640.0;
+    let (de, dn) = (e1 - e0, n1 - n0);
+    if de / dn < aspect {
+        let grow = (dn * aspect - de) / 2.0;
+        e0 -= grow;
+        e1 += grow;
+    } else {
+        let grow = (de / aspect - dn) / 2.0;
+        n0 -= grow;
+        n1 += grow;
+    }
+    let root = SVGBackend::new(path, (w, h)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            format!("Track of {}: recorded vs closed-loop predictions", r.file),
+            (FONT, 20),
+        )
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(60)
+        .build_cartesian_2d(e0..e1, n0..n1)?;
+    chart
+        .configure_mesh()
+        .x_desc("y0 / L (east) [-]")
+        .y_desc("x0 / L (north) [-]")
+        .axis_desc_style((FONT, 15))
+        .draw()?;
+    let e_range = (e0, e1);
+    let n_range = (n0, n1);
+    let rec_pts = inside(
+        rec.y0.iter().zip(&rec.x0).map(|(e, n)| (e / l, n / l)),
+        e_range,
+        n_range,
+    );
+    chart
+        .draw_series(LineSeries::new(rec_pts, BLACK.stroke_width(3)))?
+        .label(format!("recorded {}", r.file))
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(3)));
+    for (p, pts) in sims.iter().zip(clipped) {
+        let pts = inside(pts.into_iter(), e_range, n_range);
+        draw_prediction(&mut chart, p, pts, true)?;
+    }
+    draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
+    root.present()?;
+    Ok(())
+}
+
+fn heading(path: &Path, r: &DatasetRecording, sims: &[Prediction]) -> Result<()> {
+    let rec = &r.recording;
+    let root = SVGBackend::new(path, (1000, 900)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let (top, bottom) = root.split_vertically(470);
+    let t_range = range_of(
+        rec.t
+            .iter()
+            .copied()
+            .chain(sims.iter().flat_map(|p| p.t.iter().copied())),
+        0.0,
+    );
+    for (first, area) in [(true, &top), (false, &bottom)] {
+        let desc = if first {
+            "heading ψ [deg]"
+        } else {
+            "rudder δ [deg]"
+        };
+        let get = |rec: &Recording| -> Vec<f64> {
+            let v = if first { &rec.psi } else { &rec.delta };
+            v.iter().map(|x| x.to_degrees()).collect()
+        };
+        let get_p = |p: &Prediction| -> Vec<f64> {
+            let v = if first { &p.psi } else { &p.delta };
+            v.iter().map(|x| x.to_degrees()).collect()
+        };
+        let rec_y = get(rec);
+        let y_allowed = allowed(range_of(rec_y.iter().copied(), 0.0));
+        let pred: Vec<Vec<(f64, f64)>> = sims
+            .iter()
+            .map(|p| {
+                inside(
+                    p.t.iter().copied().zip(get_p(p)),
+                    (f64::NEG_INFINITY, f64::INFINITY),
+                    y_allowed,
+                )
+            })
+            .collect();
+        let y_range = range_of(
+            rec_y
+                .iter()
+                .copied()
+                .chain(pred.iter().flatten().map(|p| p.1)),
+            0.05,
+        );
+        let mut b = ChartBuilder::on(area);
+        b.margin(15).x_label_area_size(45).y_label_area_size(65);
+        if first {
+            b.caption(
+                format!(
+                    "Heading and rudder of {}: recorded vs closed-loop predictions",
+                    r.file
+                ),
+                (FONT, 20),
+            );
+        }
+        let mut chart = b.build_cartesian_2d(t_range.0..t_range.1, y_range.0..y_range.1)?;
+        chart
+            .configure_mesh()
+            .x_desc("time t [s]")
+            .y_desc(desc)
+            .axis_desc_style((FONT, 15))
+            .draw()?;
+        chart
+            .draw_series(LineSeries::new(
+                rec.t.iter().copied().zip(rec_y.iter().copied()),
+                BLACK.stroke_width(3),
+            ))?
+            .label(format!("recorded {}", r.file))
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(3)));
+        for (p, pts) in sims.iter().zip(pred) {
+            draw_prediction(&mut chart, p, pts, true)?;
+        }
+        draw_legend(
+            &mut chart,
+            if first {
+                SeriesLabelPosition::UpperLeft
+            } else {
+                SeriesLabelPosition::LowerRight
+            },
+        )?;
+    }
+    root.present()?;
+    Ok(())
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Coefficient tables: convergence, magnitudes, VIF.
+
+/// One row of coefficients.csv or diagnostics.csv.
+struct LongRow {
+    case: String,
+    set: String,
+    estimator: String,
+    training: String,
+    window: String,
+    overshoots: Option<f64>,
+    /// "X_uu".
+    term: String,
+    value: Option<f64>,
+}
+
+fn long_rows(t: &Table, quantity: &str) -> Vec<LongRow> {
+    let cell = |name: &str, i: usize| t.column(name).map(|c| c.cell(i)).unwrap_or_default();
+    (0..t.rows())
+        .filter(|&i| cell("quantity", i) == quantity)
+        .map(|i| LongRow {
+            case: cell("case", i),
+            set: cell("set", i),
+            estimator: cell("estimator", i),
+            training: cell("training", i),
+            window: cell("window", i),
+            overshoots: cell("overshoots", i).parse().ok(),
+            term: format!("{}_{}", cell("dof", i), cell("term", i)),
+            value: cell("value", i)
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite()),
+        })
+        .collect()
+}
+
+fn distinct<T: Ord + Clone>(items: impl Iterator<Item = T>) -> Vec<T> {
+    let mut seen = BTreeSet::new();
+    items.filter(|x| seen.insert(x.clone())).collect()
+}
+
+/// Fig. 16: coefficient / coefficient at the largest overshoot count, vs overshoots; one panel per DOF.
+/// Returns false (no figure) when the study does not vary overshoots.
+fn convergence(path: &Path, rows: &[LongRow]) -> Result<bool> {
+    let os: BTreeSet<i64> = rows
+        .iter()
+        .filter_map(|r| r.overshoots.map(|o| o as i64))
+        .collect();
+    if os.len() < 2 {
+        return Ok(false);
+    }
+    // Lines: (set, estimator, training, term) → (overshoots, value).
+    let mut lines: BTreeMap<LineKey, Vec<(f64, f64)>> = BTreeMap::new();
+    for r in rows {
+        if let (Some(o), Some(v)) = (r.overshoots, r.value) {
+            lines
+                .entry((
+                    r.set.clone(),
+                    r.estimator.clone(),
+                    r.training.clone(),
+                    r.term.clone(),
+                ))
+                .or_default()
+                .push((o, v));
+        }
+    }
+    let combos = distinct(
+        lines
+            .keys()
+            .map(|k| (k.0.clone(), k.1.clone(), k.2.clone())),
+    );
+    let (o_lo, o_hi) = (
+        *os.first().unwrap_or(&0) as f64,
+        *os.last().unwrap_or(&1) as f64,
+    );
+    const CLIP: (f64, f64) = (-3.0, 5.0);
+    let root = SVGBackend::new(path, (1500, 700)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let (title, body) = root.split_vertically(40);
+    title.draw(&Text::new(
+        "Coefficient convergence with the training window: value / value at the most overshoots (clipped to [-3, 5])",
+        (20, 12),
+        (FONT, 18),
+    ))?;
+    let panels = body.split_evenly((1, 3));
+    for (dof, area) in Dof::ALL.iter().zip(panels.iter()) {
+        let prefix = format!("{}_", dof.as_str());
+        let mut norm: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+        for ((set, est, training, term), pts) in &lines {
+            if !term.starts_with(&prefix) {
+                continue;
+            }
+            let mut pts = pts.clone();
+            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let Some(&(_, reference)) = pts.last() else {
+                continue;
+            };
+            if reference == 0.0 {
+                continue;
+            }
+            let label = if combos.len() > 1 {
+                format!("{term} ({set} {est} {training})")
+            } else {
+                term.clone()
+            };
+            norm.push((
+                label,
+                pts.iter()
+                    .map(|&(o, v)| (o, (v / reference).clamp(CLIP.0, CLIP.1)))
+                    .collect(),
+            ));
+        }
+        let y = range_of(norm.iter().flat_map(|l| l.1.iter().map(|p| p.1)), 0.05);
+        let mut chart = ChartBuilder::on(area)
+            .caption(format!("{dof}"), (FONT, 18))
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(55)
+            .build_cartesian_2d(o_lo - 0.2..o_hi + 0.2, y.0.min(0.0)..y.1.max(1.2))?;
+        chart
+            .configure_mesh()
+            .x_desc("overshoots in the training window [-]")
+            .y_desc("β / β(most overshoots) [-]")
+            .axis_desc_style((FONT, 14))
+            .x_labels(os.len().min(12))
+            .draw()?;
+        for (i, (label, pts)) in norm.into_iter().enumerate() {
+            let c = colour(i);
+            chart
+                .draw_series(LineSeries::new(pts.clone(), c.stroke_width(2)))?
+                .label(label)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+                });
+            chart.draw_series(pts.into_iter().map(|p| Circle::new(p, 3, c.filled())))?;
+        }
+        draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+    }
+    root.present()?;
+    Ok(true)
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum BarKind {
+    Coefficients,
+    Vif,
+}
+
+/// Fig. 18 (|coefficient|, sign disagreement marked) or Fig. 14/15 (VIF): bars per term on a log scale,
+/// one bar per case of the set.
+fn bars(path: &Path, set: &str, rows: &[LongRow], kind: BarKind) -> Result<()> {
+    let rows: Vec<&LongRow> = rows.iter().filter(|r| r.set == set).collect();
+    let terms = distinct(rows.iter().map(|r| r.term.clone()));
+    let cases = distinct(rows.iter().map(|r| r.case.clone()));
+    let label_of = |case: &str| {
+        rows.iter()
+            .find(|r| r.case == case)
+            .map(|r| format!("{} {} {}", r.estimator, r.window, r.training))
+            .unwrap_or_default()
+    };
+    let value = |case: &str, term: &str| {
+        rows.iter()
+            .find(|r| r.case == case && r.term == term)
+            .and_then(|r| r.value)
+    };
+    let magnitudes: Vec<f64> = rows
+        .iter()
+        .filter_map(|r| r.value.map(f64::abs))
+        .filter(|v| *v > 0.0)
+        .collect();
+    if terms.is_empty() || magnitudes.is_empty() {
+        return Err(fig_err!("no values of set {set}"));
+    }
+    let lo = magnitudes.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = magnitudes.iter().copied().fold(0.0, f64::max);
+    let (lo, hi) = match kind {
+        BarKind::Vif => (lo.min(1.0) / 2.0, hi.max(10.0) * 3.0),
+        BarKind::Coefficients => (lo / 2.0, hi * 5.0),
+    };
+    let n = terms.len() as f64;
+    let width = (300 + 28 * terms.len()).clamp(900, 3000) as u32;
+    let root = SVGBackend::new(path, (width, 800)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let title = match kind {
+        BarKind::Coefficients => {
+            format!(
+                "|coefficient| per term of set {set} by case (red ± above a term: signs disagree across cases)"
+            )
+        }
+        BarKind::Vif => format!("Variance inflation factor per term of set {set} by case"),
+    };
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, (FONT, 20))
+        .margin(15)
+        .x_label_area_size(90)
+        .y_label_area_size(80)
+        .build_cartesian_2d(0.0..n, (lo..hi).log_scale())?;
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .disable_x_axis()
+        .y_desc(match kind {
+            BarKind::Coefficients => "|β| (prime) [-]",
+            BarKind::Vif => "VIF [-]",
+        })
+        .axis_desc_style((FONT, 15))
+        // Decades as 1e-5, not the 9.999999999999e-6 that the log scale's ticks print.
+        .y_label_formatter(&|v| {
+            let e = v.log10().round();
+            if (v / 10f64.powf(e) - 1.0).abs() < 1e-6 {
+                format!("1e{e:.0}")
+            } else {
+                format!("{v:.1e}")
+            }
+        })
+        .draw()?;
+    let k = cases.len().max(1) as f64;
+    for (ci, case) in cases.iter().enumerate() {
+        let c = colour(ci);
+        let bars: Vec<Rectangle<(f64, f64)>> = terms
+            .iter()
+            .enumerate()
+            .filter_map(|(j, term)| {
+                let v = value(case, term)?.abs();
+                (v > 0.0).then(|| {
+                    let x0 = j as f64 + 0.1 + 0.8 * ci as f64 / k;
+                    Rectangle::new([(x0, lo), (x0 + 0.8 / k, v)], c.filled())
+                })
+            })
+            .collect();
+        chart
+            .draw_series(bars)?
+            .label(label_of(case))
+            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 15, y + 5)], c.filled()));
+    }
+    if kind == BarKind::Vif {
+        chart
+            .draw_series(LineSeries::new(
+                vec![(0.0, 10.0), (n, 10.0)],
+                RED.stroke_width(1),
+            ))?
+            .label("VIF = 10")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED.stroke_width(1)));
+    }
+    let mut any_disagreement = false;
+    for (j, term) in terms.iter().enumerate() {
+        let (mut pos, mut neg) = (false, false);
+        let mut top: f64 = lo;
+        for case in &cases {
+            if let Some(v) = value(case, term) {
+                pos |= v > 0.0;
+                neg |= v < 0.0;
+                top = top.max(v.abs());
+            }
+        }
+        if kind == BarKind::Coefficients && pos && neg {
+            any_disagreement = true;
+            chart.draw_series(std::iter::once(Text::new(
+                "±",
+                (j as f64 + 0.35, (top * 1.6).min(hi)),
+                (FONT, 18).into_font().color(&RED),
+            )))?;
+        }
+        // Term names under the axis, rotated.
+        let (px, py) = chart.backend_coord(&(j as f64 + 0.5, lo));
+        root.draw(&Text::new(
+            term.clone(),
+            (px - 6, py + 6),
+            (FONT, 12).into_font().transform(FontTransform::Rotate90),
+        ))?;
+    }
+    if any_disagreement {
+        chart
+            .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())?
+            .label("± signs disagree across cases")
+            .legend(|(x, y)| Text::new("±", (x, y - 8), (FONT, 16).into_font().color(&RED)));
+    }
+    draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+    root.present()?;
+    Ok(())
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Force contributions.
+
+/// Fig. 12/19: φ_k β_k over time per DOF for a case's model on one training recording (whole record),
+/// with the regression target y.
+fn forces(path: &Path, study: &Study, c: &CaseData, test: &str) -> Result<()> {
+    let model = c
+        .model
+        .as_ref()
+        .ok_or_else(|| fig_err!("case {} has no model (its fit failed)", c.case.id))?;
+    let ds = &study.dataset;
+    let (samples, _) =
+        training_samples(ds, &[test.to_string()], WindowSpec::Whole).map_err(|e| fig_err!("{e}"))?;
+    let inertia = PrimeInertia::new(&ds.ship, &model.added_mass, &model.set);
+    let root = SVGBackend::new(path, (1100, 1300)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let (title, body) = root.split_vertically(40);
+    title.draw(&Text::new(
+        format!(
+            "Force contributions φ_k β_k of case {} on {} (prime)",
+            case_label(study, c.case),
+            test
+        ),
+        (20, 12),
+        (FONT, 18),
+    ))?;
+    let panels = body.split_evenly((3, 1));
+    let t_range = range_of(samples.t.iter().copied(), 0.0);
+    for (dof, area) in Dof::ALL.iter().zip(panels.iter()) {
+        let d = design(&model.set, *dof, &samples, &inertia);
+        let beta = &model.coefficients[dof.index()];
+        if beta.len() != d.names.len() {
+            return Err(fig_err!("{dof}: model and set disagree"));
+        }
+        let contrib = contributions(&d, beta);
+        let y_range = range_of(
+            d.y.iter()
+                .copied()
+                .chain((0..contrib.nrows()).flat_map(|i| {
+                    let row: Vec<f64> = (0..contrib.ncols()).map(|j| contrib[(i, j)]).collect();
+                    row
+                })),
+            0.05,
+        );
+        let mut chart = ChartBuilder::on(area)
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(80)
+            .build_cartesian_2d(t_range.0..t_range.1, y_range.0..y_range.1)?;
+        chart
+            .configure_mesh()
+            .x_desc("time t [s]")
+            .y_desc(format!("{dof}' contribution [-]"))
+            .axis_desc_style((FONT, 14))
+            .draw()?;
+        chart
+            .draw_series(LineSeries::new(
+                samples.t.iter().copied().zip(d.y.iter().copied()),
+                BLACK.stroke_width(3),
+            ))?
+            .label(format!("target y_{dof}"))
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(3)));
+        for (j, name) in d.names.iter().enumerate() {
+            let col = colour(j);
+            let style = if j >= PALETTE.len() {
+                col.stroke_width(1)
+            } else {
+                col.stroke_width(2)
+            };
+            chart
+                .draw_series(LineSeries::new(
+                    samples
+                        .t
+                        .iter()
+                        .enumerate()
+                        .map(|(i, t)| (*t, contrib[(i, j)])),
+                    style,
+                ))?
+                .label(name.clone())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
+        }
+        draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+    }
+    root.present()?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Regression: in a study with several training combinations (the HSVA study), cases that
+    /// differed only in their training recordings shared one legend label.
+    #[test]
+    fn cases_that_differ_only_in_training_get_different_labels() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shipid/tests/fixtures/studies/small.toml");
+        let mut study = shipid_study::load_study(&path).unwrap();
+        let alone = case_label(&study, &study.cases[0]);
+        assert!(
+            !alone.contains(" on "),
+            "{alone}: one training combination needs no names"
+        );
+        let mut other = study.cases[0].clone();
+        other.training = vec!["zz20_20_ps.csv".into()];
+        study.cases.push(other);
+        let (a, b) = (
+            case_label(&study, &study.cases[0]),
+            case_label(&study, study.cases.last().unwrap()),
+        );
+        assert_ne!(a, b);
+        assert!(b.ends_with(" on zz20_20_ps"), "{b}");
+    }
+}

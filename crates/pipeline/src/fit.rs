@@ -1,0 +1,540 @@
+//! `shipid fit`: identify an Abkowitz model from a data set.
+//!
+//! Steps: choose the training recordings and their windows (whole record, truncated after N overshoots,
+//! or a time window) → primed samples with recorded or estimated accelerations → Φ and y per DOF →
+//! the estimator per DOF (hyper-parameters fixed or tuned by blocked cross-validation) → model file.
+
+use std::path::Path;
+use std::time::Instant;
+
+use serde::Serialize;
+use shipid_estimators::{
+    Bounds, Estimator, Family, Fit, Folds, Solver, Tuning, condition_number, default_epsilon_grid,
+    default_grid, predict, scaled_condition_number, tune, tune_svr, vif,
+};
+use shipid_io::deriv::accelerations_or_estimate;
+use shipid_io::{Dataset, DatasetRecording, Manoeuvre, PrimeScale, Recording};
+use shipid_model::{
+    AbkowitzModel, CoefficientSet, Dof, EstimatorInfo, ModelFile, PrimeInertia, Samples, SetFile,
+    TrainingWindow, design,
+};
+use shipid_sim::metrics::zigzag_events;
+
+use crate::refine::{RefineOptions, refine_output_error};
+use crate::error::{PipelineError, bad_input};
+
+/// A set by shipped name or by path to a set file.
+pub fn load_set(spec: &str) -> Result<CoefficientSet, PipelineError> {
+    if let Some(s) = CoefficientSet::builtin(spec) {
+        return Ok(s);
+    }
+    let path = Path::new(spec);
+    if !path.is_file() {
+        return Err(bad_input(format!(
+            "unknown coefficient set `{spec}`: not one of {} and no such file",
+            CoefficientSet::builtin_names().join(", ")
+        )));
+    }
+    let text = std::fs::read_to_string(path).map_err(|e| shipid_io::InputError::read(path, &e))?;
+    let file: SetFile =
+        toml::from_str(&text).map_err(|e| shipid_io::InputError::toml(path, &text, &e))?;
+    CoefficientSet::from_file(file).map_err(|e| bad_input(format!("{}: {e}", path.display())))
+}
+
+/// The estimator name of paper 001's sparse GP.
+pub const GP: &str = "sparse-gp";
+
+/// Which estimator, with its hyper-parameters as given on the command line.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EstimatorSpec {
+    /// lsq, bounded-lsq, ridge, lasso, svr, or sparse-gp (paper 001's sparse GP; no coefficient set).
+    pub name: String,
+    pub lambda: Option<f64>,
+    pub alpha: Option<f64>,
+    pub c: Option<f64>,
+    pub epsilon: Option<f64>,
+    /// Choose the hyper-parameters by blocked cross-validation (the SVR's C and ε together unless ε is
+    /// given).
+    pub tune: bool,
+    /// Then refine all coefficients in the output-error sense ([`crate::output_error`]). Not serialised
+    /// when off, so the ids of study cases stay as they were.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub refine: bool,
+    /// Similarity threshold d_gen of the sparse GP (paper 001; `sparse-gp` only). Not serialised when
+    /// absent, so the ids of the polynomial estimators' study cases stay as they were.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub similarity: Option<f64>,
+}
+
+/// ε of the SVR when it is neither given nor tuned (`--c` without `--tune`): 1 % of the RMS of the
+/// DOF's target (the ε-tube then ignores only residuals far below the force level; on noisy data give
+/// ε explicitly, about the noise level). `--tune` without `--epsilon` chooses it by cross-validation
+/// ([`shipid_estimators::tune_svr`]).
+pub const SVR_DEFAULT_EPSILON_OF_RMS: f64 = 0.01;
+/// Folds of the blocked cross-validation (contiguous in time; by recording when several are stacked).
+pub const CV_FOLDS: usize = 5;
+
+impl EstimatorSpec {
+    pub fn named(name: &str) -> EstimatorSpec {
+        EstimatorSpec {
+            name: name.into(),
+            lambda: None,
+            alpha: None,
+            c: None,
+            epsilon: None,
+            tune: false,
+            refine: false,
+            similarity: None,
+        }
+    }
+
+    /// Check the combination of flags before any work is done.
+    pub fn validate(&self) -> Result<(), PipelineError> {
+        let need = |v: Option<f64>, flag: &str| -> Result<(), PipelineError> {
+            match v {
+                Some(x) if x.is_finite() && x >= 0.0 => Ok(()),
+                Some(x) => Err(bad_input(format!(
+                    "--{flag} must be a non-negative number, not {x}"
+                ))),
+                None if self.tune => Ok(()),
+                None => Err(bad_input(format!(
+                    "estimator {} needs --{flag} or --tune",
+                    self.name
+                ))),
+            }
+        };
+        if self.similarity.is_some() && self.name != GP {
+            return Err(bad_input(
+                "--similarity applies to --estimator sparse-gp only",
+            ));
+        }
+        match self.name.as_str() {
+            "lsq" | "bounded-lsq" => Ok(()),
+            GP => {
+                for (given, flag) in [
+                    (self.lambda.is_some(), "lambda"),
+                    (self.alpha.is_some(), "alpha"),
+                    (self.c.is_some(), "c"),
+                    (self.epsilon.is_some(), "epsilon"),
+                    (self.tune, "tune"),
+                    (self.refine, "refine"),
+                ] {
+                    if given {
+                        return Err(bad_input(format!(
+                            "--{flag} does not apply to sparse-gp (its one setting is the similarity threshold d_gen)"
+                        )));
+                    }
+                }
+                match self.similarity {
+                    Some(d) if !(d > 0.0 && d <= 1.0) => Err(bad_input(format!(
+                        "--similarity must be in (0, 1], not {d}"
+                    ))),
+                    _ => Ok(()),
+                }
+            }
+            "ridge" => need(self.lambda, "lambda"),
+            "lasso" => need(self.alpha, "alpha"),
+            "svr" => {
+                need(self.c, "c")?;
+                if let Some(e) = self.epsilon
+                    && !(e.is_finite() && e >= 0.0)
+                {
+                    return Err(bad_input(format!(
+                        "--epsilon must be a non-negative number, not {e}"
+                    )));
+                }
+                Ok(())
+            }
+            other => Err(bad_input(format!(
+                "unknown estimator `{other}`: expected lsq, bounded-lsq, ridge, lasso, svr or sparse-gp"
+            ))),
+        }
+    }
+
+    /// Bounds of the set apply to every estimator but plain LSQ (the unconstrained baseline).
+    fn uses_bounds(&self) -> bool {
+        self.name != "lsq"
+    }
+}
+
+/// Which part of each training recording is used.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub enum WindowSpec {
+    Whole,
+    /// From the start to the peak of overshoot N (zig-zags only).
+    Overshoots(u32),
+    /// From `start_s` to `end_s` [s].
+    Time {
+        start_s: f64,
+        end_s: f64,
+    },
+}
+
+impl WindowSpec {
+    /// Short label for tables and legends: "whole", "4 OS", "0-120 s".
+    pub fn label(self) -> String {
+        match self {
+            WindowSpec::Whole => "whole".into(),
+            WindowSpec::Overshoots(n) => format!("{n} OS"),
+            WindowSpec::Time { start_s, end_s } => format!("{start_s}-{end_s} s"),
+        }
+    }
+}
+
+/// The sample range of a recording for a window, and the overshoot count when truncated by overshoots.
+pub fn window_range(
+    r: &DatasetRecording,
+    ds: &Dataset,
+    window: WindowSpec,
+) -> Result<std::ops::Range<usize>, PipelineError> {
+    let rec = &r.recording;
+    let end_at = |t_end: f64| rec.t.partition_point(|&t| t <= t_end);
+    match window {
+        WindowSpec::Whole => Ok(0..rec.len()),
+        WindowSpec::Time { start_s, end_s } => {
+            let lo = rec.t.partition_point(|&t| t < start_s);
+            let hi = end_at(end_s);
+            if hi <= lo + 10 {
+                return Err(bad_input(format!(
+                    "{}: time window {start_s}–{end_s} s holds {} samples, too few to fit",
+                    r.file,
+                    hi.saturating_sub(lo)
+                )));
+            }
+            Ok(lo..hi)
+        }
+        WindowSpec::Overshoots(n) => {
+            let Manoeuvre::ZigZag {
+                rudder_deg,
+                check_deg,
+                side,
+            } = r.manoeuvre
+            else {
+                // Truncation is a zig-zag notion; other manoeuvres of a combination (a turning circle
+                // stacked with a zig-zag, paper 000 §3.5) are used whole.
+                return Ok(0..rec.len());
+            };
+            let ev = zigzag_events(rec, rudder_deg, check_deg, side, &ds.ship);
+            let have = ev.as_ref().map_or(0, |e| e.overshoots.len());
+            if n == 0 || have < n as usize {
+                return Err(bad_input(format!(
+                    "{}: {n} overshoots requested but the record has {have}",
+                    r.file
+                )));
+            }
+            let t_end = ev
+                .map(|e| e.overshoots[n as usize - 1].t_s)
+                .unwrap_or(f64::INFINITY);
+            Ok(0..end_at(t_end))
+        }
+    }
+}
+
+/// Everything learnt about one DOF's regression.
+#[derive(Debug, Clone, Serialize)]
+pub struct DofReport {
+    pub dof: Dof,
+    pub names: Vec<String>,
+    pub fit: Fit,
+    /// RMS of y − Φβ (prime force or moment).
+    pub residual_rms: f64,
+    /// RMS of y, for scale.
+    pub target_rms: f64,
+    pub condition_number: Option<f64>,
+    pub scaled_condition_number: Option<f64>,
+    pub vif: Vec<Option<f64>>,
+    pub tuning: Option<Tuning>,
+}
+
+/// The result of a fit.
+pub struct FitOutput {
+    pub model: AbkowitzModel,
+    pub file: ModelFile,
+    pub dofs: Vec<DofReport>,
+    /// Wall time of the estimator solves including tuning and the output-error refinement [s] (not
+    /// loading or building Φ).
+    pub fit_time_s: f64,
+    /// The primed training samples (stacked windows), e.g. for the model's identification range.
+    pub training: Samples,
+}
+
+/// The named recordings of `ds` (all of them when `recordings` is empty); a name the data set does not
+/// have is bad input that lists the names it has.
+pub(crate) fn chosen_recordings<'a>(
+    ds: &'a Dataset,
+    recordings: &[String],
+) -> Result<Vec<&'a DatasetRecording>, PipelineError> {
+    let chosen: Vec<&DatasetRecording> = if recordings.is_empty() {
+        ds.recordings.iter().collect()
+    } else {
+        recordings
+            .iter()
+            .map(|f| {
+                ds.recording(f).ok_or_else(|| {
+                    bad_input(format!(
+                        "recording `{f}` is not in {} (it has: {})",
+                        ds.path.display(),
+                        ds.recordings
+                            .iter()
+                            .map(|r| r.file.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ))
+                })
+            })
+            .collect::<Result<_, _>>()?
+    };
+    if chosen.is_empty() {
+        return Err(bad_input(format!(
+            "{} has no recordings",
+            ds.path.display()
+        )));
+    }
+    Ok(chosen)
+}
+
+/// The training samples of the chosen recordings and window, and the windows used.
+pub fn training_samples(
+    ds: &Dataset,
+    recordings: &[String],
+    window: WindowSpec,
+) -> Result<(Samples, Vec<TrainingWindow>), PipelineError> {
+    let chosen = chosen_recordings(ds, recordings)?;
+    if matches!(window, WindowSpec::Overshoots(_))
+        && !chosen
+            .iter()
+            .any(|r| matches!(r.manoeuvre, Manoeuvre::ZigZag { .. }))
+    {
+        return Err(bad_input(
+            "--overshoots truncates zig-zags, and none of the training recordings is one",
+        ));
+    }
+    let scale = PrimeScale::of(&ds.ship);
+    let mut samples = Samples::default();
+    let mut windows = Vec::new();
+    for (g, r) in chosen.iter().enumerate() {
+        let range = window_range(r, ds, window)?;
+        // Accelerations are estimated on the whole record, then windowed, so the cut does not add
+        // end effects of the differentiator.
+        let (acc, estimated) = accelerations_or_estimate(&r.recording, &ds.ship);
+        let rec = r.recording.slice(range.clone());
+        let acc = shipid_io::Accelerations {
+            u_dot: acc.u_dot[range.clone()].to_vec(),
+            v_dot: acc.v_dot[range.clone()].to_vec(),
+            r_dot: acc.r_dot[range.clone()].to_vec(),
+        };
+        samples.push(&rec, &acc, &scale, g);
+        windows.push(training_window(
+            ds,
+            r,
+            window,
+            (rec.t[0], *rec.t.last().unwrap_or(&rec.t[0])),
+            estimated,
+        ));
+    }
+    Ok((samples, windows))
+}
+
+/// The model file's record of one training recording: its window [s] and how its accelerations were
+/// obtained (shared by the Abkowitz and the sparse-GP fits).
+pub fn training_window(
+    ds: &Dataset,
+    r: &DatasetRecording,
+    window: WindowSpec,
+    (t_start_s, t_end_s): (f64, f64),
+    estimated: bool,
+) -> TrainingWindow {
+    TrainingWindow {
+        dataset: ds.path.display().to_string(),
+        recording: r.file.clone(),
+        t_start_s,
+        t_end_s,
+        overshoots: match (window, r.manoeuvre) {
+            (WindowSpec::Overshoots(n), Manoeuvre::ZigZag { .. }) => Some(n),
+            _ => None,
+        },
+        accelerations: if estimated {
+            format!(
+                "estimated: local cubic least squares (Savitzky–Golay), window {:.3} L/U0",
+                shipid_io::deriv::WINDOW_FRACTION_OF_L_OVER_U0
+            )
+        } else {
+            "recorded".into()
+        },
+    }
+}
+
+/// Fit a set with an estimator on a data set.
+pub fn fit_dataset(
+    ds: &Dataset,
+    set: CoefficientSet,
+    spec: &EstimatorSpec,
+    recordings: &[String],
+    window: WindowSpec,
+    solver: Solver,
+) -> Result<FitOutput, PipelineError> {
+    spec.validate()?;
+    let added = ds.added_mass.ok_or_else(|| {
+        bad_input(format!(
+            "{}: no [added_mass] table; the acceleration derivatives must be known to fit",
+            ds.path.display()
+        ))
+    })?;
+    let (samples, windows) = training_samples(ds, recordings, window)?;
+    let inertia = PrimeInertia::new(&ds.ship, &added, &set);
+    let folds = if windows.len() > 1 {
+        Folds::Groups(samples.group.clone())
+    } else {
+        Folds::Blocked { k: CV_FOLDS }
+    };
+    let mut reports = Vec::new();
+    let mut coefficients: [Vec<f64>; 3] = Default::default();
+    let mut hyper = std::collections::BTreeMap::new();
+    let mut fit_time_s = 0.0;
+    for dof in Dof::ALL {
+        let d = design(&set, dof, &samples, &inertia);
+        let bounds = if spec.uses_bounds() && set.has_bounds(dof) {
+            let (lo, hi): (Vec<f64>, Vec<f64>) = d.bounds.iter().copied().unzip();
+            Some(Bounds::new(lo, hi).map_err(|e| bad_input(format!("{dof} bounds: {e}")))?)
+        } else {
+            None
+        };
+        let target_rms = rms(&d.y);
+        let started = Instant::now();
+        let (estimator, tuning) =
+            resolve_estimator(spec, &d, target_rms, &folds, bounds.as_ref(), solver)?;
+        let fit = shipid_estimators::fit(d.phi.as_ref(), &d.y, &estimator, bounds.as_ref(), solver)
+            .map_err(|e| bad_input(format!("{dof}: {e}")))?;
+        fit_time_s += started.elapsed().as_secs_f64();
+        for (k, v) in hyper_of(&estimator) {
+            hyper.insert(format!("{k}_{dof}"), v);
+        }
+        let pred = predict(d.phi.as_ref(), &fit.coefficients).unwrap_or_default();
+        let resid: Vec<f64> = pred.iter().zip(&d.y).map(|(p, y)| y - p).collect();
+        coefficients[dof.index()] = fit.coefficients.clone();
+        reports.push(DofReport {
+            dof,
+            names: d.names.clone(),
+            residual_rms: rms(&resid),
+            target_rms,
+            condition_number: condition_number(d.phi.as_ref()).ok(),
+            scaled_condition_number: scaled_condition_number(d.phi.as_ref()).ok(),
+            vif: vif(d.phi.as_ref()).unwrap_or_default(),
+            fit,
+            tuning,
+        });
+    }
+    let model = AbkowitzModel::new(set, coefficients, ds.ship, added)
+        .map_err(|e| bad_input(format!("identified model is unusable: {e}")))?;
+    let info = EstimatorInfo {
+        name: spec.name.clone(),
+        solver: solver.name().into(),
+        hyper,
+        tuned: spec.tune,
+        refinement: None,
+    };
+    let (model, info) = if spec.refine {
+        let recs: Vec<Recording> = windows
+            .iter()
+            .filter_map(|w| {
+                let r = &ds.recording(&w.recording)?.recording;
+                let lo = r.t.partition_point(|&t| t < w.t_start_s);
+                let hi = r.t.partition_point(|&t| t <= w.t_end_s);
+                Some(r.slice(lo..hi))
+            })
+            .collect();
+        let started = Instant::now();
+        let (refined, how) = refine_output_error(&model, &recs, &RefineOptions::default())
+            .map_err(|e| bad_input(format!("--refine: {e}")))?;
+        fit_time_s += started.elapsed().as_secs_f64();
+        let info = EstimatorInfo {
+            refinement: Some(how),
+            ..info
+        };
+        (refined, info)
+    } else {
+        (model, info)
+    };
+    let file = ModelFile::from_model(&model, info, windows);
+    Ok(FitOutput {
+        model,
+        file,
+        dofs: reports,
+        fit_time_s,
+        training: samples,
+    })
+}
+
+/// The estimator of `spec` on this DOF's design, tuning what `--tune` leaves open: λ, α, or the
+/// SVR's C and ε together (C alone when ε is given). `target_rms` scales the SVR's default ε.
+fn resolve_estimator(
+    spec: &EstimatorSpec,
+    d: &shipid_model::Design,
+    target_rms: f64,
+    folds: &Folds,
+    bounds: Option<&Bounds>,
+    solver: Solver,
+) -> Result<(Estimator, Option<Tuning>), PipelineError> {
+    let epsilon = spec
+        .epsilon
+        .unwrap_or(SVR_DEFAULT_EPSILON_OF_RMS * target_rms);
+    let family = match spec.name.as_str() {
+        "lsq" => return Ok((Estimator::Lsq, None)),
+        "bounded-lsq" => return Ok((Estimator::BoundedLsq, None)),
+        "ridge" => match spec.lambda {
+            Some(lambda) if !spec.tune => return Ok((Estimator::Ridge { lambda }, None)),
+            _ => Family::Ridge,
+        },
+        "lasso" => match spec.alpha {
+            Some(alpha) if !spec.tune => return Ok((Estimator::Lasso { alpha }, None)),
+            _ => Family::Lasso,
+        },
+        "svr" => match (spec.c, spec.epsilon) {
+            (Some(c), _) if !spec.tune => return Ok((Estimator::Svr { c, epsilon }, None)),
+            (_, None) => {
+                let t = tune_svr(
+                    d.phi.as_ref(),
+                    &d.y,
+                    &default_epsilon_grid(&d.y),
+                    folds,
+                    bounds,
+                    solver,
+                )
+                .map_err(|e| bad_input(format!("{}: tuning: {e}", d.dof)))?;
+                return Ok((t.estimator, Some(t)));
+            }
+            _ => Family::Svr { epsilon },
+        },
+        other => return Err(bad_input(format!("unknown estimator `{other}`"))),
+    };
+    let grid = default_grid(&family, d.phi.as_ref(), &d.y)
+        .map_err(|e| bad_input(format!("{}: {e}", d.dof)))?;
+    let t = tune(d.phi.as_ref(), &d.y, &family, &grid, folds, bounds, solver)
+        .map_err(|e| bad_input(format!("{}: tuning: {e}", d.dof)))?;
+    Ok((t.estimator, Some(t)))
+}
+
+/// The SVR's tube half-width ε [units of the target: prime force or moment], given or chosen by
+/// cross-validation; `None` for the other estimators.
+pub fn svr_epsilon(e: &Estimator) -> Option<f64> {
+    match *e {
+        Estimator::Svr { epsilon, .. } => Some(epsilon),
+        _ => None,
+    }
+}
+
+fn hyper_of(e: &Estimator) -> Vec<(&'static str, f64)> {
+    match *e {
+        Estimator::Lsq | Estimator::BoundedLsq => vec![],
+        Estimator::Ridge { lambda } => vec![("lambda", lambda)],
+        Estimator::Lasso { alpha } => vec![("alpha", alpha)],
+        Estimator::Svr { c, epsilon } => vec![("c", c), ("epsilon", epsilon)],
+    }
+}
+
+pub fn rms(x: &[f64]) -> f64 {
+    if x.is_empty() {
+        return 0.0;
+    }
+    (x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).sqrt()
+}

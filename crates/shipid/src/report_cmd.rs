@@ -1,0 +1,44 @@
+//! `shipid report DIR`: one self-contained HTML page for a study output folder or a diagnosis folder.
+
+use std::path::Path;
+
+use shipid_report::{DiagnosisFiles, RunMeta};
+
+use crate::{CliError, Outcome, bad_input, failed};
+
+pub fn run(dir: &Path, study: Option<&Path>) -> Result<Outcome, CliError> {
+    let meta = RunMeta {
+        tool_version: Some(env!("CARGO_PKG_VERSION").into()),
+        study_file: study.map(Path::to_path_buf),
+        ..RunMeta::default()
+    };
+    let html = if dir.join("report.json").is_file() {
+        shipid_report::diagnosis_page(&diagnosis_files(dir), &meta)
+    } else if dir.join("summary.csv").is_file() {
+        shipid_report::study_page(dir, &meta)
+    } else {
+        return Err(bad_input(format!(
+            "{}: neither a study output folder (summary.csv) nor a diagnosis folder (report.json)",
+            dir.display()
+        )));
+    }
+    .map_err(|e| CliError::BadInput(e.into()))?;
+    let path = shipid_report::write_report(dir, &html).map_err(failed)?;
+    println!("report: {}", path.display());
+    Ok(Outcome::Ok)
+}
+
+/// The files of a diagnosis folder: `diagnose --plots DIR` writes its figures into DIR itself,
+/// other layouts keep them in DIR/figures.
+pub fn diagnosis_files(dir: &Path) -> DiagnosisFiles {
+    let mut files = DiagnosisFiles::in_dir(dir);
+    if files.figures.is_none() {
+        let has_svg = std::fs::read_dir(dir).into_iter().flatten().flatten().any(|e| {
+            e.path().extension().is_some_and(|x| x == "svg")
+        });
+        if has_svg {
+            files.figures = Some(dir.to_path_buf());
+        }
+    }
+    files
+}

@@ -1,0 +1,202 @@
+//! The command line as users and other tools see it: names, JSON keys, exit codes, one-sentence errors.
+
+use crate::common;
+
+use serde_json::Value;
+
+use crate::common::check_exit;
+
+#[test]
+fn bad_input_exits_with_2_and_names_the_problem() {
+    check_exit(
+        &["metrics", "no/such/dataset.toml"],
+        2,
+        "error: no/such/dataset.toml: file not found",
+    );
+    check_exit(
+        &[
+            "metrics",
+            "crates/io/tests/fixtures/bad_input/unknown_key.toml",
+        ],
+        2,
+        "unknown_key.toml:2:1: key `colour`: unknown field `colour`",
+    );
+    check_exit(
+        &["simulate", "mmg:kvlcc2", "--manoeuvre", "zigzag:20:port"],
+        2,
+        "zig-zag angles must be written rudder/check",
+    );
+    check_exit(
+        &["simulate", "mmg:other", "--manoeuvre", "turning:35:port"],
+        2,
+        "unknown model `mmg:other`",
+    );
+    check_exit(
+        &[
+            "simulate",
+            "mmg:kvlcc2",
+            "--manoeuvre",
+            "turning:35:port",
+            "--dt=-1",
+        ],
+        2,
+        "invalid simulation option dt_s = -1",
+    );
+    check_exit(
+        &[
+            "generate",
+            "--out",
+            "target/never-written",
+            "--manoeuvre",
+            "turning:20:sb",
+            "--manoeuvre",
+            "turning:20:starboard",
+        ],
+        2,
+        "--manoeuvre: tc20_sb.csv is asked for twice",
+    );
+    check_exit(&["frobnicate"], 2, "unrecognized subcommand");
+}
+
+#[test]
+fn simulate_prints_status_and_metric_keys() {
+    let out = common::shipid_ok(&[
+        "simulate",
+        "mmg:kvlcc2",
+        "--manoeuvre",
+        "zigzag:20/20:starboard",
+        "--json",
+    ]);
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["status"], "ok");
+    // DOMAIN.md §6: 20/20 starboard first 10.5° / 15.7°.
+    assert!(
+        (v["overshoot_1"].as_f64().unwrap() - 10.5).abs() <= 0.3,
+        "{v}"
+    );
+    assert!(
+        (v["overshoot_2"].as_f64().unwrap() - 15.7).abs() <= 0.3,
+        "{v}"
+    );
+    for key in ["t_a", "t_check"] {
+        assert!(v[key].as_f64().is_some(), "{key} in {v}");
+    }
+    assert!(v.get("advance").is_none(), "no turning keys for a zig-zag");
+}
+
+#[test]
+fn simulate_writes_a_readable_time_series() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("tc.csv");
+    common::shipid_ok(&[
+        "simulate",
+        "mmg:kvlcc2",
+        "--manoeuvre",
+        "turning:35:port",
+        "--duration",
+        "120",
+        "--out",
+        csv.to_str().unwrap(),
+    ]);
+    let rec = shipid_io::recording::read_recording(&csv).unwrap();
+    assert!((rec.t.last().unwrap() - 120.0).abs() < 1e-9);
+    assert!(
+        rec.psi.last().unwrap() < &-1.0,
+        "a port turn turns the heading negative"
+    );
+}
+
+#[test]
+fn metrics_json_has_one_entry_per_recording() {
+    let out = common::shipid_ok(&["metrics", "data/kvlcc2-mmg/dataset.toml", "--json"]);
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let recs = v["recordings"].as_object().unwrap();
+    assert_eq!(recs.len(), 6);
+    assert_eq!(recs["tc35_sb.csv"]["kind"], "turning");
+    assert!(recs["tc35_sb.csv"]["tactical_diameter"].as_f64().is_some());
+    assert!(recs["zz35_35_sb.csv"]["overshoot_2"].as_f64().is_some());
+}
+
+/// `validate` says how much of each recording lies outside the range the model was identified on: a
+/// model trained on one zig-zag sees the turning circles mostly outside, its own training manoeuvre
+/// inside; the reference model (no training data) gets no such key.
+#[test]
+fn validate_reports_the_share_of_states_outside_the_identification_range() {
+    let dir = common::root().join("target/test-validate-range");
+    std::fs::create_dir_all(&dir).unwrap();
+    let model = dir.join("reduced32-zz35.toml");
+    let ds = common::root().join("data/kvlcc2-mmg/dataset.toml");
+    let (ds, model) = (ds.to_str().unwrap(), model.to_str().unwrap());
+    common::shipid_ok(&[
+        "fit",
+        ds,
+        "--set",
+        "reduced32",
+        "--estimator",
+        "lsq",
+        "--recordings",
+        "zz35_35_ps.csv",
+        "--overshoots",
+        "4",
+        "--out",
+        model,
+    ]);
+    let outside = |model: &str, file: &str| {
+        let out = common::shipid_ok(&["validate", model, ds, "--json"]);
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        v["recordings"][file]["outside_identification_range"].as_f64()
+    };
+    for tc in ["tc35_ps.csv", "tc35_sb.csv"] {
+        let f = outside(model, tc).unwrap();
+        assert!(f > 0.5, "{tc}: {f}");
+    }
+    // The training window ends after four overshoots; the rest of the record repeats them.
+    let own = outside(model, "zz35_35_ps.csv").unwrap();
+    assert!(own < 0.02, "{own}");
+    assert_eq!(outside("mmg:kvlcc2", "tc35_ps.csv"), None);
+}
+
+#[test]
+fn generate_simulates_the_manoeuvres_asked_for_and_a_current_only_carries_the_track_along() {
+    let dir = tempfile::tempdir().unwrap();
+    let gen_into = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            "generate",
+            "--out",
+            out.to_str().unwrap(),
+            "--manoeuvre",
+            "zigzag:15/15:starboard",
+            "--manoeuvre",
+            "turning:20:port",
+        ];
+        args.extend_from_slice(extra);
+        common::shipid_ok(&args);
+        shipid_io::Dataset::load(&out.join("dataset.toml")).unwrap()
+    };
+    let calm = gen_into("calm", &[]);
+    let files: Vec<&str> = calm.recordings.iter().map(|r| r.file.as_str()).collect();
+    assert_eq!(files, ["zz15_15_sb.csv", "tc20_ps.csv"]);
+    // The zig-zag goes to starboard first.
+    let zz = &calm.recordings[0].recording;
+    let first = zz.delta.iter().find(|d| d.abs() > 1e-3).unwrap();
+    assert!(*first > 0.0, "first rudder {first}");
+
+    // A uniform current from 120° (flowing towards 300°, x north, y east) changes nothing relative
+    // to the water: same heading, and the track over ground is the calm one plus V_c·t.
+    let drift = gen_into("current", &["--effect", "current:speed=0.05,from=120"]);
+    let (vx, vy) = (
+        0.05 * 300f64.to_radians().cos(),
+        0.05 * 300f64.to_radians().sin(),
+    );
+    for (a, b) in calm.recordings.iter().zip(&drift.recordings) {
+        let (a, b) = (&a.recording, &b.recording);
+        assert_eq!(a.len(), b.len());
+        for i in 0..a.len() {
+            let t = a.t[i];
+            assert!((a.psi[i] - b.psi[i]).abs() < 1e-6, "psi at {t} s");
+            let (dx, dy) = (b.x0[i] - a.x0[i] - vx * t, b.y0[i] - a.y0[i] - vy * t);
+            assert!(dx.hypot(dy) < 1e-4, "track at {t} s off by {dx}, {dy} m");
+        }
+    }
+}

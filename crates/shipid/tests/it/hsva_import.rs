@@ -1,0 +1,48 @@
+//! The HSVA KVLCC2 model tests through the shipped import mapping: the standard zig-zag overshoots must
+//! be those listed in ../shared/data/kvlcc2-hsva/SOURCE.md (within 0.3°).
+
+use crate::common;
+
+use serde_json::Value;
+
+#[test]
+fn hsva_overshoots_match_the_source_listing() {
+    let Some(dir) = common::shared_hsva("hsva_overshoots_match_the_source_listing") else {
+        return;
+    };
+    let out = tempfile::tempdir().unwrap();
+    let ds = common::import_hsva(&dir, out.path());
+    let ds = ds.to_str().unwrap().to_string();
+    let m = common::shipid(&["metrics", &ds, "--json"]);
+    assert!(m.status.success(), "{}", String::from_utf8_lossy(&m.stderr));
+    let v: Value = serde_json::from_slice(&m.stdout).unwrap();
+    // SOURCE.md, "Overshoots of the standard zig-zags".
+    for (file, os1, os2) in [
+        ("z10_10_ps.csv", 9.68, 17.82),
+        ("z10_10_sb.csv", 9.69, 20.54),
+        ("z20_10_ps.csv", 11.97, 13.87),
+        ("z20_10_sb.csv", 11.71, 15.62),
+    ] {
+        let r = &v["recordings"][file];
+        assert_eq!(r["kind"], "zigzag");
+        let got1 = r["overshoot_1"].as_f64().unwrap();
+        let got2 = r["overshoot_2"].as_f64().unwrap();
+        assert!(
+            (got1 - os1).abs() <= 0.3,
+            "{file}: first overshoot {got1} vs {os1}"
+        );
+        assert!(
+            (got2 - os2).abs() <= 0.3,
+            "{file}: second overshoot {got2} vs {os2}"
+        );
+    }
+    // The SNAME rudder sign is converted: the first execute of a starboard-first run is positive.
+    let ds = shipid_io::Dataset::load(std::path::Path::new(&ds)).unwrap();
+    let rec = &ds.recording("z20_10_sb.csv").unwrap().recording;
+    let max = rec.delta.iter().take(200).cloned().fold(f64::MIN, f64::max);
+    assert!(
+        max > 19f64.to_radians(),
+        "first rudder to starboard is positive, got max {max}"
+    );
+    assert!(rec.n.is_some(), "propeller rate imported");
+}

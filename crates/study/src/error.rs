@@ -1,0 +1,29 @@
+//! The study crate's error.
+
+use std::path::PathBuf;
+
+use shipid_io::InputError;
+
+/// Why a study could not be loaded, run or written.
+#[derive(Debug, thiserror::Error)]
+pub enum StudyError {
+    /// The study file (or a file it names) is wrong; the message names the file and key.
+    #[error(transparent)]
+    Input(#[from] InputError),
+    /// Reading or writing a result file failed.
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// A result table could not be written or read.
+    #[error("{}: {message}", path.display())]
+    Table { path: PathBuf, message: String },
+}
+
+impl StudyError {
+    /// Whether the user's input is to blame.
+    pub fn is_bad_input(&self) -> bool {
+        matches!(self, StudyError::Input(_))
+    }
+}

@@ -1,0 +1,487 @@
+//! `shipid run STUDY.toml`: run a study's cases in parallel and keep every case's outcome.
+//!
+//! Each case writes `cases/<id>/config.toml` (its resolved configuration and the tool version),
+//! `model.toml` and `result.json`, atomically. A rerun reuses every case whose `result.json` exists for
+//! the same configuration (resume); `--force` reruns all. A case that fails or diverges is a status in
+//! its result, never a crash. Results are collected in the study's case order, so the output does not
+//! depend on the number of threads (except the measured fit times).
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use shipid_estimators::{Solver, Status};
+use shipid_io::PrimeScale;
+use shipid_io::write::write_atomic;
+use shipid_model::IdentificationRange;
+use shipid_sim::{AbkowitzDynamics, Dynamics, Metrics, SimStatus};
+
+use shipid_pipeline::fit::{fit_dataset, load_set};
+use shipid_pipeline::range::outside_fraction;
+use crate::study::{Case, Study};
+use shipid_pipeline::validate::validate_recording;
+
+/// How a case's fit (or one DOF's) ended. Stored as kebab-case words in `result.json` and the tables.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CaseStatus {
+    /// Solved to tolerance.
+    Ok,
+    /// Solved, but the design's condition number is above the estimators' threshold.
+    IllConditioned,
+    /// The solver stopped short (reduced accuracy, iteration limit, failure).
+    SolverFailed,
+    /// The fit could not be made at all (`message` says why).
+    FitFailed,
+}
+
+impl CaseStatus {
+    /// The word used in files and tables.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            CaseStatus::Ok => "ok",
+            CaseStatus::IllConditioned => "ill-conditioned",
+            CaseStatus::SolverFailed => "solver-failed",
+            CaseStatus::FitFailed => "fit-failed",
+        }
+    }
+
+    /// Whether a model came out of the fit (possibly ill-conditioned).
+    pub fn has_model(self) -> bool {
+        matches!(self, CaseStatus::Ok | CaseStatus::IllConditioned)
+    }
+}
+
+/// How a simulation of a test ended. Stored as kebab-case words.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TestStatus {
+    Ok,
+    Diverged,
+    /// A recording without a standard manoeuvre ("free"): replayed only, no closed-loop run.
+    ReplayOnly,
+}
+
+impl TestStatus {
+    /// The word used in files and tables.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            TestStatus::Ok => "ok",
+            TestStatus::Diverged => "diverged",
+            TestStatus::ReplayOnly => "replay-only",
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DofSummary {
+    pub dof: String,
+    pub status: CaseStatus,
+    pub residual_rms: f64,
+    pub condition_number: Option<f64>,
+    pub scaled_condition_number: Option<f64>,
+    pub hyper_parameter: Option<f64>,
+    /// The SVR's ε (given or tuned) [target units]; absent for the other estimators and in
+    /// results written before 0.2.1.
+    #[serde(default)]
+    pub epsilon: Option<f64>,
+    pub objective: f64,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TermValue {
+    pub dof: String,
+    pub term: String,
+    pub value: Option<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TestRow {
+    pub test: String,
+    pub kind: String,
+    /// Closed-loop manoeuvre: "ok" or "diverged" ("free" recordings have none: "replay-only").
+    pub status: TestStatus,
+    pub diverged_at_s: Option<f64>,
+    pub replay_status: TestStatus,
+    pub position_rmse_over_l: f64,
+    pub heading_rmse_deg: f64,
+    pub u_rmse_m_s: f64,
+    pub v_rmse_m_s: f64,
+    pub r_rmse_deg_s: f64,
+    pub recorded: Metrics,
+    pub predicted: Option<Metrics>,
+    pub relative_error: std::collections::BTreeMap<String, f64>,
+    pub mrae: Option<f64>,
+    /// Share of the test recording's states outside the model's identification range (leverage above
+    /// every training state's); absent in results written before it existed.
+    #[serde(default)]
+    pub outside_identification_range: Option<f64>,
+}
+
+/// What one case produced.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CaseResult {
+    pub case_id: String,
+    /// The worst status over the DOFs, or `fit-failed` (the fit could not be made: `message` says why).
+    pub status: CaseStatus,
+    pub message: Option<String>,
+    pub fit_time_s: Option<f64>,
+    pub samples: usize,
+    pub dofs: Vec<DofSummary>,
+    pub coefficients: Vec<TermValue>,
+    pub vif: Vec<TermValue>,
+    pub tests: Vec<TestRow>,
+}
+
+impl CaseResult {
+    /// The row of a case whose fit could not be made (`message` says why).
+    fn failed_fit(case: &Case, message: String) -> CaseResult {
+        CaseResult {
+            case_id: case.id.clone(),
+            status: CaseStatus::FitFailed,
+            message: Some(message),
+            fit_time_s: None,
+            samples: 0,
+            dofs: vec![],
+            coefficients: vec![],
+            vif: vec![],
+            tests: vec![],
+        }
+    }
+
+    /// True when no model came out of the fit (it could not be computed).
+    pub fn fit_failed(&self) -> bool {
+        !self.status.has_model()
+    }
+
+    /// True when a test's simulation diverged (a result of the study, not a failure to compute it).
+    pub fn diverged(&self) -> bool {
+        self.tests
+            .iter()
+            .any(|t| t.status == TestStatus::Diverged || t.replay_status == TestStatus::Diverged)
+    }
+}
+
+fn case_status(s: &Status) -> CaseStatus {
+    match s {
+        Status::Ok => CaseStatus::Ok,
+        Status::IllConditioned { .. } => CaseStatus::IllConditioned,
+        Status::ReducedAccuracy | Status::MaxIterations | Status::SolverFailed(_) => {
+            CaseStatus::SolverFailed
+        }
+    }
+}
+
+/// The configuration stored beside a case's results.
+#[derive(Debug, Serialize)]
+struct StoredConfig<'a> {
+    shipid_version: &'static str,
+    study: &'a str,
+    dataset: String,
+    tests: &'a [String],
+    case: &'a Case,
+}
+
+/// Run one case: fit, then validate on every test recording.
+pub fn run_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
+    let failed = |msg: String| CaseResult::failed_fit(case, msg);
+    if case.estimator.name == crate::study::GP {
+        return run_gp_case(study, case);
+    }
+    let set = match load_set(&resolve_set(study, &case.set)) {
+        Ok(s) => s,
+        Err(e) => return (failed(e.to_string()), None),
+    };
+    // Validated when the study was read, so this cannot fail; if it did, the case fails, not the run.
+    let solver: Solver = match case.solver.parse() {
+        Ok(s) => s,
+        Err(e) => return (failed(e.to_string()), None),
+    };
+    let out = match fit_dataset(
+        &study.dataset,
+        set,
+        &case.estimator,
+        &case.training,
+        case.window,
+        solver,
+    ) {
+        Ok(o) => o,
+        Err(e) => return (failed(e.to_string()), None),
+    };
+    let worst = out
+        .dofs
+        .iter()
+        .map(|d| case_status(&d.fit.status))
+        .max()
+        .unwrap_or(CaseStatus::Ok);
+    let model = AbkowitzDynamics(out.model.clone());
+    let range = IdentificationRange::from_samples(&out.model.set, &out.training).ok();
+    let scale = PrimeScale::of(&study.dataset.ship);
+    let outside = |rec: &shipid_io::Recording| {
+        range
+            .as_ref()
+            .map(|g| outside_fraction(g, rec, &scale, 0..rec.len()))
+    };
+    let tests = test_rows(study, &model, &outside);
+    let mut coefficients = Vec::new();
+    let mut vif = Vec::new();
+    for d in &out.dofs {
+        for (j, name) in d.names.iter().enumerate() {
+            let term = name
+                .split_once('_')
+                .map_or(name.as_str(), |(_, t)| t)
+                .to_string();
+            coefficients.push(TermValue {
+                dof: d.dof.to_string(),
+                term: term.clone(),
+                // The model's (after `refine`, the refined ones), not the estimator's.
+                value: out.model.coefficients[d.dof.index()].get(j).copied(),
+            });
+            vif.push(TermValue {
+                dof: d.dof.to_string(),
+                term,
+                value: d.vif.get(j).copied().flatten(),
+            });
+        }
+    }
+    let model_text = toml::to_string(&out.file).ok();
+    let result = CaseResult {
+        case_id: case.id.clone(),
+        status: worst,
+        message: None,
+        fit_time_s: Some(out.fit_time_s),
+        samples: out.training.len(),
+        dofs: out
+            .dofs
+            .iter()
+            .map(|d| DofSummary {
+                dof: d.dof.to_string(),
+                status: case_status(&d.fit.status),
+                residual_rms: d.residual_rms,
+                condition_number: d.condition_number,
+                scaled_condition_number: d.scaled_condition_number,
+                hyper_parameter: d.tuning.as_ref().map(|t| t.best),
+                epsilon: shipid_pipeline::fit::svr_epsilon(&d.fit.estimator),
+                objective: d.fit.objective,
+            })
+            .collect(),
+        coefficients,
+        vif,
+        tests,
+    };
+    (result, model_text)
+}
+
+/// Validate a model on every test recording of the study: one row each. `outside`: the share of a
+/// recording's states outside the model's identification range, where it has one.
+fn test_rows(
+    study: &Study,
+    model: &dyn Dynamics,
+    outside: &dyn Fn(&shipid_io::Recording) -> Option<f64>,
+) -> Vec<TestRow> {
+    study
+        .tests
+        .iter()
+        .filter_map(|f| study.dataset.recording(f))
+        .map(|r| {
+            let v = validate_recording(model, r, &study.dataset.ship);
+            let (status, diverged_at_s, recorded, predicted, relative_error, mrae) =
+                match v.manoeuvre {
+                    Some(m) => {
+                        let (st, at) = match m.status {
+                            SimStatus::Ok => (TestStatus::Ok, None),
+                            SimStatus::Diverged { t_s, .. } => (TestStatus::Diverged, Some(t_s)),
+                        };
+                        (st, at, m.recorded, m.predicted, m.relative_error, m.mrae)
+                    }
+                    None => (
+                        TestStatus::ReplayOnly,
+                        None,
+                        Metrics::default(),
+                        None,
+                        Default::default(),
+                        None,
+                    ),
+                };
+            TestRow {
+                test: r.file.clone(),
+                kind: v.kind.into(),
+                status,
+                diverged_at_s,
+                replay_status: match v.replay.status {
+                    SimStatus::Ok => TestStatus::Ok,
+                    SimStatus::Diverged { .. } => TestStatus::Diverged,
+                },
+                position_rmse_over_l: v.replay.position_rmse_over_l,
+                heading_rmse_deg: v.replay.heading_rmse_deg,
+                u_rmse_m_s: v.replay.u_rmse_m_s,
+                v_rmse_m_s: v.replay.v_rmse_m_s,
+                r_rmse_deg_s: v.replay.r_rmse_deg_s,
+                recorded,
+                predicted,
+                relative_error,
+                mrae,
+                outside_identification_range: outside(&r.recording),
+            }
+        })
+        .collect()
+}
+
+/// A sparse-GP case (paper 001): fit, then validate on every test recording. Its `dofs` are the three
+/// GP outputs (u_dot [m/s²], v_dot [m/s²], r_dot [rad/s²]: accelerations in SI, not prime forces), with
+/// the residual RMS over all training samples and, as the objective, the negative log marginal
+/// likelihood the training minimised; it has no coefficients or VIFs, and its identification range is
+/// its sparse points' coverage ([`shipid_pipeline::range::gp_outside_fraction`]).
+fn run_gp_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
+    let threshold = case
+        .estimator
+        .similarity
+        .unwrap_or(shipid_pipeline::fit_gp::DEFAULT_SIMILARITY);
+    let (file, model, report) =
+        match shipid_pipeline::fit_gp::fit_gp_dataset(&study.dataset, &case.training, case.window, threshold)
+        {
+            Ok(x) => x,
+            Err(e) => return (CaseResult::failed_fit(case, e.to_string()), None),
+        };
+    let tests = test_rows(study, &model, &|rec| {
+        Some(shipid_pipeline::range::gp_outside_fraction(&model, rec))
+    });
+    let result = CaseResult {
+        case_id: case.id.clone(),
+        status: CaseStatus::Ok,
+        message: Some(format!(
+            "sparse GP: kept {} of {} training samples (d_gen {threshold})",
+            report.kept, report.candidates
+        )),
+        fit_time_s: Some(report.sparsify_time_s + report.train_time_s),
+        samples: report.candidates,
+        dofs: report
+            .outputs
+            .iter()
+            .map(|o| DofSummary {
+                dof: o.name.clone(),
+                status: CaseStatus::Ok,
+                residual_rms: o.rms_residual_all_samples,
+                condition_number: None,
+                scaled_condition_number: None,
+                hyper_parameter: None,
+                epsilon: None,
+                objective: -o.log_marginal_likelihood,
+            })
+            .collect(),
+        coefficients: vec![],
+        vif: vec![],
+        tests,
+    };
+    (result, shipid_pipeline::fit_gp::model_text(&file).ok())
+}
+
+/// A set named in a study: shipped name, or a path relative to the study file.
+pub fn resolve_set(study: &Study, set: &str) -> String {
+    if shipid_model::CoefficientSet::builtin(set).is_some() {
+        return set.to_string();
+    }
+    study
+        .path
+        .parent()
+        .unwrap_or(Path::new("."))
+        .join(set)
+        .display()
+        .to_string()
+}
+
+/// Where a study's results go by default: `results/<name>/`.
+pub fn default_out(study: &Study) -> PathBuf {
+    PathBuf::from("results").join(&study.name)
+}
+
+/// Run (or resume) every case; results in case order.
+pub fn run_study(
+    study: &Study,
+    out: &Path,
+    jobs: usize,
+    force: bool,
+    progress: bool,
+) -> std::io::Result<Vec<CaseResult>> {
+    // faer would otherwise spread each small factorisation over all threads while rayon already runs
+    // one case per thread.
+    faer::set_global_parallelism(faer::Par::Seq);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs.max(1))
+        .build()
+        .map_err(std::io::Error::other)?;
+    let bar = if progress {
+        ProgressBar::new(study.cases.len() as u64)
+    } else {
+        ProgressBar::hidden()
+    };
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{bar:40} {pos}/{len} cases  {msg}  elapsed {elapsed} eta {eta}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let (failed, diverged) = (AtomicUsize::new(0), AtomicUsize::new(0));
+    let results: Vec<std::io::Result<CaseResult>> = pool.install(|| {
+        study
+            .cases
+            .par_iter()
+            .map(|case| {
+                let dir = out.join("cases").join(&case.id);
+                let config = toml::to_string(&StoredConfig {
+                    shipid_version: env!("CARGO_PKG_VERSION"),
+                    study: &study.name,
+                    dataset: study.dataset_path.display().to_string(),
+                    tests: &study.tests,
+                    case,
+                })
+                .map_err(std::io::Error::other)?;
+                let result_path = dir.join("result.json");
+                let reuse = !force
+                    && std::fs::read_to_string(dir.join("config.toml")).is_ok_and(|c| c == config)
+                    && result_path.is_file();
+                let result = match reuse
+                    .then(|| {
+                        std::fs::read(&result_path)
+                            .ok()
+                            .and_then(|b| serde_json::from_slice::<CaseResult>(&b).ok())
+                    })
+                    .flatten()
+                {
+                    Some(r) => r,
+                    None => {
+                        let (r, model) = run_case(study, case);
+                        write_atomic(&dir.join("config.toml"), config.as_bytes())?;
+                        if let Some(m) = model {
+                            write_atomic(&dir.join("model.toml"), m.as_bytes())?;
+                        }
+                        // Written last: its presence marks the case as finished.
+                        write_atomic(
+                            &result_path,
+                            serde_json::to_string_pretty(&r)
+                                .map_err(std::io::Error::other)?
+                                .as_bytes(),
+                        )?;
+                        r
+                    }
+                };
+                if result.fit_failed() {
+                    failed.fetch_add(1, Ordering::Relaxed);
+                } else if result.diverged() {
+                    diverged.fetch_add(1, Ordering::Relaxed);
+                }
+                bar.set_message(format!(
+                    "{} fit failed, {} diverged",
+                    failed.load(Ordering::Relaxed),
+                    diverged.load(Ordering::Relaxed)
+                ));
+                bar.inc(1);
+                Ok(result)
+            })
+            .collect()
+    });
+    bar.finish();
+    results.into_iter().collect()
+}

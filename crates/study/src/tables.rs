@@ -1,0 +1,193 @@
+//! The result tables of a study run: `summary` (one row per case × test), `coefficients` and
+//! `diagnostics` (long tables, one row per case × DOF × term × quantity). Every row carries the columns
+//! that tell its case apart (case id, set, estimator, hyper-parameters, training).
+
+use shipid_tables::Table;
+
+use crate::runner::CaseResult;
+use crate::study::{Case, Study};
+
+pub const METRIC_KEYS: [&str; 8] = [
+    "overshoot_1",
+    "overshoot_2",
+    "t_a",
+    "t_check",
+    "advance",
+    "transfer",
+    "tactical_diameter",
+    "steady_diameter",
+];
+
+fn case_columns(t: &mut Table, rows: &[(&Case, &CaseResult)]) {
+    let text = |f: &dyn Fn(&Case, &CaseResult) -> String| {
+        rows.iter().map(|(c, r)| f(c, r)).collect::<Vec<_>>()
+    };
+    t.push_text("case", text(&|c, _| c.id.clone()));
+    t.push_text("set", text(&|c, _| c.set.clone()));
+    // A refined fit is another estimator for every reader of the tables ("lsq-oe", as in its case id).
+    t.push_text(
+        "estimator",
+        text(&|c, _| {
+            let e = &c.estimator;
+            format!("{}{}", e.name, if e.refine { "-oe" } else { "" })
+        }),
+    );
+    t.push_text("solver", text(&|c, _| c.solver.clone()));
+    t.push_text("training", text(&|c, _| c.training.join("+")));
+    t.push_text("window", text(&|c, _| c.window.label()));
+    let num = |f: &dyn Fn(&Case, &CaseResult) -> Option<f64>| {
+        rows.iter().map(|(c, r)| f(c, r)).collect::<Vec<_>>()
+    };
+    t.push_num(
+        "overshoots",
+        num(&|c, _| match c.window {
+            shipid_pipeline::fit::WindowSpec::Overshoots(n) => Some(n as f64),
+            _ => None,
+        }),
+    );
+    t.push_text("tuned", text(&|c, _| c.estimator.tune.to_string()));
+    // One column per DOF: the value of its fit, else what the case gave (a failed case has no fits).
+    let per_dof = |t: &mut Table,
+                   prefix: &str,
+                   fitted: &dyn Fn(&crate::runner::DofSummary) -> Option<f64>,
+                   given: &dyn Fn(&Case) -> Option<f64>| {
+        for (key, dof) in [("X", 0usize), ("Y", 1), ("N", 2)] {
+            t.push_num(
+                &format!("{prefix}_{key}"),
+                num(&|c, r| r.dofs.get(dof).and_then(fitted).or_else(|| given(c))),
+            );
+        }
+    };
+    per_dof(t, "hyper", &|d| d.hyper_parameter, &|c| {
+        let e = &c.estimator;
+        e.lambda.or(e.alpha).or(e.c).or(e.similarity)
+    });
+    // The SVR's second hyper-parameter (hyper_* holds its C): tuned per DOF unless given.
+    per_dof(t, "epsilon", &|d| d.epsilon, &|c| c.estimator.epsilon);
+    t.push_text("case_status", text(&|_, r| r.status.as_str().to_string()));
+    t.push_num("fit_time_s", num(&|_, r| r.fit_time_s));
+}
+
+/// One row per case × test.
+pub fn summary_table(study: &Study, results: &[CaseResult]) -> Table {
+    let mut rows: Vec<(&Case, &CaseResult, Option<&crate::runner::TestRow>)> = Vec::new();
+    for (c, r) in study.cases.iter().zip(results) {
+        if r.tests.is_empty() {
+            rows.push((c, r, None));
+        }
+        for t in &r.tests {
+            rows.push((c, r, Some(t)));
+        }
+    }
+    let mut t = Table::default();
+    let pairs: Vec<(&Case, &CaseResult)> = rows.iter().map(|(c, r, _)| (*c, *r)).collect();
+    case_columns(&mut t, &pairs);
+    let text = |f: &dyn Fn(&crate::runner::TestRow) -> String| {
+        rows.iter()
+            .map(|(_, _, x)| x.map(f).unwrap_or_default())
+            .collect()
+    };
+    let num = |f: &dyn Fn(&crate::runner::TestRow) -> Option<f64>| {
+        rows.iter().map(|(_, _, x)| x.and_then(f)).collect()
+    };
+    t.push_text("test", text(&|x| x.test.clone()));
+    t.push_text("kind", text(&|x| x.kind.clone()));
+    t.push_text("status", text(&|x| x.status.as_str().to_string()));
+    t.push_num("diverged_at_s", num(&|x| x.diverged_at_s));
+    t.push_text("replay_status", text(&|x| x.replay_status.as_str().to_string()));
+    t.push_num(
+        "position_rmse_over_l",
+        num(&|x| Some(x.position_rmse_over_l)),
+    );
+    t.push_num("heading_rmse_deg", num(&|x| Some(x.heading_rmse_deg)));
+    t.push_num("u_rmse_m_s", num(&|x| Some(x.u_rmse_m_s)));
+    t.push_num("v_rmse_m_s", num(&|x| Some(x.v_rmse_m_s)));
+    t.push_num("r_rmse_deg_s", num(&|x| Some(x.r_rmse_deg_s)));
+    t.push_num(
+        "outside_identification_range",
+        num(&|x| x.outside_identification_range),
+    );
+    for (i, key) in METRIC_KEYS.iter().enumerate() {
+        t.push_num(
+            &format!("{key}_recorded"),
+            num(&|x| x.recorded.entries()[i].1),
+        );
+        t.push_num(
+            &format!("{key}_predicted"),
+            num(&|x| x.predicted.and_then(|p| p.entries()[i].1)),
+        );
+        t.push_num(
+            &format!("{key}_rel_error"),
+            num(&|x| x.relative_error.get(*key).copied()),
+        );
+    }
+    t.push_num("mrae", num(&|x| x.mrae));
+    t
+}
+
+/// Long format: case, DOF, term, value.
+pub fn coefficients_table(study: &Study, results: &[CaseResult]) -> Table {
+    long_table(study, results, |r| {
+        r.coefficients
+            .iter()
+            .map(|c| (c.dof.clone(), c.term.clone(), "coefficient".into(), c.value))
+            .collect()
+    })
+}
+
+/// Long format: VIF per term, condition numbers and residual RMS per DOF.
+pub fn diagnostics_table(study: &Study, results: &[CaseResult]) -> Table {
+    long_table(study, results, |r| {
+        let mut v: Vec<(String, String, String, Option<f64>)> = r
+            .vif
+            .iter()
+            .map(|c| (c.dof.clone(), c.term.clone(), "vif".into(), c.value))
+            .collect();
+        for d in &r.dofs {
+            v.push((
+                d.dof.clone(),
+                String::new(),
+                "condition_number".into(),
+                d.condition_number,
+            ));
+            v.push((
+                d.dof.clone(),
+                String::new(),
+                "scaled_condition_number".into(),
+                d.scaled_condition_number,
+            ));
+            v.push((
+                d.dof.clone(),
+                String::new(),
+                "residual_rms".into(),
+                Some(d.residual_rms),
+            ));
+        }
+        v
+    })
+}
+
+type LongRow = (String, String, String, Option<f64>);
+
+fn long_table(
+    study: &Study,
+    results: &[CaseResult],
+    rows_of: impl Fn(&CaseResult) -> Vec<LongRow>,
+) -> Table {
+    let mut pairs = Vec::new();
+    let mut long = Vec::new();
+    for (c, r) in study.cases.iter().zip(results) {
+        for row in rows_of(r) {
+            pairs.push((c, r));
+            long.push(row);
+        }
+    }
+    let mut t = Table::default();
+    case_columns(&mut t, &pairs);
+    t.push_text("dof", long.iter().map(|r| r.0.clone()).collect());
+    t.push_text("term", long.iter().map(|r| r.1.clone()).collect());
+    t.push_text("quantity", long.iter().map(|r| r.2.clone()).collect());
+    t.push_num("value", long.iter().map(|r| r.3).collect());
+    t
+}
+

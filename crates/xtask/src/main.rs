@@ -1,0 +1,113 @@
+//! Research harnesses of shipid that users of the tool do not need; `cargo xtask <task> --help`.
+//!
+//! - `bench-diagnose`: the concealed-effect benchmark of the diagnosis (docs/diagnosis.md);
+//! - `paper001`: paper 001's Tab. 6 and Fig. 9–12 on the HSVA tests (docs/reproductions/paper001.md);
+//! - `inverse-bench`: wall time of paper 003's simulation database (docs/benchmarks.md);
+//! - `fit-bench`: fit times of the estimators for the side-by-side comparison in `bench/`.
+
+mod bench_diagnose;
+mod fit_bench;
+mod inverse_bench;
+mod paper001;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+#[derive(Parser)]
+#[command(name = "xtask", about = "shipid's research harnesses")]
+struct Cli {
+    #[command(subcommand)]
+    task: Task,
+}
+
+#[derive(Subcommand)]
+enum Task {
+    /// Benchmark the diagnosis on generated data with concealed effects (confusion matrix, fit
+    /// improvements, recovered parameters) written to `--out`.
+    BenchDiagnose {
+        /// sparse-gp (paper 001's GP fitted in memory on the clean default data), full74 (refined
+        /// LSQ), mmg:kvlcc2, or a model file.
+        #[arg(long, default_value = bench_diagnose::GP_BASE)]
+        base: String,
+        #[arg(long, default_value = "results/diagnose")]
+        out: PathBuf,
+        #[arg(long, default_value_t = 3)]
+        seeds: u64,
+        #[arg(long, default_value_t = 12)]
+        controls: u64,
+    },
+    /// Paper 001 Tab. 6 and Fig. 9–12 on the imported HSVA tests.
+    Paper001 {
+        #[arg(long, default_value = "data/kvlcc2-hsva/imported/dataset.toml")]
+        dataset: PathBuf,
+        #[arg(long, default_value = "results/hsva-gp")]
+        out: PathBuf,
+        /// Similarity threshold d_gen of the sparsification.
+        #[arg(long, default_value_t = shipid_pipeline::fit_gp::DEFAULT_SIMILARITY)]
+        similarity: f64,
+    },
+    /// Time the build of paper 003's simulation database (first target of the file).
+    InverseBench {
+        #[arg(default_value = "data/paper003/targets.toml")]
+        targets: PathBuf,
+        #[arg(long, default_value = "data/paper003/ships.toml")]
+        ships: PathBuf,
+        #[arg(long, default_value_t = 2603)]
+        samples: usize,
+        #[arg(long, default_value_t = 3)]
+        repeats: usize,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+    /// Fit-time benchmark of the estimators (flags: see the module's documentation).
+    #[command(disable_help_flag = true)]
+    FitBench {
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.task {
+        Task::BenchDiagnose {
+            base,
+            out,
+            seeds,
+            controls,
+        } => bench_diagnose::run(&base, &out, seeds, controls).map(|all_ok| {
+            if all_ok {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::from(1)
+            }
+        }),
+        Task::Paper001 {
+            dataset,
+            out,
+            similarity,
+        } => paper001::run(&dataset, &out, similarity).map(|md| {
+            print!("{md}");
+            eprintln!("wrote {0}/tab6.md and {0}/hsva_25_5.svg", out.display());
+            ExitCode::SUCCESS
+        }),
+        Task::InverseBench {
+            targets,
+            ships,
+            samples,
+            repeats,
+            seed,
+        } => inverse_bench::bench(&targets, &ships, samples, repeats, seed)
+            .map(|()| ExitCode::SUCCESS),
+        Task::FitBench { .. } => {
+            fit_bench::main();
+            Ok(ExitCode::SUCCESS)
+        }
+    };
+    result.unwrap_or_else(|e| {
+        eprintln!("error: {e:#}");
+        ExitCode::from(2)
+    })
+}
