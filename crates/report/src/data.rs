@@ -4,7 +4,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::ReportError;
-use crate::html::esc;
+use crate::html::{esc, id_of};
 
 /// A CSV file as text: header and rows.
 pub struct Csv {
@@ -160,7 +160,22 @@ fn figure_rank(stem: &str) -> usize {
     KINDS
         .iter()
         .position(|(p, _)| stem.starts_with(p))
-        .unwrap_or(KINDS.len())
+        .or_else(|| {
+            SUFFIXES
+                .iter()
+                .position(|(x, _)| stem.ends_with(x))
+                .map(|i| KINDS.len() + i)
+        })
+        .unwrap_or(KINDS.len() + SUFFIXES.len())
+}
+
+/// The heading of a group of figures of one kind.
+fn group_title(rank: usize) -> &'static str {
+    KINDS
+        .iter()
+        .chain(SUFFIXES.iter())
+        .nth(rank)
+        .map_or("Other figures", |k| k.1)
 }
 
 /// A caption from a file name: the kind's words for known prefixes, followed by the rest of the
@@ -199,8 +214,9 @@ pub fn figures_html(
     notes: &mut Vec<String>,
 ) -> Result<(String, usize), ReportError> {
     let files = svg_files(dir)?;
-    let mut s = String::from("<div class=\"figs\">");
-    let mut n = 0;
+    let mut body = String::new();
+    let mut index: Vec<String> = Vec::new();
+    let mut group = None;
     for (i, f) in files.iter().enumerate() {
         let text = match std::fs::read(f) {
             Ok(b) => String::from_utf8_lossy(&b).into_owned(),
@@ -217,19 +233,45 @@ pub fn figures_html(
                     .file_name()
                     .map(|n| n.to_string_lossy().into_owned())
                     .unwrap_or_default();
+                let rank = figure_rank(&stem(f));
+                if group != Some(rank) {
+                    if group.is_some() {
+                        body.push_str("</div>");
+                    }
+                    let _ = write!(
+                        body,
+                        "<h3>{}</h3><div class=\"figs\">",
+                        esc(group_title(rank))
+                    );
+                    group = Some(rank);
+                }
+                let id = id_of("figure-", &name);
                 let _ = write!(
-                    s,
-                    "<figure data-file=\"{}\">{svg}<figcaption>{} <code>{}</code></figcaption></figure>",
+                    body,
+                    "<figure id=\"{}\" data-file=\"{}\">{svg}<figcaption>{} <code>{}</code></figcaption></figure>",
+                    esc(&id),
                     esc(&name),
                     esc(&caption(f)),
                     esc(&name)
                 );
-                n += 1;
+                index.push(format!(
+                    "<a href=\"#{}\">{}</a>",
+                    esc(&id),
+                    esc(&caption(f))
+                ));
             }
             Err(e) => notes.push(format!("figure {} left out: {e}", f.display())),
         }
     }
-    s.push_str("</div>");
+    if group.is_some() {
+        body.push_str("</div>");
+    }
+    let n = index.len();
+    let s = if n > 1 {
+        format!("<nav class=\"figindex\">{}</nav>{body}", index.join(""))
+    } else {
+        body
+    };
     Ok((s, n))
 }
 

@@ -336,6 +336,13 @@ tbody tr:nth-child(even) td { background:var(--zebra); }
 tbody tr:hover td { background:#e6f0fa; }
 td.n { text-align:right; font-variant-numeric:tabular-nums; white-space:nowrap; }
 td.id { font-family:ui-monospace,"DejaVu Sans Mono",monospace; font-size:12.5px; white-space:nowrap; }
+table.summary td.id, table.summary th.id { position:sticky; left:0; z-index:1; background:#fff;
+  border-right:1px solid var(--line); }
+table.summary th.id { z-index:2; background:var(--head); }
+table.summary tbody tr:nth-child(even) td.id { background:var(--zebra); }
+table.summary tbody tr:hover td { background:#e6f0fa; }
+table.summary td { white-space:nowrap; }
+summary .tests { font-weight:400; margin-left:6px; }
 tr.bad td:first-child { box-shadow:inset 4px 0 0 var(--bad); }
 tr.warn td:first-child { box-shadow:inset 4px 0 0 #d99a00; }
 code, pre { font-family:ui-monospace,"DejaVu Sans Mono",monospace; font-size:12.5px; }
@@ -350,6 +357,9 @@ details > summary { cursor:pointer; padding:6px 0; font-weight:600; }
 details > summary code { font-weight:400; }
 details details { background:#fbfcfd; }
 .figs { display:flex; flex-direction:column; gap:18px; }
+nav.figindex { display:flex; flex-wrap:wrap; gap:4px 8px; font-size:13px; margin:4px 0 10px; }
+nav.figindex a { border:1px solid var(--line); border-radius:12px; padding:1px 9px; text-decoration:none;
+  background:#f6f8fa; }
 figure { margin:0; border:1px solid var(--line); border-radius:6px; padding:10px; background:#fff;
   min-width:0; }
 figure svg { display:block; max-width:100%; height:auto; margin:0 auto; }

@@ -278,7 +278,10 @@ pub fn study_page(dir: &Path, meta: &RunMeta) -> Result<String, ReportError> {
         b.push_str("<p class=\"common\">All cases: ");
         let parts: Vec<String> = common
             .iter()
-            .map(|(k, v)| format!("{} <code>{}</code>", esc(&label(k)), esc(v)))
+            .map(|(k, v)| {
+                let v = parse_num(v.trim()).map_or_else(|| v.clone(), num);
+                format!("{} <code>{}</code>", esc(&label(k)), esc(&v))
+            })
             .collect();
         b.push_str(&parts.join(" · "));
         b.push_str("</p>");
@@ -288,11 +291,18 @@ pub fn study_page(dir: &Path, meta: &RunMeta) -> Result<String, ReportError> {
         .filter_map(|m| summary.col(m))
         .filter(|j| test_cols.contains(j))
         .collect();
+    // Case id, its status, its tests and their medians first (what a reader scans for), then the
+    // columns that tell the cases apart.
+    let descriptive: Vec<usize> = varying
+        .iter()
+        .copied()
+        .filter(|&j| Some(j) != status_col)
+        .collect();
     b.push_str(
-        "<div class=\"tablewrap\"><table class=\"summary\"><thead><tr><th title=\"case\">case</th>",
+        "<div class=\"tablewrap\"><table class=\"summary\"><thead><tr><th class=\"id\" title=\"case\">case</th>",
     );
-    for &j in &varying {
-        b.push_str(&th(&summary.headers[j]));
+    if status_col.is_some() {
+        b.push_str("<th title=\"case_status\">status</th>");
     }
     if test_status_col.is_some() {
         b.push_str("<th>tests</th>");
@@ -304,6 +314,9 @@ pub fn study_page(dir: &Path, meta: &RunMeta) -> Result<String, ReportError> {
             esc(&summary.headers[j]),
             esc(&label(&summary.headers[j]))
         );
+    }
+    for &j in &descriptive {
+        b.push_str(&th(&summary.headers[j]));
     }
     b.push_str("</tr></thead><tbody>");
     for c in &cases {
@@ -332,13 +345,13 @@ pub fn study_page(dir: &Path, meta: &RunMeta) -> Result<String, ReportError> {
             esc(&id_of("details-", &c.id)),
             esc(&c.id)
         );
-        for &j in &varying {
-            let v = first_value(c, j);
-            if Some(j) == status_col {
-                let _ = write!(b, "<td>{}</td>", badge(&v));
+        if let Some(j) = status_col {
+            let v = if c.rows.is_empty() {
+                "no row".to_string()
             } else {
-                b.push_str(&cell(&v));
-            }
+                first_value(c, j)
+            };
+            let _ = write!(b, "<td>{}</td>", badge(&v));
         }
         if test_status_col.is_some() {
             let parts: Vec<String> = tcount
@@ -366,6 +379,9 @@ pub fn study_page(dir: &Path, meta: &RunMeta) -> Result<String, ReportError> {
                 }
                 None => b.push_str("<td class=\"empty\"></td>"),
             }
+        }
+        for &j in &descriptive {
+            b.push_str(&cell(&first_value(c, j)));
         }
         b.push_str("</tr>");
     }
@@ -590,7 +606,7 @@ fn case_details(
         .collect();
     let _ = write!(
         b,
-        "<details id=\"{}\" data-case-id=\"{}\"><summary><code>{}</code> {} <span class=\"muted\">{}</span></summary>",
+        "<details id=\"{}\" data-case-id=\"{}\"><summary><code>{}</code> {} <span class=\"muted tests\">{}</span></summary>",
         esc(&id_of("details-", &c.id)),
         esc(&c.id),
         esc(&c.id),

@@ -81,7 +81,11 @@ fn status_counts_and_summary_numbers() {
 fn figures_are_inline_svg_with_captions() {
     let html = page();
     assert_eq!(html.matches("<figure ").count(), 1);
-    assert!(html.contains("<figure data-file=\"vif_reduced32.svg\"><svg "));
+    assert!(
+        html.contains(
+            "<figure id=\"figure-vif_reduced32.svg\" data-file=\"vif_reduced32.svg\"><svg "
+        )
+    );
     assert!(html.contains("Variance inflation factor per term — reduced32"));
     assert!(!html.contains("<?xml"));
 }
