@@ -1,4 +1,4 @@
-//! Prints the MMG KVLCC2 check values of DOMAIN.md §6 as this crate computes them, and how each effect
+//! Prints the MMG KVLCC2 check values of Yasukawa & Yoshimura (2015) as this crate computes them, and how each effect
 //! changes a 35° turning circle and a 20/20 zig-zag:
 //! `cargo run --release -p shipid-sim --example check_values`.
 

@@ -3,12 +3,12 @@
 use shipid_io::{AddedMass, Ship};
 use thiserror::Error;
 
-/// Motion state of the **midship** point in the project's conventions (DOMAIN.md §1, DATA.md):
+/// Motion state of the **midship** point in the project's conventions (`docs/conventions.md`):
 /// body axes x forward / y starboard, earth axes x0 north / y0 east, heading and yaw rate positive to
 /// starboard, SI units.
 ///
-/// Velocities are over ground. Without a current (see [`crate::effects`]) they are also the velocities
-/// through the water that a hydrodynamic model sees.
+/// Velocities are over ground. Without a current (one of the effects of the `effects` module) they are
+/// also the velocities through the water that a hydrodynamic model sees.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct State {
     /// Surge velocity [m/s].
@@ -139,7 +139,7 @@ pub trait Dynamics {
     /// The filter between the recorded and the acting rudder that is part of this model (a steering-gear
     /// lag or a neutral offset found by `shipid diagnose`); a fresh one per simulation. `None`: the
     /// recorded rudder acts as it is.
-    fn model_rudder_filter(&self) -> Option<Box<dyn crate::sim::RudderFilter>> {
+    fn model_rudder_filter(&self) -> Option<Box<dyn RudderFilter>> {
         None
     }
 
@@ -154,6 +154,27 @@ pub trait Dynamics {
     /// polynomial's leverage) or that have none.
     fn sparse_gp(&self) -> Option<&crate::GpDynamics> {
         None
+    }
+}
+
+/// Turns the rudder as recorded into the rudder that acts on the hull (an actuator lag, a neutral
+/// offset…). The simulation loop applies one between the controller and the model: the model's own
+/// ([`Dynamics::model_rudder_filter`]), the rudder effects' (lag, delay, neutral offset) or the identity
+/// ([`NoFilter`]) for plain simulations.
+pub trait RudderFilter {
+    /// Effective rudder angles [rad] at the RK4 stage times `t_s`, `t_s + dt_s/2`, `t_s + dt_s` given the
+    /// recorded angles there. Called once per step in time order (`dt_s` may be 0 for a single
+    /// evaluation at the start); advances the filter's state to `t_s + dt_s`.
+    fn step(&mut self, t_s: f64, dt_s: f64, recorded_rad: [f64; 3]) -> [f64; 3];
+}
+
+/// The identity [`RudderFilter`].
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NoFilter;
+
+impl RudderFilter for NoFilter {
+    fn step(&mut self, _t_s: f64, _dt_s: f64, recorded_rad: [f64; 3]) -> [f64; 3] {
+        recorded_rad
     }
 }
 
@@ -176,7 +197,7 @@ impl<T: Dynamics + ?Sized> Dynamics for &T {
     fn linear_hull_derivatives(&self) -> Option<LinearHullDerivatives> {
         (**self).linear_hull_derivatives()
     }
-    fn model_rudder_filter(&self) -> Option<Box<dyn crate::sim::RudderFilter>> {
+    fn model_rudder_filter(&self) -> Option<Box<dyn RudderFilter>> {
         (**self).model_rudder_filter()
     }
     fn over_ground(&self, through_water: &State) -> State {
@@ -203,7 +224,7 @@ impl<T: Dynamics + ?Sized> Dynamics for Box<T> {
     fn linear_hull_derivatives(&self) -> Option<LinearHullDerivatives> {
         (**self).linear_hull_derivatives()
     }
-    fn model_rudder_filter(&self) -> Option<Box<dyn crate::sim::RudderFilter>> {
+    fn model_rudder_filter(&self) -> Option<Box<dyn RudderFilter>> {
         (**self).model_rudder_filter()
     }
     fn over_ground(&self, through_water: &State) -> State {
@@ -211,7 +232,8 @@ impl<T: Dynamics + ?Sized> Dynamics for Box<T> {
     }
 }
 
-/// Rigid-body plus added-mass matrix about midship (DOMAIN.md §2, with X_v̇ = X_ṙ = Y_u̇ = N_u̇ = 0):
+/// Rigid-body plus added-mass matrix about midship (the left-hand side of the equations of motion in
+/// `docs/conventions.md`, with X_v̇ = X_ṙ = Y_u̇ = N_u̇ = 0):
 ///
 /// ```text
 /// | m − X_u̇        0              0        |

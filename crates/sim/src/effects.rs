@@ -1,5 +1,6 @@
-//! Physical effects that a manoeuvring model leaves out (DATA.md "effects vocabulary"), applied around any
-//! [`Dynamics`] without changing the simulation loop:
+//! Physical effects that a manoeuvring model leaves out (the effects vocabulary of the diagnosis and
+//! result files, `docs/data-format.md`), applied around any [`Dynamics`] without changing the simulation
+//! loop:
 //!
 //! - [`WithEffects`] wraps a model and is itself a [`Dynamics`]: it converts the over-ground state to the
 //!   water-relative one the hydrodynamics see (current), adds external forces (wind, asymmetry, shallow
@@ -19,8 +20,10 @@ use shipid_io::{AddedMass, Ship};
 use thiserror::Error;
 
 use crate::control::RudderController;
-use crate::dynamics::{Dynamics, DynamicsError, LinearHullDerivatives, MassMatrix, State};
-use crate::sim::{RudderFilter, SimError, SimOptions, SimOutput, simulate_filtered};
+use crate::dynamics::{
+    Dynamics, DynamicsError, LinearHullDerivatives, MassMatrix, RudderFilter, State,
+};
+use crate::sim::{SimError, SimOptions, SimOutput, simulate_filtered};
 
 /// Density of air [kg/m³] (ISA sea level, 15 °C).
 pub const AIR_DENSITY_KG_M3: f64 = 1.225;
@@ -120,7 +123,7 @@ pub struct RudderLag {
 
 /// Port–starboard bias: a rudder neutral offset (the blade is at `rudder_offset_deg` when the recorded
 /// rudder is zero) and/or a constant side force and yaw moment, such as the single-screw propeller's
-/// (DOMAIN.md §3: Y_0, N_0).
+/// (the constant terms Y_0, N_0 of an asymmetric Abkowitz model).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Asymmetry {
     /// Rudder neutral offset [deg], added to the recorded rudder (positive to starboard).
@@ -187,7 +190,7 @@ pub fn clarke_linear_derivatives(ship: &Ship) -> LinearHullDerivatives {
     }
 }
 
-/// One physical effect (DATA.md vocabulary word in brackets).
+/// One physical effect (its vocabulary word, [`Effect::kind`], in brackets).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Effect {
     /// `current`.
@@ -278,7 +281,7 @@ fn check(
 }
 
 impl Effect {
-    /// The DATA.md vocabulary word.
+    /// The vocabulary word: `current`, `wind`, `rudder_lag`, `asymmetry` or `shallow_water`.
     pub fn kind(&self) -> &'static str {
         match self {
             Effect::Current(_) => "current",
@@ -290,7 +293,7 @@ impl Effect {
     }
 
     /// Parameters as `(key, value)` with the keys [`Effect::from_str`] reads (for reports; the direction
-    /// key is `from_deg` as in the DATA.md diagnosis example, `from` is accepted when parsing).
+    /// key is `from_deg` as in the diagnosis file, `from` is accepted when parsing).
     pub fn parameters(&self) -> Vec<(&'static str, f64)> {
         match *self {
             Effect::Current(c) => vec![("speed", c.speed_m_s), ("from_deg", c.from_deg)],

@@ -14,7 +14,7 @@
 //! - [`effects`]: physical effects left out of a model (current, wind, rudder lag, asymmetry, shallow
 //!   water), applied around any [`Dynamics`] without changing the simulation loop.
 //!
-//! Conventions (DOMAIN.md §1, DATA.md): SI units, midship reference point, body axes x forward / y
+//! Conventions (`docs/conventions.md`): SI units, midship reference point, body axes x forward / y
 //! starboard, earth axes x0 north / y0 east, heading and yaw rate positive to starboard, rudder angle
 //! positive when it turns the ship to starboard. Units are given in brackets in the docs, e.g. \[m/s\].
 //!
@@ -50,7 +50,9 @@ pub use abkowitz::AbkowitzDynamics;
 pub use control::{
     ControlError, Replay, RudderCommand, RudderController, Turning, ZigZag, controller_for,
 };
-pub use dynamics::{Dynamics, DynamicsError, LinearHullDerivatives, MassMatrix, State};
+pub use dynamics::{
+    Dynamics, DynamicsError, LinearHullDerivatives, MassMatrix, RudderFilter, State,
+};
 pub use effects::{Effect, EffectError, EffectParseError, WithEffects, simulate_with_effects};
 pub use gp::{
     GP_INPUTS, GP_KIND, GP_OUTPUTS, GpDynamics, GpModelError, GpModelFile, GpOutputFile,
@@ -59,6 +61,5 @@ pub use gp::{
 pub use metrics::{Metrics, metrics};
 pub use mmg::{MmgError, MmgModel, MmgParameters, kvlcc2_added_mass, kvlcc2_ship};
 pub use sim::{
-    DivergenceBounds, RudderFilter, SimError, SimOptions, SimOutput, SimStatus, simulate,
-    simulate_filtered,
+    DivergenceBounds, SimError, SimOptions, SimOutput, SimStatus, simulate, simulate_filtered,
 };

@@ -1,4 +1,4 @@
-//! IMO manoeuvring metrics (MSC.137(76); DOMAIN.md §5, DATA.md) of a recording, measured or simulated,
+//! IMO manoeuvring metrics (MSC.137(76); keys and definitions in `docs/conventions.md`) of a recording, measured or simulated,
 //! by one code path.
 //!
 //! Definitions, chosen to work on noisy tank data as well as on simulations:
@@ -26,7 +26,8 @@
 use serde::{Deserialize, Serialize};
 use shipid_io::{Manoeuvre, Recording, Ship, Side};
 
-/// Manoeuvre metrics with the DATA.md keys; `None` (absent in JSON) where undefined.
+/// Manoeuvre metrics with the keys of every JSON output and table column; `None` (absent in JSON) where
+/// undefined.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct Metrics {
     /// First zig-zag overshoot [deg].
@@ -56,7 +57,8 @@ pub struct Metrics {
 }
 
 impl Metrics {
-    /// `(DATA.md key, value)` for all eight metrics, in the order of DATA.md.
+    /// `(key, value)` for all eight metrics, in the documented order (overshoots, t_a, t_check, then the
+    /// turning-circle metrics).
     pub fn entries(&self) -> [(&'static str, Option<f64>); 8] {
         [
             ("overshoot_1", self.overshoot_1),

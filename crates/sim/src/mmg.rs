@@ -1,5 +1,5 @@
 //! The MMG standard method (Yasukawa & Yoshimura 2015, J. Mar. Sci. Technol. 20:37–52) with the KVLCC2
-//! model-scale parameters of their Tables 1–5, as restated in DOMAIN.md §6.
+//! model-scale parameters of their Tables 1–5 (summarised in `docs/conventions.md`, "The reference model").
 //!
 //! Hull forces act at midship and are non-dimensionalised with the instantaneous speed U:
 //! X_H = ½ρ L d U² X'_H(v', r'), Y_H likewise, N_H = ½ρ L² d U² N'_H, with v' = v_m/U and r' = r L/U.
@@ -18,7 +18,7 @@ const MIN_SPEED_M_S: f64 = 1e-6;
 /// ÷ ½ρ L d U², yaw moment ÷ ½ρ L² d U², masses ÷ ½ρ L² d, moment of inertia ÷ ½ρ L⁴ d, lengths ÷ L.
 ///
 /// Unless stated otherwise the KVLCC2 values ([`MmgParameters::kvlcc2`]) are those of Yasukawa &
-/// Yoshimura (2015) Tables 2–5, model scale L = 7.00 m, as restated in DOMAIN.md §6.
+/// Yoshimura (2015) Tables 2–5, model scale L = 7.00 m.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MmgParameters {
     // --- Hull (Y&Y 2015 Table 4) ---
@@ -109,7 +109,7 @@ pub struct MmgParameters {
 }
 
 impl MmgParameters {
-    /// KVLCC2 (Yasukawa & Yoshimura 2015, Tables 1–5; DOMAIN.md §6).
+    /// KVLCC2 (Yasukawa & Yoshimura 2015, Tables 1–5).
     pub fn kvlcc2() -> MmgParameters {
         MmgParameters {
             r0: 0.022,
@@ -227,9 +227,10 @@ impl MmgParameters {
     }
 }
 
-/// The KVLCC2 model of the SIMMAN/MMG benchmark at scale 1:45.714 (DOMAIN.md §6 and DATA.md):
+/// The KVLCC2 model of the SIMMAN/MMG benchmark at scale 1:45.714 (particulars as in
+/// `docs/conventions.md`, "The reference model"):
 /// L 7.00 m, B 1.27 m, d 0.46 m, ∇ 3.27 m³, ρ 1000 kg/m³ (model basin), x_G 0.25 m, k_zz = 0.25 L,
-/// U0 1.179 m/s, rudder rate 15.8 °/s (DOMAIN.md §5).
+/// U0 1.179 m/s (Froude number 0.142), rudder rate 15.8 °/s (2.34 °/s at full scale).
 pub fn kvlcc2_ship() -> Ship {
     let lpp = 7.00;
     Ship {

@@ -7,6 +7,9 @@ use thiserror::Error;
 
 use crate::control::{RudderCommand, RudderController};
 use crate::dynamics::{Dynamics, State};
+// Defined next to `Dynamics` (whose `model_rudder_filter` returns one); re-exported here for the
+// paths `shipid_sim::sim::{RudderFilter, NoFilter}`.
+pub use crate::dynamics::{NoFilter, RudderFilter};
 
 /// Limits beyond which a simulated state counts as diverged. A state outside them is not physical for a
 /// displacement ship driven by its own propeller at the approach speed U0.
@@ -131,7 +134,7 @@ impl SimOptions {
 }
 
 /// How a simulation ended. Serialises as `{"status": "ok"}` or
-/// `{"status": "diverged", "t_s": …, "reason": "…"}` (DATA.md).
+/// `{"status": "diverged", "t_s": …, "reason": "…"}` (as in result files, `docs/data-format.md`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "status", rename_all = "lowercase")]
 pub enum SimStatus {
@@ -145,7 +148,8 @@ pub enum SimStatus {
 /// A simulated manoeuvre.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SimOutput {
-    /// Samples every `sample_interval_s` of midship in DATA.md conventions, heading unwrapped, with the
+    /// Samples every `sample_interval_s` of midship in the project's conventions (`docs/conventions.md`),
+    /// heading unwrapped, with the
     /// model's accelerations and (when the model has one) the propeller rate. `delta` is the rudder as a
     /// log would record it: the actuator output or the replayed history, before any
     /// [`RudderFilter`]. After a divergence it holds the samples before it.
@@ -170,25 +174,6 @@ pub enum SimError {
     /// The model's ship cannot scale the divergence bounds or drive the actuator.
     #[error("ship particular {field} = {value} must be finite and positive")]
     InvalidShip { field: &'static str, value: f64 },
-}
-
-/// Turns the rudder as recorded into the rudder that acts on the hull (an actuator lag, a neutral
-/// offset…). Hook for [`crate::effects`]; the identity ([`NoFilter`]) for plain simulations.
-pub trait RudderFilter {
-    /// Effective rudder angles [rad] at the RK4 stage times `t_s`, `t_s + dt_s/2`, `t_s + dt_s` given the
-    /// recorded angles there. Called once per step in time order (`dt_s` may be 0 for a single
-    /// evaluation at the start); advances the filter's state to `t_s + dt_s`.
-    fn step(&mut self, t_s: f64, dt_s: f64, recorded_rad: [f64; 3]) -> [f64; 3];
-}
-
-/// The identity [`RudderFilter`].
-#[derive(Debug, Clone, Copy, Default)]
-pub struct NoFilter;
-
-impl RudderFilter for NoFilter {
-    fn step(&mut self, _t_s: f64, _dt_s: f64, recorded_rad: [f64; 3]) -> [f64; 3] {
-        recorded_rad
-    }
 }
 
 /// Simulate `model` from `initial` under `controller` (see [`simulate_filtered`]), through the model's own
