@@ -1,10 +1,11 @@
 //! The metric code on real tank data: HSVA KVLCC2 zig-zags (noisy heading, rudder leaving zero at
-//! about 0.7 s) against the overshoots stated in SOURCE.md for the same definition.
-
-mod common;
+//! about 0.7 s) against the overshoots that HSVA's documentation of these files states for the same
+//! definition (the expected values below).
 
 use shipid_io::{Manoeuvre, Side};
 use shipid_sim::metrics::{metrics, zigzag_events};
+
+use crate::common;
 
 /// HSVA model: same main particulars as the MMG KVLCC2 for L and U0, rudder rate 15.8 °/s.
 fn ship() -> shipid_io::Ship {

@@ -156,7 +156,8 @@ fn model_with(set: &str, seed: u64) -> AbkowitzModel {
 }
 
 proptest! {
-    /// Accelerations from the model, put through the targets of DOMAIN.md §2, give back y = Φβ exactly:
+    /// Accelerations from the model, put through the regression targets (the equations of motion,
+    /// `docs/conventions.md`), give back y = Φβ exactly:
     /// the design matrix and the model's equations are the same equations.
     #[test]
     fn targets_invert_the_model_equations(seed in 0u64..50, states in proptest::collection::vec(

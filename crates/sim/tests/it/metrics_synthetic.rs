@@ -3,9 +3,9 @@
 use proptest::prelude::*;
 use shipid_io::{Manoeuvre, Recording, Side};
 use shipid_sim::metrics::{Metrics, metrics, zigzag_events};
-use shipid_sim::{
-    Dynamics, MmgModel, Replay, SimOptions, State, controller_for, kvlcc2_ship, simulate,
-};
+use shipid_sim::{Dynamics, MmgModel, Replay, SimOptions, State, kvlcc2_ship, simulate};
+
+use crate::common::simulate_manoeuvre;
 
 /// A record whose heading, position and rudder are given as functions of time, sampled every `dt_s`.
 fn record(t_end: f64, dt_s: f64, f: impl Fn(f64) -> (f64, f64, f64, f64)) -> Recording {
@@ -266,14 +266,7 @@ fn metric_code_is_mirror_symmetric_on_simulations() {
             side: Side::Starboard,
         },
     ] {
-        let mut c = controller_for(&man, 2.0).unwrap();
-        let out = simulate(
-            &model,
-            c.as_mut(),
-            State::approach(ship.u0),
-            &SimOptions::new(400.0),
-        )
-        .unwrap();
+        let out = simulate_manoeuvre(&model, &man, &SimOptions::new(400.0));
         let mirrored_man = match man {
             Manoeuvre::ZigZag {
                 rudder_deg,
@@ -310,8 +303,7 @@ fn replay_of_its_own_rudder_reproduces_a_zigzag() {
         side: Side::Port,
     };
     let opts = SimOptions::new(150.0);
-    let mut c = controller_for(&man, 2.0).unwrap();
-    let original = simulate(&model, c.as_mut(), State::approach(ship.u0), &opts).unwrap();
+    let original = simulate_manoeuvre(&model, &man, &opts);
     let mut replay = Replay::from_recording(&original.recording).unwrap();
     let replayed = simulate(&model, &mut replay, State::approach(ship.u0), &opts).unwrap();
     let (a, b) = (&original.recording, &replayed.recording);

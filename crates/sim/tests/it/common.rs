@@ -1,17 +1,28 @@
-//! Helpers shared by the integration tests.
-#![allow(dead_code)]
+//! Helpers shared by the integration-test modules.
 
 use std::path::PathBuf;
 
-use shipid_io::Recording;
+use shipid_io::{Manoeuvre, Recording};
+use shipid_sim::{Dynamics, SimOptions, SimOutput, State, controller_for, simulate};
 
-/// Directory of the HSVA KVLCC2 tank data (outside the repository; see ../shared/data/kvlcc2-hsva/SOURCE.md).
+/// First execute of the standard manoeuvres in the tests [s].
+pub const T_EXECUTE_S: f64 = 2.0;
+
+/// `man` simulated with its own controller (first execute at [`T_EXECUTE_S`]) from a straight approach at
+/// the model's U0; panics on invalid input.
+pub fn simulate_manoeuvre(model: &dyn Dynamics, man: &Manoeuvre, opts: &SimOptions) -> SimOutput {
+    let mut c = controller_for(man, T_EXECUTE_S).unwrap();
+    simulate(model, c.as_mut(), State::approach(model.ship().u0), opts).unwrap()
+}
+
+/// Directory of the HSVA KVLCC2 tank data (the HSVA/CPMC zig-zag `.dat` files of the SIMMAN 2008
+/// workshop), which the repository does not include: the tests that need them skip when it is absent.
 pub fn hsva_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/kvlcc2-hsva")
 }
 
 /// Reports a missing shared data file: a `SKIPPED` line, or a failure when `SHIPID_REQUIRE_SHARED=1`
-/// (as in CI, CONTRIBUTING.md).
+/// (as in CI, see CONTRIBUTING.md).
 pub fn skip_missing(what: &str) {
     let msg = format!("SKIPPED: {what} not found under {:?}", hsva_dir());
     if std::env::var("SHIPID_REQUIRE_SHARED").is_ok_and(|v| v == "1") {

@@ -13,11 +13,11 @@ use shipid_inverse::target::{TargetShip, TargetsFile, resistance_prime, zhou_add
 use shipid_sim::{Dynamics, MmgModel, MmgParameters};
 
 fn ships() -> ShipsFile {
-    toml::from_str(include_str!("../../../data/paper003/ships.toml")).expect("ships.toml parses")
+    toml::from_str(include_str!("../../../../data/paper003/ships.toml")).expect("ships.toml parses")
 }
 
 fn targets() -> TargetsFile {
-    toml::from_str(include_str!("../../../data/paper003/targets.toml"))
+    toml::from_str(include_str!("../../../../data/paper003/targets.toml"))
         .expect("targets.toml parses")
 }
 
@@ -284,7 +284,7 @@ fn check_target_error(toml_text: &str, key: &str) {
 
 #[test]
 fn bad_target_particulars_name_their_key() {
-    let base = include_str!("../../../data/paper003/targets.toml");
+    let base = include_str!("../../../../data/paper003/targets.toml");
     check_target_error(
         &base.replacen("lpp_m = 320.0", "lpp_m = -320.0", 1),
         "lpp_m",

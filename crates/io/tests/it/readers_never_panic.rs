@@ -9,8 +9,8 @@ use shipid_io::dataset::parse_dataset;
 use shipid_io::recording::parse_recording;
 use shipid_io::write::recording_csv;
 
-const GOOD_TOML: &str = include_str!("fixtures/good/cg_sname.toml");
-const GOOD_CSV: &str = include_str!("fixtures/good/units_wrapped_heading.csv");
+const GOOD_TOML: &str = include_str!("../fixtures/good/cg_sname.toml");
+const GOOD_CSV: &str = include_str!("../fixtures/good/units_wrapped_heading.csv");
 
 fn mutate(base: &str, at: usize, cut: usize, insert: &str) -> String {
     let mut s: Vec<char> = base.chars().collect();

@@ -1,0 +1,3 @@
+//! Integration tests of shipid-gp through its public API, in one test binary (one module per topic).
+
+mod gp;

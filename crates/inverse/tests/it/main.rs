@@ -1,0 +1,4 @@
+//! Integration tests of shipid-inverse through its public API, in one test binary (one module per
+//! topic).
+
+mod paper003;

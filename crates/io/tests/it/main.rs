@@ -1,0 +1,8 @@
+//! Integration tests of shipid-io through its public API, in one test binary: one module per topic.
+//! Fixture files are under `tests/fixtures/` (paths relative to the package root, the working directory
+//! of `cargo test`).
+
+mod bad_input;
+mod conventions;
+mod prime_and_derivatives;
+mod readers_never_panic;
