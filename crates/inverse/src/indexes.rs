@@ -158,7 +158,8 @@ impl Default for SimSettings {
     }
 }
 
-/// The four simulated manoeuvres (midship tracks, SI, DATA.md conventions). The +35° turn runs to
+/// The four simulated manoeuvres (midship tracks, SI, in the conventions of
+/// `docs/conventions.md`). The +35° turn runs to
 /// [`FINAL_SPEED_HEADING_DEG`], the −35° turn to [`PORT_TURN_STOP_DEG`] (rounded up to a chunk).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Manoeuvres {

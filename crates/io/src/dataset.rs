@@ -1,4 +1,4 @@
-//! Reading and writing DATA.md data sets: a TOML file beside its recordings.
+//! Reading and writing data sets (`docs/data-format.md`): a TOML file beside its recordings.
 //!
 //! Three steps, as everywhere in the project: the raw TOML (unknown keys rejected, positions kept for
 //! errors) → checked values → a [`Dataset`] in the project's conventions (midship origin, rudder positive
@@ -48,7 +48,7 @@ pub struct RecordingEntry {
     pub side: Option<Side>,
 }
 
-/// A data set file as written (DATA.md).
+/// A data set file as written (`docs/data-format.md`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DatasetFile {

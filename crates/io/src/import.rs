@@ -3,10 +3,10 @@
 //! A mapping says how to read the source files (delimiter or whitespace, header lines to skip, text
 //! encoding), which column holds which quantity in which unit (earth-fixed velocities are turned into
 //! body velocities with the heading), the source's rudder sign (converted on import), and the data set
-//! header to write. The output is an ordinary DATA.md data set in the project's rudder convention.
+//! header to write. The output is an ordinary data set (`docs/data-format.md`) in the project's rudder convention.
 //!
 //! ```toml
-//! source_dir = "../../../shared/data/kvlcc2-hsva"  # relative to the mapping file
+//! source_dir = "raw/kvlcc2-hsva"                   # relative to the mapping file
 //! rudder_sign = -1                                  # source's positive rudder turns to port
 //! [format]
 //! delimiter = "whitespace"                          # or one character: ",", ";", "\t"

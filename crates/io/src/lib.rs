@@ -1,15 +1,15 @@
-//! Recordings and data sets in the DATA.md contract, import of other layouts, prime-system scaling and
+//! Recordings and data sets in the project's data format (`docs/data-format.md`), import of other layouts, prime-system scaling and
 //! acceleration estimation.
 //!
 //! Everything handed to other crates is in the project's conventions (see [`Recording`]): SI units,
 //! midship reference point, rudder positive to starboard. Conversions from a source's own conventions
 //! (`origin = "cg"`, `rudder_sign = -1`, unit suffixes, foreign layouts) happen here and nowhere else.
 //!
-//! - [`recording`]: one DATA.md CSV file → [`Recording`];
+//! - [`recording`]: one recording CSV file → [`Recording`];
 //! - [`dataset`]: a data set TOML and its recordings → [`Dataset`];
-//! - [`import`]: a foreign layout described by a mapping TOML → a DATA.md data set;
+//! - [`import`]: a foreign layout described by a mapping TOML → a data set in the project's format;
 //! - [`write`]: atomic writing of recordings and data sets;
-//! - [`prime`]: the prime system I with U0 (DOMAIN.md §1);
+//! - [`prime`]: the prime system I with U0 (`docs/conventions.md`);
 //! - [`deriv`]: the smoothing differentiator that estimates accelerations;
 //! - [`error`]: [`InputError`], which always names the file and the line/column or key.
 

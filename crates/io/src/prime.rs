@@ -1,4 +1,4 @@
-//! The prime system I of paper 000 §2.1 (DOMAIN.md §1): everything is made dimensionless with the
+//! The prime system I of paper 000 §2.1 (table in `docs/conventions.md`): everything is made dimensionless with the
 //! constant approach speed U0, the length L and the density ρ. Froude-similar model and full scale share
 //! every primed value. Each `*_prime` has its inverse `*_from_prime`.
 

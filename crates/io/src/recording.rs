@@ -1,4 +1,4 @@
-//! Reading a DATA.md recording (one manoeuvre, one CSV file).
+//! Reading a recording (one manoeuvre, one CSV file; format in `docs/data-format.md`).
 
 use std::collections::HashMap;
 use std::path::Path;

@@ -1,4 +1,4 @@
-//! Turning parsed numeric columns into a validated [`Recording`]: the checks shared by DATA.md CSV files
+//! Turning parsed numeric columns into a validated [`Recording`]: the checks shared by the project's CSV recordings
 //! and imported foreign layouts (time strictly increasing, every required column present, enough
 //! samples), so both report the same problems the same way.
 

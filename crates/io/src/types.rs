@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-/// One manoeuvre's time series in the project's conventions (DATA.md):
+/// One manoeuvre's time series in the project's conventions (`docs/conventions.md`):
 /// SI units (s, m, rad, m/s, rad/s, rad/s²), body axes x forward / y starboard, earth axes x0 north /
 /// y0 east, velocities and positions of the **midship** point, heading and yaw rate positive to
 /// starboard, rudder angle positive when it turns the ship to starboard.
@@ -82,7 +82,7 @@ impl Recording {
     }
 }
 
-/// Main particulars of the ship a data set describes (the `[ship]` table of DATA.md).
+/// Main particulars of the ship a data set describes (the `[ship]` table of a data-set file, `docs/data-format.md`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Ship {
@@ -123,7 +123,7 @@ impl Ship {
     }
 }
 
-/// Known added-mass derivatives in SI about the data set's origin (DATA.md `[added_mass]`), as
+/// Known added-mass derivatives in SI about the data set's origin (the data set's `[added_mass]` table), as
 /// derivatives (negative numbers). After loading they refer to midship.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
@@ -182,7 +182,7 @@ pub enum Manoeuvre {
 }
 
 impl Manoeuvre {
-    /// The DATA.md `kind` word.
+    /// The `kind` word of a data-set file: `zigzag`, `turning` or `free`.
     pub fn kind(&self) -> &'static str {
         match self {
             Manoeuvre::ZigZag { .. } => "zigzag",

@@ -1,4 +1,4 @@
-//! Physical quantities of recording columns and the units each accepts (DATA.md: `name[unit]` overrides
+//! Physical quantities of recording columns and the units each accepts (a header `name[unit]` overrides
 //! the default SI unit; an unknown unit is an error).
 
 /// The dimension of a column, which decides the units it may be written in.
@@ -81,7 +81,7 @@ pub enum Quantity {
 }
 
 impl Quantity {
-    /// Columns of a DATA.md recording, in the order the project writes them.
+    /// Columns of a recording file (`docs/data-format.md`), in the order the project writes them.
     pub const RECORDING: [Quantity; 12] = [
         Quantity::T,
         Quantity::X0,

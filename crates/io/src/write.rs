@@ -1,4 +1,4 @@
-//! Writing data sets and recordings in the DATA.md format, atomically (temporary file, then rename), in
+//! Writing data sets and recordings in the data format of `docs/data-format.md`, atomically (temporary file, then rename), in
 //! the project's conventions (SI, midship, rudder positive to starboard).
 
 use std::fmt::Write as _;

@@ -1,4 +1,5 @@
-//! Design matrices and regression targets (DOMAIN.md §2), in the prime system with the constant U0.
+//! Design matrices and regression targets (equations of motion in `docs/conventions.md`), in the prime
+//! system with the constant U0.
 //!
 //! With the acceleration derivatives known, each equation of motion gives one target per sample:
 //!

@@ -2,7 +2,8 @@
 //!
 //! - [`set`]: coefficient sets as TOML data ([`CoefficientSet`]); `full68`, `full74`, `reduced32` and `chen2021`
 //!   are shipped in `crates/model/sets/`, a user set is any file of the same form;
-//! - [`design`]: primed samples, design matrices Φ and targets y per degree of freedom (DOMAIN.md §2),
+//! - [`design`]: primed samples, design matrices Φ and targets y per degree of freedom (equations of motion in
+//!   `docs/conventions.md`),
 //!   per-term force contributions;
 //! - [`abkowitz`]: an identified model ([`AbkowitzModel`]), its accelerations for any state, and the
 //!   model file written by `shipid fit` ([`ModelFile`]);
