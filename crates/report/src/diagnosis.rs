@@ -111,7 +111,11 @@ pub fn diagnosis_page(files: &DiagnosisFiles, meta: &RunMeta) -> Result<String, 
         if effects.is_empty() {
             "none".into()
         } else {
-            effects.join("; ")
+            effects
+                .iter()
+                .map(|e| readable_effect(e))
+                .collect::<Vec<_>>()
+                .join("; ")
         },
     ));
     if let Some(se) = r.get("standard_errors").and_then(Value::as_object)
@@ -126,7 +130,7 @@ pub fn diagnosis_page(files: &DiagnosisFiles, meta: &RunMeta) -> Result<String, 
     let arrow = |a: Option<f64>, b: Option<f64>, unit: &str| -> Option<String> {
         let (a, b) = (a?, b?);
         let change = if a != 0.0 {
-            format!(" ({:+.0} %)", 100.0 * (b - a) / a)
+            format!(" ({:+.0}\u{a0}%)", 100.0 * (b - a) / a)
         } else {
             String::new()
         };
@@ -135,7 +139,7 @@ pub fn diagnosis_page(files: &DiagnosisFiles, meta: &RunMeta) -> Result<String, 
     if let Some(s) = arrow(
         fit("fit_before", "position_rmse_over_l"),
         fit("fit_after", "position_rmse_over_l"),
-        " L",
+        "\u{a0}L",
     ) {
         ev.push(("held-out position RMSE ÷ L, before → after".into(), s));
     }
@@ -205,12 +209,20 @@ pub fn diagnosis_page(files: &DiagnosisFiles, meta: &RunMeta) -> Result<String, 
                         .and_then(Value::as_f64),
                 );
                 num_cell(&mut b, c.get("n_parameters").and_then(Value::as_f64));
-                let params = c
+                // One unbreakable piece per parameter: a narrow window wraps between them only.
+                let params: Vec<String> = c
                     .get("parameters")
                     .and_then(Value::as_object)
                     .map(params_text)
-                    .unwrap_or_default();
-                let _ = write!(b, "<td><code>{}</code></td></tr>", esc(&params));
+                    .unwrap_or_default()
+                    .iter()
+                    .map(|p| format!("<code class=\"nw\">{}</code>", esc(p)))
+                    .collect();
+                let _ = write!(
+                    b,
+                    "<td class=\"params\"><div>{}</div></td></tr>",
+                    params.join(", ")
+                );
             }
             b.push_str("</tbody></table></div>");
         }
@@ -371,6 +383,24 @@ pub fn diagnosis_page(files: &DiagnosisFiles, meta: &RunMeta) -> Result<String, 
     Ok(page(&page_title, &b))
 }
 
+/// An effect in the effect syntax (`name:key=value,…`) with its numbers at four significant digits.
+fn readable_effect(e: &str) -> String {
+    let Some((name, params)) = e.split_once(':') else {
+        return e.to_string();
+    };
+    let params: Vec<String> = params
+        .split(',')
+        .map(|kv| match kv.split_once('=') {
+            Some((k, v)) => match crate::html::parse_num(v.trim()) {
+                Some(x) => format!("{k}={}", num(x)),
+                None => kv.to_string(),
+            },
+            None => kv.to_string(),
+        })
+        .collect();
+    format!("{name}: {}", params.join(", "))
+}
+
 fn str_field(v: &Value, k: &str) -> String {
     match v.get(k) {
         Some(Value::String(s)) => s.clone(),
@@ -388,11 +418,10 @@ fn num_cell(b: &mut String, x: Option<f64>) {
     }
 }
 
-fn params_text(p: &Map<String, Value>) -> String {
+fn params_text(p: &Map<String, Value>) -> Vec<String> {
     p.iter()
         .map(|(k, v)| format!("{k} = {}", v.as_f64().map_or_else(|| v.to_string(), num)))
-        .collect::<Vec<_>>()
-        .join(", ")
+        .collect()
 }
 
 /// A table of an array of objects with the given (key, header, numeric) columns.
@@ -421,4 +450,16 @@ fn rows_table(b: &mut String, v: Option<&Value>, title: &str, cols: &[(&str, &st
         b.push_str("</tr>");
     }
     b.push_str("</tbody></table></div>");
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn effects_are_shown_with_readable_numbers() {
+        assert_eq!(
+            super::readable_effect("asymmetry:offset=0.8662200838312236,y0=0,n0=0"),
+            "asymmetry: offset=0.8662, y0=0, n0=0"
+        );
+        assert_eq!(super::readable_effect("odd"), "odd");
+    }
 }

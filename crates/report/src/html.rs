@@ -328,7 +328,8 @@ table { border-collapse:separate; border-spacing:0; width:100%; font-size:13.5px
 th, td { padding:4px 9px; text-align:left; vertical-align:top; border-bottom:1px solid var(--line); }
 thead th { position:sticky; top:0; z-index:1; background:var(--head); font-weight:600;
   border-bottom:2px solid #b9c5d1; vertical-align:bottom; }
-td.nw { white-space:nowrap; }
+td.nw, code.nw { white-space:nowrap; }
+td.params div { min-width:24em; }
 table.narrow { width:auto; min-width:320px; }
 .side { display:flex; flex-wrap:wrap; gap:0 28px; align-items:flex-start; }
 .tablewrap.fit { width:fit-content; max-width:100%; }

@@ -16,7 +16,7 @@ fn verdict_evidence_candidates_recordings_and_model() {
     assert_self_contained(&html);
     assert!(html.contains("<div class=\"word\">asymmetry</div>"));
     assert!(html.contains("explains 39 % of the held-out mismatch"));
-    assert!(html.contains("0.3251 L → 0.1982 L (-39 %)"));
+    assert!(html.contains("0.3251\u{a0}L → 0.1982\u{a0}L (-39\u{a0}%)"));
     assert!(html.contains("offset ± 0.02893"));
     assert!(html.contains("data/kvlcc2-hsva/dataset.toml") && html.contains("mmg:kvlcc2"));
     // 10 candidates, two accepted.
