@@ -9,7 +9,7 @@ use std::time::Duration;
 use criterion::{Criterion, criterion_group, criterion_main};
 use shipid_estimators::*;
 
-#[path = "../tests/common/mod.rs"]
+#[path = "../tests/it/common.rs"]
 mod common;
 
 fn setup(n: usize) -> (faer::Mat<f64>, Vec<f64>, Bounds, f64, f64) {

@@ -111,6 +111,11 @@ pub fn random_design(n: usize, p: usize, seed: u64) -> Mat<f64> {
     Mat::from_fn(n, p, |_, j| mags[j] * normal.sample(&mut rng))
 }
 
+/// `√(Σ vᵢ²/n)`, the scale that tolerances, tubes and hyper-parameters are set against.
+pub fn rms(v: &[f64]) -> f64 {
+    (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
+}
+
 pub fn rel_diff(a: f64, b: f64) -> f64 {
     (a - b).abs() / a.abs().max(b.abs()).max(f64::MIN_POSITIVE)
 }

@@ -2,9 +2,7 @@
 // Index loops over several parallel arrays read more clearly than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use proptest::prelude::*;
 use shipid_estimators::faer::Mat;
 use shipid_estimators::*;
@@ -226,7 +224,7 @@ fn bounds_are_respected_and_active_bounds_bind() {
     upper[1] = 0.05;
     lower[2] = 0.0;
     let bounds = Bounds::new(lower, upper).unwrap();
-    let rms = (y.iter().map(|v| v * v).sum::<f64>() / 800.0).sqrt();
+    let rms = rms(&y);
     for est in [
         Estimator::BoundedLsq,
         Estimator::Lsq,
@@ -376,7 +374,7 @@ fn lasso_with_large_alpha_gives_zeros() {
     )
     .unwrap();
     let scales = column_scales(phi.as_ref()).unwrap();
-    let rms = (y.iter().map(|v| v * v).sum::<f64>() / 1000.0).sqrt();
+    let rms = rms(&y);
     for (b, s) in qp.coefficients.iter().zip(&scales) {
         assert!((b * s).abs() <= 1e-7 * rms, "{b}");
     }
@@ -447,7 +445,7 @@ fn svr_tube_contains_the_inside_samples() {
     // and the rest are strictly inside or outside.
     let phi = reduced_design(1000);
     let y = target(&phi, &sway_like_coefficients(9), 0.05, 12);
-    let rms = (y.iter().map(|v| v * v).sum::<f64>() / 1000.0).sqrt();
+    let rms = rms(&y);
     let eps = 0.05 * rms;
     let f = fit(
         phi.as_ref(),

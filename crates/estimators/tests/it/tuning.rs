@@ -2,9 +2,7 @@
 // Index loops over several parallel arrays read more clearly than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use proptest::prelude::*;
 use shipid_estimators::faer::Mat;
 use shipid_estimators::*;
@@ -229,7 +227,7 @@ fn svr_tuning_over_c_and_epsilon_keeps_the_least_validation_error() {
     let (phi, y, _) = problem();
     let folds = Folds::Blocked { k: 4 };
     let epsilons = default_epsilon_grid(&y);
-    let rms = (y.iter().map(|v| v * v).sum::<f64>() / y.len() as f64).sqrt();
+    let rms = rms(&y);
     let shares: Vec<f64> = epsilons.iter().map(|e| e / rms).collect();
     for (got, want) in shares
         .iter()

@@ -2,9 +2,7 @@
 // Index loops over several parallel arrays read more clearly than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use proptest::prelude::*;
 use shipid_estimators::faer::Mat;
 use shipid_estimators::*;
@@ -62,7 +60,7 @@ fn estimators(phi: &Mat<f64>, y: &[f64]) -> Vec<Estimator> {
         .last()
         .unwrap();
     let n = y.len() as f64;
-    let rms = (y.iter().map(|v| v * v).sum::<f64>() / n).sqrt();
+    let rms = rms(y);
     vec![
         Estimator::Lsq,
         Estimator::BoundedLsq,
@@ -192,7 +190,7 @@ proptest! {
         let beta: Vec<f64> = (0..c.p).map(|j| ((j as f64 + 1.0) * 1.7).sin() / phi_scale(&phi, j)).collect();
         let y = target(&phi, &beta, c.noise, c.seed ^ 0x5eed);
         let n = c.n as f64;
-        let rms = (y.iter().map(|v| v * v).sum::<f64>() / n).sqrt();
+        let rms = rms(&y);
         let alpha_max = *default_grid(&Family::Lasso, phi.as_ref(), &y).unwrap().last().unwrap();
         let est = match c.which {
             0 => Estimator::Lsq,
@@ -234,7 +232,7 @@ proptest! {
         let beta = sway_like_coefficients(22);
         let y = target(&phi, &beta, noise, seed);
         let nf = n as f64;
-        let rms = (y.iter().map(|v| v * v).sum::<f64>() / nf).sqrt();
+        let rms = rms(&y);
         let alpha_max = *default_grid(&Family::Lasso, phi.as_ref(), &y).unwrap().last().unwrap();
         let est = match which {
             0 => Estimator::BoundedLsq,

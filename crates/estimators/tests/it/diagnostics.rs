@@ -2,9 +2,7 @@
 // Index loops over several parallel arrays read more clearly than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use shipid_estimators::faer::Mat;
 use shipid_estimators::*;
 
