@@ -1,8 +1,8 @@
 # Mirrors the README's commands; `just` is optional, plain cargo works everywhere.
 
-# The main job on the embedded default data.
+# The main job on the embedded default data: the overshoot-truncation study (tables, figures, HTML report).
 main:
-    cargo run --release -p shipid -- fit data/kvlcc2-mmg/dataset.toml --set reduced32 --estimator lsq --recordings zz35_35_ps.csv --overshoots 4 --out results/kvlcc2-mmg-reduced32-lsq.toml --validate
+    cargo run --release -p shipid -- run studies/truncation.toml
 
 # The test suite (what CI runs).
 test:
@@ -11,6 +11,10 @@ test:
 # The stored-metrics regression check of the studies (what CI runs after the tests).
 check:
     for study in truncation estimators gp; do cargo run --release -p shipid -- check studies/$study.toml --reference results/reference/$study; done
+
+# Every crate's file import edges; fails on a circle.
+circles:
+    cargo xtask circles
 
 lint:
     cargo fmt --all -- --check
@@ -28,14 +32,14 @@ import-hsva:
 # The concealed-effect benchmark of `shipid diagnose` against paper 001's sparse GP as base (about 3 min on
 # 2 cores) → results/diagnose/.
 bench-diagnose:
-    cargo run --release -p shipid -- bench-diagnose --out results/diagnose
+    cargo xtask bench-diagnose --out results/diagnose
 
 # The same benchmark against refined full74 LSQ (1.5 min) and the exact MMG model (1.2 min).
 bench-diagnose-full74:
-    cargo run --release -p shipid -- bench-diagnose --base full74 --out results/diagnose/full74-base
+    cargo xtask bench-diagnose --base full74 --out results/diagnose/full74-base
 
 bench-diagnose-reference:
-    cargo run --release -p shipid -- bench-diagnose --base mmg:kvlcc2 --out results/diagnose/reference-base
+    cargo xtask bench-diagnose --base mmg:kvlcc2 --out results/diagnose/reference-base
 
 # Diagnose the HSVA tests against full68 LSQ identified from the default data.
 diagnose-hsva: import-hsva

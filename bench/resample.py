@@ -1,6 +1,6 @@
 """Copy a data set with every recording decimated by K (keep every K-th row) and/or with extra
 Gaussian noise scaled by F on the noisy channels, and/or with a share D of its rows dropped at random
-(uneven sampling, which DATA.md allows; first and last rows kept): a stand-in for recordings made
+(uneven sampling, which the data format allows; first and last rows kept): a stand-in for recordings made
 elsewhere at another sampling rate or noise level. Columns in SI units as `shipid generate` writes them;
 the noise levels are those of the KVLCC2 model (L = 7 m, U0 = 1.179 m/s).
 Usage: resample.py SRC_DIR DST_DIR K [F SEED [D]]"""

@@ -226,4 +226,3 @@ pub fn motions_figure(path: &PathBuf, target: &TargetShip, figures: &[MotionFigu
     root.present()?;
     Ok(())
 }
-

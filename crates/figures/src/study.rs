@@ -150,8 +150,12 @@ fn best_case<'c, 'a>(cases: &'c [CaseData<'a>], out: &Path) -> Option<&'c CaseDa
             std::fs::read_to_string(out.join("cases").join(&c.case.id).join("result.json")).ok()?;
         let result: shipid_study::CaseResult = serde_json::from_str(&text).ok()?;
         let m: Vec<f64> = result.tests.iter().filter_map(|t| t.mrae).collect();
-        (!m.is_empty() && result.tests.iter().all(|t| t.status == shipid_study::runner::TestStatus::Ok))
-            .then(|| m.iter().sum::<f64>() / m.len() as f64)
+        (!m.is_empty()
+            && result
+                .tests
+                .iter()
+                .all(|t| t.status == shipid_study::runner::TestStatus::Ok))
+        .then(|| m.iter().sum::<f64>() / m.len() as f64)
     };
     let with_model = cases.iter().filter(|c| c.model.is_some());
     with_model
@@ -858,8 +862,8 @@ fn forces(path: &Path, study: &Study, c: &CaseData, test: &str) -> Result<()> {
         .as_ref()
         .ok_or_else(|| fig_err!("case {} has no model (its fit failed)", c.case.id))?;
     let ds = &study.dataset;
-    let (samples, _) =
-        training_samples(ds, &[test.to_string()], WindowSpec::Whole).map_err(|e| fig_err!("{e}"))?;
+    let (samples, _) = training_samples(ds, &[test.to_string()], WindowSpec::Whole)
+        .map_err(|e| fig_err!("{e}"))?;
     let inertia = PrimeInertia::new(&ds.ship, &model.added_mass, &model.set);
     let root = SVGBackend::new(path, (1100, 1300)).into_drawing_area();
     root.fill(&WHITE)?;
@@ -942,7 +946,8 @@ mod tests {
     /// differed only in their training recordings shared one legend label.
     #[test]
     fn cases_that_differ_only_in_training_get_different_labels() {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shipid/tests/fixtures/studies/small.toml");
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../shipid/tests/fixtures/studies/small.toml");
         let mut study = shipid_study::load_study(&path).unwrap();
         let alone = case_label(&study, &study.cases[0]);
         assert!(

@@ -20,8 +20,8 @@ use shipid_model::{
 };
 use shipid_sim::metrics::zigzag_events;
 
-use crate::refine::{RefineOptions, refine_output_error};
 use crate::error::{PipelineError, bad_input};
+use crate::refine::{RefineOptions, refine_output_error};
 
 /// A set by shipped name or by path to a set file.
 pub fn load_set(spec: &str) -> Result<CoefficientSet, PipelineError> {
@@ -532,9 +532,4 @@ fn hyper_of(e: &Estimator) -> Vec<(&'static str, f64)> {
     }
 }
 
-pub fn rms(x: &[f64]) -> f64 {
-    if x.is_empty() {
-        return 0.0;
-    }
-    (x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).sqrt()
-}
+pub use crate::validate::rms;

@@ -16,8 +16,8 @@ use shipid_sim::{
     GP_INPUTS, GP_KIND, GP_OUTPUTS, GpDynamics, GpModelFile, GpOutputFile, SparsificationInfo,
 };
 
-use crate::fit::{WindowSpec, training_window, window_range};
 use crate::error::{PipelineError, bad_input};
+use crate::fit::{WindowSpec, training_window, window_range};
 
 /// Default similarity threshold d_gen. On the HSVA 15/5+20/5+30/5+35/5 training data (15 444 samples)
 /// it keeps 286 points, close to the 312 of paper 001 (chosen for the size, not tuned on validation).

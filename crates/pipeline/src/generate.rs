@@ -1,6 +1,6 @@
 //! `shipid generate`: the embedded default data set, made by the project's MMG reference simulator.
 //!
-//! Six manoeuvres of the KVLCC2 model (DOMAIN.md §6): ZZ10/10, ZZ20/20 and ZZ35/35 to port first,
+//! Six manoeuvres of the KVLCC2 model (docs/conventions.md, "The MMG reference"): ZZ10/10, ZZ20/20 and ZZ35/35 to port first,
 //! ZZ35/35 to starboard first, and 35° turning circles to both sides (or the zig-zags and turning
 //! circles given by `--manoeuvre`, e.g. to test a diagnosis on manoeuvres its base model was not
 //! identified from). Each starts from a steady approach
@@ -30,12 +30,12 @@ use shipid_sim::{
     MmgModel, SimOptions, SimStatus, State, controller_for, kvlcc2_added_mass, kvlcc2_ship,
 };
 
-use crate::spec::manoeuvre_stem;
 use crate::error::{PipelineError, failed};
+use crate::spec::manoeuvre_stem;
 
 /// Steady approach before the first rudder execute [s].
 pub const T_EXECUTE_S: f64 = 5.0;
-/// RK4 step [s] (model scale; reproduces the DOMAIN.md §6 check values).
+/// RK4 step [s] (model scale; reproduces the published KVLCC2 check values of the MMG reference).
 pub const DT_S: f64 = 0.05;
 /// Sampling interval of the written recordings [s] (10 Hz).
 pub const SAMPLE_INTERVAL_S: f64 = 0.1;
@@ -151,7 +151,10 @@ pub fn generate(noise_seed: Option<u64>) -> Result<Generated, PipelineError> {
 }
 
 /// Simulate the default manoeuvres with the MMG reference under concealed `effects`.
-pub fn generate_with(noise_seed: Option<u64>, effects: &[Effect]) -> Result<Generated, PipelineError> {
+pub fn generate_with(
+    noise_seed: Option<u64>,
+    effects: &[Effect],
+) -> Result<Generated, PipelineError> {
     generate_manoeuvres(noise_seed, effects, &default_manoeuvres())
 }
 

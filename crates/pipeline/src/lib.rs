@@ -5,10 +5,11 @@
 //!
 //! Module map (arrows are the only imports between modules, so there are no circles):
 //! `error` ← everything; `lm` (Levenberg–Marquardt step, small solves); `validate` (replays, closed-loop
-//! metrics) → `fit::rms`; `replay` (segment replays) → `lm`, `validate`; `fit` (windows, polynomial
-//! fit) → `refine` → `lm`, `replay`, `validate`; `fit_gp` → `fit`; `range` (identification range);
-//! `spec` (manoeuvre specs) ← `generate` (default data) ← `simulate` (standard manoeuvres);
-//! `model_file` (the loader) → `fit_gp`.
+//! metrics, RMS; imports nothing of this crate but `range`); `replay` (segment replays) → `lm`,
+//! `validate`; `fit` (windows, polynomial fit) → `refine` → `lm`, `replay`, `validate`; `fit_gp` →
+//! `fit`; `range` (identification range); `spec` (manoeuvre specs) ← `generate` (default data) ←
+//! `simulate` (standard manoeuvres); `model_file` (the loader) → `fit_gp`. `cargo xtask circles`
+//! checks that these stay one-way.
 
 pub mod error;
 pub mod fit;

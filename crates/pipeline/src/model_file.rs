@@ -6,7 +6,9 @@
 use std::path::Path;
 
 use shipid_model::{AugmentedModelFile, EffectEntry, ModelFile};
-use shipid_sim::{AbkowitzDynamics, Dynamics, Effect, GP_KIND, GpDynamics, GpModelFile, MmgModel, WithEffects};
+use shipid_sim::{
+    AbkowitzDynamics, Dynamics, Effect, GP_KIND, GpDynamics, GpModelFile, MmgModel, WithEffects,
+};
 
 use crate::error::{PipelineError, bad_input};
 

@@ -15,7 +15,13 @@ use shipid_sim::{
     Dynamics, Metrics, Replay, SimOptions, SimOutput, SimStatus, State, controller_for, metrics,
 };
 
-use crate::fit::rms;
+/// Root mean square of `x` (0 for no samples).
+pub fn rms(x: &[f64]) -> f64 {
+    if x.is_empty() {
+        return 0.0;
+    }
+    (x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).sqrt()
+}
 
 /// RK4 step for re-simulation, as a fraction of L/U0 (0.05 s for the KVLCC2 model, whose check values
 /// it reproduces to 0.05°).
@@ -244,7 +250,9 @@ pub fn validate_dataset(
     model_spec: &str,
     ds: &shipid_io::Dataset,
 ) -> (Vec<ValidatedRecording>, RangeSource) {
-    use crate::range::{gp_outside_fraction, identification_range, outside_fraction, training_data};
+    use crate::range::{
+        gp_outside_fraction, identification_range, outside_fraction, training_data,
+    };
     // A recording mostly outside the identification range tests the model's extrapolation, not its
     // fit. A sparse GP carries its range; a polynomial's needs the training data its file names.
     let gp = model.sparse_gp();

@@ -295,4 +295,3 @@ fn write_augmented(
     }
     write_atomic(out, text.as_bytes()).map_err(failed)
 }
-

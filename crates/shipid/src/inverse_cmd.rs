@@ -378,4 +378,3 @@ fn slug(s: &str) -> String {
         })
         .collect()
 }
-

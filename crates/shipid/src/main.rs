@@ -19,7 +19,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Write the embedded default data set (MMG KVLCC2 reference) as a DATA.md data set.
+    /// Write the embedded default data set (MMG KVLCC2 reference) as a data set (docs/data-format.md).
     Generate {
         /// Output directory.
         #[arg(long, default_value = "data/kvlcc2-mmg")]
@@ -155,7 +155,7 @@ enum Command {
         jobs: Option<usize>,
     },
     /// Diagnose why a model and recordings it did not see differ: locate the mismatch, name the
-    /// physical effect left out, fit it, show the held-out fit improve (DATA.md diagnosis report).
+    /// physical effect left out, fit it, show the held-out fit improve (docs/diagnosis.md).
     Diagnose {
         /// A model file or `mmg:kvlcc2`.
         model: String,
@@ -199,7 +199,7 @@ enum Command {
         duration: Option<f64>,
         #[arg(long)]
         json: bool,
-        /// Write the time series (DATA.md CSV).
+        /// Write the time series (the recording CSV of docs/data-format.md).
         #[arg(long)]
         out: Option<PathBuf>,
     },

@@ -22,7 +22,7 @@ pub fn dataset_metrics(ds: &Dataset) -> Vec<(String, &'static str, Metrics)> {
         .collect()
 }
 
-/// `{"recordings": {"<file>": {"kind": ..., <metric keys>}}}` (DATA.md keys).
+/// `{"recordings": {"<file>": {"kind": ..., <metric keys>}}}` (the metric keys of docs/data-format.md).
 pub fn metrics_json(rows: &[(String, &'static str, Metrics)]) -> Value {
     let mut recs = Map::new();
     for (file, kind, m) in rows {

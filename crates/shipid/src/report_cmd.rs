@@ -33,9 +33,11 @@ pub fn run(dir: &Path, study: Option<&Path>) -> Result<Outcome, CliError> {
 pub fn diagnosis_files(dir: &Path) -> DiagnosisFiles {
     let mut files = DiagnosisFiles::in_dir(dir);
     if files.figures.is_none() {
-        let has_svg = std::fs::read_dir(dir).into_iter().flatten().flatten().any(|e| {
-            e.path().extension().is_some_and(|x| x == "svg")
-        });
+        let has_svg = std::fs::read_dir(dir)
+            .into_iter()
+            .flatten()
+            .flatten()
+            .any(|e| e.path().extension().is_some_and(|x| x == "svg"));
         if has_svg {
             files.figures = Some(dir.to_path_buf());
         }

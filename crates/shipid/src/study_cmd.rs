@@ -37,19 +37,20 @@ pub fn run_and_write(
     let study_text = std::fs::read_to_string(&study.path).map_err(failed)?;
     write_atomic(&out.join("study.toml"), study_text.as_bytes()).map_err(failed)?;
     let counts = StatusCounts::of(&results);
-    let epoch_s = |t: std::time::SystemTime| {
-        t.duration_since(std::time::UNIX_EPOCH)
-            .map_or(0.0, |d| d.as_secs_f64())
-    };
     let run = serde_json::json!({
         "tool_version": env!("CARGO_PKG_VERSION"),
         "study": study.name,
         "study_file": study.path.display().to_string(),
         "dataset": study.dataset_path.display().to_string(),
-        "started_unix_s": epoch_s(started),
-        "finished_unix_s": epoch_s(std::time::SystemTime::now()),
+        "started_utc": utc(started),
+        "finished_utc": utc(std::time::SystemTime::now()),
+        "wall_time_s": started.elapsed().map_or(0.0, |d| d.as_secs_f64()),
         "cases": results.len(),
-        "status_counts": {"ok": counts.ok, "diverged": counts.diverged, "fit_failed": counts.fit_failed},
+        "case_outcomes": {
+            "every_prediction_ok": counts.ok,
+            "some_prediction_diverged": counts.diverged,
+            "fit_failed": counts.fit_failed,
+        },
         "warnings": warnings,
     });
     let run_text = serde_json::to_string_pretty(&run).map_err(failed)?;
@@ -75,6 +76,29 @@ pub fn run_and_write(
         eprintln!("warning: {w}");
     }
     Ok((results, report))
+}
+
+/// `t` as an ISO 8601 UTC time to the second (days to civil date by Howard Hinnant's algorithm).
+fn utc(t: std::time::SystemTime) -> String {
+    let secs = t
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs()) as i64;
+    let (days, rem) = (secs.div_euclid(86_400), secs.rem_euclid(86_400));
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    format!(
+        "{year:04}-{month:02}-{day:02}T{:02}:{:02}:{:02}Z",
+        rem / 3600,
+        rem % 3600 / 60,
+        rem % 60
+    )
 }
 
 /// How the cases of a run ended.

@@ -18,9 +18,9 @@ use shipid_io::write::write_atomic;
 use shipid_model::IdentificationRange;
 use shipid_sim::{AbkowitzDynamics, Dynamics, Metrics, SimStatus};
 
+use crate::study::{Case, Study};
 use shipid_pipeline::fit::{fit_dataset, load_set};
 use shipid_pipeline::range::outside_fraction;
-use crate::study::{Case, Study};
 use shipid_pipeline::validate::validate_recording;
 
 /// How a case's fit (or one DOF's) ended. Stored as kebab-case words in `result.json` and the tables.
@@ -339,12 +339,15 @@ fn run_gp_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
         .estimator
         .similarity
         .unwrap_or(shipid_pipeline::fit_gp::DEFAULT_SIMILARITY);
-    let (file, model, report) =
-        match shipid_pipeline::fit_gp::fit_gp_dataset(&study.dataset, &case.training, case.window, threshold)
-        {
-            Ok(x) => x,
-            Err(e) => return (CaseResult::failed_fit(case, e.to_string()), None),
-        };
+    let (file, model, report) = match shipid_pipeline::fit_gp::fit_gp_dataset(
+        &study.dataset,
+        &case.training,
+        case.window,
+        threshold,
+    ) {
+        Ok(x) => x,
+        Err(e) => return (CaseResult::failed_fit(case, e.to_string()), None),
+    };
     let tests = test_rows(study, &model, &|rec| {
         Some(shipid_pipeline::range::gp_outside_fraction(&model, rec))
     });

@@ -94,7 +94,10 @@ pub fn summary_table(study: &Study, results: &[CaseResult]) -> Table {
     t.push_text("kind", text(&|x| x.kind.clone()));
     t.push_text("status", text(&|x| x.status.as_str().to_string()));
     t.push_num("diverged_at_s", num(&|x| x.diverged_at_s));
-    t.push_text("replay_status", text(&|x| x.replay_status.as_str().to_string()));
+    t.push_text(
+        "replay_status",
+        text(&|x| x.replay_status.as_str().to_string()),
+    );
     t.push_num(
         "position_rmse_over_l",
         num(&|x| Some(x.position_rmse_over_l)),
@@ -190,4 +193,3 @@ fn long_table(
     t.push_num("value", long.iter().map(|r| r.3).collect());
     t
 }
-

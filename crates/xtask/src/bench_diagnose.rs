@@ -30,7 +30,9 @@ pub const FULL74_BASE: &str = "full74";
 
 pub fn run(base_spec: &str, out: &Path, seeds: u64, controls: u64) -> Result<bool> {
     if [GP_BASE, FULL74_BASE].contains(&base_spec) && Path::new(base_spec).exists() {
-        bail!("--base {base_spec}: both a base keyword and a file here; pass ./{base_spec} for the file");
+        bail!(
+            "--base {base_spec}: both a base keyword and a file here; pass ./{base_spec} for the file"
+        );
     }
     let clean = to_dataset(generate_with(None, &[])?, "embedded default data (clean)");
     // The in-memory bases are fitted on every clean recording.
@@ -39,21 +41,15 @@ pub fn run(base_spec: &str, out: &Path, seeds: u64, controls: u64) -> Result<boo
     let ((base, base_effects, base_name), range): (Base, Option<IdentificationRange>) =
         match base_spec {
             GP_BASE => {
-                let (_, gp, report) = fit_gp_dataset(
-                    &clean,
-                    &names,
-                    WindowSpec::Whole,
-                    DEFAULT_SIMILARITY,
-                )?;
+                let (_, gp, report) =
+                    fit_gp_dataset(&clean, &names, WindowSpec::Whole, DEFAULT_SIMILARITY)?;
                 (
                     (
                         Box::new(gp),
                         Vec::new(),
                         format!(
                             "sparse GP (paper 001, d_gen {}: {} of {} samples kept) fitted on the six clean default recordings (`shipid fit --estimator sparse-gp`)",
-                            DEFAULT_SIMILARITY,
-                            report.kept,
-                            report.candidates
+                            DEFAULT_SIMILARITY, report.kept, report.candidates
                         ),
                     ),
                     None,
@@ -123,14 +119,12 @@ pub fn run(base_spec: &str, out: &Path, seeds: u64, controls: u64) -> Result<boo
     let criterion = input.identification_range.map_or("", BaseRange::criterion);
     write_results(
         out, &ok_rows, level, threshold, &base_name, criterion, seeds,
-    )
-    ?;
+    )?;
     for f in &failures {
         eprintln!("case failed: {f}");
     }
     Ok(failures.is_empty())
 }
-
 
 fn write_results(
     out: &Path,

@@ -23,11 +23,11 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use serde_json::{Value, json};
-use shipid_pipeline::fit::{WindowSpec, training_samples};
 use shipid_estimators::faer::{self, Mat};
 use shipid_estimators::{Bounds, Estimator, Solver, column_scales, fit, objective};
 use shipid_io::Dataset;
 use shipid_model::{CoefficientSet, Dof, PrimeInertia, Samples, design};
+use shipid_pipeline::fit::{WindowSpec, training_samples};
 
 // Fixed, representative hyper-parameters: the values that blocked cross-validation
 // (`shipid fit --tune`) picks on the ZZ35 (4 OS) training set lie at λ ≈ 1e-5…1e-3,

@@ -3,9 +3,11 @@
 //! - `bench-diagnose`: the concealed-effect benchmark of the diagnosis (docs/diagnosis.md);
 //! - `paper001`: paper 001's Tab. 6 and Fig. 9–12 on the HSVA tests (docs/reproductions/paper001.md);
 //! - `inverse-bench`: wall time of paper 003's simulation database (docs/benchmarks.md);
+//! - `circles`: every crate's file import edges, failing on a circle;
 //! - `fit-bench`: fit times of the estimators for the side-by-side comparison in `bench/`.
 
 mod bench_diagnose;
+mod circles;
 mod fit_bench;
 mod inverse_bench;
 mod paper001;
@@ -61,6 +63,8 @@ enum Task {
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
+    /// List every crate's file import edges and fail on a circle (ARCHITECTURE.md's invariant).
+    Circles,
     /// Fit-time benchmark of the estimators (flags: see the module's documentation).
     #[command(disable_help_flag = true)]
     FitBench {
@@ -101,6 +105,14 @@ fn main() -> ExitCode {
             seed,
         } => inverse_bench::bench(&targets, &ships, samples, repeats, seed)
             .map(|()| ExitCode::SUCCESS),
+        Task::Circles => {
+            let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+            Ok(if circles::run(&root) {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::from(1)
+            })
+        }
         Task::FitBench { .. } => {
             fit_bench::main();
             Ok(ExitCode::SUCCESS)

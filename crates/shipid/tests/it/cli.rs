@@ -69,7 +69,7 @@ fn simulate_prints_status_and_metric_keys() {
     ]);
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["status"], "ok");
-    // DOMAIN.md §6: 20/20 starboard first 10.5° / 15.7°.
+    // MMG reference check values: 20/20 starboard first 10.5° / 15.7°.
     assert!(
         (v["overshoot_1"].as_f64().unwrap() - 10.5).abs() <= 0.3,
         "{v}"

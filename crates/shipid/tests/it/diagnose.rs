@@ -1,5 +1,5 @@
 //! The discrepancy diagnosis on generated data with a concealed effect: the verdict names the effect, its
-//! parameters come back, the held-out fit improves, controls give `none`, the report has DATA.md's keys
+//! parameters come back, the held-out fit improves, controls give `none`, the report has the keys of docs/data-format.md
 //! and the augmented model carries the effect into later simulations.
 
 use crate::common;
@@ -9,9 +9,9 @@ use std::path::Path;
 use serde_json::Value;
 use shipid_diagnose::bench::to_dataset;
 use shipid_diagnose::{DiagnoseInput, DiagnoseOptions, Report, diagnose, model_level};
+use shipid_estimators::Solver;
 use shipid_pipeline::fit::{EstimatorSpec, WindowSpec, fit_dataset, load_set};
 use shipid_pipeline::generate::generate_with;
-use shipid_estimators::Solver;
 use shipid_sim::{AbkowitzDynamics, Dynamics, Effect, MmgModel};
 
 /// The model identified from the clean default data (full68, LSQ, all six recordings) and its own level.
@@ -288,8 +288,8 @@ fn a_bad_effect_in_a_model_file_names_the_key() {
 /// unprimed velocities, would put everything outside.)
 #[test]
 fn states_a_model_was_not_identified_on_are_reported_outside_its_identification_range() {
-    use shipid_pipeline::fit::training_samples;
     use shipid_model::IdentificationRange;
+    use shipid_pipeline::fit::training_samples;
 
     let clean = to_dataset(generate_with(None, &[]).unwrap(), "clean");
     let one = vec!["zz35_35_ps.csv".to_string()];

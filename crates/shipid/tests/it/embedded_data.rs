@@ -96,7 +96,7 @@ fn zz35_port_holds_at_least_eight_overshoots() {
 
 #[test]
 fn embedded_metrics_are_the_mmg_check_values() {
-    // DOMAIN.md §6 check values, measured on the committed recordings by the one metrics code path.
+    // The MMG reference check values (Yasukawa & Yoshimura 2015), measured on the committed recordings by the one metrics code path.
     let ds = embedded();
     let m = |f: &str| {
         let r = ds.recording(f).unwrap();

@@ -1,5 +1,5 @@
 //! The HSVA KVLCC2 model tests through the shipped import mapping: the standard zig-zag overshoots must
-//! be those listed in ../shared/data/kvlcc2-hsva/SOURCE.md (within 0.3°).
+//! be those HSVA published with the tests (within 0.3°).
 
 use crate::common;
 
@@ -16,7 +16,7 @@ fn hsva_overshoots_match_the_source_listing() {
     let m = common::shipid(&["metrics", &ds, "--json"]);
     assert!(m.status.success(), "{}", String::from_utf8_lossy(&m.stderr));
     let v: Value = serde_json::from_slice(&m.stdout).unwrap();
-    // SOURCE.md, "Overshoots of the standard zig-zags".
+    // The overshoots HSVA lists for its standard zig-zags.
     for (file, os1, os2) in [
         ("z10_10_ps.csv", 9.68, 17.82),
         ("z10_10_sb.csv", 9.69, 20.54),

@@ -3,9 +3,9 @@
 
 use crate::common;
 
-use shipid_pipeline::fit::{EstimatorSpec, WindowSpec, fit_dataset, load_set};
 use shipid_estimators::Solver;
 use shipid_io::{Dataset, DatasetRecording, Manoeuvre, Side};
+use shipid_pipeline::fit::{EstimatorSpec, WindowSpec, fit_dataset, load_set};
 use shipid_sim::{AbkowitzDynamics, SimOptions, State, controller_for, metrics};
 
 fn embedded() -> Dataset {
@@ -155,9 +155,12 @@ fn every_estimator_reproduces_its_training_zigzag_with_either_set() {
             "{estimator}: {:?}",
             out.dofs[0].fit.status
         );
-        let cmp =
-            shipid_pipeline::validate::compare_manoeuvre(&AbkowitzDynamics(out.model), training, &ds.ship)
-                .unwrap();
+        let cmp = shipid_pipeline::validate::compare_manoeuvre(
+            &AbkowitzDynamics(out.model),
+            training,
+            &ds.ship,
+        )
+        .unwrap();
         let p = cmp.predicted.expect("training run re-simulates");
         for (k, (a, b)) in [
             (1, (recorded.overshoot_1, p.overshoot_1)),
@@ -174,7 +177,7 @@ fn every_estimator_reproduces_its_training_zigzag_with_either_set() {
 
 #[test]
 fn the_symmetric_reduced_set_still_gets_the_first_overshoot_and_the_turning_circles() {
-    // reduced32 has no port/starboard asymmetry terms (DOMAIN.md §3) while the MMG truth has; its first
+    // reduced32 has no port/starboard asymmetry terms (docs/conventions.md, coefficient sets) while the MMG truth has; its first
     // overshoot and its turning circles are still close (README: identification table).
     let ds = embedded();
     let out = fit_dataset(
@@ -199,8 +202,12 @@ fn the_symmetric_reduced_set_still_gets_the_first_overshoot_and_the_turning_circ
         zz.relative_error
     );
     for f in ["tc35_ps.csv", "tc35_sb.csv"] {
-        let tc = shipid_pipeline::validate::compare_manoeuvre(&model, ds.recording(f).unwrap(), &ds.ship)
-            .unwrap();
+        let tc = shipid_pipeline::validate::compare_manoeuvre(
+            &model,
+            ds.recording(f).unwrap(),
+            &ds.ship,
+        )
+        .unwrap();
         assert!(tc.mrae.unwrap() < 0.03, "{f}: {:?}", tc.relative_error);
     }
 }

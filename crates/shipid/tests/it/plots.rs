@@ -6,8 +6,8 @@ use crate::common;
 
 use std::path::Path;
 
-use shipid_study::study::load_study;
 use shipid::study_cmd::run_and_write;
+use shipid_study::study::load_study;
 
 const FIXTURES: &str = "crates/shipid/tests/fixtures/studies";
 
@@ -39,7 +39,9 @@ fn svg(path: &Path) -> String {
 fn a_study_run_writes_every_figure() {
     let dir = tempfile::tempdir().unwrap();
     let study = load_study(&common::root().join(FIXTURES).join("small.toml")).unwrap();
-    let results = run_and_write(&study, dir.path(), 2, false, false).unwrap().0;
+    let results = run_and_write(&study, dir.path(), 2, false, false)
+        .unwrap()
+        .0;
     let figures = dir.path().join("figures");
     // The force decomposition is drawn for the case with the smallest mean MRAE over its tests.
     let mean_mrae = |r: &shipid_study::runner::CaseResult| {
@@ -119,7 +121,10 @@ fn a_diverged_prediction_is_drawn_and_labelled() {
     let out = dir.path().join("out");
     let results = run_and_write(&study, &out, 2, false, false).unwrap().0;
     assert!(
-        results[0].tests.iter().any(|t| t.status == shipid_study::runner::TestStatus::Diverged),
+        results[0]
+            .tests
+            .iter()
+            .any(|t| t.status == shipid_study::runner::TestStatus::Diverged),
         "the fixture diverges"
     );
     let figures = out.join("figures");

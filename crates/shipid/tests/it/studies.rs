@@ -6,8 +6,8 @@ use crate::common;
 
 use std::path::Path;
 
-use shipid_study::study::load_study;
 use shipid::study_cmd::run_and_write;
+use shipid_study::study::load_study;
 use shipid_tables::Table;
 
 const FIXTURES: &str = "crates/shipid/tests/fixtures/studies";
@@ -129,7 +129,9 @@ fn an_interrupted_study_resumes_without_redoing_or_losing_cases() {
     let study = small_study();
     assert_eq!(study.cases.len(), 3);
     let dir = tempfile::tempdir().unwrap();
-    let first = run_and_write(&study, dir.path(), 2, false, false).unwrap().0;
+    let first = run_and_write(&study, dir.path(), 2, false, false)
+        .unwrap()
+        .0;
     let first_summary = Table::read_csv(&dir.path().join("summary.csv")).unwrap();
     let before = result_files(dir.path());
     // Interrupt: the last case never finished (no result.json, a half-written temporary file instead).
@@ -137,7 +139,9 @@ fn an_interrupted_study_resumes_without_redoing_or_losing_cases() {
     std::fs::remove_file(victim.join("result.json")).unwrap();
     std::fs::write(victim.join("result.json.tmp"), b"{\"case_id\": \"trunc").unwrap();
     std::thread::sleep(std::time::Duration::from_millis(20));
-    let second = run_and_write(&study, dir.path(), 2, false, false).unwrap().0;
+    let second = run_and_write(&study, dir.path(), 2, false, false)
+        .unwrap()
+        .0;
     let after = result_files(dir.path());
     assert_eq!(after.len(), 3, "the unfinished case was completed");
     for (b, a) in before.iter().zip(&after).take(2) {
@@ -249,7 +253,9 @@ fn refine_in_a_study_is_its_own_case_labelled_as_refined_and_its_replay_of_the_t
         "{ids:?}"
     );
     let dir = tempfile::tempdir().unwrap();
-    let results = run_and_write(&study, dir.path(), 2, false, false).unwrap().0;
+    let results = run_and_write(&study, dir.path(), 2, false, false)
+        .unwrap()
+        .0;
     let (lsq, refined) = (&results[0].tests[0], &results[1].tests[0]);
     assert_eq!(refined.replay_status, shipid_study::runner::TestStatus::Ok);
     // Whole open-loop replays of the 35° zig-zag drift in heading with either model (≈ 20° RMSE), so
@@ -295,7 +301,9 @@ fn a_sparse_gp_case_needs_no_set_and_is_validated_and_drawn_like_the_polynomial_
     );
     assert_eq!((case.set.as_str(), case.solver.as_str()), ("none", "none"));
     let dir = tempfile::tempdir().unwrap();
-    let results = run_and_write(&study, dir.path(), 1, false, false).unwrap().0;
+    let results = run_and_write(&study, dir.path(), 1, false, false)
+        .unwrap()
+        .0;
     let r = &results[0];
     assert_eq!(r.status, shipid_study::CaseStatus::Ok, "{:?}", r.message);
     assert!(
@@ -344,8 +352,15 @@ fn the_summary_holds_the_epsilon_every_svr_fit_used() {
     let study = load_study(&common::root().join(FIXTURES).join("svr_epsilon.toml")).unwrap();
     assert_eq!(study.cases.len(), 4);
     let dir = tempfile::tempdir().unwrap();
-    let results = run_and_write(&study, dir.path(), 2, false, false).unwrap().0;
-    assert!(results.iter().all(|r| r.status == shipid_study::CaseStatus::Ok), "{results:?}");
+    let results = run_and_write(&study, dir.path(), 2, false, false)
+        .unwrap()
+        .0;
+    assert!(
+        results
+            .iter()
+            .all(|r| r.status == shipid_study::CaseStatus::Ok),
+        "{results:?}"
+    );
     let summary = Table::read_csv(&dir.path().join("summary.csv")).unwrap();
     let cell = |name: &str, row: usize| summary.column(name).unwrap().cell(row);
     let hyper_of_model = |case: &str| -> toml::Table {
