@@ -69,8 +69,14 @@ impl ReportError {
 }
 
 /// What the caller knows about the run that the folder may not say. Every field is optional; for a
-/// study, fields left `None` are taken from `run.json`/`study.toml` when present, and the warnings
-/// of both are shown (duplicates once).
+/// study, fields left `None` are taken from `run.json`, then `study.toml` (`name`, `dataset`,
+/// `description`), then the first case's `config.toml` (`shipid_version`, `study`, `dataset`), and
+/// the warnings of the caller and of `run.json` are both shown (duplicates once).
+///
+/// `run.json` is read leniently (a JSON object): `tool_version` (or `shipid_version`, `version`),
+/// `study_name` (or `name`), `study_file` (or `study`), `dataset` (or `data_set`), `started`,
+/// `finished` and `warnings` (an array of strings) go to their places; any other key (per-status
+/// `counts`, `jobs`, …) is listed under "Run record" as it is.
 #[derive(Debug, Clone, Default)]
 pub struct RunMeta {
     /// `shipid` version that wrote the results (`env!("CARGO_PKG_VERSION")` in the CLI).

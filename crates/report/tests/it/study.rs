@@ -200,3 +200,29 @@ pub fn copy_dir(from: &std::path::Path, to: &std::path::Path) {
         }
     }
 }
+
+#[test]
+fn a_case_whose_fit_failed_has_its_row_and_no_tests() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(
+        dir.path().join("summary.csv"),
+        "case,set,case_status,fit_time_s,test,status,position_rmse_over_l\n\
+         a,s,ok,0.5,t1,ok,0.25\na,s,ok,0.5,t2,diverged,0.5\nb,s,fit-failed,,,,\n",
+    )
+    .unwrap();
+    fs::create_dir_all(dir.path().join("cases/b")).unwrap();
+    fs::write(
+        dir.path().join("cases/b/result.json"),
+        r#"{"case_id": "b", "status": "fit-failed", "message": "singular <design>", "tests": []}"#,
+    )
+    .unwrap();
+    let html = study_page(dir.path(), &RunMeta::default()).unwrap();
+    assert_eq!(summary_case_ids(&html), vec!["a", "b"]);
+    assert!(html.contains("data-case-id=\"b\" class=\"bad\""));
+    assert!(html.contains("<span class=\"v\">1</span>cases fit-failed</div>"));
+    assert!(
+        html.contains("<span class=\"v\">2</span>tests</div>"),
+        "b has no test"
+    );
+    assert!(html.contains("singular &lt;design&gt;"));
+}
