@@ -74,9 +74,9 @@ impl ReportError {
 /// the warnings of the caller and of `run.json` are both shown (duplicates once).
 ///
 /// `run.json` is read leniently (a JSON object): `tool_version` (or `shipid_version`, `version`),
-/// `study_name` (or `name`), `study_file` (or `study`), `dataset` (or `data_set`), `started`,
-/// `finished` and `warnings` (an array of strings) go to their places; any other key (per-status
-/// `counts`, `jobs`, …) is listed under "Run record" as it is.
+/// `study_name` (or `name`), `study_file` (or `study`), `dataset` (or `data_set`), `started_utc` (or
+/// `started`), `finished_utc` (or `finished`) and `warnings` (an array of strings) go to their places;
+/// any other key (`wall_time_s`, `cases`, `case_outcomes`, …) is listed under "Run record" as it is.
 #[derive(Debug, Clone, Default)]
 pub struct RunMeta {
     /// `shipid` version that wrote the results (`env!("CARGO_PKG_VERSION")` in the CLI).

@@ -186,11 +186,11 @@ pub fn study_page(dir: &Path, meta: &RunMeta) -> Result<String, ReportError> {
         "data set".into(),
         dataset.unwrap_or_else(|| "unknown".into()),
     ));
-    for k in ["started", "finished"] {
-        if let Some(v) = str_of(&[k]) {
+    for (k, utc) in [("started", "started_utc"), ("finished", "finished_utc")] {
+        if let Some(v) = str_of(&[utc, k]) {
             header.push((k.into(), v));
         }
-        used_keys.push(k);
+        used_keys.extend([k, utc]);
     }
     header.push(("output folder".into(), dir.display().to_string()));
     header.extend(meta.details.iter().cloned());

@@ -37,7 +37,14 @@ fn header_shows_version_study_data_set_and_run_record() {
     );
     assert!(html.contains("studies/truncation.toml"));
     assert!(html.contains("data/kvlcc2-mmg/dataset.toml"));
-    assert!(html.contains("2026-11-24T06:49:01Z"));
+    assert!(html.contains("<dt>started</dt><dd>2026-11-24T06:49:01Z</dd>"));
+    // Keys without a place of their own are listed under "Run record", not the ones placed above.
+    let r = html.find("Run record").expect("run record");
+    let run_record = &html[r..r + html[r..].find("</section>").unwrap()];
+    assert!(
+        run_record.contains("some prediction diverged") && run_record.contains("wall time [s]")
+    );
+    assert!(!run_record.contains("started") && !run_record.contains("tool version"));
     // study.toml as the run configuration, its description under the title.
     assert!(html.contains("Overshoot truncation sweep"));
     assert!(html.contains("<span class=\"h\">[training]</span>"));
