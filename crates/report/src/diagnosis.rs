@@ -72,11 +72,21 @@ pub fn diagnosis_page(files: &DiagnosisFiles, meta: &RunMeta) -> Result<String, 
     }
 
     let mut b = String::new();
-    let _ = write!(
-        b,
-        "<header class=\"top\"><h1><span class=\"kind\">Diagnosis</span> {}</h1>",
-        esc(if title == "Diagnosis" { "" } else { &title })
-    );
+    // A title that already says it is a diagnosis ("diagnosis of mmg:kvlcc2") stands alone.
+    let says_it = title.to_lowercase().starts_with("diagnosis");
+    let _ = if says_it {
+        let mut c = title.chars();
+        let t: String = c
+            .next()
+            .map_or(String::new(), |f| f.to_uppercase().chain(c).collect());
+        write!(b, "<header class=\"top\"><h1>{}</h1>", esc(&t))
+    } else {
+        write!(
+            b,
+            "<header class=\"top\"><h1><span class=\"kind\">Diagnosis</span> {}</h1>",
+            esc(&title)
+        )
+    };
     b.push_str(&facts(&header));
     b.push_str(
         "<nav class=\"toc\"><a href=\"#verdict\">Verdict</a><a href=\"#candidates\">Candidates</a>\
@@ -375,8 +385,8 @@ pub fn diagnosis_page(files: &DiagnosisFiles, meta: &RunMeta) -> Result<String, 
     let mut seen = std::collections::HashSet::new();
     warnings.retain(|w| seen.insert(w.clone()));
     b.insert_str(warnings_at, &warnings_box(&warnings));
-    let page_title = if title == "Diagnosis" {
-        format!("Diagnosis: {verdict} — shipid report")
+    let page_title = if says_it {
+        format!("{title}: {verdict} — shipid report")
     } else {
         format!("{title}: {verdict} — shipid diagnosis report")
     };

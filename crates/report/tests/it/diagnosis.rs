@@ -38,8 +38,14 @@ fn verdict_evidence_candidates_recordings_and_model() {
 fn a_verdict_of_none_with_figures_and_no_model() {
     let files = DiagnosisFiles::in_dir(&fixture("diagnosis-none"));
     assert!(files.model.is_none());
-    let html = diagnosis_page(&files, &meta()).unwrap();
+    let m = RunMeta {
+        name: Some("diagnosis of /tmp/m.toml".into()),
+        ..meta()
+    };
+    let html = diagnosis_page(&files, &m).unwrap();
     assert_self_contained(&html);
+    assert!(html.contains("<h1>Diagnosis of /tmp/m.toml</h1>"));
+    assert!(html.contains("<title>diagnosis of /tmp/m.toml: none — shipid report</title>"));
     assert!(html.contains("<div class=\"word\">none</div>"));
     assert!(html.contains("No augmented model file"));
     assert_eq!(html.matches("<figure ").count(), 1);
