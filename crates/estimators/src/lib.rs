@@ -46,7 +46,7 @@
 //! Every estimator exists twice ([`Solver`]); both minimise the same J:
 //!
 //! * `Qp` — the reference, a clarabel QP. The least-squares family is compressed to a
-//!   problem of size ≈ 2p–3p through a Householder R factor (`module qp`); SVR is the full
+//!   problem of size ≈ 2p–3p through a Householder R factor (`solvers::qp`); SVR is the full
 //!   primal with per-sample slacks.
 //! * `Fast` — LSQ by the corrected semi-normal equations (Cholesky of `ZᵀZ/n` plus one
 //!   refinement step) when κ(Z) ≤ 1e5, by QR otherwise (CholeskyQR2 when provably
@@ -56,20 +56,38 @@
 //!   descent, whose rate collapses at the κ(ZᵀZ) ≈ 1e8–1e12 of Abkowitz designs); SVR by
 //!   a primal-dual interior-point method with q × q normal equations whose iterates feed
 //!   an exact KKT finish (or are accepted on a certified duality gap), with Newton steps
-//!   on a smoothed ε-insensitive loss under continuation as the fallback (`module svr`).
+//!   on a smoothed ε-insensitive loss under continuation as the fallback (`solvers::svr`).
 //!
 //! [`Fit::objective`] is always J evaluated at the returned coefficients, so the two
 //! solvers can be compared directly. [`Status::IllConditioned`] flags fits whose effective
 //! condition number exceeds [`ILL_CONDITIONED_THRESHOLD`] (1/√ε_mach ≈ 6.7e7).
 //!
-//! # Modules
+//! # Public API
 //!
-//! * [`fit()`], [`objective()`], [`predict()`] — fitting and evaluation;
+//! * [`fit()`], [`objective()`], [`predict()`] — fitting and evaluation; [`Params`] and its
+//!   [`Params::check`] into [`CheckedParams`], whose [`CheckedParams::fit`] is the same
+//!   fit with the settings validated once, up front;
 //! * [`tune()`], [`Folds`], [`Family`], [`default_grid()`] — blocked / grouped k-fold
 //!   cross-validation over a log grid;
 //! * [`vif()`], [`condition_number()`], [`scaled_condition_number()`],
 //!   [`contributions()`] — diagnostics;
 //! * [`column_scales()`] — the `s_j` above.
+//!
+//! # Module map
+//!
+//! Each line uses only itself and the lines below it, and no two files import each other
+//! (`scripts/import_cycles.py` checks), so any layer can be read and tested on its own:
+//!
+//! * `fit`, `tuning`, `diagnostics` — the entry points; `fit` owns unscaling, the status
+//!   and the effective condition number, so that a solver only has to minimise J;
+//! * `solvers` — `direct` (two-pass LSQ on Φ), `fast`, `active_set`, `svr` (with `ipm`
+//!   and `data`), `qp`, and `solution`, the scaled-space result they all return;
+//! * `params` (settings checked once) and `problem` (data validation, column scaling, the
+//!   scaled problem both solver families share);
+//! * `dense` — `kernels` (fused column passes and the one `dispatch!` that picks AVX-512,
+//!   AVX2 + FMA or the baseline at run time), `small_eig`, `linalg`: fenced, they know
+//!   nothing about estimators;
+//! * `types` and `error` — the public value types and errors.
 //!
 //! faer runs with its global parallelism setting; call
 //! `faer::set_global_parallelism(faer::Par::Seq)` when fits run in parallel (rayon) or

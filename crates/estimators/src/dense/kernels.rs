@@ -1,8 +1,8 @@
 //! Fused passes over the columns of a raw design for the direct least-squares path
-//! ([`crate::solvers::direct`]): the cross-product matrix of `[Φ y]` in one pass, and the residual
-//! `y − Φβ` with `Φᵀr` and `‖r‖²` (plus `‖Φv‖²`) in another; `‖y − Φβ‖²` alone for
-//! [`crate::fit`]'s objective; and the products `Φᵀv`, `Φv` of the SVR interior point's
-//! iterations.
+//! ([`crate::solvers::direct`]): the cross-product matrix of `[Φ y]` in one pass, and the
+//! residual `y − Φβ` with `Φᵀr` and `‖r‖²` (plus `‖Φv‖²`) in another; `‖y − Φβ‖²` alone
+//! for [`mod@crate::fit`]'s objective; and the products `Φᵀv`, `Φv` of the SVR interior
+//! point's iterations.
 //!
 //! At the shapes of the Abkowitz designs (n ≈ 1e3–1e4, p ≤ 22) faer's general matrix
 //! product packs both operands and its matrix-vector products visit Φ once per product;
@@ -476,19 +476,22 @@ dispatch!(
 
 dispatch!(
     /// `‖y − Φβ‖²` in one pass over Φ.
-    pub(crate) fn residual_norm, residual_norm_generic, (cols: &[&[f64]], y: &[f64], beta: &[f64]) -> f64,
+    pub(crate) fn residual_norm, residual_norm_generic,
+    (cols: &[&[f64]], y: &[f64], beta: &[f64]) -> f64,
     avx512: <8, 4, true>, avx2: <4, 4, true>, base: <2, 2, false>
 );
 
 dispatch!(
     /// `Φᵀv` in one pass over Φ.
-    pub(crate) fn transposed_product, transposed_product_generic, (cols: &[&[f64]], v: &[f64]) -> Vec<f64>,
+    pub(crate) fn transposed_product, transposed_product_generic,
+    (cols: &[&[f64]], v: &[f64]) -> Vec<f64>,
     avx512: <8, 4, true>, avx2: <4, 4, true>, base: <2, 2, false>
 );
 
 dispatch!(
     /// `Φv` into `out` in one pass over Φ.
-    pub(crate) fn combination, combination_generic, (cols: &[&[f64]], v: &[f64], out: &mut [f64]) -> (),
+    pub(crate) fn combination, combination_generic,
+    (cols: &[&[f64]], v: &[f64], out: &mut [f64]) -> (),
     avx512: <8, 4, true>, avx2: <4, 4, true>, base: <2, 2, false>
 );
 

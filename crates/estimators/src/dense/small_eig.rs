@@ -10,10 +10,10 @@
 
 use crate::dense::kernels::madd;
 
-/// Relative width of the bracket at which the extreme-eigenvalue search stops: the callers need κ = √(λ_max/λ_min)
-/// to 1e-6 relative (what [`crate::fit`]'s condition number promises against the SVD), and
-/// the eigenvalues of the Gram carry a rounding error of ε‖G‖ anyway; 1e-10 leaves four
-/// orders of margin.
+/// Relative width of the bracket at which the extreme-eigenvalue search stops: the callers
+/// need κ = √(λ_max/λ_min) to 1e-6 relative (what [`mod@crate::fit`]'s condition number
+/// promises against the SVD), and the eigenvalues of the Gram carry a rounding error of
+/// ε‖G‖ anyway; 1e-10 leaves four orders of margin.
 const RELATIVE_WIDTH: f64 = 1e-10;
 
 /// `QᵀAQ = T` (tridiagonal: diagonal `d`, off-diagonal `e`), with Q kept as Householder
@@ -523,7 +523,8 @@ fn reduce_generic<const FMA: bool, const W: usize>(
 
 crate::dense::kernels::dispatch!(
     /// [`reduce_generic`] with FMA and wide vectors where the CPU has them.
-    pub(crate) fn reduce, reduce_generic, (a: &[f64], k: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>, usize),
+    pub(crate) fn reduce, reduce_generic,
+    (a: &[f64], k: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>, usize),
     avx512: <true, 8>, avx2: <true, 4>, base: <false, 2>
 );
 

@@ -16,7 +16,7 @@
 //!    on the explicit residual (second pass: `r₁ = y − Φβ₁` with `Φᵀr₁` and `‖r₁‖²`),
 //!    which squares the κ²ε error of the normal equations away. When κ(Z) is above 1e4
 //!    (where the Gram eigenvalue alone is not accurate to 1e-6) the same pass gives the
-//!    Rayleigh quotient `‖Zv‖²/n` of the smallest eigenvector, as in [`crate::fit`]'s
+//!    Rayleigh quotient `‖Zv‖²/n` of the smallest eigenvector, as in [`mod@crate::fit`]'s
 //!    condition number.
 //! 5. J = ‖y − Φβ‖²/2n follows from `‖r₁‖²` and the step ([`residual_after_step`]); a
 //!    third pass evaluates it explicitly only when the step is not small against it.
@@ -36,7 +36,7 @@ use crate::params::CheckedParams;
 use crate::types::{Fit, Solver, Status, status_from};
 
 /// Below this κ(G) = κ(Z)² the Gram eigenvalues give κ(Z) to better than 1e-6 (the
-/// threshold of [`crate::fit`]'s condition number).
+/// threshold of [`mod@crate::fit`]'s condition number).
 const GRAM_EIGENVALUES_SUFFICE: f64 = 1e8;
 /// κ(G) limit of the semi-normal equations (κ(Z) ≤ 1e5), as in `fast::seminormal_lsq`.
 const SEMINORMAL_LIMIT: f64 = 1e10;

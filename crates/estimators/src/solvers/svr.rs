@@ -39,9 +39,9 @@
 //!    A smoothed iterate is accepted by itself once its certified gap
 //!    `F(γ) − F_μ(γ) + decrement` is below 1e-10 relative.
 //!
-//! DOMAIN §4 reports that textbook dual coordinate descent and ADMM were slow or inexact
-//! on these collinear designs; both Newton-type methods here are insensitive to the
-//! conditioning of Z because the `I` term keeps their systems well posed.
+//! Textbook dual coordinate descent and ADMM were slow or inexact on these collinear
+//! designs; both Newton-type methods here are insensitive to the conditioning of Z
+//! because the `I` term keeps their systems well posed.
 
 use faer::Mat;
 
