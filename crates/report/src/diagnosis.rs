@@ -90,8 +90,8 @@ pub fn diagnosis_page(files: &DiagnosisFiles, meta: &RunMeta) -> Result<String, 
     b.push_str(&facts(&header));
     b.push_str(
         "<nav class=\"toc\"><a href=\"#verdict\">Verdict</a><a href=\"#candidates\">Candidates</a>\
-         <a href=\"#recordings\">Recordings</a><a href=\"#located\">Where</a>\
-         <a href=\"#figures\">Figures</a><a href=\"#model\">Augmented model</a></nav></header>",
+         <a href=\"#recordings\">Recordings</a><a href=\"#figures\">Figures</a>\
+         <a href=\"#located\">Where</a><a href=\"#model\">Augmented model</a></nav></header>",
     );
     let warnings_at = b.len();
 
@@ -297,6 +297,26 @@ pub fn diagnosis_page(files: &DiagnosisFiles, meta: &RunMeta) -> Result<String, 
     }
     b.push_str("</section>");
 
+    // ---- figures
+    b.push_str("<section id=\"figures\"><h2>Figures</h2>");
+    match &files.figures {
+        Some(d) if d.is_dir() => {
+            let (html, n) = figures_html(d, "dfig", &mut notes)?;
+            if n == 0 {
+                b.push_str("<p class=\"muted\">No figures in the figures folder.</p>");
+            }
+            b.push_str(&html);
+        }
+        Some(d) => {
+            notes.push(format!("figures folder {} does not exist", d.display()));
+            b.push_str("<p class=\"muted\">No figures.</p>");
+        }
+        None => b.push_str(
+            "<p class=\"muted\">No figures (<code>shipid diagnose --plots DIR</code> draws them).</p>",
+        ),
+    }
+    b.push_str("</section>");
+
     // ---- where the mismatch is
     b.push_str("<section id=\"located\"><h2>Where the mismatch is</h2>");
     rows_table(
@@ -322,26 +342,6 @@ pub fn diagnosis_page(files: &DiagnosisFiles, meta: &RunMeta) -> Result<String, 
             ("mean_residual_over_noise", "mean residual ÷ noise", true),
         ],
     );
-    b.push_str("</section>");
-
-    // ---- figures
-    b.push_str("<section id=\"figures\"><h2>Figures</h2>");
-    match &files.figures {
-        Some(d) if d.is_dir() => {
-            let (html, n) = figures_html(d, "dfig", &mut notes)?;
-            if n == 0 {
-                b.push_str("<p class=\"muted\">No figures in the figures folder.</p>");
-            }
-            b.push_str(&html);
-        }
-        Some(d) => {
-            notes.push(format!("figures folder {} does not exist", d.display()));
-            b.push_str("<p class=\"muted\">No figures.</p>");
-        }
-        None => b.push_str(
-            "<p class=\"muted\">No figures (<code>shipid diagnose --plots DIR</code> draws them).</p>",
-        ),
-    }
     b.push_str("</section>");
 
     // ---- augmented model, other keys, raw report
@@ -439,11 +439,22 @@ fn rows_table(b: &mut String, v: Option<&Value>, title: &str, cols: &[(&str, &st
     let Some(rows) = v.and_then(Value::as_array).filter(|a| !a.is_empty()) else {
         return;
     };
-    let _ = write!(
-        b,
-        "<h3>{}</h3><div class=\"tablewrap fit\"><table class=\"narrow\"><thead><tr>",
-        esc(title)
-    );
+    // A long list is folded: the verdict, recordings and figures come first for a reader.
+    let folded = rows.len() > 12;
+    let _ = if folded {
+        write!(
+            b,
+            "<details><summary>{} ({} rows)</summary><div class=\"tablewrap fit\"><table class=\"narrow\"><thead><tr>",
+            esc(title),
+            rows.len()
+        )
+    } else {
+        write!(
+            b,
+            "<h3>{}</h3><div class=\"tablewrap fit\"><table class=\"narrow\"><thead><tr>",
+            esc(title)
+        )
+    };
     for (k, h, _) in cols {
         let _ = write!(b, "<th title=\"{}\">{}</th>", esc(k), esc(h));
     }
@@ -460,6 +471,9 @@ fn rows_table(b: &mut String, v: Option<&Value>, title: &str, cols: &[(&str, &st
         b.push_str("</tr>");
     }
     b.push_str("</tbody></table></div>");
+    if folded {
+        b.push_str("</details>");
+    }
 }
 
 #[cfg(test)]
