@@ -6,7 +6,7 @@
 # strong magnitude, other directions and signs than the benchmark's. A stand-in for recordings made
 # elsewhere, whose manoeuvres need not be the ones the base saw; the false alarms on the controls
 # are the first thing to look at. Diagnosed against BASE (default: the refined full74 base of
-# `shipid bench-diagnose --base full74`; `mmg:kvlcc2` for the exact model, or a sparse-GP model file).
+# `cargo xtask bench-diagnose --base full74`; `mmg:kvlcc2` for the exact model, or a sparse-GP model file).
 #
 #   bench/diagnose-unseen.sh [BASE]      # ≈ 2 min; prints one line per case
 set -euo pipefail

@@ -7,7 +7,7 @@
 #                                         (default results/kvlcc2-mmg-full74-lsq-refined.toml, made by
 #                                         `shipid fit data/kvlcc2-mmg/dataset.toml --set full74
 #                                         --estimator lsq --refine --out <that file>`, the base of
-#                                         `shipid bench-diagnose --base full74`)
+#                                         `cargo xtask bench-diagnose --base full74`)
 #
 # Prints one markdown row per case: concealed effects | noise seed | verdict | found | before → after.
 # Needs target/release/shipid (`cargo test --release --workspace --no-run`) and python3.

@@ -11,7 +11,7 @@
 #   ROUNDS=3 bench/paired.sh
 #
 # Needs bench/designs (bench/run.sh exports them) and the workspace test build
-# (`cargo test --release --workspace --no-run`, which builds target/release/examples/fit_bench).
+# (`cargo build --release -p xtask`, which builds target/release/xtask).
 # Writes bench/paired.json and bench/paired.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -26,7 +26,7 @@ trap 'rm -rf "$WORK"' EXIT
 cargo test --release --workspace --no-run 2>/dev/null
 
 rust() {
-    target/release/examples/fit_bench --cases lsq,bounded_lsq --solvers fast --no-api-floor \
+    target/release/xtask fit-bench --cases lsq,bounded_lsq --solvers fast --no-api-floor \
         --min-repeats 7 --min-time 0.5 --out "$WORK/rust-$1.json" 2>/dev/null
 }
 python() {

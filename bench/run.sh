@@ -33,7 +33,7 @@ state() {
     echo "when: $(date -u +%Y-%m-%dT%H:%MZ)"
     echo "git HEAD: $(git rev-parse --short HEAD 2>/dev/null || echo '?')"
     echo "uncommitted changes under crates/estimators, crates/model, crates/shipid/src: $(git status --short -- crates/estimators crates/model crates/shipid/src 2>/dev/null | wc -l) files"
-    echo "crates/estimators/src fingerprint (sha256 of the concatenated *.rs): $(cat crates/estimators/src/*.rs | sha256sum | cut -c1-16)"
+    echo "crates/estimators/src fingerprint (sha256 of the concatenated *.rs): $(find crates/estimators/src -name "*.rs" | sort | xargs cat | sha256sum | cut -c1-16)"
     echo "rustc: $(rustc --version)"
     echo "cpu: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(getconf _NPROCESSORS_ONLN) cores"
 }
@@ -44,7 +44,7 @@ if [ -z "${SKIP_RUST:-}" ]; then
     # The workspace test build compiles the examples with the workspace's feature set;
     # `cargo build -p shipid` alone would unify features differently and rebuild polars.
     cargo test --release --workspace --no-run
-    target/release/examples/fit_bench \
+    target/release/xtask fit-bench \
         --export bench/designs --out bench/results_rust.json "${RUST_REPEATS[@]}" 2> bench/fit_bench.log
     echo "load average after the Rust run: $(cut -d' ' -f1-3 /proc/loadavg)" >> bench/source_state.txt
     echo "Rust side done (log: bench/fit_bench.log)"
