@@ -19,7 +19,6 @@
 //! This module holds the grid, the per-case diagnosis and the scoring; `cargo xtask bench-diagnose`
 //! builds the base model, runs the cases in parallel and writes the tables.
 
-use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -28,15 +27,17 @@ use shipid_pipeline::generate::{Generated, default_manoeuvres, fnv1a, generate_w
 use shipid_sim::Effect;
 use shipid_sim::effects::{Asymmetry, Current, RudderLag, ShallowWater, Wind};
 
-use crate::{DiagnoseInput, DiagnoseOptions, diagnose};
+use crate::input::{DiagnoseInput, DiagnoseOptions};
+use crate::report::diagnose;
+use crate::verdict::Verdict;
 
 /// One benchmark case.
 #[derive(Debug, Clone)]
 pub struct BenchCase {
     pub id: String,
     pub effect: Option<Effect>,
-    /// Word of the concealed effect (`none` for controls).
-    pub word: &'static str,
+    /// The verdict that names the concealed effect ([`Verdict::None`] for controls).
+    pub concealed: Verdict,
     /// The magnitude that was varied, with its unit in `magnitude_name`.
     pub magnitude: f64,
     pub magnitude_name: &'static str,
@@ -68,7 +69,7 @@ pub fn cases(seeds: u64, controls: u64) -> Vec<BenchCase> {
                     speed_m_s: s,
                     from_deg: direction(seed, 10 + k as u64),
                 })),
-                word: "current",
+                concealed: Verdict::Current,
                 magnitude: s,
                 magnitude_name: "speed [m/s]",
                 seed,
@@ -83,7 +84,7 @@ pub fn cases(seeds: u64, controls: u64) -> Vec<BenchCase> {
                     frontal_area_m2: None,
                     lateral_area_m2: None,
                 })),
-                word: "wind",
+                concealed: Verdict::Wind,
                 magnitude: s,
                 magnitude_name: "speed [m/s]",
                 seed,
@@ -96,7 +97,7 @@ pub fn cases(seeds: u64, controls: u64) -> Vec<BenchCase> {
                     delay_s: 0.0,
                     time_constant_s: tau,
                 })),
-                word: "rudder_lag",
+                concealed: Verdict::RudderLag,
                 magnitude: tau,
                 magnitude_name: "time constant [s]",
                 seed,
@@ -112,7 +113,7 @@ pub fn cases(seeds: u64, controls: u64) -> Vec<BenchCase> {
                     y0_n: 0.0,
                     n0_nm: 0.0,
                 })),
-                word: "asymmetry",
+                concealed: Verdict::Asymmetry,
                 magnitude: o,
                 magnitude_name: "|rudder offset| [deg]",
                 seed,
@@ -125,7 +126,7 @@ pub fn cases(seeds: u64, controls: u64) -> Vec<BenchCase> {
                     depth_over_draft: h,
                     yaw_factor: None,
                 })),
-                word: "shallow_water",
+                concealed: Verdict::ShallowWater,
                 magnitude: h,
                 magnitude_name: "h/T [-]",
                 seed,
@@ -136,7 +137,7 @@ pub fn cases(seeds: u64, controls: u64) -> Vec<BenchCase> {
         out.push(BenchCase {
             id: format!("control-s{}", 100 + c),
             effect: None,
-            word: "none",
+            concealed: Verdict::None,
             magnitude: 0.0,
             magnitude_name: "-",
             seed: 100 + c,
@@ -200,8 +201,8 @@ fn direction_error(case: &BenchCase, effects: &[String]) -> Option<f64> {
     let found = effects
         .iter()
         .find_map(|e| match e.parse::<Effect>().ok()? {
-            Effect::Current(c) if case.word == "current" => Some(c.from_deg),
-            Effect::Wind(w) if case.word == "wind" => Some(w.from_deg),
+            Effect::Current(c) if case.concealed == Verdict::Current => Some(c.from_deg),
+            Effect::Wind(w) if case.concealed == Verdict::Wind => Some(w.from_deg),
             _ => None,
         })?;
     Some(((found - truth + 180.0).rem_euclid(360.0) - 180.0).abs())
@@ -210,7 +211,7 @@ fn direction_error(case: &BenchCase, effects: &[String]) -> Option<f64> {
 /// One case's outcome.
 pub struct BenchRow {
     pub case: BenchCase,
-    pub verdict: String,
+    pub verdict: Verdict,
     pub before: f64,
     pub after: f64,
     pub detectable: bool,
@@ -238,7 +239,7 @@ pub fn run_case(
     let (truth_param, found_param) =
         recovered(case, &report.effects).map_or((None, None), |(t, f)| (Some(t), Some(f)));
     Ok(BenchRow {
-        verdict: report.verdict.clone(),
+        verdict: report.verdict,
         before: report.fit_before.position_rmse_over_l,
         after: report.fit_after.position_rmse_over_l,
         detectable: false,
@@ -258,7 +259,7 @@ pub fn run_case(
 pub fn detectability_threshold(rows: &[BenchRow], level: f64) -> f64 {
     let controls: Vec<f64> = rows
         .iter()
-        .filter(|r| r.case.word == "none")
+        .filter(|r| r.case.concealed == Verdict::None)
         .map(|r| r.before)
         .collect();
     if controls.is_empty() {
@@ -272,11 +273,24 @@ pub fn detectability_threshold(rows: &[BenchRow], level: f64) -> f64 {
 pub fn mark_detectable(rows: &mut [BenchRow], level: f64) -> f64 {
     let threshold = detectability_threshold(rows, level);
     for r in rows.iter_mut() {
-        r.detectable = r.case.word != "none" && r.before >= threshold;
+        r.detectable = r.case.concealed != Verdict::None && r.before >= threshold;
     }
     threshold
 }
 
+/// Rows of the confusion matrix: the controls, then the concealed effects.
+pub const CONCEALED: [Verdict; 6] = [
+    Verdict::None,
+    Verdict::Current,
+    Verdict::Wind,
+    Verdict::RudderLag,
+    Verdict::Asymmetry,
+    Verdict::ShallowWater,
+];
+
+/// Columns of the confusion matrix: every verdict's word ([`Verdict::ALL`] in order), then `other`.
+/// `other` counted verdict strings outside the vocabulary; a typed verdict always has its column, so
+/// it stays 0, and is kept so that the tables keep their columns.
 pub const WORDS: [&str; 8] = [
     "none",
     "current",
@@ -288,18 +302,29 @@ pub const WORDS: [&str; 8] = [
     "other",
 ];
 
-/// Verdict counts: (concealed word, verdict word or `other`) → cases.
-pub fn confusion(rows: &[BenchRow]) -> BTreeMap<(&'static str, &'static str), usize> {
-    let mut counts: BTreeMap<(&'static str, &'static str), usize> = BTreeMap::new();
-    for r in rows {
-        let v = WORDS
-            .iter()
-            .find(|w| **w == r.verdict)
-            .copied()
-            .unwrap_or("other");
-        *counts.entry((r.case.word, v)).or_default() += 1;
+impl BenchRow {
+    /// Whether the verdict names the concealed effect (`none` for a control).
+    pub fn correct(&self) -> bool {
+        self.verdict == self.case.concealed
     }
-    counts
+}
+
+/// Verdict counts: per concealed verdict (the rows, [`CONCEALED`]), the cases per column of [`WORDS`].
+pub fn confusion(rows: &[BenchRow]) -> Vec<(Verdict, [usize; WORDS.len()])> {
+    CONCEALED
+        .iter()
+        .map(|&k| {
+            let mut counts = [0; WORDS.len()];
+            for r in rows.iter().filter(|r| r.case.concealed == k) {
+                let column = Verdict::ALL
+                    .iter()
+                    .position(|v| *v == r.verdict)
+                    .unwrap_or(WORDS.len() - 1);
+                counts[column] += 1;
+            }
+            (k, counts)
+        })
+        .collect()
 }
 
 /// The benchmark's summary in markdown: detection rates, false alarms, improvements, the table per
@@ -312,25 +337,37 @@ pub fn summary_markdown(
     range_criterion: &str,
     seeds: u64,
 ) -> String {
-    let counts = confusion(rows);
-    let concealed: Vec<&str> = WORDS[..6].to_vec();
-    // Summary.
-    let effect_rows: Vec<&BenchRow> = rows.iter().filter(|r| r.case.word != "none").collect();
-    let detectable: Vec<&&BenchRow> = effect_rows.iter().filter(|r| r.detectable).collect();
-    let correct_det = detectable
+    let mut md = summary_bullets(rows, level, threshold, base_name, range_criterion, seeds);
+    md.push_str(&effect_table(rows));
+    md.push_str(&confusion_markdown(rows));
+    md
+}
+
+/// The heading and the bullets of the summary.
+fn summary_bullets(
+    rows: &[BenchRow],
+    level: f64,
+    threshold: f64,
+    base_name: &str,
+    range_criterion: &str,
+    seeds: u64,
+) -> String {
+    let effect_rows: Vec<&BenchRow> = rows
         .iter()
-        .filter(|r| r.verdict == r.case.word)
-        .count();
-    let controls: Vec<&BenchRow> = rows.iter().filter(|r| r.case.word == "none").collect();
-    let false_claims = controls
-        .iter()
-        .filter(|r| r.verdict != "none" && r.verdict != "unexplained")
-        .count();
-    let controls_none = controls.iter().filter(|r| r.verdict == "none").count();
-    let correct: Vec<&&BenchRow> = effect_rows
-        .iter()
-        .filter(|r| r.verdict == r.case.word)
+        .filter(|r| r.case.concealed != Verdict::None)
         .collect();
+    let detectable: Vec<&&BenchRow> = effect_rows.iter().filter(|r| r.detectable).collect();
+    let correct_det = detectable.iter().filter(|r| r.correct()).count();
+    let controls: Vec<&BenchRow> = rows
+        .iter()
+        .filter(|r| r.case.concealed == Verdict::None)
+        .collect();
+    let false_claims = controls.iter().filter(|r| r.verdict.names_effect()).count();
+    let controls_none = controls
+        .iter()
+        .filter(|r| r.verdict == Verdict::None)
+        .count();
+    let correct: Vec<&&BenchRow> = effect_rows.iter().filter(|r| r.correct()).collect();
     let reduced_50 = correct.iter().filter(|r| r.after <= 0.5 * r.before).count();
     let mut md = String::new();
     md.push_str(&format!(
@@ -387,19 +424,31 @@ pub fn summary_markdown(
     md.push_str(&format!(
         "- Mean wall time per case (generation + diagnosis, cases run two at a time): {mean_time:.1} s.\n\n"
     ));
-    md.push_str("| effect | magnitude | correct / cases | detectable | mean reduction (correct) | concealed → recovered (mean) |\n|---|---|---|---|---|---|\n");
-    let mut keys: Vec<(&str, f64)> = effect_rows
+    md
+}
+
+/// The table per effect and magnitude: correct verdicts, detectable cases, the mean reduction and the
+/// recovered parameter of the correct ones.
+fn effect_table(rows: &[BenchRow]) -> String {
+    let effect_rows: Vec<&BenchRow> = rows
         .iter()
-        .map(|r| (r.case.word, r.case.magnitude))
+        .filter(|r| r.case.concealed != Verdict::None)
         .collect();
-    keys.sort_by(|a, b| a.0.cmp(b.0).then(a.1.total_cmp(&b.1)));
+    let mut md = String::new();
+    md.push_str("| effect | magnitude | correct / cases | detectable | mean reduction (correct) | concealed → recovered (mean) |\n|---|---|---|---|---|---|\n");
+    let mut keys: Vec<(Verdict, f64)> = effect_rows
+        .iter()
+        .map(|r| (r.case.concealed, r.case.magnitude))
+        .collect();
+    // By word, as the table always was.
+    keys.sort_by(|a, b| a.0.word().cmp(b.0.word()).then(a.1.total_cmp(&b.1)));
     keys.dedup();
     for (w, m) in keys {
         let group: Vec<&&BenchRow> = effect_rows
             .iter()
-            .filter(|r| r.case.word == w && r.case.magnitude == m)
+            .filter(|r| r.case.concealed == w && r.case.magnitude == m)
             .collect();
-        let ok: Vec<&&&BenchRow> = group.iter().filter(|r| r.verdict == w).collect();
+        let ok: Vec<&&&BenchRow> = group.iter().filter(|r| r.correct()).collect();
         let det = group.iter().filter(|r| r.detectable).count();
         let red = if ok.is_empty() {
             "—".to_string()
@@ -431,6 +480,12 @@ pub fn summary_markdown(
             group.len()
         ));
     }
+    md
+}
+
+/// The confusion matrix (rows: concealed, columns: verdict).
+fn confusion_markdown(rows: &[BenchRow]) -> String {
+    let mut md = String::new();
     md.push_str("\nConfusion matrix (rows: concealed, columns: verdict):\n\n| concealed |");
     for v in WORDS {
         md.push_str(&format!(" {v} |"));
@@ -440,12 +495,25 @@ pub fn summary_markdown(
         md.push_str("---|");
     }
     md.push('\n');
-    for k in &concealed {
+    for (k, counts) in confusion(rows) {
         md.push_str(&format!("| {k} |"));
-        for v in WORDS {
-            md.push_str(&format!(" {} |", counts.get(&(*k, v)).unwrap_or(&0)));
+        for n in counts {
+            md.push_str(&format!(" {n} |"));
         }
         md.push('\n');
     }
     md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_confusion_columns_are_the_verdicts_in_their_order_then_other() {
+        let words: Vec<&str> = Verdict::ALL.iter().map(|v| v.word()).collect();
+        assert_eq!(words, WORDS[..WORDS.len() - 1]);
+        assert_eq!(WORDS[WORDS.len() - 1], "other");
+        assert_eq!(CONCEALED[..], Verdict::ALL[..6]);
+    }
 }

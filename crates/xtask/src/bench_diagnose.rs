@@ -139,7 +139,7 @@ fn write_results(
     let num = |f: &dyn Fn(&BenchRow) -> Option<f64>| rows.iter().map(f).collect::<Vec<_>>();
     let text = |f: &dyn Fn(&BenchRow) -> String| rows.iter().map(f).collect::<Vec<_>>();
     t.push_text("case", text(&|r| r.case.id.clone()));
-    t.push_text("concealed", text(&|r| r.case.word.to_string()));
+    t.push_text("concealed", text(&|r| r.case.concealed.to_string()));
     t.push_text(
         "concealed_effect",
         text(&|r| r.case.effect.map_or("none".into(), |e| e.to_string())),
@@ -147,16 +147,14 @@ fn write_results(
     t.push_num("magnitude", num(&|r| Some(r.case.magnitude)));
     t.push_text("magnitude_name", text(&|r| r.case.magnitude_name.into()));
     t.push_num("seed", num(&|r| Some(r.case.seed as f64)));
-    t.push_text("verdict", text(&|r| r.verdict.clone()));
-    t.push_text("correct", text(&|r| (r.verdict == r.case.word).to_string()));
+    t.push_text("verdict", text(&|r| r.verdict.to_string()));
+    t.push_text("correct", text(&|r| r.correct().to_string()));
     t.push_text("detectable", text(&|r| r.detectable.to_string()));
     t.push_num("before_position_rmse_over_l", num(&|r| Some(r.before)));
     t.push_num("after_position_rmse_over_l", num(&|r| Some(r.after)));
     t.push_num(
         "reduction",
-        num(&|r| {
-            (r.verdict != "none" && r.verdict != "unexplained").then(|| 1.0 - r.after / r.before)
-        }),
+        num(&|r| r.verdict.names_effect().then(|| 1.0 - r.after / r.before)),
     );
     t.push_num("concealed_parameter", num(&|r| r.truth_param));
     t.push_num("recovered_parameter", num(&|r| r.found_param));
@@ -168,20 +166,13 @@ fn write_results(
 
     // Confusion matrix: rows concealed, columns verdict.
     let counts = confusion(rows);
-    let concealed: Vec<&str> = WORDS[..6].to_vec();
     let mut c = Table::default();
     c.push_text(
         "concealed",
-        concealed.iter().map(|s| s.to_string()).collect(),
+        counts.iter().map(|(k, _)| k.to_string()).collect(),
     );
-    for v in WORDS {
-        c.push_num(
-            v,
-            concealed
-                .iter()
-                .map(|k| Some(*counts.get(&(*k, v)).unwrap_or(&0) as f64))
-                .collect(),
-        );
+    for (j, v) in WORDS.iter().enumerate() {
+        c.push_num(v, counts.iter().map(|(_, n)| Some(n[j] as f64)).collect());
     }
     c.write(out, "confusion")?;
 

@@ -1,0 +1,77 @@
+//! What the diagnosis is given besides the data: the model, what is known about it, and the tunables.
+
+use shipid_model::IdentificationRange;
+use shipid_sim::{Dynamics, Effect};
+
+/// Tunables of the diagnosis, with their reasons.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DiagnoseOptions {
+    /// Length of a replay segment ÷ (L/U0). 10 L/U0 is about one zig-zag period of KVLCC2: long enough
+    /// for a current to drift the track by a visible amount, short enough that a model's own heading
+    /// drift stays small.
+    pub horizon_l_over_u0: f64,
+    /// Smallest held-out relative reduction of the position RMSE for an effect to be accepted.
+    pub min_gain: f64,
+    /// Relative held-out error a candidate pays per parameter when candidates are ranked.
+    pub parsimony: f64,
+    /// A mismatch is real (and `unexplained` if nothing explains it) when the held-out position RMSE
+    /// exceeds this multiple of the model's own level (on its training data, when known) plus the noise.
+    pub real_mismatch_factor: f64,
+    /// Largest number of equation-error samples per recording used in a fit.
+    pub max_samples_per_recording: usize,
+}
+
+impl Default for DiagnoseOptions {
+    fn default() -> Self {
+        DiagnoseOptions {
+            horizon_l_over_u0: 10.0,
+            min_gain: 0.3,
+            parsimony: 0.03,
+            real_mismatch_factor: 2.0,
+            max_samples_per_recording: 400,
+        }
+    }
+}
+
+/// Everything the diagnosis needs besides the data.
+pub struct DiagnoseInput<'a> {
+    /// The model without its own effects.
+    pub base: &'a (dyn Dynamics + Send + Sync),
+    /// The model's own effects (kept; a candidate of the same kind replaces it).
+    pub base_effects: &'a [Effect],
+    /// The model's level on its training recordings (position RMSE ÷ L of segment replays), if known.
+    pub model_level_over_l: Option<f64>,
+    /// Where the base model was identified (an Abkowitz model with readable training data, or a
+    /// sparse GP), if known.
+    pub identification_range: Option<BaseRange<'a>>,
+}
+
+/// Where a base model was identified, tested one recorded state at a time.
+#[derive(Clone, Copy)]
+pub enum BaseRange<'a> {
+    /// A polynomial's leverage envelope: outside where the leverage exceeds every training state's.
+    Leverage(&'a IdentificationRange),
+    /// A sparse GP's coverage: outside where no sparse point is d_gen-similar
+    /// ([`shipid_sim::GpDynamics::covers`]).
+    Coverage(&'a shipid_sim::GpDynamics),
+}
+
+impl<'a> BaseRange<'a> {
+    /// The leverage range where there is one, else the GP's coverage.
+    pub fn of(
+        leverage: Option<&'a IdentificationRange>,
+        gp: Option<&'a shipid_sim::GpDynamics>,
+    ) -> Option<BaseRange<'a>> {
+        leverage
+            .map(BaseRange::Leverage)
+            .or(gp.map(BaseRange::Coverage))
+    }
+
+    /// What "outside" means, for the report's explanation.
+    pub fn criterion(self) -> &'static str {
+        match self {
+            BaseRange::Leverage(_) => "leverage above its training maximum",
+            BaseRange::Coverage(_) => "no sparse point of the GP d_gen-similar",
+        }
+    }
+}

@@ -1,0 +1,439 @@
+//! Judge: every candidate is fitted to half of the recordings and judged by the segment-replay
+//! position error on the other half, then the halves swap, so each recording is held out once. The
+//! acceptance, parsimony, pairing and near-rival rules are here (docs/diagnosis.md, "How it decides").
+
+use rayon::prelude::*;
+use shipid_sim::{Dynamics, Effect};
+
+use crate::compare::{Baseline, Composite, ReplayScore, combine, pooled, replay_scores};
+use crate::families::{Family, FitResult, fit_families, start_grid};
+use crate::input::{DiagnoseInput, DiagnoseOptions};
+use crate::verdict::Verdict;
+
+/// A candidate judged across the folds: per-recording held-out scores, and the parameters
+/// fitted to each fold (by fold index).
+type CrossFit = (Vec<ReplayScore>, Vec<(usize, Vec<f64>)>);
+
+/// One fold's fit: the fold trained on, its parameters, and the held-out recordings' scores.
+type FoldFit = (usize, Vec<f64>, Vec<(usize, ReplayScore)>);
+
+/// The base model and the held-out evaluation of a set of effects against it.
+pub(crate) struct Judge<'a> {
+    base: &'a (dyn Dynamics + Send + Sync),
+    base_effects: &'a [Effect],
+    baseline: &'a Baseline,
+    opts: &'a DiagnoseOptions,
+    /// Every other recording: the two halves that are fitted and held out in turn.
+    folds: [Vec<usize>; 2],
+}
+
+/// A candidate with its assessment and its cross fit (held-out scores, and the fold fits that warm
+/// start its final fit).
+pub(crate) struct Judged {
+    pub families: Vec<Family>,
+    pub assessed: Assessed,
+    pub cross: CrossFit,
+}
+
+impl<'a> Judge<'a> {
+    pub fn new(
+        input: &DiagnoseInput<'a>,
+        baseline: &'a Baseline,
+        opts: &'a DiagnoseOptions,
+    ) -> Judge<'a> {
+        let n = baseline.prep.len();
+        let folds = if n >= 2 {
+            [(0..n).step_by(2).collect(), (1..n).step_by(2).collect()]
+        } else {
+            [vec![0], vec![]]
+        };
+        Judge {
+            base: input.base,
+            base_effects: input.base_effects,
+            baseline,
+            opts,
+            folds,
+        }
+    }
+
+    /// Segment-replay scores of the base with `effects` on the recordings `idx`; an impossible
+    /// combination scores infinitely badly.
+    pub fn score(&self, effects: &[Effect], idx: &[usize]) -> Vec<ReplayScore> {
+        let c = Composite {
+            base: self.base,
+            effects: combine(self.base_effects, effects),
+        };
+        let Some(model) = c.model() else {
+            return idx
+                .iter()
+                .map(|_| ReplayScore {
+                    sum_sq_pos: f64::INFINITY,
+                    count: 1,
+                    ..Default::default()
+                })
+                .collect();
+        };
+        replay_scores(&model, &self.baseline.prep, idx, self.baseline.horizon_s)
+    }
+
+    /// Fit on one fold, score on the other, both ways: per-recording held-out scores and the
+    /// parameters fitted to each fold.
+    /// `alone[k]` holds each family's parameters fitted alone to fold k, where known (see
+    /// [`start_grid`]).
+    fn cross(&self, families: &[Family], alone: &[Vec<Option<&[f64]>>; 2]) -> CrossFit {
+        // The two folds in parallel: a wind's grid of starts makes one candidate's folds the longest
+        // tasks of a diagnosis.
+        let folds: Vec<FoldFit> = (0..2)
+            .into_par_iter()
+            .filter(|&k| !self.folds[1 - k].is_empty())
+            .map(|k| {
+                let (train, test) = (&self.folds[k], &self.folds[1 - k]);
+                let (effects, fit) = fit_families(
+                    self.base,
+                    self.base_effects,
+                    families,
+                    &self.baseline.prep,
+                    train,
+                    &self.baseline.scale,
+                    start_grid(families, &alone[k]),
+                    3,
+                );
+                let sc = self.score(&effects, test);
+                if std::env::var_os("SHIPID_DEBUG").is_some() {
+                    eprintln!(
+                        "fold {k}: {:?} -> {:?}",
+                        effects.iter().map(|e| e.to_string()).collect::<Vec<_>>(),
+                        sc.iter()
+                            .map(|s| s.position_rmse() / self.base.ship().lpp)
+                            .collect::<Vec<_>>()
+                    );
+                }
+                (k, fit.params, test.iter().copied().zip(sc).collect())
+            })
+            .collect();
+        let mut out = vec![ReplayScore::default(); self.baseline.prep.len()];
+        let mut fitted = Vec::new();
+        for (k, params, scores) in folds {
+            fitted.push((k, params));
+            scores.into_iter().for_each(|(i, s)| out[i] = s);
+        }
+        (out, fitted)
+    }
+
+    /// Typical per-recording change: the geometric mean of after/before over recordings, so that one
+    /// recording the base model already fits badly (or where a segment runs away) cannot decide alone.
+    fn typical_ratio(&self, idx: &[usize], scores: &[ReplayScore]) -> f64 {
+        let before_each = &self.baseline.before_each;
+        let logs: Vec<f64> = idx
+            .iter()
+            .map(|&i| {
+                let b = before_each[i].position_rmse().max(1e-12);
+                (scores[i].position_rmse().max(1e-12) / b).ln()
+            })
+            .collect();
+        (logs.iter().sum::<f64>() / logs.len().max(1) as f64).exp()
+    }
+
+    /// Whether the typical recording of each half improves by at least 10 %: an effect that helps
+    /// only where it was fitted is not one.
+    fn fold_ok(&self, scores: &[ReplayScore]) -> bool {
+        self.folds
+            .iter()
+            .filter(|f| !f.is_empty())
+            .all(|f| self.typical_ratio(f, scores) < 0.9)
+    }
+
+    /// The held-out assessment of a candidate named `name` with `k` parameters from its per-recording
+    /// held-out `scores`.
+    fn assess(&self, name: String, k: usize, scores: &[ReplayScore]) -> Assessed {
+        let b = self.baseline;
+        let lpp = b.ship.lpp;
+        let all: Vec<usize> = (0..b.prep.len()).collect();
+        let after_l = pooled(scores).position_rmse() / lpp;
+        let gain = 1.0 - self.typical_ratio(&all, scores);
+        let excess = (b.before_l - b.noise_floor).max(1e-300);
+        let explains = ((b.before_l - after_l) / excess).clamp(0.0, 1.0);
+        let mut drops: Vec<f64> = (0..scores.len())
+            .map(|i| (b.before_each[i].position_rmse() - scores[i].position_rmse()) / lpp)
+            .collect();
+        drops.sort_by(f64::total_cmp);
+        let median_drop = drops.get(drops.len() / 2).copied().unwrap_or(0.0);
+        let accepted =
+            gain >= self.opts.min_gain && self.fold_ok(scores) && median_drop > 2.0 * b.noise_floor;
+        Assessed {
+            name,
+            n_parameters: k,
+            after_l,
+            score: gain - self.opts.parsimony * k as f64,
+            explains,
+            accepted,
+        }
+    }
+
+    /// Every single effect judged held-out, then pairs where one effect alone leaves a real mismatch
+    /// (see [`Judge::pair_lead`]): the candidates, and the index of the winner if any.
+    pub fn candidates(&self, mismatch_is_real: bool) -> (Vec<Judged>, Option<usize>) {
+        let mut judged = self.singles();
+        let best = best_accepted(&judged);
+        let order = by_score(&judged);
+        let Some((lead, none_passed)) = self.pair_lead(&judged, &order, best, mismatch_is_real)
+        else {
+            return (judged, best);
+        };
+        let pairs = self.pairs(&judged, &order, lead, none_passed);
+        judged.extend(pairs);
+        let best = best_accepted(&judged);
+        (judged, best)
+    }
+
+    /// Every family alone, judged held-out (in parallel).
+    fn singles(&self) -> Vec<Judged> {
+        let single: Vec<(Family, CrossFit)> = Family::ALL
+            .par_iter()
+            .map(|&f| (f, self.cross(&[f], &Default::default())))
+            .collect();
+        single
+            .into_iter()
+            .map(|(f, cross)| Judged {
+                families: vec![f],
+                assessed: self.assess(f.label().into(), f.dim(), &cross.0),
+                cross,
+            })
+            .collect()
+    }
+
+    /// The single effect to pair the others with, and whether none passed alone; `None` when no pair
+    /// is needed. A combination is tried when one effect alone leaves a real mismatch: the winner paired
+    /// with every other effect when it leaves more than half of the mismatch; when no single effect is
+    /// accepted although the mismatch is real, the best-scoring single paired with every other (its
+    /// partner may make things worse alone, as a wind beside a current does) and the second with the
+    /// third (two concealed effects can each explain too little alone to pass).
+    fn pair_lead(
+        &self,
+        judged: &[Judged],
+        order: &[usize],
+        best: Option<usize>,
+        mismatch_is_real: bool,
+    ) -> Option<(usize, bool)> {
+        match best {
+            Some(b) => {
+                let a = &judged[b].assessed;
+                (a.explains < 0.5 && a.after_l > 3.0 * self.baseline.noise_floor)
+                    .then_some((b, false))
+            }
+            None if mismatch_is_real => order.first().map(|&i| (i, true)),
+            None => None,
+        }
+    }
+
+    /// The pairs with the single `lead` (and, when `none_passed`, of the second and third best),
+    /// judged held-out (in parallel).
+    fn pairs(
+        &self,
+        judged: &[Judged],
+        order: &[usize],
+        lead: usize,
+        none_passed: bool,
+    ) -> Vec<Judged> {
+        let after_l = judged[lead].assessed.after_l;
+        let first = judged[lead].families[0];
+        let mut pairs: Vec<Vec<Family>> = Family::ALL
+            .iter()
+            .filter(|&&f| f.verdict() != first.verdict())
+            .map(|&f| vec![first, f])
+            .collect();
+        if let (true, [_, second, third, ..]) = (none_passed, order) {
+            let (f, g) = (judged[*second].families[0], judged[*third].families[0]);
+            if f.verdict() != g.verdict() {
+                pairs.push(vec![f, g]);
+            }
+        }
+        // A single effect's parameters fitted to fold k (from its cross fit).
+        let fold_fit = |f: Family, k: usize| -> Option<&[f64]> {
+            let single = judged.iter().find(|j| j.families[..] == [f])?;
+            single
+                .cross
+                .1
+                .iter()
+                .find(|(fk, _)| *fk == k)
+                .map(|(_, p)| p.as_slice())
+        };
+        let crosses: Vec<(Vec<Family>, CrossFit)> = pairs
+            .into_par_iter()
+            .map(|fams| {
+                // The members' own fits to the same fold are starts (see `start_grid`).
+                let alone = [0, 1].map(|k| fams.iter().map(|&f| fold_fit(f, k)).collect());
+                let s = self.cross(&fams, &alone);
+                (fams, s)
+            })
+            .collect();
+        crosses
+            .into_iter()
+            .map(|(fams, cross)| {
+                let name = fams.iter().map(|f| f.label()).collect::<Vec<_>>().join("+");
+                let k = fams.iter().map(|f| f.dim()).sum();
+                let mut a = self.assess(name, k, &cross.0);
+                // A pair must beat the single effect clearly, on the held-out recordings.
+                a.accepted = a.accepted && a.after_l < 0.7 * after_l;
+                Judged {
+                    families: fams,
+                    assessed: a,
+                    cross,
+                }
+            })
+            .collect()
+    }
+
+    /// Parameters fitted on all recordings for every candidate (all are reported; the winner's are the
+    /// model), from its fold fits: the grid of starts was searched there already.
+    pub fn final_fits(&self, judged: &[Judged]) -> Vec<(Vec<Effect>, FitResult)> {
+        let all: Vec<usize> = (0..self.baseline.prep.len()).collect();
+        judged
+            .par_iter()
+            .map(|j| {
+                let warm = j.cross.1.iter().map(|(_, p)| p.clone()).collect();
+                fit_families(
+                    self.base,
+                    self.base_effects,
+                    &j.families,
+                    &self.baseline.prep,
+                    &all,
+                    &self.baseline.scale,
+                    warm,
+                    1,
+                )
+            })
+            .collect()
+    }
+}
+
+/// The accepted candidate with the highest score.
+fn best_accepted(judged: &[Judged]) -> Option<usize> {
+    judged
+        .iter()
+        .enumerate()
+        .filter(|(_, j)| j.assessed.accepted)
+        .max_by(|x, y| x.1.assessed.score.total_cmp(&y.1.assessed.score))
+        .map(|(i, _)| i)
+}
+
+/// Candidate indices, the highest score first.
+fn by_score(judged: &[Judged]) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..judged.len()).collect();
+    order.sort_by(|&x, &y| {
+        judged[y]
+            .assessed
+            .score
+            .total_cmp(&judged[x].assessed.score)
+    });
+    order
+}
+
+/// A candidate's held-out assessment.
+pub(crate) struct Assessed {
+    /// The candidate's name in the report: its families' labels joined by `+`.
+    pub name: String,
+    pub n_parameters: usize,
+    /// Pooled held-out position RMSE ÷ L with the effect.
+    pub after_l: f64,
+    /// Typical relative improvement less the parsimony charge.
+    pub score: f64,
+    /// Fraction of the mismatch above the noise floor that the effect removes.
+    pub explains: f64,
+    pub accepted: bool,
+}
+
+/// A winner's score may be this close to a rival's (as a share of the winner's) before the report says
+/// the recordings hardly tell the two apart.
+const NEAR_TIE_SHARE: f64 = 0.25;
+
+/// The accepted candidate that names none of the winner's words and scores within
+/// [`NEAR_TIE_SHARE`] of it (the best such one), as an index into `words`/`scores`/`accepted`.
+/// Why: the verdict is one word, and with a base whose own error is large where the recordings go
+/// (manoeuvres it was not identified from), a current and a wind from the same side can explain the
+/// same share of the mismatch; the verdict then rests on a few thousandths of score, and the user
+/// should read that rather than a confident word.
+fn near_rival<W: PartialEq>(
+    winner: usize,
+    words: &[Vec<W>],
+    scores: &[f64],
+    accepted: &[bool],
+) -> Option<usize> {
+    let w = scores[winner];
+    (0..scores.len())
+        .filter(|&i| {
+            i != winner
+                && accepted[i]
+                && !words[i].iter().any(|x| words[winner].contains(x))
+                && scores[i] >= w - NEAR_TIE_SHARE * w.abs()
+        })
+        .max_by(|&x, &y| scores[x].total_cmp(&scores[y]))
+}
+
+/// [`near_rival`] of the winner `winner` among `judged`, its words the verdicts of its families.
+pub(crate) fn rival_of(judged: &[Judged], winner: usize) -> Option<usize> {
+    let words: Vec<Vec<Verdict>> = judged
+        .iter()
+        .map(|j| j.families.iter().map(|f| f.verdict()).collect())
+        .collect();
+    let scores: Vec<f64> = judged.iter().map(|j| j.assessed.score).collect();
+    let accepted: Vec<bool> = judged.iter().map(|j| j.assessed.accepted).collect();
+    near_rival(winner, &words, &scores, &accepted)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check_rival(candidates: &[(&str, f64, bool)], winner: usize, expected: Option<usize>) {
+        let words: Vec<Vec<&str>> = candidates
+            .iter()
+            .map(|c| c.0.split('+').collect())
+            .collect();
+        let scores: Vec<f64> = candidates.iter().map(|c| c.1).collect();
+        let accepted: Vec<bool> = candidates.iter().map(|c| c.2).collect();
+        assert_eq!(
+            near_rival(winner, &words, &scores, &accepted),
+            expected,
+            "{candidates:?}"
+        );
+    }
+
+    #[test]
+    fn a_near_tie_names_the_rival_word_and_a_clear_win_does_not() {
+        // The head wind off the base's manoeuvres (bench/diagnose-unseen.sh, seed 39).
+        check_rival(
+            &[
+                ("current", 0.400, true),
+                ("wind", 0.397, true),
+                ("rudder_lag", -0.06, false),
+            ],
+            0,
+            Some(1),
+        );
+        // Clear win; the runner-up scores less than three quarters of the winner.
+        check_rival(&[("current", 0.70, true), ("wind", 0.50, true)], 0, None);
+        // Not accepted: no rival.
+        check_rival(&[("current", 0.40, true), ("wind", 0.39, false)], 0, None);
+        // A pair or a variant holding the winner's word is no rival.
+        check_rival(
+            &[
+                ("wind", 0.36, true),
+                ("wind+asymmetry", 0.45, true),
+                ("asymmetry", 0.1, true),
+            ],
+            0,
+            None,
+        );
+        // The best of several rivals.
+        check_rival(
+            &[
+                ("current", 0.40, true),
+                ("wind", 0.33, true),
+                ("shallow_water", 0.38, true),
+            ],
+            0,
+            Some(2),
+        );
+    }
+}

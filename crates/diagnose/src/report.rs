@@ -1,0 +1,311 @@
+//! The report (docs/data-format.md, "Diagnosis report (JSON)") and the diagnosis that assembles it
+//! from its phases: compare, judge the candidates, fit the winner on everything, conclude, locate.
+
+use std::collections::BTreeMap;
+
+use serde::Serialize;
+use shipid_io::Dataset;
+use shipid_pipeline::range::share;
+use shipid_sim::Effect;
+
+use crate::compare::{Baseline, ReplayScore, outside_counts, pooled};
+use crate::families::{FitResult, standard_errors};
+use crate::input::{BaseRange, DiagnoseInput, DiagnoseOptions};
+use crate::judge::{Judge, Judged, rival_of};
+use crate::locate::{Located, Regime, locate, regimes};
+use crate::verdict::Verdict;
+
+/// A candidate effect in the report.
+#[derive(Debug, Clone, Serialize)]
+pub struct Candidate {
+    pub effect: String,
+    /// Typical held-out relative reduction of a recording's position RMSE (1 − geometric mean of
+    /// after/before over recordings), less `parsimony` per parameter.
+    pub score: f64,
+    /// Parameters fitted on all recordings (keys of the effect syntax; SI units, degrees).
+    pub parameters: BTreeMap<String, f64>,
+    /// Fraction of the mismatch above the noise floor that the effect removes on held-out recordings.
+    pub explains: f64,
+    /// Held-out position RMSE ÷ L with the effect.
+    pub held_out_position_rmse_over_l: f64,
+    pub n_parameters: usize,
+    pub accepted: bool,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Fit {
+    pub position_rmse_over_l: f64,
+    pub heading_rmse_deg: f64,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct RecordingFit {
+    pub recording: String,
+    pub before_position_rmse_over_l: f64,
+    pub after_position_rmse_over_l: f64,
+    /// Fraction of the recording's states outside the base model's identification range (leverage
+    /// above the largest of its training states, [`shipid_model::IdentificationRange`]), when that range is known.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub outside_identification_range: Option<f64>,
+}
+
+/// The diagnosis report (docs/data-format.md, "Diagnosis report (JSON)"; keys after `fit_after` are
+/// additions).
+#[derive(Debug, Clone, Serialize)]
+pub struct Report {
+    pub verdict: Verdict,
+    pub candidates: Vec<Candidate>,
+    pub located: Vec<Located>,
+    pub fit_before: Fit,
+    pub fit_after: Fit,
+    /// The effects chosen (several when a combination was needed), in the effect syntax.
+    pub effects: Vec<String>,
+    /// One standard error of each chosen parameter.
+    pub standard_errors: BTreeMap<String, f64>,
+    pub per_recording: Vec<RecordingFit>,
+    pub regimes: Vec<Regime>,
+    /// Replay segment length [s] of every position/heading RMSE here.
+    pub horizon_s: f64,
+    /// Position RMSE ÷ L expected from the recordings' noise alone.
+    pub noise_floor_position_rmse_over_l: f64,
+    /// The model's own held-out-style level on its training recordings, when known.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub model_level_position_rmse_over_l: Option<f64>,
+    /// Fraction of all recorded states outside the base model's identification range, when known: there
+    /// the base model's own forces are an extrapolation, and a mismatch left after the effect is likely
+    /// the base model's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub outside_identification_range: Option<f64>,
+    pub explanation: String,
+}
+
+/// The explanation mentions the identification range when at least this fraction of the recorded
+/// states lies outside it (and the mismatch is real).
+const OUTSIDE_WORTH_SAYING: f64 = 0.05;
+
+/// Diagnose `ds` against the model (see the crate docs); `None` when there is nothing to diagnose (no
+/// recording long enough) or the model with its own effects cannot be built.
+pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> Option<Report> {
+    let baseline = Baseline::of(input, ds, opts)?;
+    let real_threshold = baseline.real_threshold(input.model_level_over_l, opts);
+    let judge = Judge::new(input, &baseline, opts);
+    let (judged, best) = judge.candidates(baseline.before_l > real_threshold);
+    let finals = judge.final_fits(&judged);
+    let conclusion = match best {
+        Some(b) => conclude_effect(&baseline, &judged, &finals, b),
+        None => conclude_nothing(&baseline, real_threshold, opts),
+    };
+    Some(assemble(
+        input,
+        &baseline,
+        &judged,
+        &finals,
+        conclusion,
+        real_threshold,
+    ))
+}
+
+/// What the diagnosis concludes, before the report is laid out.
+struct Conclusion {
+    verdict: Verdict,
+    effects: Vec<Effect>,
+    standard_errors: BTreeMap<String, f64>,
+    /// Held-out scores per recording with the chosen effects (the model's own when there are none).
+    after_scores: Vec<ReplayScore>,
+    explanation: String,
+}
+
+/// The winner `b` of the candidates: its word, its effects fitted on all recordings with their
+/// standard errors, and how much it explains (and which rival explains nearly as much).
+fn conclude_effect(
+    baseline: &Baseline,
+    judged: &[Judged],
+    finals: &[(Vec<Effect>, FitResult)],
+    b: usize,
+) -> Conclusion {
+    let winner = &judged[b];
+    let a = &winner.assessed;
+    let (effects, fit) = &finals[b];
+    let rival = rival_of(judged, b).map(|i| {
+        let r = &judged[i].assessed;
+        format!(
+            "; but {} explains nearly as much ({:.0} %, score {:.3} against {:.3}): these recordings hardly tell the two apart with this model",
+            r.name,
+            100.0 * r.explains,
+            r.score,
+            a.score
+        )
+    });
+    Conclusion {
+        verdict: winner.families[0].verdict(),
+        effects: effects.clone(),
+        standard_errors: standard_errors(&winner.families, effects, fit, &baseline.ship),
+        after_scores: winner.cross.0.clone(),
+        explanation: format!(
+            "{} explains {:.0} % of the held-out mismatch (position RMSE {:.4} L → {:.4} L, noise floor {:.4} L){}",
+            a.name,
+            100.0 * a.explains,
+            baseline.before_l,
+            a.after_l,
+            baseline.noise_floor,
+            rival.unwrap_or_default()
+        ),
+    }
+}
+
+/// No candidate accepted: `unexplained` when the mismatch is real, else `none`.
+fn conclude_nothing(
+    baseline: &Baseline,
+    real_threshold: f64,
+    opts: &DiagnoseOptions,
+) -> Conclusion {
+    let before_l = baseline.before_l;
+    let real = before_l > real_threshold;
+    Conclusion {
+        verdict: if real {
+            Verdict::Unexplained
+        } else {
+            Verdict::None
+        },
+        effects: Vec::new(),
+        standard_errors: BTreeMap::new(),
+        after_scores: baseline.before_each.clone(),
+        explanation: if real {
+            format!(
+                "held-out position RMSE {before_l:.4} L exceeds the model's own level and the noise ({real_threshold:.4} L), and no effect of the library reduces it by {:.0} % in both halves",
+                100.0 * opts.min_gain
+            )
+        } else {
+            format!(
+                "no effect reduces the mismatch beyond the noise; position RMSE {before_l:.4} L is within the model's own level and the noise ({real_threshold:.4} L)"
+            )
+        },
+    }
+}
+
+/// Every candidate as reported, with its parameters fitted on all recordings (keys prefixed by the
+/// effect's kind when a candidate holds several effects).
+fn candidates(judged: &[Judged], finals: &[(Vec<Effect>, FitResult)]) -> Vec<Candidate> {
+    judged
+        .iter()
+        .zip(finals)
+        .map(|(j, (effects, _))| {
+            let a = &j.assessed;
+            Candidate {
+                effect: a.name.clone(),
+                score: a.score,
+                parameters: effects
+                    .iter()
+                    .flat_map(|e| {
+                        let multi = effects.len() > 1;
+                        e.parameters().into_iter().map(move |(k, v)| {
+                            let key = if multi {
+                                format!("{}.{k}", e.kind())
+                            } else {
+                                k.to_string()
+                            };
+                            (key, v)
+                        })
+                    })
+                    .collect(),
+                explains: a.explains,
+                held_out_position_rmse_over_l: a.after_l,
+                n_parameters: a.n_parameters,
+                accepted: a.accepted,
+            }
+        })
+        .collect()
+}
+
+/// The explanation with what weakens the conclusion: recordings the effect makes worse, and, when the
+/// mismatch is real, recorded states outside the base model's identification range, where the base
+/// model's own forces are an extrapolation.
+fn with_caveats(
+    input: &DiagnoseInput,
+    baseline: &Baseline,
+    c: &Conclusion,
+    outside_all: Option<f64>,
+    real_threshold: f64,
+) -> String {
+    let prep = &baseline.prep;
+    let worse: Vec<&str> = prep
+        .iter()
+        .zip(baseline.before_each.iter().zip(&c.after_scores))
+        .filter(|(_, (b, a))| a.position_rmse() > 1.1 * b.position_rmse())
+        .map(|(p, _)| p.file.as_str())
+        .collect();
+    let explanation = if worse.is_empty() || c.effects.is_empty() {
+        c.explanation.clone()
+    } else {
+        format!(
+            "{}; but it makes {} of {} recordings worse ({}), so part of the mismatch is not this effect",
+            c.explanation,
+            worse.len(),
+            prep.len(),
+            worse.join(", ")
+        )
+    };
+    match outside_all {
+        Some(f) if f >= OUTSIDE_WORTH_SAYING && baseline.before_l > real_threshold => format!(
+            "{explanation}; {:.0} % of the recorded states lie outside the base model's identification range ({}), where its own forces are extrapolated: part of any mismatch left there is the base model's",
+            100.0 * f,
+            input.identification_range.map_or("", BaseRange::criterion)
+        ),
+        _ => explanation,
+    }
+}
+
+/// The report of the conclusion `c`, with every candidate, the located windows and regimes, and the
+/// share of states outside the base model's identification range.
+fn assemble(
+    input: &DiagnoseInput,
+    baseline: &Baseline,
+    judged: &[Judged],
+    finals: &[(Vec<Effect>, FitResult)],
+    c: Conclusion,
+    real_threshold: f64,
+) -> Report {
+    let (ship, prep) = (&baseline.ship, &baseline.prep);
+    let lpp = ship.lpp;
+    let outside: Option<Vec<(usize, usize)>> = input
+        .identification_range
+        .map(|range| outside_counts(range, prep, ship));
+    let outside_all = outside
+        .as_ref()
+        .map(|c| share(c.iter().fold((0, 0), |(o, t), &(co, ct)| (o + co, t + ct))));
+    let explanation = with_caveats(input, baseline, &c, outside_all, real_threshold);
+    let per_recording = prep
+        .iter()
+        .zip(baseline.before_each.iter().zip(&c.after_scores))
+        .enumerate()
+        .map(|(k, (p, (b, a)))| RecordingFit {
+            recording: p.file.clone(),
+            before_position_rmse_over_l: b.position_rmse() / lpp,
+            after_position_rmse_over_l: a.position_rmse() / lpp,
+            outside_identification_range: outside.as_ref().map(|c| share(c[k])),
+        })
+        .collect();
+    let after = pooled(&c.after_scores);
+    Report {
+        verdict: c.verdict,
+        candidates: candidates(judged, finals),
+        located: locate(prep, &baseline.residuals, &baseline.scale, ship),
+        fit_before: Fit {
+            position_rmse_over_l: baseline.before_l,
+            heading_rmse_deg: baseline.before.heading_rmse_rad().to_degrees(),
+        },
+        fit_after: Fit {
+            position_rmse_over_l: after.position_rmse() / lpp,
+            heading_rmse_deg: after.heading_rmse_rad().to_degrees(),
+        },
+        effects: c.effects.iter().map(|e| e.to_string()).collect(),
+        standard_errors: c.standard_errors,
+        per_recording,
+        regimes: regimes(prep, &baseline.residuals, &baseline.scale, ship),
+        horizon_s: baseline.horizon_s,
+        noise_floor_position_rmse_over_l: baseline.noise_floor,
+        model_level_position_rmse_over_l: input.model_level_over_l,
+        outside_identification_range: outside_all,
+        explanation,
+    }
+}
