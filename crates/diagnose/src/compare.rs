@@ -213,8 +213,9 @@ pub struct SegmentTrack {
     pub y0: Vec<f64>,
 }
 
-/// Noise of a signal sampled at times `t` (recordings may be unevenly sampled, docs/data-format.md): the residual of each
-/// sample from the straight line through its neighbours, `e = x₁ − (h₂x₀ + h₁x₂)/(h₁ + h₂)`, has
+/// Noise of a signal sampled at times `t` (recordings may be unevenly sampled, docs/data-format.md):
+/// the residual of each sample from the straight line through its neighbours,
+/// `e = x₁ − (h₂x₀ + h₁x₂)/(h₁ + h₂)`, has
 /// variance `σ²(1 + (h₁² + h₂²)/(h₁ + h₂)²)` for white noise and vanishes for motion that is linear
 /// over the two steps (smooth motion at the rates of these recordings adds almost nothing). With even
 /// steps this is the second difference, variance 6σ². The plain second difference would read an

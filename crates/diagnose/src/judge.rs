@@ -58,7 +58,7 @@ impl<'a> Judge<'a> {
 
     /// Segment-replay scores of the base with `effects` on the recordings `idx`; an impossible
     /// combination scores infinitely badly.
-    pub fn score(&self, effects: &[Effect], idx: &[usize]) -> Vec<ReplayScore> {
+    fn score(&self, effects: &[Effect], idx: &[usize]) -> Vec<ReplayScore> {
         let c = Composite {
             base: self.base,
             effects: combine(self.base_effects, effects),

@@ -28,9 +28,10 @@
 //!    covariance with the residual autocorrelation accounted for by thinning the samples to one per
 //!    smoothing window.
 //!
-//! The phases are modules, each using only those before it: `input` (what is given), `verdict` (the
-//! vocabulary), `compare`, `locate`, `families`, `judge`, `report` (which runs them), and [`bench`],
-//! the concealed-effect benchmark on top; their public items are re-exported here.
+//! The phases are modules, each using only those before it: `input` (what is given), `verdict`
+//! (the vocabulary), `compare`, `locate`, `families`, `judge`, `report` (which runs them), and
+//! [`bench`](mod@bench), the concealed-effect benchmark on top; their public items are re-exported
+//! here.
 
 pub mod bench;
 mod compare;

@@ -19,7 +19,8 @@ pub struct Located {
     pub mean_residual_over_noise: f64,
 }
 
-/// The residual of one DOF averaged over one manoeuvring regime (see [`regime_of`]).
+/// The residual of one DOF averaged over one manoeuvring regime (rudder moving, turning to port or
+/// starboard, straight or checking).
 #[derive(Debug, Clone, Serialize)]
 pub struct Regime {
     pub regime: &'static str,
@@ -120,6 +121,7 @@ fn regime_of(rec: &Recording, i: usize, ship: &Ship) -> &'static str {
     }
 }
 
+/// Mean residual ÷ noise scale per regime and DOF over all recordings (empty regimes left out).
 pub(crate) fn regimes(
     prep: &[Prepared],
     res: &[Vec<Option<[f64; 3]>>],

@@ -44,7 +44,8 @@ pub struct RecordingFit {
     pub before_position_rmse_over_l: f64,
     pub after_position_rmse_over_l: f64,
     /// Fraction of the recording's states outside the base model's identification range (leverage
-    /// above the largest of its training states, [`shipid_model::IdentificationRange`]), when that range is known.
+    /// above the largest of its training states, [`shipid_model::IdentificationRange`]), when that
+    /// range is known.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub outside_identification_range: Option<f64>,
 }

@@ -6,8 +6,8 @@ use serde::{Serialize, Serializer};
 
 /// What the diagnosis concludes. The report's `verdict` is [`Verdict::word`]: one effect word for
 /// every effect family (both forms of `asymmetry` are `asymmetry`; a pair is named by its first
-/// member, the effect that was accepted or led before the pair was tried), or `none` / `unexplained`.
-/// Which form or pair it was is in the report's `effects` and the candidate names.
+/// member: the single effect it was built around, or the better-scoring of two that failed alone), or
+/// `none` / `unexplained`. Which form or pair it was is in the report's `effects` and candidate names.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Verdict {
     /// Model and recordings agree within the recordings' noise and the model's own level.
