@@ -52,15 +52,15 @@ pub enum BaseRange<'a> {
     /// A polynomial's leverage envelope: outside where the leverage exceeds every training state's.
     Leverage(&'a IdentificationRange),
     /// A sparse GP's coverage: outside where no sparse point is d_gen-similar
-    /// ([`shipid_sim::GpDynamics::covers`]).
-    Coverage(&'a shipid_sim::GpDynamics),
+    /// (the range the model carries, [`shipid_sim::OwnRange`]).
+    Coverage(&'a dyn shipid_sim::OwnRange),
 }
 
 impl<'a> BaseRange<'a> {
     /// The leverage range where there is one, else the GP's coverage.
     pub fn of(
         leverage: Option<&'a IdentificationRange>,
-        gp: Option<&'a shipid_sim::GpDynamics>,
+        gp: Option<&'a dyn shipid_sim::OwnRange>,
     ) -> Option<BaseRange<'a>> {
         leverage
             .map(BaseRange::Leverage)
@@ -71,7 +71,7 @@ impl<'a> BaseRange<'a> {
     pub fn criterion(self) -> &'static str {
         match self {
             BaseRange::Leverage(_) => "leverage above its training maximum",
-            BaseRange::Coverage(_) => "no sparse point of the GP d_gen-similar",
+            BaseRange::Coverage(own) => own.criterion(),
         }
     }
 }

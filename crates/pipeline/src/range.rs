@@ -92,9 +92,9 @@ pub fn outside_fraction(
     share(outside_count(range, rec, scale, idx))
 }
 
-/// Fraction of the samples of `rec` outside a sparse GP's identification range: no sparse point is
-/// d_gen-similar to the state ([`shipid_sim::GpDynamics::covers`]).
-pub fn gp_outside_fraction(gp: &shipid_sim::GpDynamics, rec: &Recording) -> f64 {
+/// Fraction of the samples of `rec` outside the identification range a model carries (a sparse GP's:
+/// no sparse point is d_gen-similar to the state).
+pub fn gp_outside_fraction(gp: &dyn shipid_sim::OwnRange, rec: &Recording) -> f64 {
     let outside = (0..rec.len())
         .filter(|&i| !gp.covers(rec.u[i], rec.v[i], rec.r[i], rec.delta[i]))
         .count();

@@ -255,7 +255,7 @@ pub fn validate_dataset(
     };
     // A recording mostly outside the identification range tests the model's extrapolation, not its
     // fit. A sparse GP carries its range; a polynomial's needs the training data its file names.
-    let gp = model.sparse_gp();
+    let gp = model.own_range();
     let range = if gp.is_some() {
         None
     } else {
@@ -275,7 +275,7 @@ pub fn validate_dataset(
                     &scale,
                     0..r.recording.len(),
                 )),
-                (None, Some(gp)) => Some(gp_outside_fraction(gp, &r.recording)),
+                (None, Some(gp)) => Some(gp_outside_fraction(*gp, &r.recording)),
                 (None, None) => None,
             };
             ValidatedRecording {

@@ -58,7 +58,7 @@ pub fn run(
     let range = training.as_ref().and_then(identification_range);
     let level = training.as_ref().and_then(|t| own_level(t, &input, &opts));
     input.model_level_over_l = level.as_ref().map(|l| l.0);
-    input.identification_range = BaseRange::of(range.as_ref(), base.sparse_gp());
+    input.identification_range = BaseRange::of(range.as_ref(), base.own_range());
     let report = diagnose(&input, &ds, &opts).ok_or_else(|| {
         bad_input(format!(
             "{}: no recording with at least 20 samples to diagnose",

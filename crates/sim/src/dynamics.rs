@@ -149,12 +149,20 @@ pub trait Dynamics {
         *through_water
     }
 
-    /// The sparse GP this model is (or wraps), whose identification range travels with it
-    /// ([`crate::GpDynamics::covers`]); `None` for models whose range needs their training data (a
-    /// polynomial's leverage) or that have none.
-    fn sparse_gp(&self) -> Option<&crate::GpDynamics> {
+    /// The identification range this model carries with it (a sparse GP's coverage by its sparse
+    /// points); `None` for models whose range needs their training data (a polynomial's leverage,
+    /// computed from the data its model file names) or that have none (the reference model).
+    fn own_range(&self) -> Option<&dyn OwnRange> {
         None
     }
+}
+
+/// An identification range a model carries with it, tested one state at a time.
+pub trait OwnRange: Send + Sync {
+    /// Whether the state (u [m/s], v [m/s], r [rad/s], δ [rad]) lies where the model was identified.
+    fn covers(&self, u: f64, v: f64, r: f64, delta_rad: f64) -> bool;
+    /// What "outside" means, for explanations to the user.
+    fn criterion(&self) -> &'static str;
 }
 
 /// Turns the rudder as recorded into the rudder that acts on the hull (an actuator lag, a neutral
@@ -182,8 +190,8 @@ impl<T: Dynamics + ?Sized> Dynamics for &T {
     fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
         (**self).accelerations(state, delta_rad)
     }
-    fn sparse_gp(&self) -> Option<&crate::GpDynamics> {
-        (**self).sparse_gp()
+    fn own_range(&self) -> Option<&dyn OwnRange> {
+        (**self).own_range()
     }
     fn ship(&self) -> &Ship {
         (**self).ship()
@@ -209,8 +217,8 @@ impl<T: Dynamics + ?Sized> Dynamics for Box<T> {
     fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
         (**self).accelerations(state, delta_rad)
     }
-    fn sparse_gp(&self) -> Option<&crate::GpDynamics> {
-        (**self).sparse_gp()
+    fn own_range(&self) -> Option<&dyn OwnRange> {
+        (**self).own_range()
     }
     fn ship(&self) -> &Ship {
         (**self).ship()

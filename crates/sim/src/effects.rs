@@ -703,8 +703,8 @@ impl<D: Dynamics> Dynamics for WithEffects<D> {
         WithEffects::over_ground(self, through_water)
     }
 
-    fn sparse_gp(&self) -> Option<&crate::GpDynamics> {
-        self.inner.sparse_gp()
+    fn own_range(&self) -> Option<&dyn crate::dynamics::OwnRange> {
+        self.inner.own_range()
     }
 
     fn linear_hull_derivatives(&self) -> Option<LinearHullDerivatives> {

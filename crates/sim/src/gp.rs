@@ -15,7 +15,7 @@ use shipid_gp::{Gp, GpError, Hyper, Points, Similarity, Termination};
 use shipid_io::{AddedMass, Ship};
 use shipid_model::TrainingWindow;
 
-use crate::dynamics::{Dynamics, DynamicsError, State};
+use crate::dynamics::{Dynamics, DynamicsError, OwnRange, State};
 
 /// The `kind` of a GP model file.
 pub const GP_KIND: &str = "sparse-gp";
@@ -193,8 +193,17 @@ impl GpDynamics {
     }
 }
 
+impl OwnRange for GpDynamics {
+    fn covers(&self, u: f64, v: f64, r: f64, delta_rad: f64) -> bool {
+        GpDynamics::covers(self, u, v, r, delta_rad)
+    }
+    fn criterion(&self) -> &'static str {
+        "no sparse point of the GP d_gen-similar"
+    }
+}
+
 impl Dynamics for GpDynamics {
-    fn sparse_gp(&self) -> Option<&GpDynamics> {
+    fn own_range(&self) -> Option<&dyn OwnRange> {
         Some(self)
     }
 

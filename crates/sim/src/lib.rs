@@ -51,7 +51,7 @@ pub use control::{
     ControlError, Replay, RudderCommand, RudderController, Turning, ZigZag, controller_for,
 };
 pub use dynamics::{
-    Dynamics, DynamicsError, LinearHullDerivatives, MassMatrix, RudderFilter, State,
+    Dynamics, DynamicsError, LinearHullDerivatives, MassMatrix, OwnRange, RudderFilter, State,
 };
 pub use effects::{Effect, EffectError, EffectParseError, WithEffects, simulate_with_effects};
 pub use gp::{

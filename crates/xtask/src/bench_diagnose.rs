@@ -89,7 +89,7 @@ pub fn run(base_spec: &str, out: &Path, seeds: u64, controls: u64) -> Result<boo
         base_effects: &base_effects,
         model_level_over_l: None,
         // A polynomial base's leverage range, or a GP base's own coverage range.
-        identification_range: BaseRange::of(range.as_ref(), base.sparse_gp()),
+        identification_range: BaseRange::of(range.as_ref(), base.own_range()),
     };
     let level = model_level(&input, &clean, &opts);
     input.model_level_over_l = Some(level);
