@@ -171,8 +171,10 @@ fn output_does_not_depend_on_the_number_of_jobs() {
     }
 }
 
+/// A diverged prediction is a result of the study: exit 0 with the divergence counted in the summary
+/// line; `--strict` makes it exit 1.
 #[test]
-fn a_diverging_case_is_a_status_row_and_exit_code_1() {
+fn a_diverging_case_is_a_status_row_exit_0_and_exit_1_when_strict() {
     let dir = tempfile::tempdir().unwrap();
     let study = common::root()
         .join(FIXTURES)
@@ -184,11 +186,25 @@ fn a_diverging_case_is_a_status_row_and_exit_code_1() {
         "--out",
         out_dir.to_str().unwrap(),
     ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    assert!(
+        stderr.contains("1 with a diverged prediction"),
+        "the summary line counts the divergence: {stderr}"
+    );
+    assert!(out_dir.join("report.html").is_file());
+    let strict = common::shipid(&[
+        "run",
+        study.to_str().unwrap(),
+        "--out",
+        out_dir.to_str().unwrap(),
+        "--strict",
+    ]);
     assert_eq!(
-        out.status.code(),
+        strict.status.code(),
         Some(1),
         "{}",
-        String::from_utf8_lossy(&out.stderr)
+        String::from_utf8_lossy(&strict.stderr)
     );
     let t = Table::read_csv(&out_dir.join("summary.csv")).unwrap();
     let status: Vec<String> = (0..t.rows())
