@@ -60,7 +60,7 @@ pub struct FigureReport {
     pub warnings: Vec<String>,
 }
 
-pub use shipid_pipeline::validate::closed_loop;
+use shipid_pipeline::validate::closed_loop;
 
 /// (DOF, term, set, estimator) of a convergence line.
 type LineKey = (String, String, String, String);

@@ -236,6 +236,8 @@ pub enum RangeSource {
 /// One recording's validation and the share of its states outside the model's identification range.
 #[derive(Debug, Clone, Serialize)]
 pub struct ValidatedRecording {
+    /// The recording's file name (the key it is listed under, not one of its values).
+    #[serde(skip)]
     pub file: String,
     #[serde(flatten)]
     pub validation: RecordingValidation,

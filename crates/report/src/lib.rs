@@ -105,10 +105,21 @@ pub struct DiagnosisFiles {
 }
 
 impl DiagnosisFiles {
-    /// The layout of a diagnosis folder: `report.json`, `figures/` and `report.model.toml` (else
-    /// the only `*.model.toml`), the optional ones only when they exist.
+    /// The layout of a diagnosis folder: `report.json`, the figures (in `figures/`, else the folder's
+    /// own `*.svg`, as `shipid diagnose --plots DIR` writes them) and `report.model.toml` (else the
+    /// only `*.model.toml`), the optional ones only when they exist.
     pub fn in_dir(dir: &Path) -> DiagnosisFiles {
-        let figures = dir.join("figures");
+        let sub = dir.join("figures");
+        let has_svg = std::fs::read_dir(dir)
+            .into_iter()
+            .flatten()
+            .flatten()
+            .any(|e| e.path().extension().is_some_and(|x| x == "svg"));
+        let figures = if sub.is_dir() {
+            Some(sub)
+        } else {
+            has_svg.then(|| dir.to_path_buf())
+        };
         let model = dir.join("report.model.toml");
         let model = if model.is_file() {
             Some(model)
@@ -129,7 +140,7 @@ impl DiagnosisFiles {
         };
         DiagnosisFiles {
             report: dir.join("report.json"),
-            figures: figures.is_dir().then_some(figures),
+            figures,
             model,
         }
     }

@@ -50,9 +50,10 @@ impl CliError {
     }
 }
 
-impl From<shipid_pipeline::PipelineError> for CliError {
-    fn from(e: shipid_pipeline::PipelineError) -> Self {
-        if e.is_bad_input() {
+impl CliError {
+    /// A library error as the exit code it deserves: the user's input (2) or a failure (1).
+    fn classified(e: impl Into<anyhow::Error>, is_bad_input: bool) -> CliError {
+        if is_bad_input {
             CliError::BadInput(e.into())
         } else {
             CliError::Failed(e.into())
@@ -60,13 +61,17 @@ impl From<shipid_pipeline::PipelineError> for CliError {
     }
 }
 
+impl From<shipid_pipeline::PipelineError> for CliError {
+    fn from(e: shipid_pipeline::PipelineError) -> Self {
+        let bad = e.is_bad_input();
+        CliError::classified(e, bad)
+    }
+}
+
 impl From<shipid_study::StudyError> for CliError {
     fn from(e: shipid_study::StudyError) -> Self {
-        if e.is_bad_input() {
-            CliError::BadInput(e.into())
-        } else {
-            CliError::Failed(e.into())
-        }
+        let bad = e.is_bad_input();
+        CliError::classified(e, bad)
     }
 }
 

@@ -1,6 +1,6 @@
 //! Printing shared by several commands (the binary's only shared output code).
 
-use serde_json::{Map, json};
+use serde_json::{Map, Value, json};
 use shipid_io::Dataset;
 use shipid_pipeline::validate::{RangeSource, validate_dataset};
 use shipid_sim::Dynamics;
@@ -13,14 +13,10 @@ pub fn validation(model: &dyn Dynamics, model_spec: &str, ds: &Dataset, as_json:
     let (rows, source) = validate_dataset(model, model_spec, ds);
     let dataset = &ds.path;
     let any_failed = rows.iter().any(|r| r.validation.diverged());
-    let mut recs = Map::new();
-    for r in &rows {
-        let mut value = serde_json::to_value(&r.validation).unwrap_or_default();
-        if let (Some(f), Some(obj)) = (r.outside_identification_range, value.as_object_mut()) {
-            obj.insert("outside_identification_range".into(), json!(f));
-        }
-        recs.insert(r.file.clone(), value);
-    }
+    let recs: Map<String, Value> = rows
+        .iter()
+        .map(|r| (r.file.clone(), serde_json::to_value(r).unwrap_or_default()))
+        .collect();
     let value = json!({
         "model": model_spec,
         "dataset": dataset.display().to_string(),

@@ -13,7 +13,7 @@ pub fn run(dir: &Path, study: Option<&Path>) -> Result<Outcome, CliError> {
         ..RunMeta::default()
     };
     let html = if dir.join("report.json").is_file() {
-        shipid_report::diagnosis_page(&diagnosis_files(dir), &meta)
+        shipid_report::diagnosis_page(&DiagnosisFiles::in_dir(dir), &meta)
     } else if dir.join("summary.csv").is_file() {
         shipid_report::study_page(dir, &meta)
     } else {
@@ -26,21 +26,4 @@ pub fn run(dir: &Path, study: Option<&Path>) -> Result<Outcome, CliError> {
     let path = shipid_report::write_report(dir, &html).map_err(failed)?;
     println!("report: {}", path.display());
     Ok(Outcome::Ok)
-}
-
-/// The files of a diagnosis folder: `diagnose --plots DIR` writes its figures into DIR itself,
-/// other layouts keep them in DIR/figures.
-pub fn diagnosis_files(dir: &Path) -> DiagnosisFiles {
-    let mut files = DiagnosisFiles::in_dir(dir);
-    if files.figures.is_none() {
-        let has_svg = std::fs::read_dir(dir)
-            .into_iter()
-            .flatten()
-            .flatten()
-            .any(|e| e.path().extension().is_some_and(|x| x == "svg"));
-        if has_svg {
-            files.figures = Some(dir.to_path_buf());
-        }
-    }
-    files
 }

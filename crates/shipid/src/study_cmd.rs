@@ -3,18 +3,18 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use shipid_io::write::write_atomic;
 use shipid_report::RunMeta;
-
-use shipid_study::tables::{coefficients_table, diagnostics_table, summary_table};
-use shipid_study::{CaseResult, Study, default_out, load_study, run_study};
+use shipid_study::tables::write_tables;
+use shipid_study::{
+    CaseResult, OutcomeCounts, RunRecord, Study, default_out, load_study, run_study,
+};
 use shipid_tables::{Table, Tolerance, compare};
 
 use crate::{CliError, Outcome, bad_input, failed};
 
-/// Run a study and write its tables, figures, run record (`study.toml`: the study file as run;
-/// `run.json`: tool version, data set, times, status counts, warnings) and the HTML report; returns the
-/// results and the report's path (`None` when it could not be written: a warning, not a failure).
+/// Run a study and write its tables, figures, run record (`study.toml`, `run.json`) and the HTML
+/// report; returns the results and the report's path (`None` when it could not be written: figures and
+/// the report are a convenience, one that cannot be made is a warning, never a failed run).
 pub fn run_and_write(
     study: &Study,
     out: &Path,
@@ -24,37 +24,16 @@ pub fn run_and_write(
 ) -> Result<(Vec<CaseResult>, Option<PathBuf>), CliError> {
     let started = std::time::SystemTime::now();
     let results = run_study(study, out, jobs, force, progress).map_err(failed)?;
-    for (name, table) in [
-        ("summary", summary_table(study, &results)),
-        ("coefficients", coefficients_table(study, &results)),
-        ("diagnostics", diagnostics_table(study, &results)),
-    ] {
-        table.write(out, name).map_err(failed)?;
-    }
-    // Figures and the report are a convenience: one that cannot be made is a warning, never a
-    // failed run.
+    write_tables(study, &results, out)?;
     let mut warnings = shipid_figures::write_figures(study, out).warnings;
-    let study_text = std::fs::read_to_string(&study.path).map_err(failed)?;
-    write_atomic(&out.join("study.toml"), study_text.as_bytes()).map_err(failed)?;
-    let counts = StatusCounts::of(&results);
-    let run = serde_json::json!({
-        "tool_version": env!("CARGO_PKG_VERSION"),
-        "study": study.name,
-        "study_file": study.path.display().to_string(),
-        "dataset": study.dataset_path.display().to_string(),
-        "started_utc": utc(started),
-        "finished_utc": utc(std::time::SystemTime::now()),
-        "wall_time_s": started.elapsed().map_or(0.0, |d| d.as_secs_f64()),
-        "cases": results.len(),
-        "case_outcomes": {
-            "every_prediction_ok": counts.ok,
-            "some_prediction_diverged": counts.diverged,
-            "fit_failed": counts.fit_failed,
-        },
-        "warnings": warnings,
-    });
-    let run_text = serde_json::to_string_pretty(&run).map_err(failed)?;
-    write_atomic(&out.join("run.json"), run_text.as_bytes()).map_err(failed)?;
+    RunRecord::new(
+        env!("CARGO_PKG_VERSION"),
+        study,
+        &results,
+        started,
+        warnings.clone(),
+    )
+    .write(study, out)?;
     let meta = RunMeta {
         tool_version: Some(env!("CARGO_PKG_VERSION").into()),
         name: Some(study.name.clone()),
@@ -78,51 +57,6 @@ pub fn run_and_write(
     Ok((results, report))
 }
 
-/// `t` as an ISO 8601 UTC time to the second (days to civil date by Howard Hinnant's algorithm).
-fn utc(t: std::time::SystemTime) -> String {
-    let secs = t
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_secs()) as i64;
-    let (days, rem) = (secs.div_euclid(86_400), secs.rem_euclid(86_400));
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z - era * 146_097;
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let day = doy - (153 * mp + 2) / 5 + 1;
-    let month = if mp < 10 { mp + 3 } else { mp - 9 };
-    let year = yoe + era * 400 + i64::from(month <= 2);
-    format!(
-        "{year:04}-{month:02}-{day:02}T{:02}:{:02}:{:02}Z",
-        rem / 3600,
-        rem % 3600 / 60,
-        rem % 60
-    )
-}
-
-/// How the cases of a run ended.
-struct StatusCounts {
-    ok: usize,
-    diverged: usize,
-    fit_failed: usize,
-}
-
-impl StatusCounts {
-    fn of(results: &[CaseResult]) -> StatusCounts {
-        let fit_failed = results.iter().filter(|r| r.fit_failed()).count();
-        let diverged = results
-            .iter()
-            .filter(|r| !r.fit_failed() && r.diverged())
-            .count();
-        StatusCounts {
-            ok: results.len() - fit_failed - diverged,
-            diverged,
-            fit_failed,
-        }
-    }
-}
-
 /// `shipid run STUDY.toml`: exit 0 when every case ended with a recorded status (a diverged prediction
 /// is a result), 1 when a case could not be computed (or, with `strict`, when one diverged).
 pub fn run(
@@ -141,13 +75,13 @@ pub fn run(
         .unwrap_or_else(|| default_out(&study));
     let started = std::time::Instant::now();
     let (results, report) = run_and_write(&study, &out, jobs, force, true)?;
-    let c = StatusCounts::of(&results);
+    let c = OutcomeCounts::of(&results);
     eprintln!(
         "{}: {} cases ({} ok, {} with a diverged prediction, {} whose fit could not be computed) in {:.1} s with {jobs} job(s); tables in {}",
         study.name,
         results.len(),
-        c.ok,
-        c.diverged,
+        c.every_prediction_ok,
+        c.some_prediction_diverged,
         c.fit_failed,
         started.elapsed().as_secs_f64(),
         out.display()
@@ -155,11 +89,13 @@ pub fn run(
     if let Some(p) = report {
         println!("report: {}", p.display());
     }
-    Ok(if c.fit_failed > 0 || (strict && c.diverged > 0) {
-        Outcome::SomeFailed
-    } else {
-        Outcome::Ok
-    })
+    Ok(
+        if c.fit_failed > 0 || (strict && c.some_prediction_diverged > 0) {
+            Outcome::SomeFailed
+        } else {
+            Outcome::Ok
+        },
+    )
 }
 
 /// `shipid plot STUDY.toml [--out DIR]`: the figures of an existing run (no refitting).
@@ -243,7 +179,9 @@ pub fn check(
 ) -> Result<Outcome, CliError> {
     let study = load_study(study_path)?;
     let fresh_dir = tempfile_dir(&study)?;
-    let (results, _) = run_and_write(&study, &fresh_dir, jobs, true, false)?;
+    // Only the tables are compared: no figures, run record or report for a run that is thrown away.
+    let results = run_study(&study, &fresh_dir, jobs, true, false).map_err(failed)?;
+    write_tables(&study, &results, &fresh_dir)?;
     let mut per_column: BTreeMap<String, Option<Tolerance>> =
         BTreeMap::from([("fit_time_s".to_string(), None)]);
     for (k, t) in &study.check {

@@ -4,13 +4,16 @@
 //! goes through an optional bar the caller asks for.
 //!
 //! Module map: `study` (the file, its checks, the case grid) ← `runner` (per-case fit, validation,
-//! stored results, typed statuses) ← `tables` (summary, coefficients, diagnostics); `error`.
+//! stored results, typed statuses and outcomes) ← `tables` (summary, coefficients, diagnostics) and
+//! `record` (`study.toml`, `run.json`); `error`.
 
 pub mod error;
+pub mod record;
 pub mod runner;
 pub mod study;
 pub mod tables;
 
 pub use error::StudyError;
-pub use runner::{CaseResult, CaseStatus, default_out, run_study};
+pub use record::RunRecord;
+pub use runner::{CaseOutcome, CaseResult, CaseStatus, OutcomeCounts, default_out, run_study};
 pub use study::{Case, Study, load_study};

@@ -7,7 +7,7 @@
 //! depend on the number of threads (except the measured fit times).
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
 
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
@@ -151,16 +151,58 @@ impl CaseResult {
         }
     }
 
-    /// True when no model came out of the fit (it could not be computed).
-    pub fn fit_failed(&self) -> bool {
-        !self.status.has_model()
-    }
-
-    /// True when a test's simulation diverged (a result of the study, not a failure to compute it).
-    pub fn diverged(&self) -> bool {
-        self.tests
+    /// How the case counts in a run: a fit that produced no model could not be computed; a
+    /// simulation that diverged is a result of the study, not a failure to compute it.
+    pub fn outcome(&self) -> CaseOutcome {
+        if !self.status.has_model() {
+            CaseOutcome::FitFailed
+        } else if self
+            .tests
             .iter()
             .any(|t| t.status == TestStatus::Diverged || t.replay_status == TestStatus::Diverged)
+        {
+            CaseOutcome::Diverged
+        } else {
+            CaseOutcome::Ok
+        }
+    }
+}
+
+/// How a case counts in a run ([`CaseResult::outcome`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CaseOutcome {
+    /// A model, and every prediction of it ran to the end.
+    Ok,
+    /// A model, and some prediction (closed loop or replay) diverged.
+    Diverged,
+    /// No model came out of the fit.
+    FitFailed,
+}
+
+/// Cases per outcome, as `run.json` and the summary line give them.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct OutcomeCounts {
+    pub every_prediction_ok: usize,
+    pub some_prediction_diverged: usize,
+    pub fit_failed: usize,
+}
+
+impl OutcomeCounts {
+    /// Counts the outcomes of `results`.
+    pub fn of(results: &[CaseResult]) -> OutcomeCounts {
+        let mut c = OutcomeCounts::default();
+        for r in results {
+            c.add(r.outcome());
+        }
+        c
+    }
+
+    fn add(&mut self, o: CaseOutcome) {
+        match o {
+            CaseOutcome::Ok => self.every_prediction_ok += 1,
+            CaseOutcome::Diverged => self.some_prediction_diverged += 1,
+            CaseOutcome::FitFailed => self.fit_failed += 1,
+        }
     }
 }
 
@@ -426,7 +468,7 @@ pub fn run_study(
         )
         .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    let (failed, diverged) = (AtomicUsize::new(0), AtomicUsize::new(0));
+    let counts = Mutex::new(OutcomeCounts::default());
     let results: Vec<std::io::Result<CaseResult>> = pool.install(|| {
         study
             .cases
@@ -470,15 +512,14 @@ pub fn run_study(
                         r
                     }
                 };
-                if result.fit_failed() {
-                    failed.fetch_add(1, Ordering::Relaxed);
-                } else if result.diverged() {
-                    diverged.fetch_add(1, Ordering::Relaxed);
-                }
+                let counts = {
+                    let mut c = counts.lock().unwrap_or_else(|p| p.into_inner());
+                    c.add(result.outcome());
+                    *c
+                };
                 bar.set_message(format!(
                     "{} fit failed, {} diverged",
-                    failed.load(Ordering::Relaxed),
-                    diverged.load(Ordering::Relaxed)
+                    counts.fit_failed, counts.some_prediction_diverged
                 ));
                 bar.inc(1);
                 Ok(result)

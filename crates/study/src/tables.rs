@@ -2,10 +2,28 @@
 //! `diagnostics` (long tables, one row per case × DOF × term × quantity). Every row carries the columns
 //! that tell its case apart (case id, set, estimator, hyper-parameters, training).
 
+use std::path::Path;
+
 use shipid_tables::Table;
 
+use crate::error::StudyError;
 use crate::runner::CaseResult;
 use crate::study::{Case, Study};
+
+/// Writes the three tables of a run into `out` (`<stem>.csv` and `<stem>.parquet` each).
+pub fn write_tables(study: &Study, results: &[CaseResult], out: &Path) -> Result<(), StudyError> {
+    for (stem, table) in [
+        ("summary", summary_table(study, results)),
+        ("coefficients", coefficients_table(study, results)),
+        ("diagnostics", diagnostics_table(study, results)),
+    ] {
+        table.write(out, stem).map_err(|e| StudyError::Table {
+            path: out.join(format!("{stem}.csv")),
+            message: e.to_string(),
+        })?;
+    }
+    Ok(())
+}
 
 pub const METRIC_KEYS: [&str; 8] = [
     "overshoot_1",

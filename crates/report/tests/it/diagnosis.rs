@@ -52,3 +52,19 @@ fn a_verdict_of_none_with_figures_and_no_model() {
     assert!(html.contains("Equation-error residuals — tc35_sb"));
     assert_eq!(summary_case_ids(&html).len(), 6);
 }
+
+/// `shipid diagnose --plots DIR` writes its figures into DIR itself, beside report.json: the folder's
+/// own SVGs are its figures when there is no `figures/`.
+#[test]
+fn figures_written_beside_the_report_are_found() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = fixture("diagnosis-none");
+    std::fs::copy(src.join("report.json"), dir.path().join("report.json")).unwrap();
+    for e in std::fs::read_dir(src.join("figures")).unwrap().flatten() {
+        std::fs::copy(e.path(), dir.path().join(e.file_name())).unwrap();
+    }
+    let files = DiagnosisFiles::in_dir(dir.path());
+    assert_eq!(files.figures.as_deref(), Some(dir.path()));
+    let html = diagnosis_page(&files, &meta()).unwrap();
+    assert_eq!(html.matches("<figure ").count(), 1);
+}

@@ -162,8 +162,8 @@ fn an_interrupted_study_resumes_without_redoing_or_losing_cases() {
 fn output_does_not_depend_on_the_number_of_jobs() {
     let study = small_study();
     let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
-    run_and_write(&study, a.path(), 1, false, false).unwrap().0;
-    run_and_write(&study, b.path(), 2, false, false).unwrap().0;
+    run_and_write(&study, a.path(), 1, false, false).unwrap();
+    run_and_write(&study, b.path(), 2, false, false).unwrap();
     for stem in ["summary", "coefficients", "diagnostics"] {
         let ta = Table::read_csv(&a.path().join(format!("{stem}.csv"))).unwrap();
         let tb = Table::read_csv(&b.path().join(format!("{stem}.csv"))).unwrap();
