@@ -11,6 +11,8 @@
 //! - [`indexes`]: the nine motion indexes from ±35° turns and ±20/20 zig-zags (reusing `shipid-sim`).
 //! - [`mlp`]: the inverse network (two hidden layers of 30, tanh, Adam, early stopping).
 //! - [`pipeline`]: simulation database (rayon), training with a 70/15/15 split, held-out check.
+//! - [`inversion`]: a target's motions inverted (network, clipping, re-simulation, nearest database
+//!   ship, refinement) and the tables that report them.
 //!
 //! No I/O; every failure of user input is an [`InverseError`], a failed simulation an
 //! [`indexes::IndexFailure`] status.
@@ -18,6 +20,7 @@
 pub mod database;
 pub mod error;
 pub mod indexes;
+pub mod inversion;
 pub mod mlp;
 pub mod modes;
 pub mod pipeline;

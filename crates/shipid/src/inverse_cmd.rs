@@ -6,22 +6,21 @@
 //! per target `<target>/indexes.csv` (given vs obtained), `<target>/summary.md` (tables), `<target>/motions.svg`
 //! (Fig. 6/7: red = simulated with the predicted hydrodynamics, black dashed = given indexes).
 
-use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
 use shipid_figures::inverse::{MotionFigure, motions_figure, write_modes};
-use shipid_inverse::database::{ShipsFile, validate};
-use shipid_inverse::indexes::{
-    INDEX_LABELS, Manoeuvres, MotionIndexes, N_INDEXES, SimSettings, indexes_of,
-    simulate_manoeuvres,
+use shipid_inverse::database::ShipsFile;
+use shipid_inverse::indexes::SimSettings;
+use shipid_inverse::inversion::{
+    InputFault, MotionInversion, RefineOutcome, check_inputs, header_markdown, indexes_csv,
+    invert_motion, motions_markdown,
 };
 use shipid_inverse::mlp::TrainOptions;
 use shipid_inverse::modes::VariationModes;
 use shipid_inverse::pipeline::{
-    InverseModel, SimulationDatabase, build_database, clip_weights, held_out, nearest, refine,
-    sample_weights,
+    InverseModel, SimulationDatabase, build_database, held_out, sample_weights,
 };
 use shipid_inverse::target::{TargetShip, TargetsFile};
 use shipid_io::write::write_atomic;
@@ -49,28 +48,11 @@ fn read_toml<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, CliError>
 
 pub fn load(ships: &Path, targets: &Path) -> Result<(VariationModes, Vec<TargetShip>), CliError> {
     let db: ShipsFile = read_toml(ships)?;
-    validate(&db.ship).map_err(|e| bad_input(format!("{}: {e}", ships.display())))?;
-    let modes = VariationModes::new(&db.ship)
-        .map_err(|e| bad_input(format!("{}: {e}", ships.display())))?;
     let t: TargetsFile = read_toml(targets)?;
-    for target in &t.target {
-        target
-            .validate()
-            .map_err(|e| bad_input(format!("{}: {e}", targets.display())))?;
-        for m in &target.motion {
-            m.indexes().map_err(|e| {
-                bad_input(format!(
-                    "{}: target {}: {e}",
-                    targets.display(),
-                    target.name
-                ))
-            })?;
-        }
-    }
-    if t.target.is_empty() {
-        return Err(bad_input(format!("{}: no [[target]]", targets.display())));
-    }
-    Ok((modes, t.target))
+    check_inputs(&db, t).map_err(|fault| match fault {
+        InputFault::Ships(e) => bad_input(format!("{}: {e}", ships.display())),
+        InputFault::Targets(e) => bad_input(format!("{}: {e}", targets.display())),
+    })
 }
 
 pub fn progress(n: usize, what: &str) -> ProgressBar {
@@ -155,197 +137,41 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
         };
         let model = InverseModel::train(&db, &opts).map_err(|e| failed(anyhow::anyhow!(e)))?;
         let held = held_out(target, &modes, &db, &model, &settings, a.max_resim);
-        let mut md = String::new();
-        let _ = writeln!(
-            md,
-            "Target {} ({}); {} modes; database {} requested, {} usable, {} dropped; built in {:.1} s.\n",
-            target.name,
-            target.source,
-            n_modes,
-            db.requested,
-            db.samples.len(),
-            db.dropped.len(),
-            secs
-        );
-        let _ = writeln!(
-            md,
-            "Network 9-30-30-{n_modes}: {} epochs (best {}), MSE (standardised) train {:.3}, validation {:.3}; split {}/{}/{}.\n",
-            model.report.epochs,
-            model.report.best_epoch,
-            model.report.train_mse,
-            model.report.val_mse,
-            model.split.train.len(),
-            model.split.validation.len(),
-            model.split.test.len()
-        );
-        let _ = writeln!(
-            md,
-            "Held-out test ({} samples): weight RMSE / σ per mode {} (predicting the mean: {}); \
-             {} re-simulated ({} failed), mean |relative error| per index: {}.\n",
-            held.n,
-            fmt_list(&held.weight_rmse_sigma, 2),
-            fmt_list(&held.baseline_rmse_sigma, 2),
-            held.resimulated,
-            held.resim_failed,
-            INDEX_LABELS
-                .iter()
-                .zip(held.index_mare)
-                .map(|(l, e)| format!("{l} {:.1} %", 100.0 * e))
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
-        let mut csv = String::from("motion,index,given,obtained,relative_error\n");
-        let mut figures: Vec<MotionFigure> = Vec::new();
-        let _ = writeln!(
-            md,
-            "| motion | | {} | mean |rel. err.| |",
-            INDEX_LABELS.join(" | ")
-        );
-        let _ = writeln!(md, "|---|---|{}---|", "---|".repeat(N_INDEXES));
-        for m in &target.motion {
-            let given = m.indexes().map_err(|e| bad_input(e.to_string()))?;
-            let raw = model.predict(&given);
-            let (x, clipped) = clip_weights(&modes, &raw);
-            let (near, dist) = nearest(&db, &model, &given);
-            let resim = |x: &[f64]| -> std::result::Result<(Manoeuvres, MotionIndexes), String> {
-                let c = modes.generate(x).map_err(|e| e.to_string())?;
-                let mdl = target
-                    .model(&c)
-                    .ok_or("no MMG model (no self-propulsion point)")?;
-                let man = simulate_manoeuvres(&mdl, &settings).map_err(|e| e.to_string())?;
-                let q = indexes_of(&man, &target.ship()).map_err(|e| e.to_string())?;
-                Ok((man, q))
-            };
-            let row =
-                |v: &[f64; N_INDEXES]| v.iter().map(|x| format!("{x:.3}")).collect::<Vec<_>>();
-            let err_row = |q: &MotionIndexes| {
-                let rel: [f64; N_INDEXES] =
-                    std::array::from_fn(|i| (q.0[i] - given.0[i]) / given.0[i]);
-                let mean = rel.iter().map(|r| r.abs()).sum::<f64>() / N_INDEXES as f64;
-                (rel, mean)
-            };
-            let _ = writeln!(
-                md,
-                "| {} | given | {} | |",
-                m.name,
-                row(&given.0).join(" | ")
-            );
-            match resim(&x) {
-                Ok((man, q)) => {
-                    let (rel, mean) = err_row(&q);
-                    let _ = writeln!(md, "| | obtained | {} | |", row(&q.0).join(" | "));
-                    let _ = writeln!(
-                        md,
-                        "| | error | {} | {:.1} % |",
-                        rel.iter()
-                            .map(|r| format!("{:+.1} %", 100.0 * r))
-                            .collect::<Vec<_>>()
-                            .join(" | "),
-                        100.0 * mean
-                    );
-                    for (i, label) in INDEX_LABELS.iter().enumerate() {
-                        let _ = writeln!(
-                            csv,
-                            "{},{},{},{},{}",
-                            m.name, label, given.0[i], q.0[i], rel[i]
-                        );
-                    }
-                    figures.push(MotionFigure {
-                        name: m.name.clone(),
-                        given,
-                        network: Some(man),
-                        refined: None,
-                    });
-                }
-                Err(why) => {
-                    outcome = Outcome::SomeFailed;
-                    let _ = writeln!(md, "| | obtained | failed: {why} | |");
-                    for (i, label) in INDEX_LABELS.iter().enumerate() {
-                        let _ = writeln!(csv, "{},{},{},,", m.name, label, given.0[i]);
-                    }
-                    figures.push(MotionFigure {
-                        name: m.name.clone(),
-                        given,
-                        network: None,
-                        refined: None,
-                    });
-                }
-            }
-            let sigma = |x: &[f64]| {
-                fmt_list(
-                    &x.iter()
-                        .zip(&modes.weight_std)
-                        .map(|(x, s)| x / s)
-                        .collect::<Vec<_>>(),
-                    2,
-                )
-            };
-            let _ = writeln!(
-                md,
-                "| | weights x/σ | {}{} | |",
-                sigma(&x),
-                if clipped {
-                    format!(" (network output {} clipped to ±3σ)", sigma(&raw))
-                } else {
-                    String::new()
-                }
-            );
-            let nq = &db.samples[near].indexes;
-            let (_, nmean) = err_row(nq);
-            let _ = writeln!(
-                md,
-                "| | nearest database ship (distance {dist:.2} std) | {} | {:.1} % |",
-                row(&nq.0).join(" | "),
-                100.0 * nmean
-            );
-            if a.refine_evals > 0 {
-                let starts = [x.clone(), db.samples[near].weights.clone()];
-                let refined = refine(
+        let motions: Vec<MotionInversion> = target
+            .motion
+            .iter()
+            .map(|m| {
+                let given = m.indexes().map_err(|e| bad_input(e.to_string()))?;
+                Ok(invert_motion(
                     target,
                     &modes,
+                    &db,
                     &model,
-                    &given,
-                    &starts,
                     &settings,
+                    &m.name,
+                    given,
                     a.refine_evals,
-                );
-                match refined.and_then(|r| resim(&r.weights).ok().map(|(man, _)| (r, man))) {
-                    Some((r, man)) => {
-                        let (rel, mean) = err_row(&r.indexes);
-                        let _ = writeln!(
-                            md,
-                            "| | refined ({} simulations) | {} | |",
-                            r.evaluations,
-                            row(&r.indexes.0).join(" | ")
-                        );
-                        let _ = writeln!(
-                            md,
-                            "| | refined error | {} | {:.1} % |",
-                            rel.iter()
-                                .map(|r| format!("{:+.1} %", 100.0 * r))
-                                .collect::<Vec<_>>()
-                                .join(" | "),
-                            100.0 * mean
-                        );
-                        let _ = writeln!(md, "| | refined weights x/σ | {} | |", sigma(&r.weights));
-                        for (i, label) in INDEX_LABELS.iter().enumerate() {
-                            let _ = writeln!(
-                                csv,
-                                "{} refined,{},{},{},{}",
-                                m.name, label, given.0[i], r.indexes.0[i], rel[i]
-                            );
-                        }
-                        if let Some(f) = figures.last_mut() {
-                            f.refined = Some(man);
-                        }
-                    }
-                    None => {
-                        outcome = Outcome::SomeFailed;
-                        let _ = writeln!(md, "| | refined | failed: no start simulates | |");
-                    }
-                }
-            }
+                ))
+            })
+            .collect::<Result<_, CliError>>()?;
+        if motions.iter().any(MotionInversion::failed) {
+            outcome = Outcome::SomeFailed;
         }
+        let md = header_markdown(target, n_modes, &db, secs, &model, &held)
+            + &motions_markdown(&motions, &modes, &db);
+        let csv = indexes_csv(&motions);
+        let figures: Vec<MotionFigure> = motions
+            .iter()
+            .map(|m| MotionFigure {
+                name: m.name.clone(),
+                given: m.given,
+                network: m.network.as_ref().ok().map(|s| s.manoeuvres.clone()),
+                refined: match &m.refined {
+                    RefineOutcome::Done { manoeuvres, .. } => Some((**manoeuvres).clone()),
+                    _ => None,
+                },
+            })
+            .collect();
         print!("{md}");
         let dir = a.out.join(slug(&target.name));
         std::fs::create_dir_all(&dir).map_err(failed)?;
@@ -358,13 +184,6 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
         println!("wrote {}", dir.display());
     }
     Ok(outcome)
-}
-
-fn fmt_list(v: &[f64], digits: usize) -> String {
-    v.iter()
-        .map(|x| format!("{x:.digits$}"))
-        .collect::<Vec<_>>()
-        .join(", ")
 }
 
 fn slug(s: &str) -> String {

@@ -6,6 +6,7 @@ use shipid_inverse::database::{Coefficients, ShipsFile, behaviour};
 use shipid_inverse::indexes::{
     MotionIndexes, SimSettings, indexes_of, motion_indexes, simulate_manoeuvres,
 };
+use shipid_inverse::inversion::{InputFault, check_inputs};
 use shipid_inverse::mlp::TrainOptions;
 use shipid_inverse::modes::VariationModes;
 use shipid_inverse::pipeline::{InverseModel, build_database, held_out, sample_weights};
@@ -330,4 +331,27 @@ fn too_few_samples_is_an_error() {
         Err(InverseError::TooFewSamples { .. })
     ));
     let _ = Coefficients([0.0; 24]);
+}
+
+fn check_inputs_fault(targets: TargetsFile, expected: InputFault) {
+    assert_eq!(check_inputs(&ships(), targets).err(), Some(expected));
+}
+
+#[test]
+fn inputs_without_a_target_or_with_a_zero_index_are_refused_naming_the_targets_file() {
+    check_inputs_fault(
+        TargetsFile { target: vec![] },
+        InputFault::Targets("no [[target]]".into()),
+    );
+    let mut t = targets();
+    t.target[0].motion[0].advance_p35 = 0.0;
+    let name = t.target[0].name.clone();
+    let err = check_inputs(&ships(), t).err();
+    assert!(
+        matches!(&err, Some(InputFault::Targets(m)) if m.starts_with(&format!("target {name}: "))),
+        "{err:?}"
+    );
+    let (modes, kept) = check_inputs(&ships(), targets()).expect("the shipped inputs are valid");
+    assert_eq!(kept.len(), targets().target.len());
+    assert!(!modes.singular_values.is_empty());
 }

@@ -1,0 +1,380 @@
+//! Inverting a target ship's motions with a trained network (`shipid inverse`): per motion the
+//! network's mode weights (clipped to the ±3σ box it was trained on), their re-simulation, the nearest
+//! database ship and, when asked, the weights refined by re-simulation; and the tables that report
+//! them (markdown summary, CSV of given vs obtained indexes). No I/O.
+
+use std::fmt::Write as _;
+
+use crate::database::{ShipsFile, validate};
+use crate::indexes::{
+    INDEX_LABELS, Manoeuvres, MotionIndexes, N_INDEXES, SimSettings, indexes_of,
+    simulate_manoeuvres,
+};
+use crate::modes::VariationModes;
+use crate::pipeline::{
+    HeldOut, InverseModel, Refined, SimulationDatabase, clip_weights, nearest, refine,
+};
+use crate::target::{TargetShip, TargetsFile};
+
+/// A fault in the inputs of an inversion, by the file it is in.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum InputFault {
+    /// In the ships (database) file.
+    #[error("{0}")]
+    Ships(String),
+    /// In the targets file.
+    #[error("{0}")]
+    Targets(String),
+}
+
+/// The variation modes of the ships file and the targets, checked: the database's ships, every target
+/// and every motion's indexes, and at least one target.
+pub fn check_inputs(
+    ships: &ShipsFile,
+    targets: TargetsFile,
+) -> Result<(VariationModes, Vec<TargetShip>), InputFault> {
+    validate(&ships.ship).map_err(|e| InputFault::Ships(e.to_string()))?;
+    let modes = VariationModes::new(&ships.ship).map_err(|e| InputFault::Ships(e.to_string()))?;
+    for target in &targets.target {
+        target
+            .validate()
+            .map_err(|e| InputFault::Targets(e.to_string()))?;
+        for m in &target.motion {
+            m.indexes()
+                .map_err(|e| InputFault::Targets(format!("target {}: {e}", target.name)))?;
+        }
+    }
+    if targets.target.is_empty() {
+        return Err(InputFault::Targets("no [[target]]".into()));
+    }
+    Ok((modes, targets.target))
+}
+
+/// Manoeuvres simulated with a set of weights, and their indexes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Resimulated {
+    pub manoeuvres: Manoeuvres,
+    pub indexes: MotionIndexes,
+}
+
+/// What the refinement by re-simulation gave.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RefineOutcome {
+    /// Not asked for (0 simulations per start: the network alone, as in paper 003).
+    NotAsked,
+    /// No start could be simulated.
+    Failed,
+    /// Refined weights and their manoeuvres.
+    Done {
+        refined: Refined,
+        // Boxed: four recorded manoeuvres are large beside the other variants.
+        manoeuvres: Box<Manoeuvres>,
+    },
+}
+
+/// One motion of a target, inverted.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MotionInversion {
+    pub name: String,
+    pub given: MotionIndexes,
+    /// The network's output, before clipping.
+    pub network_weights: Vec<f64>,
+    /// The weights used: the network's, clipped to the box it was trained on.
+    pub weights: Vec<f64>,
+    /// Whether clipping changed the network's output (the target lies outside the trained box).
+    pub clipped: bool,
+    /// The re-simulation with `weights`, or why it failed.
+    pub network: Result<Resimulated, String>,
+    /// Index of the database ship whose features are nearest to the given ones, and the distance in
+    /// training standard deviations.
+    pub nearest: usize,
+    pub nearest_distance: f64,
+    pub refined: RefineOutcome,
+}
+
+impl MotionInversion {
+    /// Whether a re-simulation or an asked-for refinement failed.
+    pub fn failed(&self) -> bool {
+        self.network.is_err() || self.refined == RefineOutcome::Failed
+    }
+}
+
+/// The manoeuvres and indexes of `target` with the mode weights `x`.
+pub fn resimulate(
+    target: &TargetShip,
+    modes: &VariationModes,
+    settings: &SimSettings,
+    x: &[f64],
+) -> Result<Resimulated, String> {
+    let c = modes.generate(x).map_err(|e| e.to_string())?;
+    let mdl = target
+        .model(&c)
+        .ok_or("no MMG model (no self-propulsion point)")?;
+    let manoeuvres = simulate_manoeuvres(&mdl, settings).map_err(|e| e.to_string())?;
+    let indexes = indexes_of(&manoeuvres, &target.ship()).map_err(|e| e.to_string())?;
+    Ok(Resimulated {
+        manoeuvres,
+        indexes,
+    })
+}
+
+/// Inverts one motion: network, clipping, re-simulation, nearest database ship, and (with
+/// `refine_evals` > 0 simulations per start) the refinement from the network's and the nearest
+/// ship's weights.
+#[allow(clippy::too_many_arguments)]
+pub fn invert_motion(
+    target: &TargetShip,
+    modes: &VariationModes,
+    db: &SimulationDatabase,
+    model: &InverseModel,
+    settings: &SimSettings,
+    name: &str,
+    given: MotionIndexes,
+    refine_evals: usize,
+) -> MotionInversion {
+    let network_weights = model.predict(&given);
+    let (weights, clipped) = clip_weights(modes, &network_weights);
+    let (near, nearest_distance) = nearest(db, model, &given);
+    let network = resimulate(target, modes, settings, &weights);
+    let refined = if refine_evals == 0 {
+        RefineOutcome::NotAsked
+    } else {
+        let starts = [weights.clone(), db.samples[near].weights.clone()];
+        refine(
+            target,
+            modes,
+            model,
+            &given,
+            &starts,
+            settings,
+            refine_evals,
+        )
+        .and_then(|r| {
+            resimulate(target, modes, settings, &r.weights)
+                .ok()
+                .map(|s| (r, Box::new(s.manoeuvres)))
+        })
+        .map_or(RefineOutcome::Failed, |(refined, manoeuvres)| {
+            RefineOutcome::Done {
+                refined,
+                manoeuvres,
+            }
+        })
+    };
+    MotionInversion {
+        name: name.to_string(),
+        given,
+        network_weights,
+        weights,
+        clipped,
+        network,
+        nearest: near,
+        nearest_distance,
+        refined,
+    }
+}
+
+/// The summary's opening paragraphs: target, database, network and its held-out test.
+pub fn header_markdown(
+    target: &TargetShip,
+    n_modes: usize,
+    db: &SimulationDatabase,
+    build_time_s: f64,
+    model: &InverseModel,
+    held: &HeldOut,
+) -> String {
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "Target {} ({}); {} modes; database {} requested, {} usable, {} dropped; built in {:.1} s.\n",
+        target.name,
+        target.source,
+        n_modes,
+        db.requested,
+        db.samples.len(),
+        db.dropped.len(),
+        build_time_s
+    );
+    let _ = writeln!(
+        md,
+        "Network 9-30-30-{n_modes}: {} epochs (best {}), MSE (standardised) train {:.3}, validation {:.3}; split {}/{}/{}.\n",
+        model.report.epochs,
+        model.report.best_epoch,
+        model.report.train_mse,
+        model.report.val_mse,
+        model.split.train.len(),
+        model.split.validation.len(),
+        model.split.test.len()
+    );
+    let _ = writeln!(
+        md,
+        "Held-out test ({} samples): weight RMSE / σ per mode {} (predicting the mean: {}); \
+         {} re-simulated ({} failed), mean |relative error| per index: {}.\n",
+        held.n,
+        fmt_list(&held.weight_rmse_sigma, 2),
+        fmt_list(&held.baseline_rmse_sigma, 2),
+        held.resimulated,
+        held.resim_failed,
+        INDEX_LABELS
+            .iter()
+            .zip(held.index_mare)
+            .map(|(l, e)| format!("{l} {:.1} %", 100.0 * e))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    md
+}
+
+/// Relative errors of `q` against `given` per index, and their mean absolute value.
+fn relative_errors(q: &MotionIndexes, given: &MotionIndexes) -> ([f64; N_INDEXES], f64) {
+    let rel: [f64; N_INDEXES] = std::array::from_fn(|i| (q.0[i] - given.0[i]) / given.0[i]);
+    let mean = rel.iter().map(|r| r.abs()).sum::<f64>() / N_INDEXES as f64;
+    (rel, mean)
+}
+
+fn index_row(v: &[f64; N_INDEXES]) -> String {
+    v.iter()
+        .map(|x| format!("{x:.3}"))
+        .collect::<Vec<_>>()
+        .join(" | ")
+}
+
+fn error_row(rel: &[f64; N_INDEXES]) -> String {
+    rel.iter()
+        .map(|r| format!("{:+.1} %", 100.0 * r))
+        .collect::<Vec<_>>()
+        .join(" | ")
+}
+
+/// The table of every motion: given, obtained and refined indexes with their errors, the weights in
+/// units of each mode's σ, and the nearest database ship.
+pub fn motions_markdown(
+    motions: &[MotionInversion],
+    modes: &VariationModes,
+    db: &SimulationDatabase,
+) -> String {
+    let sigma = |x: &[f64]| {
+        fmt_list(
+            &x.iter()
+                .zip(&modes.weight_std)
+                .map(|(x, s)| x / s)
+                .collect::<Vec<_>>(),
+            2,
+        )
+    };
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "| motion | | {} | mean |rel. err.| |",
+        INDEX_LABELS.join(" | ")
+    );
+    let _ = writeln!(md, "|---|---|{}---|", "---|".repeat(N_INDEXES));
+    for m in motions {
+        let _ = writeln!(md, "| {} | given | {} | |", m.name, index_row(&m.given.0));
+        match &m.network {
+            Ok(s) => {
+                let (rel, mean) = relative_errors(&s.indexes, &m.given);
+                let _ = writeln!(md, "| | obtained | {} | |", index_row(&s.indexes.0));
+                let _ = writeln!(
+                    md,
+                    "| | error | {} | {:.1} % |",
+                    error_row(&rel),
+                    100.0 * mean
+                );
+            }
+            Err(why) => {
+                let _ = writeln!(md, "| | obtained | failed: {why} | |");
+            }
+        }
+        let _ = writeln!(
+            md,
+            "| | weights x/σ | {}{} | |",
+            sigma(&m.weights),
+            if m.clipped {
+                format!(
+                    " (network output {} clipped to ±3σ)",
+                    sigma(&m.network_weights)
+                )
+            } else {
+                String::new()
+            }
+        );
+        let nq = &db.samples[m.nearest].indexes;
+        let (_, nmean) = relative_errors(nq, &m.given);
+        let _ = writeln!(
+            md,
+            "| | nearest database ship (distance {:.2} std) | {} | {:.1} % |",
+            m.nearest_distance,
+            index_row(&nq.0),
+            100.0 * nmean
+        );
+        match &m.refined {
+            RefineOutcome::NotAsked => {}
+            RefineOutcome::Failed => {
+                let _ = writeln!(md, "| | refined | failed: no start simulates | |");
+            }
+            RefineOutcome::Done { refined: r, .. } => {
+                let (rel, mean) = relative_errors(&r.indexes, &m.given);
+                let _ = writeln!(
+                    md,
+                    "| | refined ({} simulations) | {} | |",
+                    r.evaluations,
+                    index_row(&r.indexes.0)
+                );
+                let _ = writeln!(
+                    md,
+                    "| | refined error | {} | {:.1} % |",
+                    error_row(&rel),
+                    100.0 * mean
+                );
+                let _ = writeln!(md, "| | refined weights x/σ | {} | |", sigma(&r.weights));
+            }
+        }
+    }
+    md
+}
+
+/// `indexes.csv`: per motion and index the given and obtained values and the relative error (empty
+/// where the re-simulation failed), then the refined ones as motion `<name> refined`.
+pub fn indexes_csv(motions: &[MotionInversion]) -> String {
+    let mut csv = String::from("motion,index,given,obtained,relative_error\n");
+    for m in motions {
+        let given = &m.given.0;
+        match &m.network {
+            Ok(s) => {
+                let (rel, _) = relative_errors(&s.indexes, &m.given);
+                for (i, label) in INDEX_LABELS.iter().enumerate() {
+                    let _ = writeln!(
+                        csv,
+                        "{},{},{},{},{}",
+                        m.name, label, given[i], s.indexes.0[i], rel[i]
+                    );
+                }
+            }
+            Err(_) => {
+                for (i, label) in INDEX_LABELS.iter().enumerate() {
+                    let _ = writeln!(csv, "{},{},{},,", m.name, label, given[i]);
+                }
+            }
+        }
+        if let RefineOutcome::Done { refined: r, .. } = &m.refined {
+            let (rel, _) = relative_errors(&r.indexes, &m.given);
+            for (i, label) in INDEX_LABELS.iter().enumerate() {
+                let _ = writeln!(
+                    csv,
+                    "{} refined,{},{},{},{}",
+                    m.name, label, given[i], r.indexes.0[i], rel[i]
+                );
+            }
+        }
+    }
+    csv
+}
+
+/// `v` with `digits` decimals, comma-separated.
+pub fn fmt_list(v: &[f64], digits: usize) -> String {
+    v.iter()
+        .map(|x| format!("{x:.digits$}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
