@@ -33,6 +33,7 @@
 //! [`bench`](mod@bench), the concealed-effect benchmark on top; their public items are re-exported
 //! here.
 
+mod augment;
 pub mod bench;
 mod compare;
 mod families;
@@ -42,6 +43,7 @@ mod locate;
 mod report;
 mod verdict;
 
+pub use augment::{AugmentedModel, augmented_model};
 pub use compare::{
     POSITION_ERROR_CAP_OVER_L, Prepared, REPLAY_RESOLUTION_OVER_L, ReplayScore, ResidualSeries,
     SegmentTrack, model_level, normalised_residuals, prepare, segment_tracks,

@@ -4,13 +4,13 @@
 use std::path::{Path, PathBuf};
 
 use shipid_diagnose::{
-    BaseRange, DiagnoseInput, DiagnoseOptions, Located, Report, diagnose, model_level,
-    normalised_residuals,
+    AugmentedModel, BaseRange, DiagnoseInput, DiagnoseOptions, Located, Report, augmented_model,
+    diagnose, model_level, normalised_residuals,
 };
 use shipid_figures::diagnosis::{residual_figure, track_figure};
 use shipid_io::Dataset;
 use shipid_io::write::write_atomic;
-use shipid_model::{AugmentedModelFile, EffectEntry, ModelFile};
+use shipid_model::ModelFile;
 use shipid_pipeline::model_file::load_model_parts;
 use shipid_pipeline::range::{identification_range, training_data};
 use shipid_sim::{Effect, WithEffects};
@@ -226,70 +226,38 @@ fn print_summary(r: &Report, model: &str, dataset: &Path, level_from: Option<&st
     }
 }
 
-fn entries(r: &Report, dataset: &Path) -> Vec<EffectEntry> {
-    r.effects
-        .iter()
-        .map(|e| {
-            let kind = e.split(':').next().unwrap_or("");
-            let multi = r.effects.len() > 1;
-            EffectEntry {
-                effect: e.clone(),
-                source: format!(
-                    "shipid {} diagnose on {} (fitted on all its recordings, equation error)",
-                    env!("CARGO_PKG_VERSION"),
-                    dataset.display()
-                ),
-                standard_error: r
-                    .standard_errors
-                    .iter()
-                    .filter_map(|(k, v)| match k.split_once('.') {
-                        Some((kk, key)) if multi && kk == kind => Some((key.to_string(), *v)),
-                        None if !multi => Some((k.clone(), *v)),
-                        _ => None,
-                    })
-                    .collect(),
-            }
-        })
-        .collect()
-}
-
-/// The model with the found effects: a copy of the model file with `[[effects]]` when the base is a
-/// model file, otherwise a `base = "mmg:…"` file.
+/// The model with the found effects (see [`augmented_model`]), written to `out`.
 fn write_augmented(
     model_spec: &str,
     r: &Report,
     dataset: &Path,
     out: &Path,
 ) -> Result<(), CliError> {
-    let new = entries(r, dataset);
-    let text = match std::fs::read_to_string(model_spec)
+    let source = format!(
+        "shipid {} diagnose on {} (fitted on all its recordings, equation error)",
+        env!("CARGO_PKG_VERSION"),
+        dataset.display()
+    );
+    let base_file = std::fs::read_to_string(model_spec)
         .ok()
-        .and_then(|t| toml::from_str::<ModelFile>(&t).ok())
-    {
-        Some(mut file) => {
-            file.effects.retain(|b| {
-                !new.iter()
-                    .any(|n| n.effect.split(':').next() == b.effect.split(':').next())
-            });
-            file.effects.extend(new);
-            toml::to_string(&file).map_err(failed)?
-        }
-        None => {
-            let base = if model_spec.starts_with("mmg:") {
-                model_spec.to_string()
-            } else {
-                std::path::absolute(model_spec)
-                    .map(|p| p.display().to_string())
-                    .unwrap_or_else(|_| model_spec.to_string())
-            };
-            toml::to_string(&AugmentedModelFile {
-                shipid_version: env!("CARGO_PKG_VERSION").into(),
-                base,
-                effects: new,
-            })
-            .map_err(failed)?
-        }
+        .and_then(|t| toml::from_str::<ModelFile>(&t).ok());
+    let base_ref = if model_spec.starts_with("mmg:") {
+        model_spec.to_string()
+    } else {
+        std::path::absolute(model_spec)
+            .map(|p| p.display().to_string())
+            .unwrap_or_else(|_| model_spec.to_string())
     };
+    let text = match augmented_model(
+        base_file,
+        base_ref,
+        r.effect_entries(&source),
+        env!("CARGO_PKG_VERSION"),
+    ) {
+        AugmentedModel::Copy(file) => toml::to_string(&file),
+        AugmentedModel::Wrapper(file) => toml::to_string(&file),
+    }
+    .map_err(failed)?;
     if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(parent).map_err(failed)?;
     }
