@@ -1,7 +1,8 @@
 //! Study files: a grid of identification cases in TOML, in three layers —
-//! [`RawStudy`] (the file as written, unknown keys rejected) → [`Study`] (checked against its data set:
-//! recordings exist, overshoot counts exist, estimators and sets are known) → [`Case`]s (one per grid
-//! point, each with an id made from its values).
+//! [`RawStudy`] (the file as written, unknown keys rejected) → [`CheckedStudy`] (checked against its
+//! data set: recordings exist, overshoot counts exist, estimators and sets are known, no grid axis is
+//! empty or repeats a value; each axis resolved) → [`Study`] with its [`Case`]s (the axes crossed, one
+//! case per grid point, each with an id made from its values). [`load_study`] runs all three.
 //!
 //! ```toml
 //! name = "truncation"
@@ -168,47 +169,171 @@ pub struct Study {
 
 /// Read, check and expand a study file.
 pub fn load_study(path: &Path) -> Result<Study, InputError> {
-    let text = std::fs::read_to_string(path).map_err(|e| InputError::read(path, &e))?;
-    let raw: RawStudy = toml::from_str(&text).map_err(|e| InputError::toml(path, &text, &e))?;
-    let key = |k: &str, msg: String| InputError::key(path, k, msg);
-    if raw.name.is_empty()
-        || !raw
-            .name
+    let raw = RawStudy::read(path)?;
+    Ok(CheckedStudy::from_raw(path, raw)?.into_study())
+}
+
+impl RawStudy {
+    /// The file as written; a misspelt key is an error rather than a silently ignored one.
+    pub fn read(path: &Path) -> Result<RawStudy, InputError> {
+        let text = std::fs::read_to_string(path).map_err(|e| InputError::read(path, &e))?;
+        toml::from_str(&text).map_err(|e| InputError::toml(path, &text, &e))
+    }
+}
+
+/// A study whose keys all hold against its data set: each axis of the grid is resolved (estimator
+/// entries expanded into one spec per hyper-parameter value) but the axes are not yet crossed.
+pub struct CheckedStudy {
+    pub path: PathBuf,
+    pub name: String,
+    pub description: String,
+    pub dataset_path: PathBuf,
+    pub dataset: Dataset,
+    /// May be empty when every estimator is the GP.
+    pub sets: Vec<String>,
+    /// Combinations of recordings.
+    pub training: Vec<Vec<String>>,
+    pub windows: Vec<WindowSpec>,
+    pub estimators: Vec<CheckedEstimator>,
+    pub tests: Vec<String>,
+    pub check: BTreeMap<String, Tolerance>,
+}
+
+/// One point of the estimator axis.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CheckedEstimator {
+    pub spec: EstimatorSpec,
+    pub solver: String,
+}
+
+impl CheckedStudy {
+    /// The checks run in a fixed order (name, data set, sets, training, estimators, tests), so a
+    /// file with several faults always reports the same first one.
+    pub fn from_raw(path: &Path, raw: RawStudy) -> Result<CheckedStudy, InputError> {
+        check_name(path, &raw.name)?;
+        let (dataset_path, dataset) = load_dataset(path, &raw.dataset)?;
+        let polynomial = raw.estimators.iter().any(|e| e.name != GP);
+        check_sets(path, &raw.sets, polynomial)?;
+        let known = DatasetRecordings {
+            dataset: &dataset,
+            dataset_path: &dataset_path,
+        };
+        check_training(path, &raw.training.recordings, known)?;
+        let windows = training_windows(path, &raw.training, &dataset)?;
+        let estimators = check_estimators(path, &raw.estimators)?;
+        let tests = test_recordings(path, &raw.test.recordings, known)?;
+        Ok(CheckedStudy {
+            path: path.to_path_buf(),
+            name: raw.name,
+            description: raw.description,
+            dataset_path,
+            dataset,
+            sets: raw.sets,
+            training: raw.training.recordings,
+            windows,
+            estimators,
+            tests,
+            check: raw.check,
+        })
+    }
+
+    /// Sets × polynomial estimators × training × windows, then the GP's cases, which have no set. The
+    /// GP comes last so that adding it left the order (and so the tables) of every existing study as
+    /// it was.
+    pub fn cases(&self) -> Vec<Case> {
+        let (gp, polynomial): (Vec<_>, Vec<_>) =
+            self.estimators.iter().partition(|e| e.spec.name == GP);
+        let mut cases = Vec::new();
+        for set in &self.sets {
+            for e in &polynomial {
+                self.push_cases(&mut cases, set, e);
+            }
+        }
+        for e in &gp {
+            self.push_cases(&mut cases, NO_SET, e);
+        }
+        cases
+    }
+
+    fn push_cases(&self, cases: &mut Vec<Case>, set: &str, e: &CheckedEstimator) {
+        for combo in &self.training {
+            for w in &self.windows {
+                cases.push(case(set, &e.spec, &e.solver, combo, *w));
+            }
+        }
+    }
+
+    pub fn into_study(self) -> Study {
+        let cases = self.cases();
+        Study {
+            path: self.path,
+            name: self.name,
+            description: self.description,
+            dataset_path: self.dataset_path,
+            dataset: self.dataset,
+            cases,
+            tests: self.tests,
+            check: self.check,
+        }
+    }
+}
+
+/// The name becomes the default results directory (`results/NAME`): one plain word.
+fn check_name(path: &Path, name: &str) -> Result<(), InputError> {
+    if !name.is_empty()
+        && name
             .chars()
             .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
     {
-        return Err(key(
-            "name",
-            format!(
-                "\"{}\" must be a non-empty word of letters, digits, - and _",
-                raw.name
-            ),
-        ));
+        return Ok(());
     }
-    let dataset_path = path.parent().unwrap_or(Path::new(".")).join(&raw.dataset);
+    Err(InputError::key(
+        path,
+        "name",
+        format!("\"{name}\" must be a non-empty word of letters, digits, - and _"),
+    ))
+}
+
+/// Relative to the study file, so a study and its data move together.
+fn load_dataset(path: &Path, dataset: &str) -> Result<(PathBuf, Dataset), InputError> {
+    let dataset_path = beside(path, dataset);
     if !dataset_path.is_file() {
-        return Err(key(
+        return Err(InputError::key(
+            path,
             "dataset",
             format!("data set `{}` not found", dataset_path.display()),
         ));
     }
     let dataset = Dataset::load(&dataset_path)?;
-    let polynomial = raw.estimators.iter().any(|e| e.name != GP);
-    if raw.sets.is_empty() && polynomial {
-        return Err(key("sets", "the grid is empty: no coefficient set".into()));
-    }
-    // A repeated grid value would give two cases one id (one directory, one row twice).
-    if let Some((i, j)) = first_repeat(&raw.sets) {
-        return Err(key(
-            &format!("sets[{i}]"),
-            format!("`{}` repeats sets[{j}]", raw.sets[i]),
+    Ok((dataset_path, dataset))
+}
+
+fn beside(path: &Path, file: &str) -> PathBuf {
+    path.parent().unwrap_or(Path::new(".")).join(file)
+}
+
+/// A GP-only study needs no set; any polynomial estimator does.
+fn check_sets(path: &Path, sets: &[String], polynomial: bool) -> Result<(), InputError> {
+    if sets.is_empty() && polynomial {
+        return Err(InputError::key(
+            path,
+            "sets",
+            "the grid is empty: no coefficient set",
         ));
     }
-    for (i, s) in raw.sets.iter().enumerate() {
-        let as_path = path.parent().unwrap_or(Path::new(".")).join(s);
-        if CoefficientSet::builtin(s).is_none() && !as_path.is_file() {
-            return Err(key(
-                &format!("sets[{i}]"),
+    // A repeated grid value would give two cases one id (one directory, one row twice).
+    if let Some((i, j)) = first_repeat(sets) {
+        return Err(InputError::key(
+            path,
+            format!("sets[{i}]"),
+            format!("`{}` repeats sets[{j}]", sets[i]),
+        ));
+    }
+    for (i, s) in sets.iter().enumerate() {
+        if CoefficientSet::builtin(s).is_none() && !beside(path, s).is_file() {
+            return Err(InputError::key(
+                path,
+                format!("sets[{i}]"),
                 format!(
                     "unknown coefficient set `{s}` (not one of {} and no such file)",
                     CoefficientSet::builtin_names().join(", ")
@@ -216,268 +341,367 @@ pub fn load_study(path: &Path) -> Result<Study, InputError> {
             ));
         }
     }
-    if raw.training.recordings.is_empty() {
-        return Err(key(
+    Ok(())
+}
+
+/// The data set a study's recordings are looked up in, and its path for the messages.
+#[derive(Clone, Copy)]
+struct DatasetRecordings<'a> {
+    dataset: &'a Dataset,
+    dataset_path: &'a Path,
+}
+
+impl DatasetRecordings<'_> {
+    fn check(&self, path: &Path, key: String, file: &str) -> Result<(), InputError> {
+        if self.dataset.recording(file).is_some() {
+            return Ok(());
+        }
+        Err(InputError::key(
+            path,
+            key,
+            format!(
+                "recording `{file}` is not in {}",
+                self.dataset_path.display()
+            ),
+        ))
+    }
+}
+
+fn check_training(
+    path: &Path,
+    combos: &[Vec<String>],
+    known: DatasetRecordings,
+) -> Result<(), InputError> {
+    if combos.is_empty() {
+        return Err(InputError::key(
+            path,
             "training.recordings",
-            "the grid is empty: no training combination".into(),
+            "the grid is empty: no training combination",
         ));
     }
-    if let Some((i, j)) = first_repeat(&raw.training.recordings) {
-        return Err(key(
-            &format!("training.recordings[{i}]"),
+    if let Some((i, j)) = first_repeat(combos) {
+        return Err(InputError::key(
+            path,
+            format!("training.recordings[{i}]"),
             format!("repeats training.recordings[{j}]"),
         ));
     }
-    for (i, combo) in raw.training.recordings.iter().enumerate() {
+    for (i, combo) in combos.iter().enumerate() {
         if combo.is_empty() {
-            return Err(key(
-                &format!("training.recordings[{i}]"),
-                "empty combination".into(),
+            return Err(InputError::key(
+                path,
+                format!("training.recordings[{i}]"),
+                "empty combination",
             ));
         }
         for (j, f) in combo.iter().enumerate() {
-            if dataset.recording(f).is_none() {
-                return Err(key(
-                    &format!("training.recordings[{i}][{j}]"),
-                    format!("recording `{f}` is not in {}", dataset_path.display()),
-                ));
-            }
+            known.check(path, format!("training.recordings[{i}][{j}]"), f)?;
         }
     }
-    let windows: Vec<WindowSpec> = match (&raw.training.overshoots, &raw.training.windows) {
+    Ok(())
+}
+
+/// The window axis: overshoot counts, time windows or (neither given) whole recordings.
+fn training_windows(
+    path: &Path,
+    training: &RawTraining,
+    dataset: &Dataset,
+) -> Result<Vec<WindowSpec>, InputError> {
+    let windows = match (&training.overshoots, &training.windows) {
         (Some(_), Some(_)) => {
-            return Err(key(
+            return Err(InputError::key(
+                path,
                 "training.windows",
-                "give overshoots or windows, not both".into(),
+                "give overshoots or windows, not both",
             ));
         }
-        (Some(o), None) => {
-            let list: Vec<u32> = match o {
-                OvershootSpec::List(l) => l.clone(),
-                OvershootSpec::Range { from, to } => (*from..=*to).collect(),
-            };
-            if list.is_empty() || list.contains(&0) {
-                return Err(key(
-                    "training.overshoots",
-                    "needs overshoot counts of 1 or more".into(),
-                ));
-            }
-            check_overshoots(path, &dataset, &raw.training.recordings, &list)?;
-            list.into_iter().map(WindowSpec::Overshoots).collect()
-        }
-        (None, Some(w)) => {
-            if w.is_empty() {
-                return Err(key(
-                    "training.windows",
-                    "the grid is empty: no window".into(),
-                ));
-            }
-            w.iter()
-                .map(|[a, b]| {
-                    if a.is_finite() && b.is_finite() && b > a {
-                        Ok(WindowSpec::Time {
-                            start_s: *a,
-                            end_s: *b,
-                        })
-                    } else {
-                        Err(key(
-                            "training.windows",
-                            format!("[{a}, {b}] is not a time window"),
-                        ))
-                    }
-                })
-                .collect::<Result<_, _>>()?
-        }
+        (Some(o), None) => overshoot_windows(path, o, dataset, &training.recordings)?,
+        (None, Some(w)) => time_windows(path, w)?,
         (None, None) => vec![WindowSpec::Whole],
     };
     if let Some((i, j)) = first_repeat(&windows) {
-        let grid = if raw.training.windows.is_some() {
+        let grid = if training.windows.is_some() {
             "training.windows"
         } else {
             "training.overshoots"
         };
-        return Err(key(
+        return Err(InputError::key(
+            path,
             grid,
             format!("value {} repeats value {} (counting from 1)", i + 1, j + 1),
         ));
     }
-    if raw.estimators.is_empty() {
-        return Err(key("estimator", "the grid is empty: no estimator".into()));
+    Ok(windows)
+}
+
+fn overshoot_windows(
+    path: &Path,
+    spec: &OvershootSpec,
+    dataset: &Dataset,
+    combos: &[Vec<String>],
+) -> Result<Vec<WindowSpec>, InputError> {
+    let list: Vec<u32> = match spec {
+        OvershootSpec::List(l) => l.clone(),
+        OvershootSpec::Range { from, to } => (*from..=*to).collect(),
+    };
+    if list.is_empty() || list.contains(&0) {
+        return Err(InputError::key(
+            path,
+            "training.overshoots",
+            "needs overshoot counts of 1 or more",
+        ));
     }
-    let mut estimators: Vec<(EstimatorSpec, String)> = Vec::new();
-    // The [[estimator]] entry each of `estimators` came from.
-    let mut origin: Vec<usize> = Vec::new();
-    for (i, e) in raw.estimators.iter().enumerate() {
-        let k = |f: &str| format!("estimator[{i}].{f}");
-        if e.name == GP {
-            // Keys of the polynomial estimators name what they would change; here nothing.
-            for (given, flag) in [
-                (e.lambda.is_some(), "lambda"),
-                (e.alpha.is_some(), "alpha"),
-                (e.c.is_some(), "c"),
-                (e.epsilon.is_some(), "epsilon"),
-                (e.tune, "tune"),
-                (e.refine, "refine"),
-                (e.solver.is_some(), "solver"),
-            ] {
-                if given {
-                    return Err(key(
-                        &k(flag),
-                        format!(
-                            "does not apply to {GP} (its one setting is `similarity`, the threshold d_gen)"
-                        ),
-                    ));
-                }
-            }
-            let values = e
-                .similarity
-                .as_ref()
-                .map(OneOrMany::values)
-                .unwrap_or_else(|| vec![shipid_pipeline::fit_gp::DEFAULT_SIMILARITY]);
-            if values.is_empty() {
-                return Err(key(
-                    &k("similarity"),
-                    "the grid is empty: give similarity values or leave it out".into(),
-                ));
-            }
-            for d in values {
-                let spec = EstimatorSpec {
-                    similarity: Some(d),
-                    ..EstimatorSpec::named(GP)
-                };
-                spec.validate()
-                    .map_err(|err| key(&k("similarity"), err.to_string()))?;
-                estimators.push((spec, NO_SOLVER.into()));
-                origin.push(i);
-            }
-            continue;
-        }
-        if e.similarity.is_some() {
-            return Err(key(&k("similarity"), format!("applies to {GP} only")));
-        }
-        let solver = e.solver.clone().unwrap_or_else(|| "fast".into());
-        if let Err(err) = solver.parse::<shipid_estimators::Solver>() {
-            return Err(key(&k("solver"), err.to_string()));
-        }
-        let base = EstimatorSpec {
-            epsilon: e.epsilon,
-            tune: e.tune,
-            refine: e.refine,
-            ..EstimatorSpec::named(&e.name)
-        };
-        let grid = |v: &Option<OneOrMany>| v.as_ref().map(OneOrMany::values).unwrap_or_default();
-        let expanded: Vec<EstimatorSpec> = match e.name.as_str() {
-            "lsq" | "bounded-lsq" => vec![base.clone()],
-            "ridge" if !e.tune => grid(&e.lambda)
-                .into_iter()
-                .map(|l| EstimatorSpec {
-                    lambda: Some(l),
-                    ..base.clone()
-                })
-                .collect(),
-            "lasso" if !e.tune => grid(&e.alpha)
-                .into_iter()
-                .map(|a| EstimatorSpec {
-                    alpha: Some(a),
-                    ..base.clone()
-                })
-                .collect(),
-            "svr" if !e.tune => grid(&e.c)
-                .into_iter()
-                .map(|c| EstimatorSpec {
-                    c: Some(c),
-                    ..base.clone()
-                })
-                .collect(),
-            "ridge" | "lasso" | "svr" => vec![base.clone()],
-            other => {
-                return Err(key(
-                    &k("name"),
-                    format!(
-                        "unknown estimator `{other}` (lsq, bounded-lsq, ridge, lasso, svr, {GP})"
-                    ),
-                ));
-            }
-        };
-        if expanded.is_empty() {
-            let flag = grid_key(&e.name);
-            return Err(key(
-                &k(flag),
-                format!("the grid is empty: give {flag} values or tune = true"),
-            ));
-        }
-        for spec in expanded {
-            spec.validate()
-                .map_err(|err| key(&k("name"), err.to_string()))?;
-            estimators.push((spec, solver.clone()));
-            origin.push(i);
-        }
+    check_overshoots(path, dataset, combos, &list)?;
+    Ok(list.into_iter().map(WindowSpec::Overshoots).collect())
+}
+
+fn time_windows(path: &Path, windows: &[[f64; 2]]) -> Result<Vec<WindowSpec>, InputError> {
+    if windows.is_empty() {
+        return Err(InputError::key(
+            path,
+            "training.windows",
+            "the grid is empty: no window",
+        ));
     }
-    if let Some((a, b)) = first_repeat(&estimators) {
-        let (i, earlier) = (origin[a], origin[b]);
-        return Err(if i == earlier {
-            key(
-                &format!("estimator[{i}].{}", grid_key(&estimators[a].0.name)),
-                "a value appears twice in the grid".into(),
-            )
+    windows
+        .iter()
+        .map(|[a, b]| {
+            if a.is_finite() && b.is_finite() && b > a {
+                Ok(WindowSpec::Time {
+                    start_s: *a,
+                    end_s: *b,
+                })
+            } else {
+                Err(InputError::key(
+                    path,
+                    "training.windows",
+                    format!("[{a}, {b}] is not a time window"),
+                ))
+            }
+        })
+        .collect()
+}
+
+/// The estimator axis: every entry expanded over its hyper-parameter values, in the file's order.
+fn check_estimators(
+    path: &Path,
+    entries: &[RawEstimator],
+) -> Result<Vec<CheckedEstimator>, InputError> {
+    if entries.is_empty() {
+        return Err(InputError::key(
+            path,
+            "estimator",
+            "the grid is empty: no estimator",
+        ));
+    }
+    let mut estimators = Vec::new();
+    // The [[estimator]] entry each of `estimators` came from, to name it when a case repeats.
+    let mut origin = Vec::new();
+    for (i, e) in entries.iter().enumerate() {
+        let expanded = if e.name == GP {
+            gp_estimators(path, i, e)?
         } else {
-            key(
-                &format!("estimator[{i}]"),
-                format!("repeats a case of estimator[{earlier}]"),
-            )
-        });
+            polynomial_estimators(path, i, e)?
+        };
+        origin.extend(std::iter::repeat_n(i, expanded.len()));
+        estimators.extend(expanded);
     }
-    let tests = match &raw.test.recordings {
-        TestRecordings::Word(w) if w == "all" => {
-            dataset.recordings.iter().map(|r| r.file.clone()).collect()
-        }
-        TestRecordings::Word(w) => {
-            return Err(key(
-                "test.recordings",
-                format!("\"{w}\": expected \"all\" or a list of files"),
+    check_estimator_repeats(path, &estimators, &origin)?;
+    Ok(estimators)
+}
+
+fn entry_key(i: usize, field: &str) -> String {
+    format!("estimator[{i}].{field}")
+}
+
+fn gp_estimators(
+    path: &Path,
+    i: usize,
+    e: &RawEstimator,
+) -> Result<Vec<CheckedEstimator>, InputError> {
+    reject_polynomial_keys(path, i, e)?;
+    let values = e
+        .similarity
+        .as_ref()
+        .map(OneOrMany::values)
+        .unwrap_or_else(|| vec![shipid_pipeline::fit_gp::DEFAULT_SIMILARITY]);
+    if values.is_empty() {
+        return Err(InputError::key(
+            path,
+            entry_key(i, "similarity"),
+            "the grid is empty: give similarity values or leave it out",
+        ));
+    }
+    values
+        .into_iter()
+        .map(|d| {
+            let spec = EstimatorSpec {
+                similarity: Some(d),
+                ..EstimatorSpec::named(GP)
+            };
+            spec.validate().map_err(|err| {
+                InputError::key(path, entry_key(i, "similarity"), err.to_string())
+            })?;
+            Ok(CheckedEstimator {
+                spec,
+                solver: NO_SOLVER.into(),
+            })
+        })
+        .collect()
+}
+
+/// Keys of the polynomial estimators name what they would change; for the GP nothing, so one given
+/// is a mistake rather than a no-op.
+fn reject_polynomial_keys(path: &Path, i: usize, e: &RawEstimator) -> Result<(), InputError> {
+    for (given, flag) in [
+        (e.lambda.is_some(), "lambda"),
+        (e.alpha.is_some(), "alpha"),
+        (e.c.is_some(), "c"),
+        (e.epsilon.is_some(), "epsilon"),
+        (e.tune, "tune"),
+        (e.refine, "refine"),
+        (e.solver.is_some(), "solver"),
+    ] {
+        if given {
+            return Err(InputError::key(
+                path,
+                entry_key(i, flag),
+                format!(
+                    "does not apply to {GP} (its one setting is `similarity`, the threshold d_gen)"
+                ),
             ));
         }
+    }
+    Ok(())
+}
+
+fn polynomial_estimators(
+    path: &Path,
+    i: usize,
+    e: &RawEstimator,
+) -> Result<Vec<CheckedEstimator>, InputError> {
+    if e.similarity.is_some() {
+        return Err(InputError::key(
+            path,
+            entry_key(i, "similarity"),
+            format!("applies to {GP} only"),
+        ));
+    }
+    let solver = e.solver.clone().unwrap_or_else(|| "fast".into());
+    if let Err(err) = solver.parse::<shipid_estimators::Solver>() {
+        return Err(InputError::key(
+            path,
+            entry_key(i, "solver"),
+            err.to_string(),
+        ));
+    }
+    let expanded = hyper_grid(path, i, e)?;
+    if expanded.is_empty() {
+        let flag = grid_key(&e.name);
+        return Err(InputError::key(
+            path,
+            entry_key(i, flag),
+            format!("the grid is empty: give {flag} values or tune = true"),
+        ));
+    }
+    expanded
+        .into_iter()
+        .map(|spec| {
+            spec.validate()
+                .map_err(|err| InputError::key(path, entry_key(i, "name"), err.to_string()))?;
+            Ok(CheckedEstimator {
+                spec,
+                solver: solver.clone(),
+            })
+        })
+        .collect()
+}
+
+/// One spec per value of the estimator's grid key; a tuned estimator picks its own value, so it is
+/// one spec whatever the file lists.
+fn hyper_grid(path: &Path, i: usize, e: &RawEstimator) -> Result<Vec<EstimatorSpec>, InputError> {
+    let base = EstimatorSpec {
+        epsilon: e.epsilon,
+        tune: e.tune,
+        refine: e.refine,
+        ..EstimatorSpec::named(&e.name)
+    };
+    let grid = |v: &Option<OneOrMany>| v.as_ref().map(OneOrMany::values).unwrap_or_default();
+    let with = |set: fn(&mut EstimatorSpec, f64), values: Vec<f64>| -> Vec<EstimatorSpec> {
+        values
+            .into_iter()
+            .map(|x| {
+                let mut spec = base.clone();
+                set(&mut spec, x);
+                spec
+            })
+            .collect()
+    };
+    Ok(match e.name.as_str() {
+        "lsq" | "bounded-lsq" => vec![base.clone()],
+        "ridge" | "lasso" | "svr" if e.tune => vec![base.clone()],
+        "ridge" => with(|s, x| s.lambda = Some(x), grid(&e.lambda)),
+        "lasso" => with(|s, x| s.alpha = Some(x), grid(&e.alpha)),
+        "svr" => with(|s, x| s.c = Some(x), grid(&e.c)),
+        other => {
+            return Err(InputError::key(
+                path,
+                entry_key(i, "name"),
+                format!("unknown estimator `{other}` (lsq, bounded-lsq, ridge, lasso, svr, {GP})"),
+            ));
+        }
+    })
+}
+
+/// Two equal points would give two cases one id.
+fn check_estimator_repeats(
+    path: &Path,
+    estimators: &[CheckedEstimator],
+    origin: &[usize],
+) -> Result<(), InputError> {
+    let Some((a, b)) = first_repeat(estimators) else {
+        return Ok(());
+    };
+    let (i, earlier) = (origin[a], origin[b]);
+    Err(if i == earlier {
+        InputError::key(
+            path,
+            entry_key(i, grid_key(&estimators[a].spec.name)),
+            "a value appears twice in the grid",
+        )
+    } else {
+        InputError::key(
+            path,
+            format!("estimator[{i}]"),
+            format!("repeats a case of estimator[{earlier}]"),
+        )
+    })
+}
+
+fn test_recordings(
+    path: &Path,
+    recordings: &TestRecordings,
+    known: DatasetRecordings,
+) -> Result<Vec<String>, InputError> {
+    match recordings {
+        TestRecordings::Word(w) if w == "all" => Ok(known
+            .dataset
+            .recordings
+            .iter()
+            .map(|r| r.file.clone())
+            .collect()),
+        TestRecordings::Word(w) => Err(InputError::key(
+            path,
+            "test.recordings",
+            format!("\"{w}\": expected \"all\" or a list of files"),
+        )),
         TestRecordings::List(l) => {
             for (i, f) in l.iter().enumerate() {
-                if dataset.recording(f).is_none() {
-                    return Err(key(
-                        &format!("test.recordings[{i}]"),
-                        format!("recording `{f}` is not in {}", dataset_path.display()),
-                    ));
-                }
+                known.check(path, format!("test.recordings[{i}]"), f)?;
             }
-            l.clone()
-        }
-    };
-    let mut cases = Vec::new();
-    for set in &raw.sets {
-        for (est, solver) in estimators.iter().filter(|(e, _)| e.name != GP) {
-            for combo in &raw.training.recordings {
-                for w in &windows {
-                    cases.push(case(set, est, solver, combo, *w));
-                }
-            }
+            Ok(l.clone())
         }
     }
-    // The GP has no coefficient set: its cases come once, after the polynomial ones (whose order, and
-    // so every existing study's, is unchanged).
-    for (est, solver) in estimators.iter().filter(|(e, _)| e.name == GP) {
-        for combo in &raw.training.recordings {
-            for w in &windows {
-                cases.push(case(NO_SET, est, solver, combo, *w));
-            }
-        }
-    }
-    Ok(Study {
-        path: path.to_path_buf(),
-        name: raw.name,
-        description: raw.description,
-        dataset_path,
-        dataset,
-        cases,
-        tests,
-        check: raw.check,
-    })
 }
 
 fn check_overshoots(
