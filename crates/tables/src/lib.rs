@@ -58,8 +58,40 @@ pub enum TableError {
     Csv(String, csv::Error),
     #[error("column `{0}` has {1} rows, the table {2}")]
     Ragged(String, usize, usize),
-    #[error("no column `{0}`")]
-    NoColumn(String),
+    #[error("no column `{name}` (the table has {})", known.join(", "))]
+    NoColumn { name: String, known: Vec<String> },
+    #[error(
+        "`{0}`: expected ROWS,COLS,VALUE (ROWS and COLS may join columns with +), e.g. window,test,mrae"
+    )]
+    BadPivot(String),
+    /// A pivot would show only the last of several rows in one cell.
+    #[error(
+        "{count} rows fall into one cell ({rows} `{row}`, {cols} `{col}`), so all but the last would vanish: {}",
+        short_list(keys)
+    )]
+    Collision {
+        rows: String,
+        row: String,
+        cols: String,
+        col: String,
+        count: usize,
+        keys: Vec<String>,
+    },
+}
+
+/// The first few of `keys` and how many more.
+fn short_list(keys: &[String]) -> String {
+    const SHOWN: usize = 4;
+    let mut s = keys
+        .iter()
+        .take(SHOWN)
+        .cloned()
+        .collect::<Vec<_>>()
+        .join(", ");
+    if keys.len() > SHOWN {
+        s.push_str(&format!(" and {} more", keys.len() - SHOWN));
+    }
+    s
 }
 
 impl Table {
@@ -109,25 +141,28 @@ impl Table {
         std::fs::create_dir_all(dir).map_err(|e| TableError::Io(dir.display().to_string(), e))?;
         let csv_path = dir.join(format!("{stem}.csv"));
         let pq_path = dir.join(format!("{stem}.parquet"));
-        let csv_tmp = csv_path.with_extension("csv.tmp");
-        let pq_tmp = pq_path.with_extension("parquet.tmp");
+        let csv_tmp = unique_tmp(&csv_path);
+        let pq_tmp = unique_tmp(&pq_path);
         let name = |p: &Path| p.display().to_string();
-        {
+        let written = (|| {
             let mut f =
                 std::fs::File::create(&csv_tmp).map_err(|e| TableError::Io(name(&csv_tmp), e))?;
             CsvWriter::new(&mut f)
                 .finish(&mut df)
                 .map_err(|e| TableError::Polars(name(&csv_path), e))?;
-        }
-        {
             let f = std::fs::File::create(&pq_tmp).map_err(|e| TableError::Io(name(&pq_tmp), e))?;
             ParquetWriter::new(f)
                 .finish(&mut df)
                 .map_err(|e| TableError::Polars(name(&pq_path), e))?;
+            std::fs::rename(&csv_tmp, &csv_path).map_err(|e| TableError::Io(name(&csv_path), e))?;
+            std::fs::rename(&pq_tmp, &pq_path).map_err(|e| TableError::Io(name(&pq_path), e))
+        })();
+        if written.is_err() {
+            // A failed write leaves no temporary file behind (a renamed one is simply gone).
+            let _ = std::fs::remove_file(&csv_tmp);
+            let _ = std::fs::remove_file(&pq_tmp);
         }
-        std::fs::rename(&csv_tmp, &csv_path).map_err(|e| TableError::Io(name(&csv_path), e))?;
-        std::fs::rename(&pq_tmp, &pq_path).map_err(|e| TableError::Io(name(&pq_path), e))?;
-        Ok(())
+        written
     }
 
     /// Read a CSV written by [`Table::write`]: a column whose every non-empty cell is a number is numeric.
@@ -166,22 +201,31 @@ impl Table {
         Ok(Table { columns })
     }
 
-    /// Markdown pivot: one row per distinct value of `rows`, one column per distinct value of `cols`,
-    /// cells `value` (formatted with `fmt`), in order of first appearance.
+    /// Markdown pivot: one row per distinct combination of the `rows` columns, one column per
+    /// distinct combination of the `cols` columns, cells `value` (formatted with `fmt`), in order of
+    /// first appearance. Two table rows never share a cell: a pivot that would put them in one (and
+    /// so show only the last) is refused, naming them by their `key` column (a case id).
     pub fn pivot_markdown(
         &self,
-        rows: &str,
-        cols: &str,
-        value: &str,
+        pivot: &Pivot,
+        key: &str,
         fmt: impl Fn(f64) -> String,
     ) -> Result<String, TableError> {
-        let get = |n: &str| self.column(n).ok_or_else(|| TableError::NoColumn(n.into()));
-        let (rc, cc, vc) = (get(rows)?, get(cols)?, get(value)?);
+        let vc = self.get(&pivot.value)?;
+        if let Some(c) = self
+            .collisions(&pivot.rows, &pivot.cols, key)?
+            .into_iter()
+            .next()
+        {
+            return Err(c);
+        }
+        let row_label = self.labeller(&pivot.rows)?;
+        let col_label = self.labeller(&pivot.cols)?;
         let mut row_keys: Vec<String> = Vec::new();
         let mut col_keys: Vec<String> = Vec::new();
         let mut cells: BTreeMap<(String, String), String> = BTreeMap::new();
         for i in 0..self.rows() {
-            let (r, c) = (rc.cell(i), cc.cell(i));
+            let (r, c) = (row_label(i), col_label(i));
             if !row_keys.contains(&r) {
                 row_keys.push(r.clone());
             }
@@ -194,7 +238,11 @@ impl Table {
             };
             cells.insert((r, c), v);
         }
-        let mut out = format!("| {rows} | {} |\n", col_keys.join(" | "));
+        let mut out = format!(
+            "| {} | {} |\n",
+            pivot.rows.join(" / "),
+            col_keys.join(" | ")
+        );
         out.push_str(&format!("|---|{}\n", "---|".repeat(col_keys.len())));
         for r in &row_keys {
             let line: Vec<String> = col_keys
@@ -209,6 +257,169 @@ impl Table {
             out.push_str(&format!("| {r} | {} |\n", line.join(" | ")));
         }
         Ok(out)
+    }
+
+    /// The columns of `candidates` (in their order, each only if it splits a crowded cell) that
+    /// `rows` needs so that no cell of `rows` × `cols` holds two table rows; an error naming the
+    /// rows still together when even all candidates do not separate them.
+    pub fn separating_columns(
+        &self,
+        rows: &[String],
+        cols: &[String],
+        key: &str,
+        candidates: &[&str],
+    ) -> Result<Vec<String>, TableError> {
+        let mut rows = rows.to_vec();
+        let mut added = Vec::new();
+        for cand in candidates {
+            let crowded = self.crowded_cells(&rows, cols)?;
+            if crowded.is_empty() {
+                break;
+            }
+            if rows.iter().any(|r| r == cand) || cols.iter().any(|c| c == cand) {
+                continue;
+            }
+            let Ok(col) = self.get(cand) else { continue };
+            let splits = crowded
+                .iter()
+                .any(|members| members.iter().any(|&i| col.cell(i) != col.cell(members[0])));
+            if splits {
+                rows.push(cand.to_string());
+                added.push(cand.to_string());
+            }
+        }
+        match self.collisions(&rows, cols, key)?.into_iter().next() {
+            Some(c) => Err(c),
+            None => Ok(added),
+        }
+    }
+
+    /// One [`TableError::Collision`] per cell of `rows` × `cols` that holds more than one row.
+    fn collisions(
+        &self,
+        rows: &[String],
+        cols: &[String],
+        key: &str,
+    ) -> Result<Vec<TableError>, TableError> {
+        let kc = self.get(key)?;
+        let row_label = self.labeller(rows)?;
+        let col_label = self.labeller(cols)?;
+        Ok(self
+            .crowded_cells(rows, cols)?
+            .into_iter()
+            .map(|members| {
+                let mut keys: Vec<String> = Vec::new();
+                for &i in &members {
+                    let k = kc.cell(i);
+                    if !keys.contains(&k) {
+                        keys.push(k);
+                    }
+                }
+                TableError::Collision {
+                    rows: rows.join("+"),
+                    row: row_label(members[0]),
+                    cols: cols.join("+"),
+                    col: col_label(members[0]),
+                    count: members.len(),
+                    keys,
+                }
+            })
+            .collect())
+    }
+
+    /// The table rows of every cell of `rows` × `cols` that holds more than one, in order of first
+    /// appearance.
+    fn crowded_cells(
+        &self,
+        rows: &[String],
+        cols: &[String],
+    ) -> Result<Vec<Vec<usize>>, TableError> {
+        let row_label = self.labeller(rows)?;
+        let col_label = self.labeller(cols)?;
+        let mut order: Vec<(String, String)> = Vec::new();
+        let mut members: BTreeMap<(String, String), Vec<usize>> = BTreeMap::new();
+        for i in 0..self.rows() {
+            let cell = (row_label(i), col_label(i));
+            let m = members.entry(cell.clone()).or_default();
+            if m.is_empty() {
+                order.push(cell);
+            }
+            m.push(i);
+        }
+        Ok(order
+            .into_iter()
+            .filter_map(|c| members.remove(&c).filter(|m| m.len() > 1))
+            .collect())
+    }
+
+    fn get(&self, name: &str) -> Result<&Column, TableError> {
+        self.column(name).ok_or_else(|| TableError::NoColumn {
+            name: name.into(),
+            known: self.columns.iter().map(|(n, _)| n.clone()).collect(),
+        })
+    }
+
+    /// The label of row `i` over `names` (their cells joined by " / ").
+    fn labeller(&self, names: &[String]) -> Result<impl Fn(usize) -> String + '_, TableError> {
+        let cols = names
+            .iter()
+            .map(|n| self.get(n))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(move |i: usize| {
+            cols.iter()
+                .map(|c| c.cell(i))
+                .collect::<Vec<_>>()
+                .join(" / ")
+        })
+    }
+}
+
+/// A temporary name beside `path`, unique per process and call: two writers of one table (two runs,
+/// two threads) must never share one, or one renames the other's half-written file into place.
+fn unique_tmp(path: &Path) -> std::path::PathBuf {
+    static COUNTER: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let name = path
+        .file_name()
+        .map(|f| f.to_string_lossy())
+        .unwrap_or_default();
+    path.with_file_name(format!("{name}.{}-{n}.tmp", std::process::id()))
+}
+
+/// Which columns a markdown pivot puts in its rows and columns and which one in its cells.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Pivot {
+    pub rows: Vec<String>,
+    pub cols: Vec<String>,
+    pub value: String,
+}
+
+impl std::str::FromStr for Pivot {
+    type Err = TableError;
+
+    /// `ROWS,COLS,VALUE`, where ROWS and COLS may each join several columns with `+`
+    /// (`set+estimator,test,mrae`).
+    fn from_str(text: &str) -> Result<Pivot, TableError> {
+        let bad = || TableError::BadPivot(text.to_string());
+        let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+        let [rows, cols, value] = parts.as_slice() else {
+            return Err(bad());
+        };
+        let names = |s: &str| -> Result<Vec<String>, TableError> {
+            let v: Vec<String> = s.split('+').map(|n| n.trim().to_string()).collect();
+            if v.iter().any(String::is_empty) {
+                return Err(bad());
+            }
+            Ok(v)
+        };
+        if value.is_empty() || value.contains('+') {
+            return Err(bad());
+        }
+        Ok(Pivot {
+            rows: names(rows)?,
+            cols: names(cols)?,
+            value: value.to_string(),
+        })
     }
 }
 
@@ -333,14 +544,132 @@ mod tests {
         assert!(compare(&wider, &sample(), &ignore, exact).is_empty());
     }
 
+    fn pivot(text: &str) -> Pivot {
+        text.parse().unwrap()
+    }
+
     #[test]
     fn pivot_in_order_of_appearance() {
         let md = sample()
-            .pivot_markdown("case", "test", "mrae", |x| format!("{:.0}%", 100.0 * x))
+            .pivot_markdown(&pivot("case,test,mrae"), "case", |x| {
+                format!("{:.0}%", 100.0 * x)
+            })
             .unwrap();
         assert_eq!(
             md,
             "| case | zz | tc |\n|---|---|---|\n| a | 10% | – |\n| b | 25% |  |\n"
+        );
+    }
+
+    /// Four cases (two sets × two estimators) with the same window and test.
+    fn four_cases() -> Table {
+        let mut t = Table::default();
+        t.push_text(
+            "case",
+            ["r-lsq", "r-ridge", "f-lsq", "f-ridge"]
+                .map(String::from)
+                .to_vec(),
+        );
+        t.push_text("set", ["r", "r", "f", "f"].map(String::from).to_vec());
+        t.push_text(
+            "estimator",
+            ["lsq", "ridge", "lsq", "ridge"].map(String::from).to_vec(),
+        );
+        t.push_text("window", vec!["4 OS".to_string(); 4]);
+        t.push_text("test", vec!["zz".to_string(); 4]);
+        t.push_num("mrae", vec![Some(0.1), Some(0.2), Some(0.3), Some(0.4)]);
+        t
+    }
+
+    fn check_collision(t: &Table, spec: &str, expected: &str) {
+        let err = t
+            .pivot_markdown(&pivot(spec), "case", |x| format!("{x}"))
+            .unwrap_err();
+        assert_eq!(err.to_string(), expected, "{spec}");
+    }
+
+    /// Regression: `window,test,mrae` printed one row holding the last case's value, the other
+    /// cases gone without a word.
+    #[test]
+    fn a_pivot_that_puts_two_rows_in_one_cell_is_refused_naming_them() {
+        let t = four_cases();
+        check_collision(
+            &t,
+            "window,test,mrae",
+            "4 rows fall into one cell (window `4 OS`, test `zz`), so all but the last would vanish: r-lsq, r-ridge, f-lsq, f-ridge",
+        );
+        check_collision(
+            &t,
+            "set+window,test,mrae",
+            "2 rows fall into one cell (set+window `r / 4 OS`, test `zz`), so all but the last would vanish: r-lsq, r-ridge",
+        );
+        let md = t
+            .pivot_markdown(&pivot("set+estimator,test,mrae"), "case", |x| {
+                format!("{x}")
+            })
+            .unwrap();
+        assert_eq!(
+            md,
+            "| set / estimator | zz |\n|---|---|\n| r / lsq | 0.1 |\n| r / ridge | 0.2 |\n| f / lsq | 0.3 |\n| f / ridge | 0.4 |\n"
+        );
+    }
+
+    #[test]
+    fn separating_columns_are_the_candidates_that_split_a_crowded_cell() {
+        let t = four_cases();
+        let v = |s: &[&str]| s.iter().map(|x| x.to_string()).collect::<Vec<_>>();
+        // `window` is constant, so it is not needed; set and estimator both are.
+        assert_eq!(
+            t.separating_columns(
+                &v(&["window"]),
+                &v(&["test"]),
+                "case",
+                &["window", "set", "estimator"]
+            )
+            .unwrap(),
+            v(&["set", "estimator"])
+        );
+        assert_eq!(
+            t.separating_columns(
+                &v(&["estimator"]),
+                &v(&["test"]),
+                "case",
+                &["estimator", "set"]
+            )
+            .unwrap(),
+            v(&["set"])
+        );
+        let err = t
+            .separating_columns(&v(&["window"]), &v(&["test"]), "case", &["set"])
+            .unwrap_err();
+        assert!(
+            err.to_string().starts_with("2 rows fall into one cell"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn bad_pivots_and_unknown_columns_are_named() {
+        for text in [
+            "window,test",
+            "window,test,mrae,x",
+            "window+,test,mrae",
+            "a,b,c+d",
+            ",test,mrae",
+        ] {
+            assert_eq!(
+                text.parse::<Pivot>().unwrap_err().to_string(),
+                format!(
+                    "`{text}`: expected ROWS,COLS,VALUE (ROWS and COLS may join columns with +), e.g. window,test,mrae"
+                )
+            );
+        }
+        let err = sample()
+            .pivot_markdown(&pivot("case,colour,mrae"), "case", |x| format!("{x}"))
+            .unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "no column `colour` (the table has case, test, mrae)"
         );
     }
 }
