@@ -213,6 +213,8 @@ fn case_status(s: &Status) -> CaseStatus {
         Status::ReducedAccuracy | Status::MaxIterations | Status::SolverFailed(_) => {
             CaseStatus::SolverFailed
         }
+        // run_case turns it into a fit-failed row with the windows and regressors named.
+        Status::RankDeficient { .. } => CaseStatus::FitFailed,
     }
 }
 
@@ -252,6 +254,9 @@ pub fn run_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
         Ok(o) => o,
         Err(e) => return (failed(e.to_string()), None),
     };
+    if let Some(none) = out.no_information() {
+        return (failed(none.to_string()), None);
+    }
     let worst = out
         .dofs
         .iter()
