@@ -127,7 +127,14 @@ pub(crate) fn fit_problem(pb: &Problem, params: &CheckedParams) -> Result<Fit, E
     let coefficients = pb.unscale(&sol.gamma, bounds);
     let objective = pb.objective(estimator, &coefficients);
     let condition_number = effective_condition(pb, estimator, &sol.gamma, &lo, &hi)?;
-    let status = status_from(sol.status, condition_number);
+    // A zero column is left out of the solve and of the condition number, so neither
+    // would show that the data say nothing about its coefficient.
+    let status = match sol.status {
+        Status::Ok if !pb.zero_columns.is_empty() => Status::RankDeficient {
+            zero_columns: pb.zero_columns.clone(),
+        },
+        s => status_from(s, condition_number),
+    };
     Ok(Fit {
         coefficients,
         objective,

@@ -39,7 +39,7 @@
 //!
 //! A column that is identically zero carries no information: it is left out of the solve
 //! and its coefficient is the value of `[lower, upper]` closest to 0
-//! ([`Fit::zero_columns`]).
+//! ([`Fit::zero_columns`]), and the fit's status is [`Status::RankDeficient`].
 //!
 //! # Solvers
 //!

@@ -202,8 +202,8 @@ pub(crate) fn status_from(status: Status, condition_number: Option<f64>) -> Stat
     }
 }
 
-/// Outcome of a solve. Only `Ok` and `IllConditioned` carry a solution that met the
-/// solver's own accuracy criterion; the others carry the best iterate found.
+/// Outcome of a solve. Only `Ok`, `IllConditioned` and `RankDeficient` carry a solution
+/// that met the solver's own accuracy criterion; the others carry the best iterate found.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "status", rename_all = "snake_case")]
 pub enum Status {
@@ -220,11 +220,27 @@ pub enum Status {
     MaxIterations,
     /// The solver failed; the text says how.
     SolverFailed(String),
+    /// Solved, but some columns of the design are identically zero: the data say nothing
+    /// about their coefficients, which are set to the value of `[lower, upper]` closest to 0
+    /// (e.g. a window that ends before the rudder first moves). Not a usable model.
+    RankDeficient {
+        /// The zero columns (indices into the design), as [`Fit::zero_columns`].
+        zero_columns: Vec<usize>,
+    },
 }
 
 impl Status {
-    /// `Ok` or `IllConditioned`.
+    /// `Ok`, `IllConditioned` or `RankDeficient`: the solver met its accuracy criterion
+    /// (for a rank-deficient design on the columns that carry information).
     pub fn is_solved(&self) -> bool {
+        matches!(
+            self,
+            Status::Ok | Status::IllConditioned { .. } | Status::RankDeficient { .. }
+        )
+    }
+
+    /// `Ok` or `IllConditioned`: every coefficient is determined by the data.
+    pub fn is_identified(&self) -> bool {
         matches!(self, Status::Ok | Status::IllConditioned { .. })
     }
 }

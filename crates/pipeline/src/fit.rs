@@ -246,6 +246,32 @@ pub struct DofReport {
     pub tuning: Option<Tuning>,
 }
 
+/// A fit whose training data say nothing about some coefficients: the windows used and, per DOF,
+/// the regressors that are identically zero in them ([`shipid_estimators::Status::RankDeficient`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct NoInformation {
+    /// "recording t0–t1 s" per training window.
+    pub windows: Vec<String>,
+    /// (DOF, names of its zero regressors), for the DOFs that have any.
+    pub regressors: Vec<(Dof, Vec<String>)>,
+}
+
+impl std::fmt::Display for NoInformation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let regressors: Vec<String> = self
+            .regressors
+            .iter()
+            .map(|(dof, names)| format!("{dof}: {}", names.join(", ")))
+            .collect();
+        write!(
+            f,
+            "rank-deficient: the training window ({}) carries no information on {} (identically zero there; e.g. the window ends before the rudder first moves): widen --window or choose other recordings",
+            self.windows.join("; "),
+            regressors.join("; ")
+        )
+    }
+}
+
 /// The result of a fit.
 pub struct FitOutput {
     pub model: AbkowitzModel,
@@ -335,6 +361,40 @@ pub fn training_samples(
     Ok((samples, windows))
 }
 
+impl FitOutput {
+    /// Which regressors carry no information in the training windows, when any DOF's fit is
+    /// rank deficient; such a fit is no model.
+    pub fn no_information(&self) -> Option<NoInformation> {
+        let regressors: Vec<(Dof, Vec<String>)> = self
+            .dofs
+            .iter()
+            .filter_map(|d| match &d.fit.status {
+                shipid_estimators::Status::RankDeficient { zero_columns } => Some((
+                    d.dof,
+                    zero_columns
+                        .iter()
+                        .filter_map(|&j| d.names.get(j).cloned())
+                        .collect(),
+                )),
+                _ => None,
+            })
+            .collect();
+        if regressors.is_empty() {
+            return None;
+        }
+        let windows = self
+            .file
+            .training
+            .iter()
+            .map(|w| format!("{} {}–{} s", w.recording, w.t_start_s, w.t_end_s))
+            .collect();
+        Some(NoInformation {
+            windows,
+            regressors,
+        })
+    }
+}
+
 /// The model file's record of one training recording: its window [s] and how its accelerations were
 /// obtained (shared by the Abkowitz and the sparse-GP fits).
 pub fn training_window(
@@ -345,7 +405,11 @@ pub fn training_window(
     estimated: bool,
 ) -> TrainingWindow {
     TrainingWindow {
-        dataset: ds.path.display().to_string(),
+        // Absolute here; the writer of the model file makes it relative to where the file goes.
+        dataset: crate::model_file::absolute_path(&ds.path)
+            .display()
+            .to_string(),
+        dataset_hash: crate::model_file::training_hash(&ds.path, &r.file).ok(),
         recording: r.file.clone(),
         t_start_s,
         t_end_s,
@@ -433,7 +497,11 @@ pub fn fit_dataset(
         tuned: spec.tune,
         refinement: None,
     };
-    let (model, info) = if spec.refine {
+    let rank_deficient = reports
+        .iter()
+        .any(|d| !d.fit.status.is_identified() && d.fit.status.is_solved());
+    // A rank-deficient fit is no model (see `FitOutput::no_information`): nothing to refine.
+    let (model, info) = if spec.refine && !rank_deficient {
         let recs: Vec<Recording> = windows
             .iter()
             .filter_map(|w| {

@@ -71,11 +71,69 @@ pub fn report_json(out: &FitOutput) -> Value {
     })
 }
 
+/// A fit's status in words: `ok`, `ill-conditioned`, `rank-deficient (no information on …)`, …
+fn status_words(d: &shipid_pipeline::fit::DofReport) -> String {
+    use shipid_estimators::Status;
+    match &d.fit.status {
+        Status::Ok => "ok".into(),
+        Status::IllConditioned { condition_number } => {
+            format!("ill-conditioned (effective condition number {condition_number:.3e})")
+        }
+        Status::RankDeficient { zero_columns } => format!(
+            "rank-deficient (no information on {})",
+            zero_columns
+                .iter()
+                .filter_map(|&j| d.names.get(j).map(String::as_str))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+        Status::ReducedAccuracy => "reduced accuracy".into(),
+        Status::MaxIterations => "iteration limit reached".into(),
+        Status::SolverFailed(how) => format!("solver failed ({how})"),
+    }
+}
+
+/// The fit's summary on stdout: the JSON report, or one line per DOF; `out` is the model file
+/// written, if any.
+fn print_summary(out: &FitOutput, written: Option<&Path>, as_json: bool) {
+    if as_json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&report_json(out)).unwrap_or_default()
+        );
+        return;
+    }
+    println!(
+        "fitted {} with {} on {} samples in {:.2} ms → {}",
+        out.model.set.name,
+        out.file.estimator.name,
+        out.training.len(),
+        out.fit_time_s * 1e3,
+        written.map_or("no model file".into(), |p| p.display().to_string())
+    );
+    for d in &out.dofs {
+        println!(
+            "  {}: status {}, residual RMS {:.3e} (target RMS {:.3e}), condition number {:.3e}",
+            d.dof,
+            status_words(d),
+            d.residual_rms,
+            d.target_rms,
+            d.condition_number.unwrap_or(f64::NAN)
+        );
+    }
+}
+
 pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     a.estimator.validate()?;
     let set = load_set(a.set)?;
     let ds = Dataset::load(a.dataset)?;
     let out = fit_dataset(&ds, set, &a.estimator, &a.recordings, a.window, a.solver)?;
+    if let Some(none) = out.no_information() {
+        // No model file: a model whose coefficients the data never saw would validate as if it
+        // were one.
+        print_summary(&out, None, a.json);
+        return Err(crate::failed_msg(none));
+    }
     let text = toml::to_string(&out.file).map_err(failed)?;
     let header = format!(
         "# Abkowitz model identified by shipid {}.\n# Coefficients: prime system I (docs/conventions.md) with U0 = {} m/s, L = {} m; midship; rudder positive to starboard.\n",
@@ -83,33 +141,10 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
         ds.ship.u0,
         ds.ship.lpp
     );
-    write_atomic(a.out, format!("{header}{text}").as_bytes()).map_err(failed)?;
+    write_atomic(a.out, format!("{header}{text}").as_bytes())
+        .map_err(|e| crate::write_failed(a.out, e))?;
     let all_solved = out.dofs.iter().all(|d| d.fit.status.is_solved());
-    if a.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&report_json(&out)).unwrap_or_default()
-        );
-    } else {
-        println!(
-            "fitted {} with {} on {} samples in {:.2} ms → {}",
-            out.model.set.name,
-            out.file.estimator.name,
-            out.training.len(),
-            out.fit_time_s * 1e3,
-            a.out.display()
-        );
-        for d in &out.dofs {
-            println!(
-                "  {}: status {:?}, residual RMS {:.3e} (target RMS {:.3e}), condition number {:.3e}",
-                d.dof,
-                d.fit.status,
-                d.residual_rms,
-                d.target_rms,
-                d.condition_number.unwrap_or(f64::NAN)
-            );
-        }
-    }
+    print_summary(&out, Some(a.out), a.json);
     let mut outcome = if all_solved {
         Outcome::Ok
     } else {

@@ -90,3 +90,13 @@ pub fn bad_input(msg: impl fmt::Display) -> CliError {
 pub fn failed(e: impl Into<anyhow::Error>) -> CliError {
     CliError::Failed(e.into())
 }
+
+/// A failure whose message is all there is to say.
+pub fn failed_msg(msg: impl fmt::Display) -> CliError {
+    CliError::Failed(anyhow::anyhow!("{msg}"))
+}
+
+/// A failed write, naming the file (an `io::Error` alone says only "No such file or directory").
+pub fn write_failed(path: &std::path::Path, e: impl fmt::Display) -> CliError {
+    CliError::Failed(anyhow::anyhow!("cannot write {}: {e}", path.display()))
+}

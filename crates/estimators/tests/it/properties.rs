@@ -580,6 +580,15 @@ fn zero_column_is_held_at_the_bound_nearest_zero() {
         )
         .unwrap();
         assert_eq!(f.zero_columns, vec![4]);
+        // The data say nothing about column 4: not a fit that identifies every coefficient.
+        assert_eq!(
+            f.status,
+            Status::RankDeficient {
+                zero_columns: vec![4]
+            },
+            "{solver:?}"
+        );
+        assert!(f.status.is_solved() && !f.status.is_identified());
         assert_eq!(f.coefficients[4], 0.0);
         let others: Vec<f64> = f
             .coefficients
