@@ -43,11 +43,14 @@ impl Report {
     }
 }
 
-/// The base with `entries` added: `base_file` is the base's polynomial model file when it is one,
-/// `base_ref` how a wrapper names the base otherwise, `tool_version` the version that writes it.
+/// The base with `entries` added: `base_file` is the base's polynomial model file when it is one (its
+/// training paths already made relative to where the result goes), `base_ref` how a wrapper names the
+/// base otherwise (relative to the wrapper) and `base_hash` the fingerprint of the base's file, if it
+/// is one, `tool_version` the version that writes it.
 pub fn augmented_model(
     base_file: Option<ModelFile>,
     base_ref: String,
+    base_hash: Option<String>,
     entries: Vec<EffectEntry>,
     tool_version: &str,
 ) -> AugmentedModel {
@@ -62,6 +65,7 @@ pub fn augmented_model(
         None => AugmentedModel::Wrapper(AugmentedModelFile {
             shipid_version: tool_version.into(),
             base: base_ref,
+            base_hash,
             effects: entries,
         }),
     }
@@ -96,6 +100,7 @@ mod tests {
         let m = augmented_model(
             Some(base),
             "unused".into(),
+            None,
             vec![
                 entry("asymmetry:offset=1,y0=0,n0=0"),
                 entry("current:speed=0.1,from=90"),
@@ -114,6 +119,7 @@ mod tests {
         let m = augmented_model(
             None,
             "mmg:kvlcc2".into(),
+            None,
             vec![entry("wind:speed=2,from=0")],
             "9.9",
         );

@@ -183,7 +183,13 @@ pub struct Refinement {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TrainingWindow {
+    /// The data set, relative to the model file that holds this window (absolute when no relative
+    /// path exists).
     pub dataset: String,
+    /// Fingerprint of the data set file and this window's recording when the model was written
+    /// (`fnv1a64:` + 16 hex digits); absent in older model files.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dataset_hash: Option<String>,
     pub recording: String,
     pub t_start_s: f64,
     pub t_end_s: f64,
@@ -235,6 +241,10 @@ pub struct EffectEntry {
 pub struct AugmentedModelFile {
     pub shipid_version: String,
     pub base: String,
+    /// Fingerprint of the base's model file when this file was written (`fnv1a64:` + 16 hex digits);
+    /// absent in older files and for `mmg:` bases.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub base_hash: Option<String>,
     pub effects: Vec<EffectEntry>,
 }
 

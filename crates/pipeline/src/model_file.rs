@@ -1,16 +1,29 @@
 //! The one loader of model files, used by every command: `mmg:kvlcc2` (the reference), a model file
 //! written by `shipid fit` (`kind = "abkowitz"` or `"sparse-gp"`), or an augmented model file
-//! (`base = …` plus `[[effects]]`) written by `shipid diagnose`, whose base is found relative to the
-//! file that names it.
+//! (`base = …` plus `[[effects]]`) written by `shipid diagnose`.
+//!
+//! Paths a model file stores (`training[*].dataset`, `base`) are written relative to the file that names
+//! them (absolute only when there is no relative path, e.g. another drive) and resolved relative to it
+//! on load, never against the working directory, so a model means the same wherever it is used from.
+//! Beside each path the file keeps a fingerprint of what it named (`dataset_hash`, `base_hash`):
+//! a changed base is refused here; what a changed or missing training data set means is up to the
+//! command ([`crate::range::training_source`]).
 
-use std::path::Path;
+use std::path::{Component, Path, PathBuf};
 
-use shipid_model::{AugmentedModelFile, EffectEntry, ModelFile};
+use shipid_io::{InputError, Ship};
+use shipid_model::{AugmentedModelFile, EffectEntry, ModelFile, TrainingWindow};
 use shipid_sim::{
     AbkowitzDynamics, Dynamics, Effect, GP_KIND, GpDynamics, GpModelFile, MmgModel, WithEffects,
 };
 
 use crate::error::{PipelineError, bad_input};
+
+/// The model kinds a model file may declare in `kind` (an augmented file has `base` instead).
+pub const MODEL_KINDS: [&str; 2] = ["abkowitz", GP_KIND];
+
+/// How deep augmented files may wrap each other; deeper is surely a mistake (a loop is caught anyway).
+const MAX_BASE_DEPTH: usize = 8;
 
 /// A model named on the command line: `mmg:kvlcc2` (the reference), a model file written by `shipid fit`,
 /// or an augmented model file (`base = …` plus effects) written by `shipid diagnose`. Effects in the
@@ -29,7 +42,7 @@ pub fn load_model(spec: &str) -> Result<Box<dyn Dynamics + Send + Sync>, Pipelin
 pub fn load_model_parts(
     spec: &str,
 ) -> Result<(Box<dyn Dynamics + Send + Sync>, Vec<Effect>), PipelineError> {
-    load_parts(spec, 0)
+    load_parts(spec, &mut Vec::new())
 }
 
 fn parse_entries(path: &Path, entries: &[EffectEntry]) -> Result<Vec<Effect>, PipelineError> {
@@ -47,9 +60,74 @@ fn parse_entries(path: &Path, entries: &[EffectEntry]) -> Result<Vec<Effect>, Pi
         .collect()
 }
 
+/// The base an augmented model file names: `mmg:…` as written, or the path of its model file resolved
+/// relative to `path` (the file that names it), checked against the stored `base_hash`. `chain` holds
+/// the files already on the way (a base that is one of them is a loop).
+pub fn resolve_base(
+    path: &Path,
+    file: &AugmentedModelFile,
+    chain: &[PathBuf],
+) -> Result<String, PipelineError> {
+    if file.base.starts_with("mmg:") {
+        return Ok(file.base.clone());
+    }
+    let resolved = resolve_stored(path, &file.base);
+    if !resolved.is_file() {
+        return Err(InputError::key(
+            path,
+            "base",
+            format!(
+                "`{}` is not a model file (paths are relative to the file that names them: {})",
+                file.base,
+                resolved.display()
+            ),
+        )
+        .into());
+    }
+    let me = absolute_path(&resolved);
+    if chain.contains(&me) || me == absolute_path(path) {
+        let names: Vec<String> = chain
+            .iter()
+            .chain([&absolute_path(path), &me])
+            .map(|p| p.display().to_string())
+            .collect();
+        return Err(InputError::key(
+            path,
+            "base",
+            format!("the chain of base models loops: {}", names.join(" → ")),
+        )
+        .into());
+    }
+    if chain.len() >= MAX_BASE_DEPTH {
+        return Err(InputError::key(
+            path,
+            "base",
+            format!("more than {MAX_BASE_DEPTH} augmented model files wrap each other"),
+        )
+        .into());
+    }
+    if let Some(stored) = &file.base_hash {
+        let found = files_hash(&[&resolved])?;
+        if &found != stored {
+            return Err(InputError::key(
+                path,
+                "base_hash",
+                format!(
+                    "{stored}, but the base {} now hashes to {found}: the base model changed since \
+                     the effects were fitted to it; diagnose the new base again, or delete `base_hash` \
+                     to use the changed base anyway",
+                    resolved.display()
+                ),
+            )
+            .into());
+        }
+    }
+    Ok(resolved.display().to_string())
+}
+
 fn load_parts(
     spec: &str,
-    depth: usize,
+    chain: &mut Vec<PathBuf>,
 ) -> Result<(Box<dyn Dynamics + Send + Sync>, Vec<Effect>), PipelineError> {
     if spec == "mmg:kvlcc2" {
         return Ok((Box::new(MmgModel::kvlcc2()), Vec::new()));
@@ -60,45 +138,199 @@ fn load_parts(
             "unknown model `{spec}`: expected `mmg:kvlcc2` or a model file"
         )));
     }
-    let text = std::fs::read_to_string(path).map_err(|e| shipid_io::InputError::read(path, &e))?;
-    let is_augmented = toml::from_str::<toml::Table>(&text)
-        .map(|t| t.contains_key("base"))
-        .unwrap_or(false);
-    if is_augmented {
+    let text = std::fs::read_to_string(path).map_err(|e| InputError::read(path, &e))?;
+    let table = toml::from_str::<toml::Table>(&text).ok();
+    if table.as_ref().is_some_and(|t| t.contains_key("base")) {
         let file: AugmentedModelFile =
-            toml::from_str(&text).map_err(|e| shipid_io::InputError::toml(path, &text, &e))?;
-        if depth > 4 {
-            return Err(bad_input(format!(
-                "{}: key `base`: too many nested augmented model files",
-                path.display()
-            )));
-        }
-        let base_spec = if file.base.starts_with("mmg:") {
-            file.base.clone()
-        } else {
-            path.parent()
-                .unwrap_or(Path::new("."))
-                .join(&file.base)
-                .display()
-                .to_string()
-        };
-        let (base, mut effects) = load_parts(&base_spec, depth + 1)?;
+            toml::from_str(&text).map_err(|e| InputError::toml(path, &text, &e))?;
+        let base_spec = resolve_base(path, &file, chain)?;
+        chain.push(absolute_path(path));
+        let (base, mut effects) = load_parts(&base_spec, chain)?;
         for e in parse_entries(path, &file.effects)? {
             effects.retain(|x| x.kind() != e.kind());
             effects.push(e);
         }
         return Ok((base, effects));
     }
+    check_kind(path, table.as_ref())?;
     if let Some(gp) = load_gp_model(path, &text)? {
         return Ok((Box::new(gp), Vec::new()));
     }
-    let file: ModelFile =
-        toml::from_str(&text).map_err(|e| shipid_io::InputError::toml(path, &text, &e))?;
+    let file: ModelFile = toml::from_str(&text).map_err(|e| InputError::toml(path, &text, &e))?;
     let model = file
         .to_model()
         .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
     let effects = parse_entries(path, &file.effects)?;
     Ok((Box::new(AbkowitzDynamics(model)), effects))
+}
+
+/// A `kind` the loader does not know is refused: read as a polynomial it would simulate some other
+/// model without a word.
+fn check_kind(path: &Path, table: Option<&toml::Table>) -> Result<(), PipelineError> {
+    let Some(kind) = table.and_then(|t| t.get("kind")) else {
+        // Missing or not TOML: the full reader names the fault.
+        return Ok(());
+    };
+    match kind.as_str() {
+        Some(k) if MODEL_KINDS.contains(&k) => Ok(()),
+        _ => Err(InputError::key(
+            path,
+            "kind",
+            format!(
+                "unknown model kind {kind}: expected one of {} (an augmented model file has `base` instead)",
+                MODEL_KINDS
+                    .iter()
+                    .map(|k| format!("\"{k}\""))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        )
+        .into()),
+    }
+}
+
+/// A path as stored in a file at `file`: relative to the file's folder, or absolute when there is no
+/// relative path (another drive).
+pub fn stored_path(file: &Path, target: &Path) -> String {
+    let target = absolute_path(target);
+    let dir = absolute_path(file)
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_default();
+    relative_path(&dir, &target)
+        .unwrap_or(target)
+        .display()
+        .to_string()
+}
+
+/// A path stored in the file at `file`, resolved relative to that file's folder (an absolute path
+/// stays as it is).
+pub fn resolve_stored(file: &Path, stored: &str) -> PathBuf {
+    match file.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => dir.join(stored),
+        _ => PathBuf::from(stored),
+    }
+}
+
+/// `path` made absolute with symbolic links resolved as far as it exists (the rest appended with `.`
+/// and `..` removed), so two spellings of one file compare equal and relative paths between them hold
+/// for the file system, not only for the spelling.
+pub fn absolute_path(path: &Path) -> PathBuf {
+    let abs = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    let mut existing = abs.as_path();
+    let mut rest = Vec::new();
+    loop {
+        if let Ok(c) = existing.canonicalize() {
+            let mut out = c;
+            for part in rest.iter().rev() {
+                match part {
+                    Component::ParentDir => {
+                        out.pop();
+                    }
+                    Component::CurDir => {}
+                    other => out.push(other.as_os_str()),
+                }
+            }
+            return out;
+        }
+        match (existing.parent(), existing.components().next_back()) {
+            (Some(parent), Some(last)) => {
+                rest.push(last);
+                existing = parent;
+            }
+            _ => return abs,
+        }
+    }
+}
+
+/// The path from the folder `from_dir` to `to`, both absolute and normalised; `None` when they share
+/// no root (another drive).
+fn relative_path(from_dir: &Path, to: &Path) -> Option<PathBuf> {
+    let a: Vec<Component> = from_dir.components().collect();
+    let b: Vec<Component> = to.components().collect();
+    if a.first() != b.first() {
+        return None;
+    }
+    let common = a.iter().zip(&b).take_while(|(x, y)| x == y).count();
+    let mut out = PathBuf::new();
+    for _ in common..a.len() {
+        out.push("..");
+    }
+    for c in &b[common..] {
+        out.push(c.as_os_str());
+    }
+    Some(out)
+}
+
+/// The training windows of a model file about to be written at `model_path`: each `dataset` (as a fit
+/// records it, absolute) made relative to the model file.
+pub fn anchor_training(windows: &mut [TrainingWindow], model_path: &Path) {
+    for w in windows {
+        w.dataset = stored_path(model_path, Path::new(&w.dataset));
+    }
+}
+
+/// Training windows copied from the model file `from` into a file written at `to`: each `dataset`,
+/// relative to `from`, made relative to `to` (the fingerprints still hold: the data did not move).
+pub fn reanchor_training(windows: &mut [TrainingWindow], from: &Path, to: &Path) {
+    for w in windows {
+        w.dataset = stored_path(to, &resolve_stored(from, &w.dataset));
+    }
+}
+
+/// FNV-1a, 64 bits, continued from `hash`: a fingerprint to notice that a file named by a model file
+/// changed since the model was written (not a defence against deliberate forgery).
+fn fnv1a64(mut hash: u64, bytes: &[u8]) -> u64 {
+    for &b in bytes {
+        hash ^= u64::from(b);
+        hash = hash.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    hash
+}
+
+/// The fingerprint of files read in order, `fnv1a64:` + 16 hex digits. Each file's length goes in
+/// before its bytes, so moving bytes from one file to the next changes it.
+pub fn files_hash(paths: &[&Path]) -> Result<String, PipelineError> {
+    let mut hash = 0xcbf2_9ce4_8422_2325_u64;
+    for p in paths {
+        let bytes = std::fs::read(p).map_err(|e| InputError::read(p, &e))?;
+        hash = fnv1a64(hash, &(bytes.len() as u64).to_le_bytes());
+        hash = fnv1a64(hash, &bytes);
+    }
+    Ok(format!("fnv1a64:{hash:016x}"))
+}
+
+/// The `dataset_hash` of a training window: its data set file, then its recording (found beside the
+/// data set, as the data set's reader finds it).
+pub fn training_hash(dataset: &Path, recording: &str) -> Result<String, PipelineError> {
+    let csv = resolve_stored(dataset, recording);
+    files_hash(&[dataset, &csv])
+}
+
+/// A model made for another ship than the recordings': the lengths differ by more than 0.1 %.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShipMismatch {
+    pub model_lpp_m: f64,
+    pub dataset_lpp_m: f64,
+}
+
+impl std::fmt::Display for ShipMismatch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the model is of a ship with L = {} m, the data set's ship has L = {} m (another ship, or another scale)",
+            self.model_lpp_m, self.dataset_lpp_m
+        )
+    }
+}
+
+/// Whether a model of `model` may be compared with recordings of `data` (see [`ShipMismatch`]).
+pub fn ship_mismatch(model: &Ship, data: &Ship) -> Option<ShipMismatch> {
+    let same = (model.lpp - data.lpp).abs() <= 1e-3 * model.lpp.abs().max(data.lpp.abs());
+    (!same).then_some(ShipMismatch {
+        model_lpp_m: model.lpp,
+        dataset_lpp_m: data.lpp,
+    })
 }
 
 /// The GP model of a model file whose `kind` is `sparse-gp`; `None` for any other kind.

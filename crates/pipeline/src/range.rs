@@ -1,45 +1,201 @@
 //! The identification range of a model file (where its regression extrapolates, see
 //! [`shipid_model::envelope`]): built from the training windows the file records, when its data set can
-//! still be read, and applied to recordings by `diagnose` and `validate`. A sparse GP carries its own
-//! (its sparse points and their similarity, [`gp_outside_fraction`]).
+//! still be read unchanged, and applied to recordings by `diagnose` and `validate`. A sparse GP carries
+//! its own (its sparse points and their similarity, [`gp_outside_fraction`]).
 
 use std::path::{Path, PathBuf};
 
 use shipid_io::{Dataset, PrimeScale, Recording};
 use shipid_model::design::primed_state;
-use shipid_model::{CoefficientSet, IdentificationRange, ModelFile, TrainingWindow};
+use shipid_model::{AugmentedModelFile, CoefficientSet, IdentificationRange, ModelFile, TrainingWindow};
 
-/// The model file's training data, when it names a data set that can still be read (paths as written by
-/// `shipid fit`, tried as given and relative to the model file): the Abkowitz model file (`None` for
-/// another kind, such as a sparse GP, whose training windows are read all the same), the data set
-/// restricted to the training recordings, and the data set's path.
-pub fn training_data(model_spec: &str) -> Option<(Option<ModelFile>, Dataset, PathBuf)> {
+use crate::model_file::{absolute_path, resolve_base, resolve_stored, training_hash};
+
+/// A model's training data, read: the Abkowitz model file (`None` for another kind, such as a sparse
+/// GP, whose training windows are read all the same), the data set restricted to the training
+/// recordings, and the data set's path.
+pub type TrainingData = (Option<ModelFile>, Dataset, PathBuf);
+
+/// What became of the training data a model names.
+#[derive(Debug)]
+pub enum TrainingSource {
+    /// The model names none (the reference `mmg:…`, or a file without `[[training]]`).
+    NotRecorded,
+    /// Read, and unchanged since the fit; `unverified` when the file predates the fingerprints.
+    Read {
+        data: TrainingData,
+        /// The model file whose windows these are (the base of an augmented file).
+        model: PathBuf,
+        unverified: bool,
+    },
+    /// Named, but not usable.
+    Unavailable(Unavailable),
+}
+
+/// Why a model's training data cannot be used; each names the model file, the key and the data set.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum Unavailable {
+    /// The data set is not where the model file says (relative to the model file).
+    #[error(
+        "{model}: key `training[{index}].dataset`: `{stored}` is not a file (paths in a model file are relative to it: {resolved}); \
+         older model files stored it relative to the working directory of `shipid fit`: write it relative to the model file"
+    )]
+    Missing {
+        model: PathBuf,
+        index: usize,
+        stored: String,
+        resolved: PathBuf,
+    },
+    /// The data set or a training recording has changed since the fit.
+    #[error(
+        "{model}: key `training[{index}].dataset_hash` = {stored}, but the data set {dataset} with recording `{recording}` now hashes to {found}: the training data changed since the fit"
+    )]
+    Changed {
+        model: PathBuf,
+        index: usize,
+        dataset: PathBuf,
+        recording: String,
+        stored: String,
+        found: String,
+    },
+    /// The data set is there but cannot be read (or the model file itself cannot).
+    #[error("{model}: {reason}")]
+    Unreadable { model: PathBuf, reason: String },
+}
+
+/// The training data a model names, following an augmented file to its base: resolved relative to the
+/// file that names it, and checked against its fingerprints.
+pub fn training_source(model_spec: &str) -> TrainingSource {
+    if model_spec.starts_with("mmg:") {
+        return TrainingSource::NotRecorded;
+    }
+    let mut path = PathBuf::from(model_spec);
+    let mut chain = Vec::new();
+    loop {
+        let unreadable = |reason: String, model: &Path| {
+            TrainingSource::Unavailable(Unavailable::Unreadable {
+                model: model.to_path_buf(),
+                reason,
+            })
+        };
+        let text = match std::fs::read_to_string(&path) {
+            Ok(t) => t,
+            Err(e) => return unreadable(e.to_string(), &path),
+        };
+        let table = match toml::from_str::<toml::Table>(&text) {
+            Ok(t) => t,
+            Err(e) => return unreadable(e.message().to_string(), &path),
+        };
+        if !table.contains_key("base") {
+            return windows_source(&path, &text);
+        }
+        let base = toml::from_str::<AugmentedModelFile>(&text)
+            .map_err(|e| e.message().to_string())
+            .and_then(|f| resolve_base(&path, &f, &chain).map_err(|e| e.to_string()));
+        match base {
+            Ok(b) if b.starts_with("mmg:") => return TrainingSource::NotRecorded,
+            Ok(b) => {
+                chain.push(absolute_path(&path));
+                path = PathBuf::from(b);
+            }
+            Err(reason) => return unreadable(reason, &path),
+        }
+    }
+}
+
+/// The training data of a model file with `[[training]]` windows (every kind written by `fit`).
+fn windows_source(path: &Path, text: &str) -> TrainingSource {
     // Only the windows: every kind of model file written by `fit` records them alike.
     #[derive(serde::Deserialize)]
     struct Windows {
         #[serde(default)]
         training: Vec<TrainingWindow>,
     }
-    let path = Path::new(model_spec);
-    let text = std::fs::read_to_string(path).ok()?;
-    let windows = toml::from_str::<Windows>(&text).ok()?.training;
-    let first = windows.first()?;
-    // As given (relative to the working directory of `fit`), then relative to the model file's folder
-    // and each folder above it (a model in results/ names data/… of the project root).
-    let mut candidates = vec![PathBuf::from(&first.dataset)];
-    let dir = std::path::absolute(path).ok()?;
-    candidates.extend(dir.ancestors().skip(1).map(|a| a.join(&first.dataset)));
-    let ds_path = candidates.into_iter().find(|p| p.is_file())?;
+    let windows = match toml::from_str::<Windows>(text) {
+        Ok(w) => w.training,
+        Err(e) => {
+            return TrainingSource::Unavailable(Unavailable::Unreadable {
+                model: path.to_path_buf(),
+                reason: e.message().to_string(),
+            });
+        }
+    };
+    let Some(first) = windows.first() else {
+        return TrainingSource::NotRecorded;
+    };
+    let ds_path = resolve_stored(path, &first.dataset);
+    let mut unverified = false;
+    for (index, w) in windows.iter().enumerate() {
+        let resolved = resolve_stored(path, &w.dataset);
+        if !resolved.is_file() {
+            return TrainingSource::Unavailable(Unavailable::Missing {
+                model: path.to_path_buf(),
+                index,
+                stored: w.dataset.clone(),
+                resolved,
+            });
+        }
+        if absolute_path(&resolved) != absolute_path(&ds_path) {
+            return TrainingSource::Unavailable(Unavailable::Unreadable {
+                model: path.to_path_buf(),
+                reason: format!(
+                    "key `training[{index}].dataset`: the training windows name two data sets ({} and {})",
+                    first.dataset, w.dataset
+                ),
+            });
+        }
+        let Some(stored) = &w.dataset_hash else {
+            unverified = true;
+            continue;
+        };
+        match training_hash(&resolved, &w.recording) {
+            Ok(found) if &found == stored => {}
+            Ok(found) => {
+                return TrainingSource::Unavailable(Unavailable::Changed {
+                    model: path.to_path_buf(),
+                    index,
+                    dataset: resolved,
+                    recording: w.recording.clone(),
+                    stored: stored.clone(),
+                    found,
+                });
+            }
+            Err(e) => {
+                return TrainingSource::Unavailable(Unavailable::Unreadable {
+                    model: path.to_path_buf(),
+                    reason: format!("key `training[{index}].recording`: {e}"),
+                });
+            }
+        }
+    }
     let used: Vec<String> = windows.iter().map(|w| w.recording.clone()).collect();
-    let ds = Dataset::load_filtered(&ds_path, |f| used.iter().any(|u| u == f)).ok()?;
-    let file = toml::from_str::<ModelFile>(&text).ok();
-    Some((file, ds, ds_path))
+    let ds = match Dataset::load_filtered(&ds_path, |f| used.iter().any(|u| u == f)) {
+        Ok(ds) => ds,
+        Err(e) => {
+            return TrainingSource::Unavailable(Unavailable::Unreadable {
+                model: path.to_path_buf(),
+                reason: format!("key `training[0].dataset`: {e}"),
+            });
+        }
+    };
+    let file = toml::from_str::<ModelFile>(text).ok();
+    TrainingSource::Read {
+        data: (file, ds, ds_path),
+        model: path.to_path_buf(),
+        unverified,
+    }
+}
+
+/// The model's training data when it can be used (see [`training_source`] for why it cannot).
+pub fn training_data(model_spec: &str) -> Option<TrainingData> {
+    match training_source(model_spec) {
+        TrainingSource::Read { data, .. } => Some(data),
+        _ => None,
+    }
 }
 
 /// Where an Abkowitz model was identified: its set's leverage over the states of its training windows.
-pub fn identification_range(
-    (file, ds, _): &(Option<ModelFile>, Dataset, PathBuf),
-) -> Option<IdentificationRange> {
+pub fn identification_range((file, ds, _): &TrainingData) -> Option<IdentificationRange> {
     let file = file.as_ref()?;
     if file.kind != "abkowitz" {
         return None;

@@ -1,7 +1,7 @@
 //! `shipid diagnose MODEL DATASET [--json REPORT.json] [--plots DIR] [--model-out FILE]`: I/O around
 //! [`crate::diagnose`].
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use shipid_diagnose::{
     AugmentedModel, BaseRange, DiagnoseInput, DiagnoseOptions, Located, Report, augmented_model,
@@ -11,15 +11,17 @@ use shipid_figures::diagnosis::{residual_figure, track_figure};
 use shipid_io::Dataset;
 use shipid_io::write::write_atomic;
 use shipid_model::ModelFile;
-use shipid_pipeline::model_file::load_model_parts;
-use shipid_pipeline::range::{identification_range, training_data};
+use shipid_pipeline::model_file::{
+    files_hash, load_model_parts, reanchor_training, ship_mismatch, stored_path,
+};
+use shipid_pipeline::range::{TrainingData, TrainingSource, identification_range, training_source};
 use shipid_sim::{Effect, WithEffects};
 
 use crate::{CliError, Outcome, bad_input, failed};
 
 /// The model's own level: segment replays on the recordings it was trained on.
 fn own_level(
-    training: &(Option<ModelFile>, Dataset, PathBuf),
+    training: &TrainingData,
     input: &DiagnoseInput,
     opts: &DiagnoseOptions,
 ) -> Option<(f64, String)> {
@@ -27,6 +29,40 @@ fn own_level(
     level
         .is_finite()
         .then(|| (level, training.2.display().to_string()))
+}
+
+/// The model's training data, or why the diagnosis refuses: its threshold is the model's own level on
+/// that data, and without it a model's ordinary error would be judged a real mismatch. A model that
+/// names no training data (the reference, a hand-written file) is diagnosed against the noise alone,
+/// with a warning.
+fn training_for_diagnosis(model_spec: &str) -> Result<Option<TrainingData>, CliError> {
+    match training_source(model_spec) {
+        TrainingSource::Read {
+            data,
+            model,
+            unverified,
+        } => {
+            if unverified {
+                eprintln!(
+                    "warning: {}: its training windows carry no `dataset_hash` (written by an older shipid): cannot check that {} is still the data it was fitted on",
+                    model.display(),
+                    data.2.display()
+                );
+            }
+            Ok(Some(data))
+        }
+        TrainingSource::NotRecorded => {
+            if !model_spec.starts_with("mmg:") {
+                eprintln!(
+                    "warning: {model_spec}: the model names no training data, so its own error level is unknown: the mismatch is judged against the noise alone"
+                );
+            }
+            Ok(None)
+        }
+        TrainingSource::Unavailable(why) => Err(bad_input(format!(
+            "{why}\nthe model's own error level on its training data sets the diagnosis threshold, and it cannot be computed: refusing to judge the mismatch against the noise alone"
+        ))),
+    }
 }
 
 pub fn run(
@@ -44,6 +80,13 @@ pub fn run(
     }
     let (base, base_effects) = load_model_parts(model_spec)?;
     let ds = Dataset::load(dataset)?;
+    if let Some(m) = ship_mismatch(base.ship(), &ds.ship) {
+        return Err(bad_input(format!(
+            "{model_spec} on {}: {m}: a diagnosis would blame the difference on a missing effect",
+            dataset.display()
+        )));
+    }
+    let training = training_for_diagnosis(model_spec)?;
     let opts = DiagnoseOptions {
         horizon_l_over_u0,
         ..DiagnoseOptions::default()
@@ -54,7 +97,6 @@ pub fn run(
         model_level_over_l: None,
         identification_range: None,
     };
-    let training = training_data(model_spec);
     let range = training.as_ref().and_then(identification_range);
     let level = training.as_ref().and_then(|t| own_level(t, &input, &opts));
     input.model_level_over_l = level.as_ref().map(|l| l.0);
@@ -166,7 +208,7 @@ fn print_summary(r: &Report, model: &str, dataset: &Path, level_from: Option<&st
         // Without its own level an identified model's error counts as a real mismatch: say so.
         None if model.starts_with("mmg:") => {}
         None => println!(
-            "  model's own level: unknown (the model file names no training data set that can be read from here); the mismatch is judged against the noise alone"
+            "  model's own level: unknown (the model file names no training data); the mismatch is judged against the noise alone"
         ),
     }
     println!(
@@ -238,19 +280,28 @@ fn write_augmented(
         env!("CARGO_PKG_VERSION"),
         dataset.display()
     );
-    let base_file = std::fs::read_to_string(model_spec)
+    let base_path = Path::new(model_spec);
+    // A copy keeps the base's training windows: their paths, relative to the base, are made relative
+    // to the copy.
+    let base_file = std::fs::read_to_string(base_path)
         .ok()
-        .and_then(|t| toml::from_str::<ModelFile>(&t).ok());
-    let base_ref = if model_spec.starts_with("mmg:") {
-        model_spec.to_string()
+        .and_then(|t| toml::from_str::<ModelFile>(&t).ok())
+        .map(|mut f| {
+            reanchor_training(&mut f.training, base_path, out);
+            f
+        });
+    let (base_ref, base_hash) = if model_spec.starts_with("mmg:") {
+        (model_spec.to_string(), None)
     } else {
-        std::path::absolute(model_spec)
-            .map(|p| p.display().to_string())
-            .unwrap_or_else(|_| model_spec.to_string())
+        (
+            stored_path(out, base_path),
+            Some(files_hash(&[base_path]).map_err(failed)?),
+        )
     };
     let text = match augmented_model(
         base_file,
         base_ref,
+        base_hash,
         r.effect_entries(&source),
         env!("CARGO_PKG_VERSION"),
     ) {
