@@ -134,7 +134,10 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
         print_summary(&out, None, a.json);
         return Err(crate::failed_msg(none));
     }
-    let text = toml::to_string(&out.file).map_err(failed)?;
+    // The data set's path relative to the model file, so the model reads it from anywhere.
+    let mut file = out.file.clone();
+    shipid_pipeline::model_file::anchor_training(&mut file.training, a.out);
+    let text = toml::to_string(&file).map_err(failed)?;
     let header = format!(
         "# Abkowitz model identified by shipid {}.\n# Coefficients: prime system I (docs/conventions.md) with U0 = {} m/s, L = {} m; midship; rudder positive to starboard.\n",
         env!("CARGO_PKG_VERSION"),
@@ -172,7 +175,8 @@ pub fn run_gp(
 ) -> Result<Outcome, CliError> {
     let ds = Dataset::load(dataset)?;
     let threshold = similarity.unwrap_or(DEFAULT_SIMILARITY);
-    let (file, _model, report) = fit_gp_dataset(&ds, recordings, window, threshold)?;
+    let (mut file, _model, report) = fit_gp_dataset(&ds, recordings, window, threshold)?;
+    shipid_pipeline::model_file::anchor_training(&mut file.training, out);
     let text = model_text(&file).map_err(failed)?;
     write_atomic(out, text.as_bytes()).map_err(failed)?;
     if json {
