@@ -8,14 +8,19 @@
 //! metrics, RMS; imports nothing of this crate but `range`); `replay` (segment replays) → `lm`,
 //! `validate`; `fit` (windows, polynomial fit) → `refine` → `lm`, `replay`, `validate`; `fit_gp` →
 //! `fit`; `range` (identification range); `spec` (manoeuvre specs) ← `generate` (default data) ←
-//! `simulate` (standard manoeuvres); `model_file` (the loader) → `fit_gp`. `cargo xtask circles`
+//! `simulate` (standard manoeuvres); `model_file` (the loader) → `fit_gp`;
+//! `bootstrap` (block-bootstrap replicates of a polynomial fit); `bands` (replicated models'
+//! manoeuvre bands) → `simulate`. `cargo xtask circles`
 //! checks that these stay one-way.
 
+pub mod bands;
+pub mod bootstrap;
 pub mod error;
 pub mod fit;
 pub mod fit_gp;
 pub mod generate;
 pub mod lm;
+pub mod mmg;
 pub mod model_file;
 pub mod range;
 pub mod refine;

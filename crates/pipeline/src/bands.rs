@@ -1,0 +1,161 @@
+//! Bands of a standard manoeuvre's metrics and track from replicated models (bootstrap replicates of a
+//! polynomial or mmg fit, posterior draws of a sparse GP, an ensemble of inverse networks): every
+//! replicate is simulated like the point model, and each metric's band is the central percentile
+//! interval over the replicates whose run defines it. A replicate run that diverges is counted (its
+//! metrics are undefined), never dropped silently. No I/O.
+
+use rayon::prelude::*;
+use serde::Serialize;
+use shipid_io::{Manoeuvre, Ship};
+use shipid_sim::metrics::metrics;
+use shipid_sim::{Dynamics, SimStatus};
+use shipid_uncertainty::{Band, UncertaintyError, percentile_band};
+
+use crate::error::PipelineError;
+use crate::simulate::simulate_manoeuvre;
+
+/// One metric's point prediction and band.
+#[derive(Debug, Clone, Serialize)]
+pub struct MetricBand {
+    /// Metric key as `shipid simulate --json` names it (e.g. `tactical_diameter`, `overshoot_1`; units
+    /// as there: lengths ÷ L, angles in degrees, times × U0/L).
+    pub metric: &'static str,
+    /// The point model's value (None when its run does not define the metric).
+    pub point: Option<f64>,
+    /// The band, or why there is none (too few replicates define the metric).
+    #[serde(serialize_with = "band_or_reason")]
+    pub band: Result<Band, UncertaintyError>,
+}
+
+fn band_or_reason<S: serde::Serializer>(
+    band: &Result<Band, UncertaintyError>,
+    s: S,
+) -> Result<S::Ok, S::Error> {
+    match band {
+        Ok(b) => b.serialize(s),
+        Err(e) => s.serialize_str(&e.to_string()),
+    }
+}
+
+/// Pointwise band of a track sampled at common times.
+#[derive(Debug, Clone, Serialize)]
+pub struct TrackBand {
+    /// Times [s] (the point run's samples, thinned).
+    pub t_s: Vec<f64>,
+    /// Earth-fixed x [m] band, lower and upper, per time (None where fewer than
+    /// `shipid_uncertainty::band::MIN_FINITE_REPLICATES` replicate runs reach that time).
+    pub x0_m: Vec<Option<(f64, f64)>>,
+    /// Earth-fixed y [m] band.
+    pub y0_m: Vec<Option<(f64, f64)>>,
+    /// Heading [deg] band.
+    pub psi_deg: Vec<Option<(f64, f64)>>,
+}
+
+/// Bands of one manoeuvre.
+#[derive(Debug, Clone, Serialize)]
+pub struct ManoeuvreBands {
+    pub level: f64,
+    pub replicates: usize,
+    /// Replicate runs that diverged before the end of the manoeuvre.
+    pub diverged: usize,
+    pub metrics: Vec<MetricBand>,
+    pub track: Option<TrackBand>,
+}
+
+/// Largest number of track samples kept per band (enough for a figure; bounds memory for long runs).
+const TRACK_SAMPLES: usize = 400;
+
+/// Simulate `point` and every model of `replicates` through `m`; the `level` bands of the metrics and
+/// of the track.
+pub fn manoeuvre_bands(
+    point: &dyn Dynamics,
+    replicates: &[Box<dyn Dynamics + Send + Sync>],
+    m: &Manoeuvre,
+    ship: &Ship,
+    level: f64,
+) -> Result<ManoeuvreBands, PipelineError> {
+    let point_run = simulate_manoeuvre(point, m, None, None)?;
+    let point_metrics = metrics(&point_run.recording, m, ship);
+    let runs: Vec<Option<shipid_sim::SimOutput>> = replicates
+        .par_iter()
+        .map(|model| simulate_manoeuvre(model.as_ref(), m, None, None).ok())
+        .collect();
+    let diverged = runs
+        .iter()
+        .filter(|r| {
+            r.as_ref()
+                .is_none_or(|r| !matches!(r.status, SimStatus::Ok))
+        })
+        .count();
+    let replicate_metrics: Vec<Option<[(&'static str, Option<f64>); 8]>> = runs
+        .iter()
+        .map(|r| {
+            r.as_ref()
+                .filter(|r| matches!(r.status, SimStatus::Ok))
+                .map(|r| metrics(&r.recording, m, ship).entries())
+        })
+        .collect();
+    let metrics = point_metrics
+        .entries()
+        .iter()
+        .enumerate()
+        .map(|(i, &(name, value))| MetricBand {
+            metric: name,
+            point: value,
+            band: percentile_band(
+                replicate_metrics.iter().map(|e| e.and_then(|e| e[i].1)),
+                level,
+            ),
+        })
+        .collect();
+    let track =
+        (!point_run.recording.t.is_empty()).then(|| track_band(&point_run.recording, &runs, level));
+    Ok(ManoeuvreBands {
+        level,
+        replicates: replicates.len(),
+        diverged,
+        metrics,
+        track,
+    })
+}
+
+/// Linear interpolation of `y(t)` at `at` (None outside the samples).
+fn at_time(t: &[f64], y: &[f64], at: f64) -> Option<f64> {
+    let i = t.partition_point(|&s| s < at);
+    if i == 0 {
+        return (t.first() == Some(&at)).then(|| y[0]);
+    }
+    if i >= t.len() {
+        return None;
+    }
+    let w = (at - t[i - 1]) / (t[i] - t[i - 1]);
+    Some(y[i - 1] + w * (y[i] - y[i - 1]))
+}
+
+fn track_band(
+    point: &shipid_io::Recording,
+    runs: &[Option<shipid_sim::SimOutput>],
+    level: f64,
+) -> TrackBand {
+    let step = point.t.len().div_ceil(TRACK_SAMPLES).max(1);
+    let times: Vec<f64> = point.t.iter().step_by(step).copied().collect();
+    let band_of = |series: fn(&shipid_io::Recording) -> &Vec<f64>, scale: f64| {
+        times
+            .iter()
+            .map(|&at| {
+                let values = runs.iter().map(|r| {
+                    r.as_ref()
+                        .and_then(|r| at_time(&r.recording.t, series(&r.recording), at))
+                        .map(|v| v * scale)
+                });
+                percentile_band(values, level).ok().map(|b| (b.lo, b.hi))
+            })
+            .collect::<Vec<_>>()
+    };
+    TrackBand {
+        x0_m: band_of(|r| &r.x0, 1.0),
+        y0_m: band_of(|r| &r.y0, 1.0),
+        psi_deg: band_of(|r| &r.psi, 180.0 / std::f64::consts::PI),
+        t_s: times,
+    }
+}

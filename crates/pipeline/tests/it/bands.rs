@@ -1,0 +1,148 @@
+//! Block-bootstrap replicates of a polynomial fit and the manoeuvre bands they give.
+
+use std::path::Path;
+
+use shipid_estimators::Solver;
+use shipid_io::Dataset;
+use shipid_model::CoefficientSet;
+use shipid_pipeline::bands::manoeuvre_bands;
+use shipid_pipeline::bootstrap::{Bootstrap, bootstrap_abkowitz};
+use shipid_pipeline::fit::{EstimatorSpec, FitOutput, WindowSpec, fit_dataset};
+use shipid_pipeline::spec::parse_manoeuvre;
+use shipid_sim::{AbkowitzDynamics, Dynamics};
+
+fn default_data() -> Dataset {
+    Dataset::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/kvlcc2-mmg/dataset.toml"))
+        .expect("the shipped default data load")
+}
+
+/// reduced32 ridge (λ fixed) on ZZ35/35 port alone: the single-manoeuvre case.
+fn zz35_fit(ds: &Dataset) -> FitOutput {
+    let spec = EstimatorSpec {
+        lambda: Some(1e-6),
+        ..EstimatorSpec::named("ridge")
+    };
+    fit_dataset(
+        ds,
+        CoefficientSet::builtin("reduced32").unwrap(),
+        &spec,
+        &["zz35_35_ps.csv".into()],
+        WindowSpec::Whole,
+        Solver::Fast,
+    )
+    .expect("reduced32 fits ZZ35")
+}
+
+fn replicates(ds: &Dataset, out: &FitOutput, n: usize, seed: u64) -> Bootstrap {
+    let estimators = [0, 1, 2].map(|i| out.dofs[i].fit.estimator.clone());
+    bootstrap_abkowitz(
+        ds,
+        &out.model,
+        &out.model.coefficients,
+        &out.training,
+        &estimators,
+        false,
+        Solver::Fast,
+        n,
+        seed,
+    )
+    .expect("the bootstrap runs")
+}
+
+#[test]
+fn bootstrap_is_reproducible_and_centred_on_the_fit() {
+    let ds = default_data();
+    let out = zz35_fit(&ds);
+    let a = replicates(&ds, &out, 60, 5);
+    let b = replicates(&ds, &out, 60, 5);
+    assert_eq!(a.replicates, b.replicates, "same seed, same replicates");
+    assert_eq!(a.replicates.len() + a.rejected, 60);
+    assert!(
+        a.block.rows > 1,
+        "manoeuvre residuals are autocorrelated: {:?}",
+        a.block
+    );
+    // Every coefficient varies, and the fit lies inside its replicates' range.
+    for dof in 0..3 {
+        for (j, &c) in out.model.coefficients[dof].iter().enumerate() {
+            let values: Vec<f64> = a.replicates.iter().map(|r| r[dof][j]).collect();
+            let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            assert!(lo < hi, "DOF {dof} term {j} does not vary");
+            assert!(
+                lo <= c && c <= hi,
+                "DOF {dof} term {j}: fit {c} outside [{lo}, {hi}]"
+            );
+        }
+    }
+}
+
+#[test]
+fn too_few_or_absurd_replicate_counts_are_refused() {
+    let ds = default_data();
+    let out = zz35_fit(&ds);
+    let estimators = [0, 1, 2].map(|i| out.dofs[i].fit.estimator.clone());
+    for n in [0, 1, 10_001] {
+        let err = bootstrap_abkowitz(
+            &ds,
+            &out.model,
+            &out.model.coefficients,
+            &out.training,
+            &estimators,
+            false,
+            Solver::Fast,
+            n,
+            1,
+        )
+        .unwrap_err();
+        assert!(err.to_string().contains("--bootstrap"), "{n}: {err}");
+    }
+}
+
+#[test]
+fn turning_circle_bands_count_every_replicate() {
+    let ds = default_data();
+    let out = zz35_fit(&ds);
+    let boot = replicates(&ds, &out, 40, 9);
+    let models: Vec<Box<dyn Dynamics + Send + Sync>> = boot
+        .replicates
+        .iter()
+        .map(|c| {
+            let m = shipid_model::AbkowitzModel::new(
+                out.model.set.clone(),
+                c.clone(),
+                out.model.ship,
+                out.model.added_mass,
+            )
+            .unwrap();
+            Box::new(AbkowitzDynamics(m)) as Box<dyn Dynamics + Send + Sync>
+        })
+        .collect();
+    let m = parse_manoeuvre("turning:35:starboard").unwrap();
+    let bands = manoeuvre_bands(
+        &AbkowitzDynamics(out.model.clone()),
+        &models,
+        &m,
+        &ds.ship,
+        0.9,
+    )
+    .unwrap();
+    assert_eq!(bands.replicates, 40);
+    let tactical = bands
+        .metrics
+        .iter()
+        .find(|b| b.metric.starts_with("tactical_diameter"))
+        .expect("a turning circle has a tactical diameter");
+    let band = tactical.band.as_ref().expect("40 replicates give a band");
+    assert!(band.lo <= band.hi);
+    assert_eq!(band.finite + band.undefined, 40);
+    // Zig-zag metrics are not defined for a turning circle: no band, and the reason says why.
+    let overshoot = bands
+        .metrics
+        .iter()
+        .find(|b| b.metric.starts_with("overshoot_1"))
+        .unwrap();
+    assert!(overshoot.point.is_none() && overshoot.band.is_err());
+    let track = bands.track.expect("a run gives a track band");
+    assert_eq!(track.t_s.len(), track.psi_deg.len());
+}

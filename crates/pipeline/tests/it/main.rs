@@ -1,0 +1,3 @@
+//! Integration tests of the pipeline crate: one test binary, one module per concern.
+
+mod bands;
