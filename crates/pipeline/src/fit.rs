@@ -457,6 +457,7 @@ pub fn fit_dataset(
     let mut fit_time_s = 0.0;
     for dof in Dof::ALL {
         let d = design(&set, dof, &samples, &inertia);
+        check_design_finite(ds, &windows, &samples, &d)?;
         let bounds = if spec.uses_bounds() && set.has_bounds(dof) {
             let (lo, hi): (Vec<f64>, Vec<f64>) = d.bounds.iter().copied().unzip();
             Some(Bounds::new(lo, hi).map_err(|e| bad_input(format!("{dof} bounds: {e}")))?)
@@ -531,6 +532,67 @@ pub fn fit_dataset(
         fit_time_s,
         training: samples,
     })
+}
+
+/// Every regressor and target finite, or bad input naming the recording file, its line and the
+/// regressor: a recorded value can be finite and still overflow in a cubic term (|v| = 1e120).
+fn check_design_finite(
+    ds: &Dataset,
+    windows: &[TrainingWindow],
+    samples: &Samples,
+    d: &shipid_model::Design,
+) -> Result<(), PipelineError> {
+    let bad = (0..d.phi.ncols())
+        .flat_map(|j| (0..d.phi.nrows()).map(move |i| (i, j)))
+        .find(|&(i, j)| !d.phi[(i, j)].is_finite())
+        .map(|(i, j)| (i, d.names[j].clone(), d.phi[(i, j)]))
+        .or_else(|| {
+            d.y.iter().position(|y| !y.is_finite()).map(|i| {
+                (
+                    i,
+                    format!("the {} target (inertia × acceleration)", d.dof),
+                    d.y[i],
+                )
+            })
+        });
+    let Some((row, what, value)) = bad else {
+        return Ok(());
+    };
+    let recording = samples
+        .group
+        .get(row)
+        .and_then(|&g| windows.get(g))
+        .and_then(|w| ds.recording(&w.recording));
+    let place = match recording {
+        Some(r) => {
+            let path = ds.path.parent().unwrap_or(Path::new("")).join(&r.file);
+            let index = r.recording.t.partition_point(|&t| t < samples.t[row]);
+            match data_line(&path, index) {
+                Some(line) => format!("{}, line {line}", path.display()),
+                None => format!("{} (t = {} s)", path.display(), samples.t[row]),
+            }
+        }
+        None => format!("{} (training sample {row})", ds.path.display()),
+    };
+    Err(bad_input(format!(
+        "{place}: {what} is {value}: a recorded value of this row is too large for the model's terms (there du' = {:.3e}, v' = {:.3e}, r' = {:.3e}, delta = {:.3e} rad)",
+        samples.du[row], samples.v[row], samples.r[row], samples.delta[row]
+    )))
+}
+
+/// The line (1-based) of data row `index` in a recording CSV, counted as its reader does:
+/// comments and blank lines before the header, the header, then non-blank lines.
+fn data_line(path: &Path, index: usize) -> Option<usize> {
+    let text = std::fs::read_to_string(path).ok()?;
+    let mut lines = text.lines().enumerate().skip_while(|(_, l)| {
+        let l = l.trim();
+        l.starts_with('#') || l.is_empty()
+    });
+    lines.next()?; // the header
+    lines
+        .filter(|(_, l)| !l.trim().is_empty())
+        .nth(index)
+        .map(|(k, _)| k + 1)
 }
 
 /// The estimator of `spec` on this DOF's design, tuning what `--tune` leaves open: λ, α, or the
