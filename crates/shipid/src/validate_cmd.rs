@@ -3,17 +3,53 @@
 use std::path::Path;
 
 use shipid_io::Dataset;
-use shipid_pipeline::model_file::load_model;
+use shipid_pipeline::model_file::{load_model, ship_mismatch};
+use shipid_pipeline::range::{TrainingSource, training_source};
 
 use crate::{CliError, Outcome};
 
 pub fn run(model_spec: &str, dataset: &Path, as_json: bool) -> Result<Outcome, CliError> {
     let model = load_model(model_spec)?;
     let ds = Dataset::load(dataset)?;
+    // Validation still runs: its errors are what the user asked for; the warnings say what they
+    // cannot mean.
+    if let Some(m) = ship_mismatch(model.ship(), &ds.ship) {
+        eprintln!(
+            "warning: {model_spec} on {}: {m}: the errors below compare different ships",
+            dataset.display()
+        );
+    }
+    // A sparse GP carries its own identification range; a polynomial's needs its training data.
+    if model.own_range().is_none() {
+        warn_about_training(model_spec);
+    }
     Ok(crate::print::validation(
         model.as_ref(),
         model_spec,
         &ds,
         as_json,
     ))
+}
+
+/// Says on stderr when the identification range (the `outside` column) cannot be given, and why.
+fn warn_about_training(model_spec: &str) {
+    match training_source(model_spec) {
+        TrainingSource::Read {
+            unverified: true,
+            model,
+            data,
+        } => eprintln!(
+            "warning: {}: its training windows carry no `dataset_hash` (written by an older shipid): cannot check that {} is still the data it was fitted on; the identification range assumes it is",
+            model.display(),
+            data.2.display()
+        ),
+        TrainingSource::Read { .. } => {}
+        TrainingSource::NotRecorded if model_spec.starts_with("mmg:") => {}
+        TrainingSource::NotRecorded => eprintln!(
+            "warning: {model_spec}: the model names no training data: the identification range (column `outside`) is unavailable"
+        ),
+        TrainingSource::Unavailable(why) => eprintln!(
+            "warning: {why}\nthe identification range (column `outside`) is unavailable"
+        ),
+    }
 }
