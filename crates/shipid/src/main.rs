@@ -121,9 +121,12 @@ enum Command {
     /// Print a comparison table of a study's summary (markdown).
     Table {
         study: PathBuf,
-        /// ROWS,COLS,VALUE columns of the summary table.
-        #[arg(long, default_value = "window,test,mrae")]
-        pivot: String,
+        /// ROWS,COLS,VALUE columns of the summary table; ROWS and COLS may join several columns
+        /// with + (`set+estimator,test,mrae`). A pivot that would put two cases in one cell is
+        /// refused. Default: window,test,mrae with the columns that tell the cases apart added to
+        /// the rows.
+        #[arg(long)]
+        pivot: Option<String>,
         #[arg(long)]
         out: Option<PathBuf>,
     },
@@ -197,6 +200,9 @@ enum Command {
         /// Simulated time [s].
         #[arg(long)]
         duration: Option<f64>,
+        /// Run even more than 1e7 RK4 steps (the stored history is thinned to at most 1e6 samples).
+        #[arg(long)]
+        allow_large: bool,
         #[arg(long)]
         json: bool,
         /// Write the time series (the recording CSV of docs/data-format.md).
@@ -341,13 +347,20 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             replay,
             dt,
             duration,
+            allow_large,
             json,
             out,
         } => match (manoeuvre, replay) {
             (_, Some(ds)) => shipid::simulate_cmd::run_replay(&model, &ds, json),
-            (Some(m), None) => {
-                shipid::simulate_cmd::run(&model, &m, dt, duration, json, out.as_deref())
-            }
+            (Some(m), None) => shipid::simulate_cmd::run(&shipid::simulate_cmd::SimulateArgs {
+                model: &model,
+                manoeuvre: &m,
+                dt_s: dt,
+                duration_s: duration,
+                allow_large,
+                json,
+                out_csv: out.as_deref(),
+            }),
             (None, None) => Err(shipid::bad_input("give --manoeuvre or --replay")),
         },
         Command::Run {
@@ -364,7 +377,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             strict,
         ),
         Command::Table { study, pivot, out } => {
-            shipid::study_cmd::table(&study, out.as_deref(), &pivot)
+            shipid::study_cmd::table(&study, out.as_deref(), pivot.as_deref())
         }
         Command::Plot { study, out } => shipid::study_cmd::plot(&study, out.as_deref()),
         Command::Report { dir, study } => shipid::report_cmd::run(&dir, study.as_deref()),

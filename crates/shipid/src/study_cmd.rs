@@ -129,8 +129,13 @@ pub fn plot(study_path: &Path, out: Option<&Path>) -> Result<Outcome, CliError> 
     })
 }
 
-/// `shipid table STUDY.toml [--pivot ROWS,COLS,VALUE]`: a markdown comparison table from `summary.csv`.
-pub fn table(study_path: &Path, out: Option<&Path>, pivot: &str) -> Result<Outcome, CliError> {
+/// `shipid table STUDY.toml [--pivot ROWS,COLS,VALUE]`: a markdown comparison table from `summary.csv`
+/// (`None`: the default pivot, with every column that tells the study's cases apart in its rows).
+pub fn table(
+    study_path: &Path,
+    out: Option<&Path>,
+    pivot: Option<&str>,
+) -> Result<Outcome, CliError> {
     let study = load_study(study_path)?;
     let dir = out
         .map(PathBuf::from)
@@ -143,25 +148,32 @@ pub fn table(study_path: &Path, out: Option<&Path>, pivot: &str) -> Result<Outco
             study_path.display()
         )));
     }
-    let parts: Vec<&str> = pivot.split(',').map(str::trim).collect();
-    let [rows, cols, value] = parts.as_slice() else {
-        return Err(bad_input(format!(
-            "--pivot `{pivot}`: expected ROWS,COLS,VALUE, e.g. window,test,mrae"
-        )));
-    };
     let t = Table::read_csv(&path).map_err(failed)?;
-    let percent = value.ends_with("mrae") || value.ends_with("rel_error");
-    let md = t
-        .pivot_markdown(rows, cols, value, |x| {
-            if percent {
-                format!("{:.1} %", 100.0 * x)
-            } else {
-                format!("{x:.4}")
-            }
-        })
-        .map_err(|e| bad_input(format!("--pivot: {e} in {}", path.display())))?;
+    let md = shipid_study::tables::summary_pivot(&t, pivot).map_err(|e| {
+        let hint = pivot_hint(&t, pivot, &e).unwrap_or_default();
+        bad_input(format!("--pivot: {e} in {}{hint}", path.display()))
+    })?;
     println!("{md}");
     Ok(Outcome::Ok)
+}
+
+/// For a pivot refused because it puts cases together: the pivot that tells them apart.
+fn pivot_hint(
+    summary: &Table,
+    pivot: Option<&str>,
+    e: &shipid_tables::TableError,
+) -> Option<String> {
+    let shipid_tables::TableError::Collision { .. } = e else {
+        return None;
+    };
+    let mut p: shipid_tables::Pivot = pivot?.parse().ok()?;
+    p.rows = shipid_study::tables::separated_rows(summary, &p).ok()?;
+    Some(format!(
+        "; to tell them apart: --pivot {},{},{} (or leave --pivot out)",
+        p.rows.join("+"),
+        p.cols.join("+"),
+        p.value
+    ))
 }
 
 /// Tolerances of `shipid check`: timings are ignored, everything else is compared to 1e-8 absolute plus

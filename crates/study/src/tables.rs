@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use shipid_tables::Table;
+use shipid_tables::{Pivot, Table, TableError};
 
 use crate::error::StudyError;
 use crate::runner::CaseResult;
@@ -23,6 +23,66 @@ pub fn write_tables(study: &Study, results: &[CaseResult], out: &Path) -> Result
         })?;
     }
     Ok(())
+}
+
+/// `shipid table`'s pivot when none is given: the test's MRAE per window, with the columns that tell
+/// the study's cases apart added to the rows.
+pub const DEFAULT_PIVOT: &str = "window,test,mrae";
+
+/// The summary's columns that tell cases apart, in the order a default pivot adds them to its rows
+/// (each only if it splits cases that would otherwise share a cell); the case id is the last resort.
+pub const CASE_COLUMNS: [&str; 13] = [
+    "set",
+    "estimator",
+    "solver",
+    "training",
+    "window",
+    "tuned",
+    "hyper_X",
+    "hyper_Y",
+    "hyper_N",
+    "epsilon_X",
+    "epsilon_Y",
+    "epsilon_N",
+    "case",
+];
+
+/// A markdown pivot of a summary table. `None`: [`DEFAULT_PIVOT`] with the case columns it needs
+/// added to its rows, so every case × test has its own cell. A given pivot is used as written and
+/// refused when it would put two cases in one cell (the error names them).
+pub fn summary_pivot(summary: &Table, pivot: Option<&str>) -> Result<String, TableError> {
+    let mut p: Pivot = pivot.unwrap_or(DEFAULT_PIVOT).parse()?;
+    if pivot.is_none() {
+        p.rows = separated_rows(summary, &p)?;
+    }
+    let percent = p.value.ends_with("mrae") || p.value.ends_with("rel_error");
+    summary.pivot_markdown(&p, "case", |x| {
+        if percent {
+            format!("{:.1} %", 100.0 * x)
+        } else {
+            format!("{x:.4}")
+        }
+    })
+}
+
+/// `pivot`'s rows with the case columns added that tell its cases apart: the set and the estimator
+/// whenever the study varies them (a reader needs them to know what a row is), then each further
+/// column only if it splits cases that would still share a cell.
+pub fn separated_rows(summary: &Table, pivot: &Pivot) -> Result<Vec<String>, TableError> {
+    let varies = |name: &str| {
+        summary
+            .column(name)
+            .is_some_and(|c| (1..c.len()).any(|i| c.cell(i) != c.cell(0)))
+    };
+    let mut rows: Vec<String> = ["set", "estimator"]
+        .into_iter()
+        .filter(|n| varies(n) && !pivot.rows.iter().chain(&pivot.cols).any(|r| r == n))
+        .map(String::from)
+        .collect();
+    rows.extend(pivot.rows.iter().cloned());
+    let added = summary.separating_columns(&rows, &pivot.cols, "case", &CASE_COLUMNS)?;
+    let given = rows.split_off(rows.len() - pivot.rows.len());
+    Ok(rows.into_iter().chain(added).chain(given).collect())
 }
 
 pub const METRIC_KEYS: [&str; 8] = [

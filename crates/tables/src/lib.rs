@@ -359,7 +359,7 @@ impl Table {
         })
     }
 
-    /// The label of row `i` over `names` (their cells joined by " / ").
+    /// The label of row `i` over `names` (their cells joined by " / ", an empty one as "–").
     fn labeller(&self, names: &[String]) -> Result<impl Fn(usize) -> String + '_, TableError> {
         let cols = names
             .iter()
@@ -367,7 +367,14 @@ impl Table {
             .collect::<Result<Vec<_>, _>>()?;
         Ok(move |i: usize| {
             cols.iter()
-                .map(|c| c.cell(i))
+                .map(|c| {
+                    let cell = c.cell(i);
+                    if cell.is_empty() {
+                        "–".to_string()
+                    } else {
+                        cell
+                    }
+                })
                 .collect::<Vec<_>>()
                 .join(" / ")
         })
