@@ -15,6 +15,7 @@ use serde::Serialize;
 use shipid_estimators::{Bounds, Estimator, Solver, Status, predict};
 use shipid_io::Dataset;
 use shipid_model::{AbkowitzModel, Design, Dof, PrimeInertia, Samples, design};
+use shipid_sim::{AbkowitzDynamics, Dynamics};
 use shipid_uncertainty::{BlockLength, SplitMix64, block_length, replicate_rows};
 
 use crate::error::{PipelineError, bad_input};
@@ -34,6 +35,20 @@ pub struct Bootstrap {
     pub seed: u64,
     /// Replicate fits whose solver did not report `Ok` (kept out of `replicates`).
     pub rejected: usize,
+}
+
+impl Bootstrap {
+    /// The replicates as simulation models of `base`'s set, ship and added masses (a replicate the model
+    /// constructor rejects, e.g. a singular mass matrix, is left out).
+    pub fn models(&self, base: &AbkowitzModel) -> Vec<Box<dyn Dynamics + Send + Sync>> {
+        self.replicates
+            .iter()
+            .filter_map(|c| {
+                AbkowitzModel::new(base.set.clone(), c.clone(), base.ship, base.added_mass).ok()
+            })
+            .map(|m| Box::new(AbkowitzDynamics(m)) as Box<dyn Dynamics + Send + Sync>)
+            .collect()
+    }
 }
 
 /// The contiguous row range of every recording (group) of the samples, in order.

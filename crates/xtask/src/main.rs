@@ -4,10 +4,12 @@
 //! - `paper001`: paper 001's Tab. 6 and Fig. 9–12 on the HSVA tests (docs/reproductions/paper001.md);
 //! - `inverse-bench`: wall time of paper 003's simulation database (docs/benchmarks.md);
 //! - `circles`: every crate's file import edges, failing on a circle;
+//! - `coverage`: measured coverage of the bootstrap bands on generated noisy data;
 //! - `fit-bench`: fit times of the estimators for the side-by-side comparison in `bench/`.
 
 mod bench_diagnose;
 mod circles;
+mod coverage;
 mod fit_bench;
 mod inverse_bench;
 mod paper001;
@@ -63,6 +65,18 @@ enum Task {
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
+    /// Measured coverage of reduced32's bootstrap bands on generated noisy data (docs/uncertainty.md).
+    Coverage {
+        #[arg(long, default_value = "results/coverage")]
+        out: PathBuf,
+        #[arg(long, default_value_t = 10)]
+        seeds: u64,
+        #[arg(long, default_value_t = 200)]
+        replicates: usize,
+        /// Nominal level of the bands.
+        #[arg(long, default_value_t = 0.9)]
+        level: f64,
+    },
     /// List every crate's file import edges and fail on a circle (ARCHITECTURE.md's invariant).
     Circles,
     /// Fit-time benchmark of the estimators (flags: see the module's documentation).
@@ -105,6 +119,12 @@ fn main() -> ExitCode {
             seed,
         } => inverse_bench::bench(&targets, &ships, samples, repeats, seed)
             .map(|()| ExitCode::SUCCESS),
+        Task::Coverage {
+            out,
+            seeds,
+            replicates,
+            level,
+        } => coverage::run(&out, seeds, replicates, level).map(|()| ExitCode::SUCCESS),
         Task::Circles => {
             let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
             Ok(if circles::run(&root) {
