@@ -328,6 +328,27 @@ impl MmgModel {
 
     /// Build the model and solve for the self-propulsion propeller rate at `ship.u0`.
     pub fn new(ship: Ship, params: MmgParameters) -> Result<MmgModel, MmgError> {
+        let mut model = MmgModel::unsolved(ship, params)?;
+        model.propeller_rate_hz = model.solve_self_propulsion()?;
+        Ok(model)
+    }
+
+    /// Build the model with the propeller turning at `n_hz` [1/s] (a recorded rate, or an identified
+    /// model's training rate) instead of the self-propulsion rate of U0.
+    pub fn at_rate(ship: Ship, params: MmgParameters, n_hz: f64) -> Result<MmgModel, MmgError> {
+        if !(n_hz.is_finite() && n_hz >= 0.0) {
+            return Err(MmgError::InvalidParameter {
+                name: "propeller_rate_hz",
+                value: n_hz,
+            });
+        }
+        let mut model = MmgModel::unsolved(ship, params)?;
+        model.propeller_rate_hz = n_hz;
+        Ok(model)
+    }
+
+    /// The checked model with its propeller at rest; the constructors set the rate.
+    fn unsolved(ship: Ship, params: MmgParameters) -> Result<MmgModel, MmgError> {
         for (name, value) in [
             ("lpp", ship.lpp),
             ("draft", ship.draft),
@@ -362,7 +383,7 @@ impl MmgModel {
                 value: params.m_y,
             });
         }
-        let mut model = MmgModel {
+        Ok(MmgModel {
             ship,
             params,
             added_mass,
@@ -372,9 +393,7 @@ impl MmgModel {
             my_kg,
             half_rho_l_d: 0.5 * ship.rho * ship.lpp * ship.draft,
             inv_sway_yaw: [[d / det, -b / det], [-b / det, a / det]],
-        };
-        model.propeller_rate_hz = model.solve_self_propulsion()?;
-        Ok(model)
+        })
     }
 
     /// The parameters.
@@ -436,6 +455,17 @@ impl MmgModel {
 
     /// Hull, propeller and rudder forces at `state` with rudder angle `delta_rad` (Y&Y 2015 §2–3).
     pub fn forces(&self, state: &State, delta_rad: f64) -> Result<MmgForces, DynamicsError> {
+        self.forces_at_rate(state, delta_rad, self.propeller_rate_hz)
+    }
+
+    /// [`MmgModel::forces`] with the propeller turning at `n_hz` [1/s] (a recorded rate) instead of the
+    /// model's own rate: the identification evaluates each sample at its recorded rate.
+    pub fn forces_at_rate(
+        &self,
+        state: &State,
+        delta_rad: f64,
+        n_hz: f64,
+    ) -> Result<MmgForces, DynamicsError> {
         let p = &self.params;
         let ship = &self.ship;
         let (u, v, r) = (state.u, state.v, state.r);
@@ -479,7 +509,7 @@ impl MmgModel {
         let c2 = if beta_p > 0.0 { p.c2_pos } else { p.c2_neg };
         let one_minus_wp =
             (1.0 - p.w_p0) * (1.0 + (1.0 - (-p.c1 * beta_p.abs()).exp()) * (c2 - 1.0));
-        let n = self.propeller_rate_hz;
+        let n = n_hz;
         let dp = p.propeller_diameter_m;
         let u_p = u * one_minus_wp;
         let nd = n * dp;

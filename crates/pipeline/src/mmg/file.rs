@@ -1,0 +1,274 @@
+//! The model file `kind = "mmg"`: every identified parameter with its value, bounds, prior, the prior's
+//! source, standard error, the data's share of its precision and whether the data determine it; the
+//! ship, added masses, propeller and rudder data; the training windows and the estimator.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+use shipid_io::{AddedMass, Ship};
+use shipid_model::TrainingWindow;
+use shipid_sim::MmgModel;
+
+use super::MmgFit;
+use super::geometry::MmgGeometry;
+use super::identify::{DETERMINED_SHARE, assemble};
+use super::priors::{HULL_NAMES, NONLINEAR_NAMES};
+use crate::error::{PipelineError, bad_input};
+
+/// The `kind` of an MMG model file.
+pub const MMG_KIND: &str = "mmg";
+
+/// `[propeller]` of the model file.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PropellerEntry {
+    pub diameter_m: f64,
+    pub x_m: f64,
+    /// K_T(J) = k0 + k1 J + k2 J².
+    pub k_t: [f64; 3],
+    /// The rate a simulation holds [1/s] (mean recorded rate of the training windows).
+    pub rate_rps: f64,
+}
+
+/// `[rudder]` of the model file.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RudderEntry {
+    pub area_m2: f64,
+    pub span_m: f64,
+    pub x_m: f64,
+}
+
+/// `[[estimator.cv]]`: one candidate prior weight and its mean held-out cost.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CvEntry {
+    pub lambda: f64,
+    pub held_out_cost: f64,
+}
+
+/// `[estimator]` of the model file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MmgEstimatorEntry {
+    /// `bounded-lsq` or `ridge` (the inner solve of the hull derivatives).
+    pub name: String,
+    pub method: String,
+    /// λ, the weight of the prior.
+    pub prior_weight: f64,
+    pub tuned: bool,
+    /// A parameter counts as determined by the data above this share of its precision.
+    pub determined_share: f64,
+    pub samples: usize,
+    /// RMS of the prime equation-error residual [X', Y', N'].
+    pub residual_rms: [f64; 3],
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub cv: Vec<CvEntry>,
+}
+
+/// `[[parameter]]` of the model file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParamEntry {
+    pub name: String,
+    pub value: f64,
+    pub lower: f64,
+    pub upper: f64,
+    pub prior: f64,
+    pub prior_sd: f64,
+    pub prior_source: String,
+    pub standard_error: f64,
+    /// Share of the posterior precision that comes from the data, in [0, 1].
+    pub data_share: f64,
+    pub determined_by_data: bool,
+}
+
+/// An MMG model file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MmgModelFile {
+    pub shipid_version: String,
+    pub kind: String,
+    pub ship: Ship,
+    pub added_mass: AddedMass,
+    pub propeller: PropellerEntry,
+    pub rudder: RudderEntry,
+    pub estimator: MmgEstimatorEntry,
+    #[serde(default)]
+    pub training: Vec<TrainingWindow>,
+    #[serde(rename = "parameter")]
+    pub parameters: Vec<ParamEntry>,
+}
+
+impl MmgModelFile {
+    /// The file of a fit.
+    pub fn of_fit(fit: &MmgFit, added: AddedMass) -> MmgModelFile {
+        use shipid_sim::Dynamics;
+        let g = &fit.geometry;
+        MmgModelFile {
+            shipid_version: env!("CARGO_PKG_VERSION").into(),
+            kind: MMG_KIND.into(),
+            ship: *fit.model.ship(),
+            added_mass: added,
+            propeller: PropellerEntry {
+                diameter_m: g.propeller_diameter_m,
+                x_m: g.propeller_x_m,
+                k_t: g.k_t,
+                rate_rps: fit.propeller_rate_hz,
+            },
+            rudder: RudderEntry {
+                area_m2: g.rudder_area_m2,
+                span_m: g.rudder_span_m,
+                x_m: g.rudder_x_m,
+            },
+            estimator: MmgEstimatorEntry {
+                name: fit.estimator.name().into(),
+                method: "equation error, variable projection: hull derivatives by the estimator on the \
+                         prior-augmented design inside, propeller and rudder parameters by projected \
+                         Levenberg–Marquardt outside; maximum a posteriori with the priors"
+                    .into(),
+                prior_weight: fit.lambda,
+                tuned: !fit.cv.is_empty(),
+                determined_share: DETERMINED_SHARE,
+                samples: fit.samples,
+                residual_rms: fit.estimate.residual_rms,
+                cv: fit
+                    .cv
+                    .iter()
+                    .map(|c| CvEntry {
+                        lambda: c.lambda,
+                        held_out_cost: c.held_out_cost,
+                    })
+                    .collect(),
+            },
+            training: fit.windows.clone(),
+            parameters: fit
+                .estimate
+                .params
+                .iter()
+                .map(|p| ParamEntry {
+                    name: p.spec.name.into(),
+                    value: p.value,
+                    lower: p.spec.lower,
+                    upper: p.spec.upper,
+                    prior: p.spec.prior,
+                    prior_sd: p.spec.prior_sd,
+                    prior_source: p.spec.source.clone(),
+                    standard_error: p.standard_error,
+                    data_share: p.data_share,
+                    determined_by_data: p.determined_by_data,
+                })
+                .collect(),
+        }
+    }
+
+    fn geometry(&self) -> MmgGeometry {
+        MmgGeometry {
+            propeller_diameter_m: self.propeller.diameter_m,
+            propeller_x_m: self.propeller.x_m,
+            k_t: self.propeller.k_t,
+            rudder_area_m2: self.rudder.area_m2,
+            rudder_span_m: self.rudder.span_m,
+            rudder_x_m: self.rudder.x_m,
+        }
+    }
+
+    /// The model this file describes; a fault names the file and the key.
+    pub fn to_model(&self, path: &Path) -> Result<MmgModel, PipelineError> {
+        let at =
+            |key: String, msg: String| bad_input(format!("{}: key `{key}`: {msg}", path.display()));
+        if self.kind != MMG_KIND {
+            return Err(at(
+                "kind".into(),
+                format!("expected \"{MMG_KIND}\", not \"{}\"", self.kind),
+            ));
+        }
+        let known: Vec<&str> = HULL_NAMES
+            .iter()
+            .flatten()
+            .copied()
+            .filter(|n| !n.is_empty())
+            .chain(NONLINEAR_NAMES)
+            .collect();
+        for (i, p) in self.parameters.iter().enumerate() {
+            if !known.contains(&p.name.as_str()) {
+                return Err(at(
+                    format!("parameter[{i}].name"),
+                    format!(
+                        "unknown MMG parameter `{}` (expected one of {})",
+                        p.name,
+                        known.join(", ")
+                    ),
+                ));
+            }
+            if self.parameters[..i].iter().any(|q| q.name == p.name) {
+                return Err(at(
+                    format!("parameter[{i}].name"),
+                    format!("`{}` is given twice", p.name),
+                ));
+            }
+            if !p.value.is_finite() {
+                return Err(at(
+                    format!("parameter[{i}].value"),
+                    format!("must be a finite number, not {}", p.value),
+                ));
+            }
+            if p.value < p.lower || p.value > p.upper {
+                return Err(at(
+                    format!("parameter[{i}].value"),
+                    format!(
+                        "{} = {} is outside its bounds [{}, {}]",
+                        p.name, p.value, p.lower, p.upper
+                    ),
+                ));
+            }
+        }
+        if let Some(missing) = known
+            .iter()
+            .find(|n| !self.parameters.iter().any(|p| p.name == **n))
+        {
+            return Err(at("parameter".into(), format!("no entry for `{missing}`")));
+        }
+        if self.added_mass.Y_rdot != 0.0 || self.added_mass.N_vdot != 0.0 {
+            return Err(at(
+                "added_mass".into(),
+                "Y_rdot and N_vdot must be 0: the MMG model has no sway–yaw added-mass coupling"
+                    .into(),
+            ));
+        }
+        let geometry = self.geometry();
+        geometry.check(
+            self.ship.lpp,
+            &format!("{}: [propeller]/[rudder]", path.display()),
+        )?;
+        let get = |name: &str| {
+            self.parameters
+                .iter()
+                .find(|p| p.name == name)
+                .map_or(f64::NAN, |p| p.value)
+        };
+        let params = assemble(&self.ship, &self.added_mass, &geometry, &get);
+        MmgModel::at_rate(self.ship, params, self.propeller.rate_rps)
+            .map_err(|e| bad_input(format!("{}: {e}", path.display())))
+    }
+}
+
+/// The TOML text of a fit's model file, with a comment on what it is.
+pub fn write_mmg_model(fit: &MmgFit, added: AddedMass) -> Result<String, PipelineError> {
+    let file = MmgModelFile::of_fit(fit, added);
+    let body =
+        toml::to_string(&file).map_err(|e| crate::error::failed(format!("mmg model file: {e}")))?;
+    Ok(format!(
+        "# MMG model (Yasukawa & Yoshimura 2015 structure) identified by shipid from free-running \
+         recordings.\n# Each [[parameter]]: value, bounds, prior with its source, standard error, \
+         the data's share of its precision\n# and whether the data determine it (share > {DETERMINED_SHARE}). \
+         docs/mmg.md explains the fields.\n{body}"
+    ))
+}
+
+/// The model of an MMG model file's text (`path` names it in errors).
+pub fn load_mmg_model(path: &Path, text: &str) -> Result<MmgModel, PipelineError> {
+    let file: MmgModelFile =
+        toml::from_str(text).map_err(|e| shipid_io::InputError::toml(path, text, &e))?;
+    file.to_model(path)
+}

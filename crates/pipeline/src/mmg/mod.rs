@@ -1,0 +1,331 @@
+//! The `mmg` model family: the MMG standard method (Yasukawa & Yoshimura 2015) with its hull, propeller
+//! and rudder parameters identified from free-running recordings (`docs/mmg.md`).
+//!
+//! - `geometry`: the known propeller and rudder data ([`MmgGeometry`]).
+//! - `priors`: every identified parameter with its physical bounds and an empirical prior from the
+//!   ship's main particulars, each with its source.
+//! - `identify`: equation error by variable projection (hull derivatives by bounded least squares of
+//!   the estimators crate inside, propeller and rudder parameters by projected Levenberg–Marquardt
+//!   outside), the posterior and the data's share of each parameter's precision.
+//! - `file`: the model file `kind = "mmg"` and its loader.
+//!
+//! The identified model is a [`shipid_sim::MmgModel`] (a `Dynamics`) with its propeller at the mean
+//! recorded rate of the training windows: the identification uses each sample's recorded `n`, a
+//! simulation holds the rate constant, as free-running manoeuvring tests do.
+//!
+//! Module imports: `geometry` ← `priors` ← `identify` ← this file → `file`.
+
+pub mod file;
+pub mod geometry;
+pub mod identify;
+pub mod priors;
+
+use std::time::Instant;
+
+use shipid_io::Dataset;
+use shipid_io::deriv::accelerations_or_estimate;
+use shipid_model::TrainingWindow;
+use shipid_sim::{MmgModel, State};
+
+pub use file::{MMG_KIND, MmgModelFile, load_mmg_model, write_mmg_model};
+pub use geometry::MmgGeometry;
+pub use identify::{DETERMINED_SHARE, EqSample, Estimate, ParamEstimate, Problem};
+pub use priors::{ParamSpec, Role, priors};
+
+use crate::error::{PipelineError, bad_input, failed};
+use crate::fit::{WindowSpec, chosen_recordings, training_window, window_range};
+
+/// How the hull derivatives are solved inside: bounded least squares on the prior-augmented design
+/// (the physical sign bounds of [`priors`] hold), or the same without bounds (a ridge toward the
+/// prior).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MmgEstimator {
+    BoundedLsq,
+    Ridge,
+}
+
+impl MmgEstimator {
+    pub fn name(self) -> &'static str {
+        match self {
+            MmgEstimator::BoundedLsq => "bounded-lsq",
+            MmgEstimator::Ridge => "ridge",
+        }
+    }
+
+    /// `bounded-lsq` or `ridge`.
+    pub fn parse(name: &str) -> Result<MmgEstimator, PipelineError> {
+        match name {
+            "bounded-lsq" => Ok(MmgEstimator::BoundedLsq),
+            "ridge" => Ok(MmgEstimator::Ridge),
+            other => Err(bad_input(format!(
+                "estimator `{other}` does not apply to --set mmg: expected bounded-lsq or ridge"
+            ))),
+        }
+    }
+}
+
+/// The weight λ of the prior against the data.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PriorWeight {
+    Fixed(f64),
+    /// Chosen from [`CV_GRID`] by blocked cross-validation (by recording when there are several).
+    CrossValidated,
+}
+
+/// λ without `--tune`: the prior acts only where the data say little.
+pub const DEFAULT_PRIOR_WEIGHT: f64 = 1e-6;
+/// The candidates of the cross-validation.
+pub const CV_GRID: [f64; 5] = [1e-8, 1e-6, 1e-4, 1e-2, 1.0];
+/// Blocks of the cross-validation when there is one training window.
+pub const CV_BLOCKS: usize = 5;
+
+/// What to fit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MmgFitOptions {
+    /// Training recordings (all when empty).
+    pub recordings: Vec<String>,
+    pub window: WindowSpec,
+    pub estimator: MmgEstimator,
+    pub prior_weight: PriorWeight,
+    /// Propeller rate [1/s] for recordings without an `n` column.
+    pub propeller_rate_hz: Option<f64>,
+}
+
+impl Default for MmgFitOptions {
+    fn default() -> Self {
+        MmgFitOptions {
+            recordings: Vec::new(),
+            window: WindowSpec::Whole,
+            estimator: MmgEstimator::BoundedLsq,
+            prior_weight: PriorWeight::Fixed(DEFAULT_PRIOR_WEIGHT),
+            propeller_rate_hz: None,
+        }
+    }
+}
+
+/// One cross-validation candidate: λ and its mean held-out cost.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CvScore {
+    pub lambda: f64,
+    pub held_out_cost: f64,
+}
+
+/// The identified model, its parameters with their identifiability, and how it was found.
+pub struct MmgFit {
+    pub model: MmgModel,
+    pub geometry: MmgGeometry,
+    pub estimate: Estimate,
+    pub lambda: f64,
+    pub estimator: MmgEstimator,
+    /// The cross-validation scores when λ was tuned.
+    pub cv: Vec<CvScore>,
+    pub windows: Vec<TrainingWindow>,
+    /// Propeller rate of the model: the mean recorded rate of the training samples [1/s].
+    pub propeller_rate_hz: f64,
+    pub samples: usize,
+    pub fit_time_s: f64,
+}
+
+/// The equation-error samples of the chosen recordings and window, and the windows used.
+pub fn training_samples(
+    ds: &Dataset,
+    opts: &MmgFitOptions,
+) -> Result<(Vec<EqSample>, Vec<TrainingWindow>), PipelineError> {
+    let added = ds.added_mass.ok_or_else(|| {
+        bad_input(format!(
+            "{}: no [added_mass] table; the MMG fit needs m_x, m_y and J_z",
+            ds.path.display()
+        ))
+    })?;
+    if added.Y_rdot != 0.0 || added.N_vdot != 0.0 {
+        return Err(bad_input(format!(
+            "{}: [added_mass] has Y_rdot = {} and N_vdot = {}: the MMG model has no sway–yaw added-mass coupling",
+            ds.path.display(),
+            added.Y_rdot,
+            added.N_vdot
+        )));
+    }
+    let ship = &ds.ship;
+    let m = ship.mass_kg();
+    let mx = -added.X_udot;
+    let my = -added.Y_vdot;
+    let iz = ship.iz_midship_kg_m2() - added.N_rdot;
+    let chosen = chosen_recordings(ds, &opts.recordings)?;
+    let mut samples = Vec::new();
+    let mut windows = Vec::new();
+    for (g, r) in chosen.iter().enumerate() {
+        let range = window_range(r, ds, opts.window)?;
+        let rec = &r.recording;
+        let (acc, estimated) = accelerations_or_estimate(rec, ship);
+        for i in range.clone() {
+            let n_hz = match (&rec.n, opts.propeller_rate_hz) {
+                (Some(n), _) => n[i],
+                (None, Some(n)) => n,
+                (None, None) => {
+                    return Err(bad_input(format!(
+                        "{}: recording `{}` has no `n` column and no propeller rate is given \
+                         ([propeller] rate_rps of the data set)",
+                        ds.path.display(),
+                        r.file
+                    )));
+                }
+            };
+            let state = State::of_recording(rec, i);
+            if !(state.speed() > 0.05 * ship.u0) || !n_hz.is_finite() {
+                continue;
+            }
+            let (u, v, rr) = (state.u, state.v, state.r);
+            let (ud, vd, rd) = (acc.u_dot[i], acc.v_dot[i], acc.r_dot[i]);
+            let needed = [
+                (m + mx) * ud - (m + my) * v * rr - ship.xg * m * rr * rr,
+                (m + my) * vd + (m + mx) * u * rr + ship.xg * m * rd,
+                iz * rd + ship.xg * m * (vd + u * rr),
+            ];
+            samples.push(EqSample {
+                state,
+                delta_rad: rec.delta[i],
+                n_hz,
+                needed,
+                group: g,
+            });
+        }
+        let t = &rec.t;
+        windows.push(training_window(
+            ds,
+            r,
+            opts.window,
+            (
+                t[range.start],
+                t[range.end.saturating_sub(1).max(range.start)],
+            ),
+            estimated,
+        ));
+    }
+    if samples.len() < 40 {
+        return Err(bad_input(format!(
+            "{}: {} usable samples in the training windows, too few for the 31 MMG parameters",
+            ds.path.display(),
+            samples.len()
+        )));
+    }
+    Ok((samples, windows))
+}
+
+/// Identify the MMG model of `ds` with the priors of [`priors`].
+pub fn fit_mmg(
+    ds: &Dataset,
+    geometry: &MmgGeometry,
+    opts: &MmgFitOptions,
+) -> Result<MmgFit, PipelineError> {
+    let added = ds
+        .added_mass
+        .ok_or_else(|| bad_input(format!("{}: no [added_mass] table", ds.path.display())))?;
+    fit_mmg_with_priors(ds, geometry, opts, priors(&ds.ship, geometry, &added))
+}
+
+/// [`fit_mmg`] with given priors (e.g. deliberately wrong ones, to test what the data determine).
+pub fn fit_mmg_with_priors(
+    ds: &Dataset,
+    geometry: &MmgGeometry,
+    opts: &MmgFitOptions,
+    specs: Vec<ParamSpec>,
+) -> Result<MmgFit, PipelineError> {
+    geometry.check(
+        ds.ship.lpp,
+        &format!("{}: propeller/rudder", ds.path.display()),
+    )?;
+    if let PriorWeight::Fixed(l) = opts.prior_weight
+        && !(l.is_finite() && l > 0.0)
+    {
+        return Err(bad_input(format!(
+            "the prior weight λ must be a positive number, not {l}"
+        )));
+    }
+    let (samples, windows) = training_samples(ds, opts)?;
+    let added = ds.added_mass.unwrap_or_default();
+    let rate = samples.iter().map(|s| s.n_hz).sum::<f64>() / samples.len() as f64;
+    let problem = Problem::new(
+        ds.ship,
+        added,
+        *geometry,
+        samples,
+        specs,
+        opts.estimator == MmgEstimator::BoundedLsq,
+    )?;
+    let started = Instant::now();
+    let all: Vec<usize> = (0..problem.samples.len()).collect();
+    let (lambda, cv, start) = match opts.prior_weight {
+        PriorWeight::Fixed(l) => (l, Vec::new(), problem.prior_phi()),
+        PriorWeight::CrossValidated => cross_validate(&problem, &all)?,
+    };
+    let (phi, beta, iterations) = problem.solve(&start, &all, lambda)?;
+    let estimate = problem.estimate(&phi, &beta, lambda, iterations)?;
+    let fit_time_s = started.elapsed().as_secs_f64();
+    let theta: Vec<f64> = estimate.params.iter().map(|p| p.value).collect();
+    let model = MmgModel::at_rate(ds.ship, problem.parameters(&theta), rate)
+        .map_err(|e| failed(format!("the identified MMG model is unusable: {e}")))?;
+    Ok(MmgFit {
+        model,
+        geometry: *geometry,
+        estimate,
+        lambda,
+        estimator: opts.estimator,
+        cv,
+        windows,
+        propeller_rate_hz: rate,
+        samples: problem.samples.len(),
+        fit_time_s,
+    })
+}
+
+/// λ from [`CV_GRID`] by blocked cross-validation: leave one recording out when there are several,
+/// otherwise [`CV_BLOCKS`] contiguous blocks. Each λ is fitted on all data first (warm start from the
+/// previous λ), its folds start there. Returns λ, the scores and the full-data φ of the chosen λ.
+fn cross_validate(
+    problem: &Problem,
+    all: &[usize],
+) -> Result<(f64, Vec<CvScore>, Vec<f64>), PipelineError> {
+    let groups = problem.samples.iter().map(|s| s.group).max().unwrap_or(0) + 1;
+    let folds: Vec<Vec<usize>> = if groups > 1 {
+        (0..groups)
+            .map(|g| {
+                all.iter()
+                    .copied()
+                    .filter(|&i| problem.samples[i].group == g)
+                    .collect()
+            })
+            .collect()
+    } else {
+        let n = all.len();
+        (0..CV_BLOCKS)
+            .map(|b| all[b * n / CV_BLOCKS..(b + 1) * n / CV_BLOCKS].to_vec())
+            .collect()
+    };
+    let mut start = problem.prior_phi();
+    let mut scores = Vec::new();
+    let mut best: Option<(f64, f64, Vec<f64>)> = None;
+    for &lambda in &CV_GRID {
+        let (phi, _, _) = problem.solve(&start, all, lambda)?;
+        let mut total = 0.0;
+        for held in &folds {
+            let train: Vec<usize> = all
+                .iter()
+                .copied()
+                .filter(|i| held.binary_search(i).is_err())
+                .collect();
+            let (phi_k, beta_k, _) = problem.solve(&phi, &train, lambda)?;
+            total += problem.data_cost(&phi_k, &beta_k, held)?;
+        }
+        let score = total / folds.len() as f64;
+        scores.push(CvScore {
+            lambda,
+            held_out_cost: score,
+        });
+        if best.as_ref().is_none_or(|b| score < b.1) {
+            best = Some((lambda, score, phi.clone()));
+        }
+        start = phi;
+    }
+    let (lambda, _, phi) = best.ok_or_else(|| failed("mmg: empty cross-validation grid"))?;
+    Ok((lambda, scores, phi))
+}

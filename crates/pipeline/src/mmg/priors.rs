@@ -1,0 +1,269 @@
+//! The parameters of the identified MMG model, their physical bounds and their priors from the ship's
+//! main particulars, each with its source. No I/O.
+
+use shipid_io::{AddedMass, Ship};
+
+use super::geometry::MmgGeometry;
+
+/// Kinematic viscosity of fresh water at 15 °C [m²/s] (ITTC 2011 tables), for the friction line of
+/// the resistance prior.
+const NU_M2_S: f64 = 1.139e-6;
+/// Form factor 1 + k of the resistance prior: a typical value of full-form single-screw ships.
+const FORM_FACTOR: f64 = 1.25;
+
+/// Whether a parameter enters the forces linearly given the others (the hull derivatives, solved by
+/// the inner least-squares problem) or not (propeller and rudder interaction, the outer problem).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Role {
+    /// Hull derivative: coefficient of the regressor `column` in the equation of `dof` (0 = X, 1 = Y,
+    /// 2 = N).
+    Hull { dof: usize, column: usize },
+    /// Propeller or rudder parameter.
+    Nonlinear,
+}
+
+/// One identified parameter: its name in the model file, bounds, prior and the prior's source.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParamSpec {
+    pub name: &'static str,
+    pub role: Role,
+    pub lower: f64,
+    pub upper: f64,
+    /// Prior centre: an empirical estimate from the main particulars.
+    pub prior: f64,
+    /// Prior standard deviation (the width of the neighbourhood the prior stands for).
+    pub prior_sd: f64,
+    pub source: String,
+}
+
+/// The 17 hull parameters in the order of the regressors of [`super::identify`]: X (R'_0 and four),
+/// Y (six) and N (six).
+pub const HULL_NAMES: [[&str; 6]; 3] = [
+    ["r0", "x_vv", "x_vr", "x_rr", "x_vvvv", ""],
+    ["y_v", "y_r", "y_vvv", "y_vvr", "y_vrr", "y_rrr"],
+    ["n_v", "n_r", "n_vvv", "n_vvr", "n_vrr", "n_rrr"],
+];
+
+/// The 14 propeller and rudder parameters identified by the outer problem, in their order there.
+pub const NONLINEAR_NAMES: [&str; 14] = [
+    "t_p",
+    "w_p0",
+    "c1",
+    "c2_pos",
+    "c2_neg",
+    "epsilon",
+    "kappa",
+    "gamma_r_neg",
+    "gamma_r_pos",
+    "l_r",
+    "t_r",
+    "a_h",
+    "x_h",
+    "f_alpha",
+];
+
+/// Block coefficient C_b = ∇ / (L B d).
+pub fn block_coefficient(ship: &Ship) -> f64 {
+    ship.displacement / (ship.lpp * ship.beam * ship.draft)
+}
+
+/// m'_x from the added mass X_u̇ (MMG prime: ÷ ½ρL²d).
+pub fn prime_mx(ship: &Ship, added: &AddedMass) -> f64 {
+    -added.X_udot / (0.5 * ship.rho * ship.lpp * ship.lpp * ship.draft)
+}
+
+/// Every parameter of the model with its bounds and prior, hull derivatives first.
+pub fn priors(ship: &Ship, geometry: &MmgGeometry, added: &AddedMass) -> Vec<ParamSpec> {
+    let l = ship.lpp;
+    let cb = block_coefficient(ship);
+    let k = 2.0 * ship.draft / l;
+    let cbbl = cb * ship.beam / l;
+    let pi = std::f64::consts::PI;
+    const INF: f64 = f64::INFINITY;
+    let kijima = "Kijima et al. 1990 (J. SNAJ 168) regression in k = 2d/L, C_b B/L";
+    let weak = "no empirical estimate: weakly informative prior at 0, sd = the magnitude of published \
+                single-screw ships' derivatives";
+    let hull =
+        |dof: usize, column: usize, bounds: (f64, f64), prior: f64, sd: f64, source: &str| {
+            ParamSpec {
+                name: HULL_NAMES[dof][column],
+                role: Role::Hull { dof, column },
+                lower: bounds.0,
+                upper: bounds.1,
+                prior,
+                prior_sd: sd,
+                source: source.to_string(),
+            }
+        };
+    // ITTC-1957 friction line × form factor on Mumford's wetted surface S = 1.7 L d + ∇/d, as R'_0 =
+    // (1 + k) C_F S / (L d).
+    let reynolds = ship.u0 * l / NU_M2_S;
+    let c_f = 0.075 / (reynolds.log10() - 2.0).powi(2);
+    let wetted_m2 = 1.7 * l * ship.draft + ship.displacement / ship.draft;
+    let r0 = FORM_FACTOR * c_f * wetted_m2 / (l * ship.draft);
+    let taylor_w = (0.5 * cb - 0.05).clamp(0.0, 0.7);
+    let span_aspect = geometry.rudder_span_m.powi(2) / geometry.rudder_area_m2;
+    let mut out = vec![
+        hull(
+            0,
+            0,
+            (0.0, 0.2),
+            r0,
+            0.5 * r0,
+            &format!(
+                "ITTC-1957 friction line at Re = U0 L/ν ({reynolds:.3e}), form factor {FORM_FACTOR}, \
+                 Mumford wetted surface; sd 50 %"
+            ),
+        ),
+        hull(0, 1, (-INF, INF), 0.0, 0.1, weak),
+        hull(0, 2, (-INF, INF), 0.0, 0.2, weak),
+        hull(0, 3, (-INF, INF), 0.0, 0.05, weak),
+        hull(0, 4, (-INF, INF), 0.0, 1.0, weak),
+        hull(
+            1,
+            0,
+            (-INF, 0.0),
+            -(0.5 * pi * k + 1.4 * cbbl),
+            0.1,
+            &format!("{kijima}: Y'_v = −(πk/2 + 1.4 C_b B/L)"),
+        ),
+        hull(
+            1,
+            1,
+            (-INF, INF),
+            prime_mx(ship, added) + 0.25 * pi * k,
+            0.05,
+            &format!("{kijima}: Y'_r − m'_x = πk/4"),
+        ),
+        hull(1, 2, (-INF, INF), 0.0, 2.0, weak),
+        hull(1, 3, (-INF, INF), 0.0, 0.5, weak),
+        hull(1, 4, (-INF, INF), 0.0, 0.5, weak),
+        hull(1, 5, (-INF, INF), 0.0, 0.1, weak),
+        hull(2, 0, (-INF, INF), -k, 0.05, &format!("{kijima}: N'_v = −k")),
+        hull(
+            2,
+            1,
+            (-INF, 0.0),
+            -0.54 * k + k * k,
+            0.02,
+            &format!("{kijima}: N'_r = −0.54k + k²"),
+        ),
+        hull(2, 2, (-INF, INF), 0.0, 0.2, weak),
+        hull(2, 3, (-INF, INF), 0.0, 0.3, weak),
+        hull(2, 4, (-INF, INF), 0.0, 0.1, weak),
+        hull(2, 5, (-INF, INF), 0.0, 0.05, weak),
+    ];
+    let nl =
+        |name: &'static str, bounds: (f64, f64), prior: f64, sd: f64, source: String| ParamSpec {
+            name,
+            role: Role::Nonlinear,
+            lower: bounds.0,
+            upper: bounds.1,
+            prior,
+            prior_sd: sd,
+            source,
+        };
+    out.extend([
+        nl(
+            "t_p",
+            (0.0, 0.5),
+            0.6 * taylor_w,
+            0.1,
+            "Schoenherr t_P = k w_P0 with k = 0.6 (single screw) on Taylor's w_P0".into(),
+        ),
+        nl(
+            "w_p0",
+            (0.0, 0.8),
+            taylor_w,
+            0.1,
+            "Taylor (single screw): w_P0 = 0.5 C_b − 0.05".into(),
+        ),
+        nl(
+            "c1",
+            (0.0, 10.0),
+            3.0,
+            2.0,
+            "no empirical estimate: weakly informative 3 ± 2".into(),
+        ),
+        nl(
+            "c2_pos",
+            (0.5, 3.0),
+            1.3,
+            0.4,
+            "no empirical estimate: 1.3 ± 0.4 on both sides (no asymmetry assumed)".into(),
+        ),
+        nl(
+            "c2_neg",
+            (0.5, 3.0),
+            1.3,
+            0.4,
+            "no empirical estimate: 1.3 ± 0.4 on both sides (no asymmetry assumed)".into(),
+        ),
+        nl(
+            "epsilon",
+            (0.5, 2.0),
+            (-156.2 * cbbl * cbbl + 41.6 * cbbl - 1.76).clamp(0.6, 1.9),
+            0.2,
+            format!("{kijima}: ε = −156.2 (C_b B/L)² + 41.6 C_b B/L − 1.76"),
+        ),
+        nl(
+            "kappa",
+            (0.0, 1.0),
+            0.5,
+            0.2,
+            "usual MMG value κ = 0.5 (Yasukawa & Yoshimura 2015 use it for KVLCC2)".into(),
+        ),
+        nl(
+            "gamma_r_neg",
+            (0.05, 1.5),
+            0.5,
+            0.25,
+            "no empirical estimate: 0.5 ± 0.25 on both sides".into(),
+        ),
+        nl(
+            "gamma_r_pos",
+            (0.05, 1.5),
+            0.5,
+            0.25,
+            "no empirical estimate: 0.5 ± 0.25 on both sides".into(),
+        ),
+        nl(
+            "l_r",
+            (-1.5, -0.3),
+            2.0 * geometry.rudder_x_m / l,
+            0.3,
+            "no empirical estimate: about twice x'_R, ± 0.3".into(),
+        ),
+        nl(
+            "t_r",
+            (0.0, 0.8),
+            (0.45 - 0.28 * cb).clamp(0.0, 0.7),
+            0.15,
+            format!("{kijima}: 1 − t_R = 0.28 C_b + 0.55"),
+        ),
+        nl(
+            "a_h",
+            (0.0, 1.0),
+            0.3,
+            0.2,
+            "no empirical estimate: 0.3 ± 0.2".into(),
+        ),
+        nl(
+            "x_h",
+            (-0.8, -0.2),
+            -(0.4 + 0.1 * cb),
+            0.1,
+            format!("{kijima}: x'_H = −(0.4 + 0.1 C_b)"),
+        ),
+        nl(
+            "f_alpha",
+            (1.0, 6.5),
+            6.13 * span_aspect / (span_aspect + 2.25),
+            0.5,
+            format!(
+                "Fujii's formula f_α = 6.13 Λ/(Λ + 2.25) with the rudder aspect ratio Λ = H_R²/A_R = {span_aspect:.3}"
+            ),
+        ),
+    ]);
+    out
+}
