@@ -1,3 +1,4 @@
 //! Integration tests of the pipeline crate: one test binary, one module per concern.
 
 mod bands;
+mod mmg;
