@@ -107,6 +107,92 @@ impl AbkowitzModel {
         ]
     }
 
+    /// Number of coefficients over the three DOFs (the length of [`AbkowitzModel::flat_coefficients`]).
+    pub fn coefficient_total(&self) -> usize {
+        self.coefficients.iter().map(Vec::len).sum()
+    }
+
+    /// The coefficients in DOF order (X, then Y, then N, each in the set's term order).
+    pub fn flat_coefficients(&self) -> Vec<f64> {
+        self.coefficients.concat()
+    }
+
+    /// The same model with coefficients `flat` in the order of [`AbkowitzModel::flat_coefficients`].
+    pub fn with_flat_coefficients(&self, flat: &[f64]) -> Result<AbkowitzModel, ModelError> {
+        let mut rest = flat;
+        let coefficients: [Vec<f64>; 3] = std::array::from_fn(|d| {
+            let (head, tail) = rest.split_at(self.coefficients[d].len().min(rest.len()));
+            rest = tail;
+            head.to_vec()
+        });
+        AbkowitzModel::new(self.set.clone(), coefficients, self.ship, self.added_mass)
+    }
+
+    /// [`AbkowitzModel::accelerations`] (the same values to the last bit) with their derivatives:
+    /// `d_state[i][k]` = ∂a_i/∂x_k for x = (u [m/s], v [m/s], r [rad/s]), and `d_coefficients[n]` =
+    /// ∂a/∂β_n in the order of [`AbkowitzModel::flat_coefficients`] (entries past the model's
+    /// coefficients are left alone). The accelerations are linear in the coefficients, so ∂a/∂β is
+    /// exact: the inverse mass matrix's column of the coefficient's DOF times its monomial. Sensitivity
+    /// replays need both at every RK4 stage, in one pass over the terms.
+    pub fn accelerations_and_derivatives(
+        &self,
+        u: f64,
+        v: f64,
+        r: f64,
+        delta: f64,
+        d_state: &mut [[f64; 3]; 3],
+        d_coefficients: &mut [[f64; 3]],
+    ) -> [f64; 3] {
+        let s = &self.scale;
+        let (du, vp, rp) = (s.delta_u_prime(u), s.velocity_prime(v), s.yaw_rate_prime(r));
+        let powers = Powers::new(du, vp, rp, delta);
+        // Primed accelerations → SI, and primed state → SI, for the chain rule.
+        let out_scale = [
+            s.acceleration_from_prime(1.0),
+            s.acceleration_from_prime(1.0),
+            s.yaw_acceleration_from_prime(1.0),
+        ];
+        let in_scale = [1.0 / s.u0_m_s, s.velocity_prime(1.0), s.yaw_rate_prime(1.0)];
+        // Column d of the inverse mass matrix in SI accelerations per unit primed force of DOF d.
+        let column: [[f64; 3]; 3] = std::array::from_fn(|d| {
+            std::array::from_fn(|i| out_scale[i] * self.inverse_mass[i][d])
+        });
+        let mut f = [0.0; 3];
+        let mut df = [[0.0; 3]; 3];
+        let mut n = 0;
+        for d in 0..3 {
+            let mut sum = 0.0;
+            for (m, b) in self.set.terms[d].iter().zip(&self.coefficients[d]) {
+                let (value, gradient) = m.eval_with_gradient(&powers);
+                sum += b * value;
+                (0..3).for_each(|k| df[d][k] += b * gradient[k]);
+                if let Some(slot) = d_coefficients.get_mut(n) {
+                    *slot = std::array::from_fn(|i| column[d][i] * value);
+                }
+                n += 1;
+            }
+            f[d] = sum;
+        }
+        let c = self.inertia.rigid_body_forces(du, vp, rp);
+        let dc = self.inertia.rigid_body_force_gradients(du, vp, rp);
+        let rhs = [f[0] + c[0], f[1] + c[1], f[2] + c[2]];
+        let a: [f64; 3] =
+            std::array::from_fn(|i| (0..3).map(|j| self.inverse_mass[i][j] * rhs[j]).sum());
+        for (i, row) in d_state.iter_mut().enumerate() {
+            for (k, x) in row.iter_mut().enumerate() {
+                let primed: f64 = (0..3)
+                    .map(|j| self.inverse_mass[i][j] * (df[j][k] + dc[j][k]))
+                    .sum();
+                *x = out_scale[i] * primed * in_scale[k];
+            }
+        }
+        [
+            s.acceleration_from_prime(a[0]),
+            s.acceleration_from_prime(a[1]),
+            s.yaw_acceleration_from_prime(a[2]),
+        ]
+    }
+
     /// Coefficient by name ("Y_vvr"), prime system.
     pub fn coefficient(&self, name: &str) -> Option<f64> {
         Dof::ALL.iter().find_map(|&d| {

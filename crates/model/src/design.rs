@@ -84,6 +84,17 @@ impl PrimeInertia {
             -self.m * self.xg * u * r,
         ]
     }
+
+    /// ∂/∂(Δu', v', r') of [`PrimeInertia::rigid_body_forces`]: row = force, column = variable.
+    pub fn rigid_body_force_gradients(&self, du: f64, v: f64, r: f64) -> [[f64; 3]; 3] {
+        let u = 1.0 + du;
+        let m = self.m;
+        [
+            [0.0, m * r, m * (v + 2.0 * self.xg * r)],
+            [-m * r, 0.0, -m * u],
+            [-m * self.xg * r, 0.0, -m * self.xg * u],
+        ]
+    }
 }
 
 /// Primed samples of one or more recordings, stacked.

@@ -123,6 +123,31 @@ impl Monomial {
         p.get(0, self.du) * p.get(1, self.v) * p.get(2, self.r) * p.get(3, self.delta)
     }
 
+    /// [`Monomial::eval_powers`] and the gradient ∂/∂(Δu', v', r') at the same state: what a
+    /// sensitivity replay needs of every term at every RK4 stage (`shipid_sim::dynamics::Parametric`).
+    /// The value is the same to the last bit as [`Monomial::eval_powers`].
+    #[inline]
+    pub fn eval_with_gradient(&self, p: &Powers) -> (f64, [f64; 3]) {
+        let (a, b, c, d) = (
+            p.get(0, self.du),
+            p.get(1, self.v),
+            p.get(2, self.r),
+            p.get(3, self.delta),
+        );
+        let lower = |variable: usize, exponent: u8| match exponent {
+            0 => 0.0,
+            e => f64::from(e) * p.get(variable, e - 1),
+        };
+        (
+            a * b * c * d,
+            [
+                lower(0, self.du) * b * c * d,
+                a * lower(1, self.v) * c * d,
+                a * b * lower(2, self.r) * d,
+            ],
+        )
+    }
+
     /// Parity under (v, r, δ) → (−v, −r, −δ): true when the term changes sign.
     pub fn is_odd(&self) -> bool {
         (self.v + self.r + self.delta) % 2 == 1

@@ -7,8 +7,14 @@
 //! from the equation-error coefficients and minimises what a user of the model sees instead: the track
 //! and heading error of segment replays (the training recordings cut into segments of `horizon`,
 //! each restarted from the recorded state with the recorded rudder, as `shipid diagnose` scores a
-//! model), by Levenberg–Marquardt over all coefficients with a finite-difference Jacobian (columns in
-//! parallel). No I/O.
+//! model), by Levenberg–Marquardt over all coefficients. No I/O.
+//!
+//! The Jacobian comes from forward sensitivities: each segment is replayed once with ∂x/∂θ integrated
+//! alongside the state by the same RK4 stages ([`replay_segment_sensitivities`]), segments in parallel
+//! — the exact derivative of the discretised replay, where a finite-difference Jacobian replayed every
+//! segment once per coefficient (74 replays of the training data per iteration for full74). The
+//! refinement is generic over [`Parametric`] models, so any parameterised family refines the same way;
+//! [`refine_output_error`] is the Abkowitz entry point.
 //!
 //! Parameters are scaled so that a unit step of any coefficient changes its DOF's force by the RMS of
 //! that force on the training states: p_j = β_j s_j / c_d, with s_j the RMS of term j's monomial and c_d
@@ -18,12 +24,16 @@
 //! other recordings to show.
 
 use rayon::prelude::*;
-use shipid_io::{PrimeScale, Recording, deriv::accelerations_or_estimate};
+use shipid_io::{Recording, deriv::accelerations_or_estimate};
 use shipid_model::{AbkowitzModel, Refinement};
 use shipid_sim::AbkowitzDynamics;
+use shipid_sim::dynamics::{Parametric, State};
 
 use crate::lm::{LmPoint, lm_step};
-use crate::replay::{differentiator_margin, replay_segment, segments};
+use crate::replay::{
+    SegmentSensitivities, differentiator_margin, replay_segment, replay_segment_sensitivities,
+    segments,
+};
 use crate::validate::interp;
 
 /// Tunables of the refinement.
@@ -81,8 +91,31 @@ const CAP: f64 = 1.0;
 /// model; keeping the force fit in the cost keeps the model's force field where the data put it.
 const EQUATION_ERROR_WEIGHT: f64 = 1.0;
 
-struct Problem<'a> {
-    start: &'a AbkowitzModel,
+/// Residual of an equation error that cannot be evaluated (the model fails at a recorded state).
+const EE_FAILED: f64 = 1e3;
+
+/// A refined model and what the refinement did.
+#[derive(Debug, Clone)]
+pub struct Refined<P> {
+    pub model: P,
+    pub refinement: Refinement,
+    /// The cost LM minimised (replay part ÷ its start value + equation error ÷ its start value ×
+    /// `EQUATION_ERROR_WEIGHT`) at the start and at the result.
+    pub cost_before: f64,
+    pub cost_after: f64,
+}
+
+/// One replay segment: recording, first and end sample.
+#[derive(Debug, Clone, Copy)]
+struct Segment {
+    recording: usize,
+    a: usize,
+    b: usize,
+}
+
+struct Problem<'a, P> {
+    start: &'a P,
+    theta0: Vec<f64>,
     /// Equation-error samples: (recording, index, recorded accelerations).
     ee: Vec<(usize, usize, [f64; 3])>,
     /// Weights of the two costs: each starts at 1 (÷ its value at the equation-error solution), the
@@ -90,68 +123,83 @@ struct Problem<'a> {
     w_oe: f64,
     w_ee: [f64; 3],
     recordings: &'a [Recording],
-    horizon_s: f64,
+    segments: Vec<Segment>,
     stride: Vec<usize>,
-    /// (DOF, term) of each free parameter and its step in coefficient units per unit parameter.
-    free: Vec<(usize, usize, f64)>,
+    lpp: f64,
+    /// (parameter index, its step per unit of p) of each free parameter.
+    free: Vec<(usize, f64)>,
+    /// Replay position (÷ L) and heading [deg] RMSE of the start.
+    before_rmse: (f64, f64),
 }
 
-impl Problem<'_> {
-    fn model(&self, p: &[f64]) -> Option<AbkowitzModel> {
-        let mut c = self.start.coefficients.clone();
-        for (&(d, j, unit), &x) in self.free.iter().zip(p) {
-            c[d][j] += x * unit;
+impl<P: Parametric> Problem<'_, P> {
+    fn model(&self, p: &[f64]) -> Option<P> {
+        let mut theta = self.theta0.clone();
+        for (&(j, unit), &x) in self.free.iter().zip(p) {
+            theta[j] += x * unit;
         }
-        AbkowitzModel::new(
-            self.start.set.clone(),
-            c,
-            self.start.ship,
-            self.start.added_mass,
-        )
-        .ok()
+        self.start.with_parameters(&theta)
+    }
+
+    /// The compared samples of a segment: indices into its recording.
+    fn compared(&self, seg: &Segment) -> impl Iterator<Item = usize> + use<'_, P> {
+        let (a, stride) = (seg.a, self.stride[seg.recording]);
+        (seg.a..seg.b).filter(move |i| (i - a) % stride == 0)
+    }
+
+    fn state(&self, k: usize, i: usize) -> State {
+        State::of_recording(&self.recordings[k], i)
     }
 
     /// Equation-error residuals [m/s², m/s², rad/s²] (unweighted) at the thinned samples.
-    fn equation_errors(&self, m: &AbkowitzModel) -> Vec<[f64; 3]> {
+    fn equation_errors(&self, m: &P) -> Vec<[f64; 3]> {
         self.ee
             .iter()
             .map(|&(k, i, a)| {
-                let rec = &self.recordings[k];
-                let f = m.accelerations(rec.u[i], rec.v[i], rec.r[i], rec.delta[i]);
+                let f = m
+                    .accelerations(&self.state(k, i), self.recordings[k].delta[i])
+                    .unwrap_or([f64::NAN; 3]);
                 std::array::from_fn(|d| {
                     let e = a[d] - f[d];
-                    if e.is_finite() { e } else { 1e3 }
+                    if e.is_finite() { e } else { EE_FAILED }
                 })
             })
             .collect()
     }
 
-    /// Weighted residuals: [Δx/L, Δy/L, Δψ] at the compared samples of every segment (capped), then
-    /// the equation errors.
-    fn residuals(&self, p: &[f64]) -> Vec<f64> {
-        let mut out = self.replay_residuals(p);
+    /// Weighted residuals of a model (`None`: the parameters make none): [Δx/L, Δy/L, Δψ] at the
+    /// compared samples of every segment (capped), then the equation errors.
+    fn residuals_of(&self, model: Option<&P>) -> Vec<f64> {
+        let mut out = self.replay_residuals(model);
         out.iter_mut().for_each(|x| *x *= self.w_oe);
-        match self.model(p) {
+        match model {
             Some(m) => {
-                for e in self.equation_errors(&m) {
+                for e in self.equation_errors(m) {
                     (0..3).for_each(|d| out.push(e[d] * self.w_ee[d]));
                 }
             }
-            None => out.extend(std::iter::repeat_n(1e3, 3 * self.ee.len())),
+            None => out.extend(std::iter::repeat_n(EE_FAILED, 3 * self.ee.len())),
         }
         out
     }
 
-    /// Replay residuals [Δx/L, Δy/L, Δψ] at the compared samples of every segment (capped).
-    fn replay_residuals(&self, p: &[f64]) -> Vec<f64> {
-        let model = self.model(p).map(AbkowitzDynamics);
-        let lpp = self.start.ship.lpp;
-        let mut out = Vec::new();
-        for (rec, &stride) in self.recordings.iter().zip(&self.stride) {
-            for (a, b) in segments(rec, self.horizon_s) {
-                let sim = model.as_ref().map(|m| replay_segment(m, rec, a, b).0);
-                let t0 = rec.t[a];
-                for i in (a..b).filter(|i| (i - a) % stride == 0) {
+    fn residuals(&self, p: &[f64]) -> Vec<f64> {
+        self.residuals_of(self.model(p).as_ref())
+    }
+
+    /// Replay residuals [Δx/L, Δy/L, Δψ] at the compared samples of every segment (capped), segments
+    /// in parallel.
+    fn replay_residuals(&self, model: Option<&P>) -> Vec<f64> {
+        let lpp = self.lpp;
+        let per_segment: Vec<Vec<f64>> = self
+            .segments
+            .par_iter()
+            .map(|seg| {
+                let rec = &self.recordings[seg.recording];
+                let sim = model.map(|m| replay_segment(m, rec, seg.a, seg.b).0);
+                let t0 = rec.t[seg.a];
+                let mut out = Vec::new();
+                for i in self.compared(seg) {
                     let t = rec.t[i] - t0;
                     match &sim {
                         Some(s) if !s.is_empty() && t <= s.t[s.t.len() - 1] + 1e-9 => {
@@ -163,10 +211,105 @@ impl Problem<'_> {
                         _ => out.extend([CAP; 3]),
                     }
                 }
+                out
+            })
+            .collect();
+        per_segment.concat()
+    }
+
+    /// Jacobian of [`Problem::residuals`] at `p` (one column per free parameter): replay rows from the
+    /// forward sensitivities of each segment (in parallel), equation-error rows analytic. A capped
+    /// residual, a sample past a divergence or a failed equation error has a zero row, as it does not
+    /// move with p.
+    fn jacobian(&self, p: &[f64]) -> Vec<Vec<f64>> {
+        let n = self.free.len();
+        let Some(model) = self.model(p) else {
+            return vec![Vec::new(); n];
+        };
+        let lpp = self.lpp;
+        let blocks: Vec<Vec<f64>> = self
+            .segments
+            .par_iter()
+            .map(|seg| {
+                let rec = &self.recordings[seg.recording];
+                let sens = replay_segment_sensitivities(&model, rec, seg.a, seg.b, &self.free);
+                let t0 = rec.t[seg.a];
+                let mut rows = Vec::new();
+                for i in self.compared(seg) {
+                    let t = rec.t[i] - t0;
+                    let recorded = [rec.x0[i] / lpp, rec.y0[i] / lpp, rec.psi[i]];
+                    let scale = [1.0 / lpp, 1.0 / lpp, 1.0];
+                    match pose_at(&sens, t) {
+                        Some((pose, d_pose)) => {
+                            for axis in 0..3 {
+                                let raw = pose[axis] * scale[axis] - recorded[axis];
+                                let live = raw.abs() < CAP;
+                                rows.extend((0..n).map(|j| {
+                                    if live {
+                                        d_pose[3 * j + axis] * scale[axis] * self.w_oe
+                                    } else {
+                                        0.0
+                                    }
+                                }));
+                            }
+                        }
+                        None => rows.extend(std::iter::repeat_n(0.0, 3 * n)),
+                    }
+                }
+                rows
+            })
+            .collect();
+        let mut d_state = [[0.0; 3]; 3];
+        let mut d_theta = vec![[0.0; 3]; self.theta0.len()];
+        let mut ee_rows = Vec::with_capacity(3 * n * self.ee.len());
+        for &(k, i, a) in &self.ee {
+            let x = self.state(k, i);
+            let f =
+                model.sensitivities(&x, self.recordings[k].delta[i], &mut d_state, &mut d_theta);
+            for d in 0..3 {
+                let live = f.as_ref().is_ok_and(|f| (a[d] - f[d]).is_finite());
+                ee_rows.extend(self.free.iter().map(|&(j, unit)| {
+                    if live {
+                        -d_theta[j][d] * unit * self.w_ee[d]
+                    } else {
+                        0.0
+                    }
+                }));
             }
         }
-        out
+        let rows: Vec<&[f64]> = blocks
+            .iter()
+            .chain(std::iter::once(&ee_rows))
+            .flat_map(|b| b.chunks(n))
+            .collect();
+        (0..n)
+            .into_par_iter()
+            .map(|j| rows.iter().map(|row| row[j]).collect())
+            .collect()
     }
+}
+
+/// Pose and its sensitivities at `t` [s] from the segment's start, interpolated between steps as the
+/// residuals interpolate the replay ([`interp`]); `None` past the replay's end.
+fn pose_at(s: &SegmentSensitivities, t: f64) -> Option<([f64; 3], Vec<f64>)> {
+    let last = s.t.len().checked_sub(1)?;
+    if t > s.t[last] + 1e-9 {
+        return None;
+    }
+    let i = s.t.partition_point(|&x| x <= t);
+    if i == 0 || i > last {
+        let k = i.min(last);
+        return Some((s.pose[k], s.pose_sensitivity[k].clone()));
+    }
+    let w = (t - s.t[i - 1]) / (s.t[i] - s.t[i - 1]);
+    let lerp = |a: f64, b: f64| a + w * (b - a);
+    let pose = std::array::from_fn(|k| lerp(s.pose[i - 1][k], s.pose[i][k]));
+    let d = s.pose_sensitivity[i - 1]
+        .iter()
+        .zip(&s.pose_sensitivity[i])
+        .map(|(&a, &b)| lerp(a, b))
+        .collect();
+    Some((pose, d))
 }
 
 /// Position (÷ L) and heading [deg] RMSE of a residual vector.
@@ -183,50 +326,47 @@ pub fn refine_output_error(
     recordings: &[Recording],
     opts: &RefineOptions,
 ) -> Result<(AbkowitzModel, Refinement), RefineError> {
-    let ship = start.ship;
+    let refined = refine(&AbkowitzDynamics(start.clone()), recordings, opts)?;
+    Ok((refined.model.0, refined.refinement))
+}
+
+/// The problem of refining `start`: segments, thinning, parameter units and cost weights.
+fn problem<'a, P: Parametric>(
+    start: &'a P,
+    recordings: &'a [Recording],
+    opts: &RefineOptions,
+) -> Result<Problem<'a, P>, RefineError> {
+    let ship = *start.ship();
     let horizon_s = opts.horizon_l_over_u0 * ship.lpp / ship.u0;
-    if recordings.iter().all(|r| segments(r, horizon_s).is_empty()) {
+    let segments: Vec<Segment> = recordings
+        .iter()
+        .enumerate()
+        .flat_map(|(k, rec)| {
+            segments(rec, horizon_s)
+                .into_iter()
+                .map(move |(a, b)| Segment { recording: k, a, b })
+        })
+        .collect();
+    if segments.is_empty() {
         return Err(RefineError::NoSegments);
     }
-    // One thinning per recording for the compared replay samples, the equation errors and the scales.
+    // One thinning per recording for the compared replay samples, the equation errors and the units.
     let stride: Vec<usize> = recordings
         .iter()
         .map(|r| r.len().div_ceil(opts.max_samples_per_recording).max(1))
         .collect();
-    // Scales of the parameters from the training states.
-    let s = PrimeScale::of(&ship);
     let mut states = Vec::new();
     for (rec, &step) in recordings.iter().zip(&stride) {
         for i in (0..rec.len()).step_by(step) {
-            states.push((
-                s.delta_u_prime(rec.u[i]),
-                s.velocity_prime(rec.v[i]),
-                s.yaw_rate_prime(rec.r[i]),
-                rec.delta[i],
-            ));
+            states.push((State::of_recording(rec, i), rec.delta[i]));
         }
     }
-    let n = states.len().max(1) as f64;
-    let mut free = Vec::new();
-    for d in 0..3 {
-        let force_rms = (states
-            .iter()
-            .map(|&(du, v, r, dl)| start.forces_prime(du, v, r, dl)[d].powi(2))
-            .sum::<f64>()
-            / n)
-            .sqrt();
-        for (j, m) in start.set.terms[d].iter().enumerate() {
-            let term_rms = (states
-                .iter()
-                .map(|&(du, v, r, dl)| m.eval(du, v, r, dl).powi(2))
-                .sum::<f64>()
-                / n)
-                .sqrt();
-            if term_rms > 1e-12 && force_rms > 0.0 {
-                free.push((d, j, force_rms / term_rms));
-            }
-        }
-    }
+    let free: Vec<(usize, f64)> = start
+        .parameter_units(&states)
+        .into_iter()
+        .enumerate()
+        .filter_map(|(j, unit)| Some((j, unit?)))
+        .collect();
     let mut ee = Vec::new();
     for (k, rec) in recordings.iter().enumerate() {
         let (acc, _) = accelerations_or_estimate(rec, &ship);
@@ -238,15 +378,19 @@ pub fn refine_output_error(
     }
     let mut problem = Problem {
         start,
+        theta0: start.parameters(),
         ee,
         w_oe: 1.0,
         w_ee: [0.0; 3],
         recordings,
-        horizon_s,
+        segments,
         stride,
+        lpp: ship.lpp,
         free,
+        before_rmse: (0.0, 0.0),
     };
-    let oe0 = problem.replay_residuals(&vec![0.0; problem.free.len()]);
+    let oe0 = problem.replay_residuals(Some(start));
+    problem.before_rmse = rmse(&oe0);
     let oe0_cost = oe0.iter().map(|x| x * x).sum::<f64>().max(1e-300);
     problem.w_oe = 1.0 / oe0_cost.sqrt();
     let ee0 = problem.equation_errors(start);
@@ -255,45 +399,77 @@ pub fn refine_output_error(
         let c = ee0.iter().map(|e| e[d] * e[d]).sum::<f64>().max(1e-300);
         problem.w_ee[d] = (EQUATION_ERROR_WEIGHT / 3.0 / c).sqrt();
     }
+    Ok(problem)
+}
+
+/// The refinement's cost (as in [`Refined::cost_after`]) of `candidate` on the problem of refining
+/// `start`: how benchmarks compare refinements of the same start made by different code.
+pub fn refinement_cost<P: Parametric>(
+    start: &P,
+    candidate: &P,
+    recordings: &[Recording],
+    opts: &RefineOptions,
+) -> Result<f64, RefineError> {
+    let problem = problem(start, recordings, opts)?;
+    Ok(problem
+        .residuals_of(Some(candidate))
+        .iter()
+        .map(|x| x * x)
+        .sum())
+}
+
+/// Refine any parameterised model `start` on `recordings` (the training windows, over ground,
+/// recorded rudder) by Levenberg–Marquardt on segment replays plus the equation error, with the
+/// Jacobian from forward sensitivities. Parameters move within [`Parametric::parameter_bounds`].
+pub fn refine<P: Parametric>(
+    start: &P,
+    recordings: &[Recording],
+    opts: &RefineOptions,
+) -> Result<Refined<P>, RefineError> {
+    let problem = problem(start, recordings, opts)?;
+    let bounds = start.parameter_bounds();
+    // Bounds in the units of p (a unit is positive, so the order holds).
+    let p_bounds: Vec<(f64, f64)> = problem
+        .free
+        .iter()
+        .map(|&(j, unit)| {
+            let (lo, hi) = bounds
+                .get(j)
+                .copied()
+                .unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
+            let t0 = problem.theta0[j];
+            ((lo - t0) / unit, (hi - t0) / unit)
+        })
+        .collect();
+    let project = |q: &mut Vec<f64>| {
+        for (x, &(lo, hi)) in q.iter_mut().zip(&p_bounds) {
+            *x = x.max(lo).min(hi);
+        }
+    };
     let k = problem.free.len();
     let p = vec![0.0; k];
     let r = problem.residuals(&p);
-    let (before_pos, before_psi) = rmse(&oe0);
     let cost = r.iter().map(|x| x * x).sum::<f64>();
+    let cost_before = cost;
     let mut at = LmPoint { p, r, cost };
     let mut lambda = 1e-2;
     let mut iterations = 0;
-    // Forward differences: the replays are deterministic, so a small step is clean.
-    let h = 1e-5;
     for _ in 0..opts.max_iterations {
         iterations += 1;
-        let jac: Vec<Vec<f64>> = (0..k)
-            .into_par_iter()
-            .map(|j| {
-                let mut q = at.p.clone();
-                q[j] += h;
-                let rq = problem.residuals(&q);
-                rq.iter().zip(&at.r).map(|(a, b)| (a - b) / h).collect()
-            })
-            .collect();
-        let step = lm_step(
-            &jac,
-            &mut at,
-            &mut lambda,
-            10,
-            |_| {},
-            |q| problem.residuals(q),
-        );
+        let jac = problem.jacobian(&at.p);
+        let step = lm_step(&jac, &mut at, &mut lambda, 10, project, |q| {
+            problem.residuals(q)
+        });
         if !step.is_some_and(|rel| rel > opts.tolerance) {
             break;
         }
     }
-    let p = at.p;
-    let (after_pos, after_psi) = rmse(&problem.replay_residuals(&p));
-    let model = problem.model(&p).unwrap_or_else(|| start.clone());
-    Ok((
+    let model = problem.model(&at.p).unwrap_or_else(|| start.clone());
+    let (before_pos, before_psi) = problem.before_rmse;
+    let (after_pos, after_psi) = rmse(&problem.replay_residuals(Some(&model)));
+    Ok(Refined {
         model,
-        Refinement {
+        refinement: Refinement {
             method: "output error: Levenberg–Marquardt on segment replays".into(),
             horizon_l_over_u0: opts.horizon_l_over_u0,
             iterations,
@@ -302,5 +478,7 @@ pub fn refine_output_error(
             before_heading_rmse_deg: before_psi,
             after_heading_rmse_deg: after_psi,
         },
-    ))
+        cost_before,
+        cost_after: at.cost,
+    })
 }

@@ -298,3 +298,120 @@ impl MassMatrix {
         ]
     }
 }
+
+/// A model whose accelerations depend on a parameter vector θ that an output-error fit adjusts
+/// (`shipid_pipeline::refine`): the Abkowitz polynomial (θ = its coefficients) and any physics-based
+/// family that implements it.
+///
+/// The refinement integrates the sensitivities of a replay, S = ∂x/∂θ, alongside the state with
+/// the same RK4 stages (which gives the exact Jacobian of the discretised replay), so it needs at each
+/// stage ∂a/∂(u, v, r) and ∂a/∂θ ([`Parametric::sensitivities`]). The default is finite differences,
+/// central over the three velocities and over θ through [`Parametric::accelerations_at`]; a model that
+/// knows its derivatives (the Abkowitz polynomial is linear in θ) overrides it.
+pub trait Parametric: Dynamics + Clone + Send + Sync {
+    /// The parameter vector θ.
+    fn parameters(&self) -> Vec<f64>;
+
+    /// The same model with parameters `theta` (as long as [`Parametric::parameters`]); `None` when
+    /// they make no valid model.
+    fn with_parameters(&self, theta: &[f64]) -> Option<Self>;
+
+    /// Lower and upper bound of each parameter (−∞/+∞ when free, the default).
+    fn parameter_bounds(&self) -> Vec<(f64, f64)> {
+        vec![(f64::NEG_INFINITY, f64::INFINITY); self.parameters().len()]
+    }
+
+    /// The step of each parameter that changes the accelerations by their own size on `states`
+    /// (state, rudder [rad]) — the refinement works in these units so that every parameter matters
+    /// on the same scale; `None` for a parameter the states do not move (it stays where it is).
+    /// Default: 1 / RMS over the states of ‖∂a/∂θ_j ⊘ rms(a)‖.
+    fn parameter_units(&self, states: &[(State, f64)]) -> Vec<Option<f64>> {
+        let k = self.parameters().len();
+        let mut d_theta = vec![[0.0; 3]; k];
+        let mut d_state = [[0.0; 3]; 3];
+        let mut acc_sq = [0.0; 3];
+        let mut col_sq = vec![[0.0; 3]; k];
+        let mut n = 0.0;
+        for (s, delta) in states {
+            let Ok(a) = self.sensitivities(s, *delta, &mut d_state, &mut d_theta) else {
+                continue;
+            };
+            if !a
+                .iter()
+                .chain(d_theta.iter().flatten())
+                .all(|x| x.is_finite())
+            {
+                continue;
+            }
+            n += 1.0;
+            (0..3).for_each(|i| acc_sq[i] += a[i] * a[i]);
+            for (sq, d) in col_sq.iter_mut().zip(&d_theta) {
+                (0..3).for_each(|i| sq[i] += d[i] * d[i]);
+            }
+        }
+        col_sq
+            .iter()
+            .map(|sq| {
+                let relative: f64 = (0..3)
+                    .filter(|&i| acc_sq[i] > 0.0)
+                    .map(|i| sq[i] / acc_sq[i])
+                    .sum();
+                (n > 0.0 && relative > 1e-24 && relative.is_finite()).then(|| 1.0 / relative.sqrt())
+            })
+            .collect()
+    }
+
+    /// Accelerations with parameters `theta` (default: through [`Parametric::with_parameters`]; a
+    /// model that can evaluate them without building a copy overrides it).
+    fn accelerations_at(
+        &self,
+        theta: &[f64],
+        state: &State,
+        delta_rad: f64,
+    ) -> Result<[f64; 3], DynamicsError> {
+        self.with_parameters(theta)
+            .ok_or_else(|| DynamicsError::OutOfDomain("parameters give no valid model".into()))?
+            .accelerations(state, delta_rad)
+    }
+
+    /// [`Dynamics::accelerations`] with `d_state[i][k]` = ∂a_i/∂x_k for x = (u [m/s], v [m/s],
+    /// r [rad/s]) and `d_theta[j]` = ∂a/∂θ_j (`d_theta` as long as θ).
+    fn sensitivities(
+        &self,
+        state: &State,
+        delta_rad: f64,
+        d_state: &mut [[f64; 3]; 3],
+        d_theta: &mut [[f64; 3]],
+    ) -> Result<[f64; 3], DynamicsError> {
+        let a = self.accelerations(state, delta_rad)?;
+        let ship = self.ship();
+        // Central differences, steps of a millionth of the state's natural scale (U0, U0/L).
+        let scales = [ship.u0, ship.u0, ship.u0 / ship.lpp];
+        for (k, scale) in scales.into_iter().enumerate() {
+            let h = 1e-6 * scale;
+            let shifted = |sign: f64| {
+                let mut x = *state;
+                match k {
+                    0 => x.u += sign * h,
+                    1 => x.v += sign * h,
+                    _ => x.r += sign * h,
+                }
+                self.accelerations(&x, delta_rad)
+            };
+            let (plus, minus) = (shifted(1.0)?, shifted(-1.0)?);
+            (0..3).for_each(|i| d_state[i][k] = (plus[i] - minus[i]) / (2.0 * h));
+        }
+        let mut theta = self.parameters();
+        for (j, out) in d_theta.iter_mut().enumerate().take(theta.len()) {
+            let t0 = theta[j];
+            let h = 1e-6 * t0.abs().max(1e-3);
+            theta[j] = t0 + h;
+            let plus = self.accelerations_at(&theta, state, delta_rad)?;
+            theta[j] = t0 - h;
+            let minus = self.accelerations_at(&theta, state, delta_rad)?;
+            theta[j] = t0;
+            *out = std::array::from_fn(|i| (plus[i] - minus[i]) / (2.0 * h));
+        }
+        Ok(a)
+    }
+}
