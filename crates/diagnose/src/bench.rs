@@ -165,6 +165,8 @@ pub fn to_dataset(g: Generated, name: &str) -> Dataset {
         name: g.dataset.name.clone(),
         ship: g.dataset.ship,
         added_mass: g.dataset.added_mass,
+        propeller: None,
+        rudder: None,
         recordings,
     }
 }

@@ -8,9 +8,10 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::InputError;
+use crate::error::{InputError, number};
+use crate::open_water::read_open_water;
 use crate::recording::read_recording;
-use crate::types::{AddedMass, Manoeuvre, Recording, Ship, Side};
+use crate::types::{AddedMass, Manoeuvre, PropellerData, Recording, RudderData, Ship, Side};
 
 /// The point that velocities and positions of a data set refer to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -60,12 +61,36 @@ pub struct DatasetFile {
     pub ship: Ship,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub added_mass: Option<AddedMass>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub propeller: Option<PropellerTable>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rudder: Option<RudderData>,
     #[serde(rename = "recording", default)]
     pub recordings: Vec<RecordingEntry>,
 }
 
 fn one() -> i64 {
     1
+}
+
+/// The `[propeller]` table as written: the open-water curve either as the quadratic's coefficients
+/// (`k_t`) or as a CSV of points (`open_water`), exactly one of them.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PropellerTable {
+    /// Propeller diameter D_P [m].
+    pub diameter_m: f64,
+    /// Position forward of midship [m].
+    pub x_m: f64,
+    /// K_T(J) = k_t[0] + k_t[1] J + k_t[2] J².
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub k_t: Option<Vec<f64>>,
+    /// CSV with `J` and `K_T` columns, relative to the data set file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub open_water: Option<String>,
+    /// Constant propeller rate [1/s] for recordings without an `n` column.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rate_rps: Option<f64>,
 }
 
 /// A recording of a data set with the manoeuvre it performs.
@@ -86,6 +111,10 @@ pub struct Dataset {
     pub ship: Ship,
     /// Added-mass derivatives about midship, when the data set gives them.
     pub added_mass: Option<AddedMass>,
+    /// The propeller, when the data set gives a `[propeller]` table (the open-water file already read).
+    pub propeller: Option<PropellerData>,
+    /// The rudder, when the data set gives a `[rudder]` table.
+    pub rudder: Option<RudderData>,
     pub recordings: Vec<DatasetRecording>,
 }
 
@@ -100,6 +129,11 @@ impl Dataset {
         let text = std::fs::read_to_string(path).map_err(|e| InputError::read(path, &e))?;
         let file = parse_dataset(path, &text)?;
         let dir = path.parent().unwrap_or(Path::new("."));
+        let propeller = file
+            .propeller
+            .as_ref()
+            .map(|p| propeller_data(path, dir, p))
+            .transpose()?;
         let mut recordings = Vec::new();
         for (i, entry) in file.recordings.iter().enumerate() {
             if !keep(&entry.file) {
@@ -131,6 +165,8 @@ impl Dataset {
             name: file.name,
             ship: file.ship,
             added_mass,
+            propeller,
+            rudder: file.rudder,
             recordings,
         })
     }
@@ -167,7 +203,7 @@ pub fn parse_dataset(path: &Path, text: &str) -> Result<DatasetFile, InputError>
             return Err(InputError::key(
                 path,
                 format!("ship.{key}"),
-                format!("must be a positive number, not {value}"),
+                format!("must be a positive number, not {}", number(value)),
             ));
         }
     }
@@ -177,14 +213,166 @@ pub fn parse_dataset(path: &Path, text: &str) -> Result<DatasetFile, InputError>
             "ship.xg",
             format!(
                 "must be a finite distance within the ship length, not {}",
-                s.xg
+                number(s.xg)
             ),
         ));
+    }
+    if let Some(p) = &file.propeller {
+        check_propeller(path, p, s.lpp)?;
+    }
+    if let Some(r) = &file.rudder {
+        check_rudder(path, r, s.lpp)?;
     }
     for (i, entry) in file.recordings.iter().enumerate() {
         manoeuvre_of(path, i, entry)?;
     }
     Ok(file)
+}
+
+fn positive(path: &Path, key: &str, value: f64) -> Result<(), InputError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(InputError::key(
+            path,
+            key,
+            format!("must be a positive number, not {}", number(value)),
+        ))
+    }
+}
+
+/// A position along the hull: finite and within one ship length of midship.
+fn position(path: &Path, key: &str, value: f64, lpp: f64) -> Result<(), InputError> {
+    if value.is_finite() && value.abs() <= lpp {
+        Ok(())
+    } else {
+        Err(InputError::key(
+            path,
+            key,
+            format!(
+                "must be a finite distance from midship within the ship length ship.lpp = {lpp} m, not {}",
+                number(value)
+            ),
+        ))
+    }
+}
+
+fn check_propeller(path: &Path, p: &PropellerTable, lpp: f64) -> Result<(), InputError> {
+    positive(path, "propeller.diameter_m", p.diameter_m)?;
+    if p.diameter_m >= lpp {
+        return Err(InputError::key(
+            path,
+            "propeller.diameter_m",
+            format!(
+                "{} m is not shorter than the ship (ship.lpp = {lpp} m)",
+                p.diameter_m
+            ),
+        ));
+    }
+    position(path, "propeller.x_m", p.x_m, lpp)?;
+    if let Some(n) = p.rate_rps {
+        positive(path, "propeller.rate_rps", n)?;
+    }
+    match (&p.k_t, &p.open_water) {
+        (None, None) => Err(InputError::key(
+            path,
+            "propeller",
+            "needs the open-water curve: either `k_t = [k0, k1, k2]` or `open_water = \"file.csv\"`",
+        )),
+        (Some(_), Some(_)) => Err(InputError::key(
+            path,
+            "propeller",
+            "give either `k_t` or `open_water`, not both",
+        )),
+        (Some(k), None) => {
+            if k.len() != 3 {
+                return Err(InputError::key(
+                    path,
+                    "propeller.k_t",
+                    format!(
+                        "must hold three coefficients [k0, k1, k2] of K_T(J) = k0 + k1 J + k2 J², not {}",
+                        k.len()
+                    ),
+                ));
+            }
+            if let Some(bad) = k.iter().find(|v| !v.is_finite()) {
+                return Err(InputError::key(
+                    path,
+                    "propeller.k_t",
+                    format!("coefficients must be finite, not {bad}"),
+                ));
+            }
+            if k[0] <= 0.0 {
+                return Err(InputError::key(
+                    path,
+                    "propeller.k_t",
+                    format!(
+                        "K_T at J = 0 (the first coefficient) must be positive, not {}",
+                        k[0]
+                    ),
+                ));
+            }
+            Ok(())
+        }
+        (None, Some(f)) if f.trim().is_empty() => Err(InputError::key(
+            path,
+            "propeller.open_water",
+            "must name a CSV file",
+        )),
+        (None, Some(_)) => Ok(()),
+    }
+}
+
+fn check_rudder(path: &Path, r: &RudderData, lpp: f64) -> Result<(), InputError> {
+    positive(path, "rudder.area_m2", r.area_m2)?;
+    positive(path, "rudder.span_m", r.span_m)?;
+    position(path, "rudder.x_m", r.x_m, lpp)
+}
+
+/// A checked `[propeller]` table → [`PropellerData`], reading the open-water CSV beside the data set.
+fn propeller_data(
+    path: &Path,
+    dir: &Path,
+    p: &PropellerTable,
+) -> Result<PropellerData, InputError> {
+    let (k_t, open_water) = match (&p.k_t, &p.open_water) {
+        (Some(k), _) => ([k[0], k[1], k[2]], None),
+        (None, Some(f)) => {
+            let csv = dir.join(f);
+            if !csv.is_file() {
+                return Err(InputError::key(
+                    path,
+                    "propeller.open_water",
+                    format!("open-water file `{}` not found", csv.display()),
+                ));
+            }
+            let (k, curve) = read_open_water(&csv, f)?;
+            if k[0] <= 0.0 {
+                return Err(InputError::file(
+                    &csv,
+                    format!(
+                        "the quadratic through the open-water points gives K_T = {} at J = 0; it must be positive",
+                        k[0]
+                    ),
+                ));
+            }
+            (k, Some(curve))
+        }
+        (None, None) => {
+            return Err(InputError::key(
+                path,
+                "propeller",
+                "needs the open-water curve: either `k_t` or `open_water`",
+            ));
+        }
+    };
+    Ok(PropellerData {
+        diameter_m: p.diameter_m,
+        x_m: p.x_m,
+        k_t,
+        open_water,
+        rate_rps: p.rate_rps,
+    })
 }
 
 fn manoeuvre_of(path: &Path, i: usize, e: &RecordingEntry) -> Result<Manoeuvre, InputError> {

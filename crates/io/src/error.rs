@@ -164,3 +164,14 @@ fn floor_char_boundary(text: &str, mut i: usize) -> usize {
     }
     i
 }
+
+/// A number as a message shows it: as written for ordinary magnitudes, in exponent form when Rust's
+/// plain form would spell out hundreds of digits (`1e300`, `1e-300`).
+pub fn number(value: f64) -> String {
+    let a = value.abs();
+    if value.is_finite() && a != 0.0 && !(1e-6..1e15).contains(&a) {
+        format!("{value:e}")
+    } else {
+        format!("{value}")
+    }
+}

@@ -236,6 +236,8 @@ impl Mapping {
             rudder_sign: 1,
             ship: self.dataset.ship,
             added_mass: self.dataset.added_mass,
+            propeller: None,
+            rudder: None,
             recordings: recordings.to_vec(),
         }
     }

@@ -8,6 +8,7 @@
 //! - [`recording`]: one recording CSV file → [`Recording`];
 //! - [`dataset`]: a data set TOML and its recordings → [`Dataset`];
 //! - [`import`]: a foreign layout described by a mapping TOML → a data set in the project's format;
+//! - [`open_water`]: the propeller's open-water CSV → the quadratic K_T(J);
 //! - [`write`]: atomic writing of recordings and data sets;
 //! - [`prime`]: the prime system I with U0 (`docs/conventions.md`);
 //! - [`deriv`]: the smoothing differentiator that estimates accelerations;
@@ -17,6 +18,7 @@ pub mod dataset;
 pub mod deriv;
 pub mod error;
 pub mod import;
+pub mod open_water;
 pub mod prime;
 pub mod recording;
 pub mod table;
@@ -24,7 +26,7 @@ pub mod types;
 pub mod units;
 pub mod write;
 
-pub use dataset::{Dataset, DatasetFile, DatasetRecording, Origin};
+pub use dataset::{Dataset, DatasetFile, DatasetRecording, Origin, PropellerTable};
 pub use error::InputError;
 pub use prime::PrimeScale;
 pub use types::*;

@@ -141,6 +141,65 @@ pub struct AddedMass {
     pub N_rdot: f64,
 }
 
+/// The ship's propeller (the data set's optional `[propeller]` table, `docs/data-format.md`), as the mmg
+/// model family needs it. Positions are of the propeller plane, forward of midship.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PropellerData {
+    /// Propeller diameter D_P [m].
+    pub diameter_m: f64,
+    /// Position forward of midship [m] (aft is negative).
+    pub x_m: f64,
+    /// Open-water thrust coefficient K_T(J) = k_t[0] + k_t[1] J + k_t[2] J²: as given, or the
+    /// least-squares quadratic through the open-water points.
+    pub k_t: [f64; 3],
+    /// The open-water points the quadratic was fitted to, when the data set gives a table.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub open_water: Option<OpenWaterCurve>,
+    /// Constant propeller rate n [1/s] for recordings without an `n` column.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rate_rps: Option<f64>,
+}
+
+impl PropellerData {
+    /// K_T at advance ratio J from the quadratic (outside the open-water range it is an extrapolation:
+    /// see [`OpenWaterCurve::j_min`] / [`OpenWaterCurve::j_max`]).
+    pub fn k_t_at(&self, j: f64) -> f64 {
+        let [k0, k1, k2] = self.k_t;
+        k0 + j * (k1 + j * k2)
+    }
+}
+
+/// Open-water test points (advance ratio J, thrust coefficient K_T) read from a CSV file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OpenWaterCurve {
+    /// The CSV file as named in the data set (relative to the data set file).
+    pub file: String,
+    /// Advance ratios J [-], strictly increasing.
+    pub j: Vec<f64>,
+    /// Thrust coefficients K_T [-] at `j`.
+    pub k_t: Vec<f64>,
+    /// Smallest J of the points: the quadratic is fitted, not extrapolated, from here …
+    pub j_min: f64,
+    /// … to here.
+    pub j_max: f64,
+    /// Root-mean-square residual of the quadratic at the points [-].
+    pub rms_residual: f64,
+}
+
+/// The ship's rudder (the data set's optional `[rudder]` table, `docs/data-format.md`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RudderData {
+    /// Rudder area A_R [m²].
+    pub area_m2: f64,
+    /// Rudder span H_R [m].
+    pub span_m: f64,
+    /// Rudder stock position forward of midship [m] (aft is negative).
+    pub x_m: f64,
+}
+
 /// Side of the first rudder execute.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Hash)]
 #[serde(rename_all = "lowercase")]

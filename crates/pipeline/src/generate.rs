@@ -219,6 +219,8 @@ pub fn generate_manoeuvres(
         rudder_sign: 1,
         ship,
         added_mass: Some(kvlcc2_added_mass()),
+        propeller: None,
+        rudder: None,
         recordings: entries,
     };
     Ok(Generated {

@@ -5,4 +5,5 @@
 mod bad_input;
 mod conventions;
 mod prime_and_derivatives;
+mod propeller_rudder;
 mod readers_never_panic;
