@@ -209,6 +209,32 @@ pub fn validate(ships: &[DatabaseShip]) -> Result<(), InverseError> {
                 )));
             }
         }
+        // The interaction coefficients have physical ranges; outside them the MMG model of a
+        // generated ship runs, but describes no ship (a thrust-increasing rudder, a negative wake).
+        for (name, v, ok, range) in [
+            (
+                "one_minus_t_r",
+                s.one_minus_t_r,
+                s.one_minus_t_r > 0.0 && s.one_minus_t_r <= 1.0,
+                "(0, 1]: t_R in [0, 1)",
+            ),
+            ("a_h", s.a_h, s.a_h >= 0.0, "≥ 0"),
+            ("epsilon", s.epsilon, s.epsilon > 0.0, "> 0"),
+            ("kappa", s.kappa, s.kappa > 0.0, "> 0"),
+            ("gamma_r_pos", s.gamma_r_pos, s.gamma_r_pos > 0.0, "> 0"),
+            ("gamma_r_neg", s.gamma_r_neg, s.gamma_r_neg > 0.0, "> 0"),
+        ] {
+            if !ok {
+                return Err(InverseError::Database(format!(
+                    "ship {}: {name} = {v} must be in {range}",
+                    s.id
+                )));
+            }
+        }
     }
     Ok(())
 }
+
+/// The database of paper 003 Tab. 1 (`data/paper003/ships.toml`), built into the library so that
+/// `shipid inverse` works from any directory without the repository.
+pub const PAPER003_SHIPS_TOML: &str = include_str!("../../../data/paper003/ships.toml");

@@ -93,7 +93,8 @@ pub struct MotionTarget {
 }
 
 impl MotionTarget {
-    /// The indexes, checked: finite, non-zero (they are log-transformed), speed ratio in (0, 1].
+    /// The indexes, checked: finite, non-zero (they are log-transformed), of the sign their definition
+    /// gives (all positive but the port turn's tactical diameter), speed ratio in (0, 1].
     pub fn indexes(&self) -> Result<MotionIndexes, InverseError> {
         let q = MotionIndexes([
             self.advance_p35,
@@ -113,6 +114,30 @@ impl MotionTarget {
                     key,
                     value: v,
                     reason: "must be finite and non-zero",
+                });
+            }
+        }
+        // The network sees ln|q|, so a wrong sign would be inverted as if it were right: refuse it.
+        for (key, v, positive) in [
+            ("advance_p35", self.advance_p35, true),
+            ("tactical_diameter_p35", self.tactical_diameter_p35, true),
+            ("advance_m35", self.advance_m35, true),
+            ("tactical_diameter_m35", self.tactical_diameter_m35, false),
+            ("heading_peak_p20", self.heading_peak_p20, true),
+            ("t1_p20", self.t1_p20, true),
+            ("heading_peak_m20", self.heading_peak_m20, true),
+            ("t2_m20", self.t2_m20, true),
+        ] {
+            if (v > 0.0) != positive {
+                return Err(InverseError::Index {
+                    motion: self.name.clone(),
+                    key,
+                    value: v,
+                    reason: if positive {
+                        "must be positive (lengths, times and ψ_peak/ψ_check of the same sign)"
+                    } else {
+                        "must be negative (the port turn's tactical diameter is signed, negative to port)"
+                    },
                 });
             }
         }

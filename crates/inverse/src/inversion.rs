@@ -39,9 +39,16 @@ pub fn check_inputs(
         target
             .validate()
             .map_err(|e| InputFault::Targets(e.to_string()))?;
-        for m in &target.motion {
+        for (i, m) in target.motion.iter().enumerate() {
             m.indexes()
                 .map_err(|e| InputFault::Targets(format!("target {}: {e}", target.name)))?;
+            // Rows of the tables are named by motion: two of one name could not be told apart.
+            if target.motion[..i].iter().any(|o| o.name == m.name) {
+                return Err(InputFault::Targets(format!(
+                    "target {}: two motions named `{}`",
+                    target.name, m.name
+                )));
+            }
         }
     }
     if targets.target.is_empty() {

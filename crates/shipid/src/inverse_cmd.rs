@@ -2,6 +2,9 @@
 //! motion-index database per target ship, the inverse network, and the inversion of each target motion
 //! with a re-simulation; `shipid inverse-bench` times the database build.
 //!
+//! The 20-ship database is built into the binary (`--ships FILE` overrides it), so the command runs
+//! from any directory.
+//!
 //! Outputs under `--out` (default `results/paper003/`): `modes.csv` and `modes.svg` (paper 003 Fig. 3),
 //! per target `<target>/indexes.csv` (given vs obtained), `<target>/summary.md` (tables), `<target>/motions.svg`
 //! (Fig. 6/7: red = simulated with the predicted hydrodynamics, black dashed = given indexes).
@@ -11,7 +14,7 @@ use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
 use shipid_figures::inverse::{MotionFigure, motions_figure, write_modes};
-use shipid_inverse::database::ShipsFile;
+use shipid_inverse::database::{PAPER003_SHIPS_TOML, ShipsFile};
 use shipid_inverse::indexes::SimSettings;
 use shipid_inverse::inversion::{
     InputFault, MotionInversion, RefineOutcome, check_inputs, header_markdown, indexes_csv,
@@ -20,7 +23,7 @@ use shipid_inverse::inversion::{
 use shipid_inverse::mlp::TrainOptions;
 use shipid_inverse::modes::VariationModes;
 use shipid_inverse::pipeline::{
-    InverseModel, SimulationDatabase, build_database, held_out, sample_weights,
+    InverseModel, MIN_SAMPLES, SimulationDatabase, build_database, held_out, sample_weights,
 };
 use shipid_inverse::target::{TargetShip, TargetsFile};
 use shipid_io::write::write_atomic;
@@ -30,7 +33,8 @@ use crate::{CliError, Outcome, bad_input, failed};
 /// Arguments of `shipid inverse`.
 pub struct InverseArgs<'a> {
     pub targets: &'a Path,
-    pub ships: &'a Path,
+    /// The hydrodynamic database; `None`: the one built in (paper 003 Tab. 1).
+    pub ships: Option<&'a Path>,
     pub samples: usize,
     pub seed: u64,
     pub modes: Option<usize>,
@@ -43,16 +47,53 @@ pub struct InverseArgs<'a> {
 fn read_toml<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, CliError> {
     let text =
         std::fs::read_to_string(path).map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
-    toml::from_str(&text).map_err(|e| bad_input(format!("{}: {e}", path.display())))
+    parse_toml(&text, &path.display().to_string())
 }
 
-pub fn load(ships: &Path, targets: &Path) -> Result<(VariationModes, Vec<TargetShip>), CliError> {
-    let db: ShipsFile = read_toml(ships)?;
+fn parse_toml<T: serde::de::DeserializeOwned>(text: &str, name: &str) -> Result<T, CliError> {
+    toml::from_str(text).map_err(|e| bad_input(format!("{name}: {e}")))
+}
+
+/// How the built-in database is named in messages.
+const BUILT_IN_SHIPS: &str = "the built-in ships database (data/paper003/ships.toml)";
+
+/// The variation modes of the database (`ships`, or the built-in one) and the checked targets.
+pub fn load(
+    ships: Option<&Path>,
+    targets: &Path,
+) -> Result<(VariationModes, Vec<TargetShip>), CliError> {
+    let (db, ships_name): (ShipsFile, String) = match ships {
+        Some(p) => (read_toml(p)?, p.display().to_string()),
+        None => (
+            parse_toml(PAPER003_SHIPS_TOML, BUILT_IN_SHIPS)?,
+            BUILT_IN_SHIPS.into(),
+        ),
+    };
     let t: TargetsFile = read_toml(targets)?;
-    check_inputs(&db, t).map_err(|fault| match fault {
-        InputFault::Ships(e) => bad_input(format!("{}: {e}", ships.display())),
+    let (modes, targets_checked) = check_inputs(&db, t).map_err(|fault| match fault {
+        InputFault::Ships(e) => bad_input(format!("{ships_name}: {e}")),
         InputFault::Targets(e) => bad_input(format!("{}: {e}", targets.display())),
-    })
+    })?;
+    // Each target writes into a folder named after it: two names of one folder would overwrite
+    // each other's tables, and an empty one would write into --out itself.
+    for (i, t) in targets_checked.iter().enumerate() {
+        let s = slug(&t.name);
+        if s.is_empty() {
+            return Err(bad_input(format!(
+                "{}: a [[target]] has an empty name (its tables go into a folder named after it)",
+                targets.display()
+            )));
+        }
+        if let Some(o) = targets_checked[..i].iter().find(|o| slug(&o.name) == s) {
+            return Err(bad_input(format!(
+                "{}: targets `{}` and `{}` would both write into the folder `{s}`",
+                targets.display(),
+                o.name,
+                t.name
+            )));
+        }
+    }
+    Ok((modes, targets_checked))
 }
 
 pub fn progress(n: usize, what: &str) -> ProgressBar {
@@ -99,6 +140,12 @@ fn dropped_summary(db: &SimulationDatabase) -> String {
 /// `shipid inverse`.
 pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
     faer::set_global_parallelism(faer::Par::Seq);
+    if a.samples < MIN_SAMPLES {
+        return Err(bad_input(format!(
+            "--samples {}: the network needs at least {MIN_SAMPLES} simulated ships per target",
+            a.samples
+        )));
+    }
     let (modes, targets) = load(a.ships, a.targets)?;
     let n95 = modes.modes_for(0.95);
     let n_modes = a.modes.unwrap_or(n95);

@@ -213,9 +213,9 @@ enum Command {
     Inverse {
         /// Targets file (ship particulars and motion indexes), e.g. data/paper003/targets.toml.
         targets: PathBuf,
-        /// The hydrodynamic database (paper 003 Tab. 1).
-        #[arg(long, default_value = "data/paper003/ships.toml")]
-        ships: PathBuf,
+        /// The hydrodynamic database (default: paper 003 Tab. 1, data/paper003/ships.toml, built in).
+        #[arg(long)]
+        ships: Option<PathBuf>,
         /// Simulated ships per target (paper 003: 2603 for KVLCC2).
         #[arg(long, default_value_t = 2603)]
         samples: usize,
@@ -418,7 +418,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             out,
         } => shipid::inverse_cmd::run(&shipid::inverse_cmd::InverseArgs {
             targets: &targets,
-            ships: &ships,
+            ships: ships.as_deref(),
             samples,
             seed,
             modes,

@@ -16,7 +16,7 @@ pub fn bench(
     seed: u64,
 ) -> Result<()> {
     shipid_estimators::faer::set_global_parallelism(shipid_estimators::faer::Par::Seq);
-    let (modes, targets) = load(ships, targets).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let (modes, targets) = load(Some(ships), targets).map_err(|e| anyhow::anyhow!("{e}"))?;
     let target = &targets[0];
     let n_modes = modes.modes_for(0.95);
     let settings = SimSettings::default();
