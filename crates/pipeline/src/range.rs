@@ -7,13 +7,15 @@ use std::path::{Path, PathBuf};
 
 use shipid_io::{Dataset, PrimeScale, Recording};
 use shipid_model::design::primed_state;
-use shipid_model::{AugmentedModelFile, CoefficientSet, IdentificationRange, ModelFile, TrainingWindow};
+use shipid_model::{
+    AugmentedModelFile, CoefficientSet, IdentificationRange, ModelFile, TrainingWindow,
+};
 
 use crate::model_file::{absolute_path, resolve_base, resolve_stored, training_hash};
 
 /// A model's training data, read: the Abkowitz model file (`None` for another kind, such as a sparse
 /// GP, whose training windows are read all the same), the data set restricted to the training
-/// recordings, and the data set's path.
+/// recordings, and the data set's absolute path.
 pub type TrainingData = (Option<ModelFile>, Dataset, PathBuf);
 
 /// What became of the training data a model names.
@@ -179,8 +181,9 @@ fn windows_source(path: &Path, text: &str) -> TrainingSource {
         }
     };
     let file = toml::from_str::<ModelFile>(text).ok();
+    // Named as the file system knows it: the same wherever the model was named from.
     TrainingSource::Read {
-        data: (file, ds, ds_path),
+        data: (file, ds, absolute_path(&ds_path)),
         model: path.to_path_buf(),
         unverified,
     }

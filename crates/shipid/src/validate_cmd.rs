@@ -48,8 +48,8 @@ fn warn_about_training(model_spec: &str) {
         TrainingSource::NotRecorded => eprintln!(
             "warning: {model_spec}: the model names no training data: the identification range (column `outside`) is unavailable"
         ),
-        TrainingSource::Unavailable(why) => eprintln!(
-            "warning: {why}\nthe identification range (column `outside`) is unavailable"
-        ),
+        TrainingSource::Unavailable(why) => {
+            eprintln!("warning: {why}\nthe identification range (column `outside`) is unavailable")
+        }
     }
 }

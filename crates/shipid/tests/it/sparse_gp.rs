@@ -163,7 +163,8 @@ fn a_sparse_gp_base_gets_its_own_level_from_its_training_data() {
     ]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
-        stdout.contains("model's own level (training data data/kvlcc2-mmg/dataset.toml)"),
+        stdout.contains("model's own level (training data /")
+            && stdout.contains("/data/kvlcc2-mmg/dataset.toml)"),
         "{stdout}"
     );
     let r: Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
