@@ -46,6 +46,12 @@ pub struct LmPoint {
     pub cost: f64,
 }
 
+/// The normal equations of a linearised least-squares problem: JᵀJ (k × k) and −Jᵀr.
+pub struct Normal {
+    pub jtj: Vec<Vec<f64>>,
+    pub neg_jtr: Vec<f64>,
+}
+
 /// One Levenberg–Marquardt step from `at` with the Jacobian `jac` (one row per parameter): solves
 /// (JᵀJ + λ diag JᵀJ) δ = −Jᵀr, projects p + δ with `project` and moves `at` there when the cost
 /// drops (then λ ← max(0.3 λ, 1e-9)); otherwise λ grows tenfold and it tries again, at most `tries`
@@ -66,10 +72,32 @@ pub fn lm_step(
         .map(|a| (0..k).map(|b| dot(&jac[a], &jac[b])).collect())
         .collect();
     let neg_jtr: Vec<f64> = (0..k).map(|a| -dot(&jac[a], &at.r)).collect();
+    lm_step_normal(
+        &Normal { jtj, neg_jtr },
+        at,
+        lambda,
+        tries,
+        project,
+        residuals,
+    )
+}
+
+/// [`lm_step`] from the normal equations, for callers that accumulate them without storing J (the
+/// refinement, whose J has ten thousand rows).
+pub fn lm_step_normal(
+    normal: &Normal,
+    at: &mut LmPoint,
+    lambda: &mut f64,
+    tries: usize,
+    project: impl Fn(&mut Vec<f64>),
+    residuals: impl Fn(&[f64]) -> Vec<f64>,
+) -> Option<f64> {
+    let Normal { jtj, neg_jtr } = normal;
+    let k = jtj.len();
     for _ in 0..tries {
         let mut a = jtj.clone();
         (0..k).for_each(|i| a[i][i] += *lambda * jtj[i][i].max(1e-12));
-        let Some(step) = solve_small(&a, &neg_jtr) else {
+        let Some(step) = solve_small(&a, neg_jtr) else {
             *lambda *= 10.0;
             continue;
         };

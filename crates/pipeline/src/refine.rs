@@ -29,7 +29,7 @@ use shipid_model::{AbkowitzModel, Refinement};
 use shipid_sim::AbkowitzDynamics;
 use shipid_sim::dynamics::{Parametric, State};
 
-use crate::lm::{LmPoint, lm_step};
+use crate::lm::{LmPoint, Normal, lm_step_normal};
 use crate::replay::{
     SegmentSensitivities, differentiator_margin, replay_segment, replay_segment_sensitivities,
     segments,
@@ -217,76 +217,117 @@ impl<P: Parametric> Problem<'_, P> {
         per_segment.concat()
     }
 
-    /// Jacobian of [`Problem::residuals`] at `p` (one column per free parameter): replay rows from the
-    /// forward sensitivities of each segment (in parallel), equation-error rows analytic. A capped
-    /// residual, a sample past a divergence or a failed equation error has a zero row, as it does not
-    /// move with p.
-    fn jacobian(&self, p: &[f64]) -> Vec<Vec<f64>> {
+    /// Normal equations JᵀJ, −Jᵀr of [`Problem::residuals`] at `p` with residuals `r` there. J's rows
+    /// come from the forward sensitivities of each segment (replay rows) and analytically (equation
+    /// errors); a capped residual, a sample past a divergence or a failed equation error has a zero
+    /// row, as it does not move with p. Each block of rows (a segment, the equation errors) is
+    /// reduced to its share of JᵀJ in parallel, and the shares are added in block order, so the sum
+    /// does not depend on the thread count.
+    fn normal_equations(&self, p: &[f64], r: &[f64]) -> Normal {
         let n = self.free.len();
         let Some(model) = self.model(p) else {
-            return vec![Vec::new(); n];
+            return Normal {
+                jtj: vec![vec![0.0; n]; n],
+                neg_jtr: vec![0.0; n],
+            };
         };
-        let lpp = self.lpp;
-        let blocks: Vec<Vec<f64>> = self
-            .segments
-            .par_iter()
-            .map(|seg| {
-                let rec = &self.recordings[seg.recording];
-                let sens = replay_segment_sensitivities(&model, rec, seg.a, seg.b, &self.free);
-                let t0 = rec.t[seg.a];
-                let mut rows = Vec::new();
-                for i in self.compared(seg) {
-                    let t = rec.t[i] - t0;
-                    let recorded = [rec.x0[i] / lpp, rec.y0[i] / lpp, rec.psi[i]];
-                    let scale = [1.0 / lpp, 1.0 / lpp, 1.0];
-                    match pose_at(&sens, t) {
-                        Some((pose, d_pose)) => {
-                            for axis in 0..3 {
-                                let raw = pose[axis] * scale[axis] - recorded[axis];
-                                let live = raw.abs() < CAP;
-                                rows.extend((0..n).map(|j| {
-                                    if live {
-                                        d_pose[3 * j + axis] * scale[axis] * self.w_oe
-                                    } else {
-                                        0.0
-                                    }
-                                }));
-                            }
-                        }
-                        None => rows.extend(std::iter::repeat_n(0.0, 3 * n)),
-                    }
-                }
-                rows
+        // First residual of each block.
+        let mut offsets = Vec::with_capacity(self.segments.len() + 1);
+        let mut offset = 0;
+        for seg in &self.segments {
+            offsets.push(offset);
+            offset += 3 * self.compared(seg).count();
+        }
+        offsets.push(offset);
+        let shares: Vec<(Vec<f64>, Vec<f64>)> = (0..=self.segments.len())
+            .into_par_iter()
+            .map(|block| {
+                let rows = match self.segments.get(block) {
+                    Some(seg) => self.replay_rows(&model, seg),
+                    None => self.equation_error_rows(&model),
+                };
+                normal_share(&rows, &r[offsets[block]..], n)
             })
             .collect();
+        let mut jtj = vec![0.0; n * n];
+        let mut jtr = vec![0.0; n];
+        for (share_jtj, share_jtr) in &shares {
+            jtj.iter_mut().zip(share_jtj).for_each(|(x, y)| *x += y);
+            jtr.iter_mut().zip(share_jtr).for_each(|(x, y)| *x += y);
+        }
+        // Only the upper triangle was accumulated.
+        let jtj = (0..n)
+            .map(|a| (0..n).map(|b| jtj[a.min(b) * n + a.max(b)]).collect())
+            .collect();
+        Normal {
+            jtj,
+            neg_jtr: jtr.iter().map(|x| -x).collect(),
+        }
+    }
+
+    /// Rows of J (row-major, one column per free parameter) for the replay residuals of a segment.
+    fn replay_rows(&self, model: &P, seg: &Segment) -> Vec<f64> {
+        let n = self.free.len();
+        let lpp = self.lpp;
+        let rec = &self.recordings[seg.recording];
+        let sens = replay_segment_sensitivities(model, rec, seg.a, seg.b, &self.free);
+        let t0 = rec.t[seg.a];
+        let scale = [1.0 / lpp, 1.0 / lpp, 1.0];
+        let mut rows = Vec::new();
+        for i in self.compared(seg) {
+            let recorded = [rec.x0[i] / lpp, rec.y0[i] / lpp, rec.psi[i]];
+            match pose_at(&sens, rec.t[i] - t0) {
+                Some((pose, d_pose)) => {
+                    for axis in 0..3 {
+                        let live = (pose[axis] * scale[axis] - recorded[axis]).abs() < CAP;
+                        let w = if live { scale[axis] * self.w_oe } else { 0.0 };
+                        rows.extend((0..n).map(|j| d_pose[3 * j + axis] * w));
+                    }
+                }
+                None => rows.extend(std::iter::repeat_n(0.0, 3 * n)),
+            }
+        }
+        rows
+    }
+
+    /// Rows of J for the equation errors: −w ∂a/∂p at the recorded states.
+    fn equation_error_rows(&self, model: &P) -> Vec<f64> {
+        let n = self.free.len();
         let mut d_state = [[0.0; 3]; 3];
         let mut d_theta = vec![[0.0; 3]; self.theta0.len()];
-        let mut ee_rows = Vec::with_capacity(3 * n * self.ee.len());
+        let mut rows = Vec::with_capacity(3 * n * self.ee.len());
         for &(k, i, a) in &self.ee {
             let x = self.state(k, i);
             let f =
                 model.sensitivities(&x, self.recordings[k].delta[i], &mut d_state, &mut d_theta);
             for d in 0..3 {
                 let live = f.as_ref().is_ok_and(|f| (a[d] - f[d]).is_finite());
-                ee_rows.extend(self.free.iter().map(|&(j, unit)| {
-                    if live {
-                        -d_theta[j][d] * unit * self.w_ee[d]
-                    } else {
-                        0.0
-                    }
-                }));
+                let w = if live { -self.w_ee[d] } else { 0.0 };
+                rows.extend(self.free.iter().map(|&(j, unit)| d_theta[j][d] * unit * w));
             }
         }
-        let rows: Vec<&[f64]> = blocks
-            .iter()
-            .chain(std::iter::once(&ee_rows))
-            .flat_map(|b| b.chunks(n))
-            .collect();
-        (0..n)
-            .into_par_iter()
-            .map(|j| rows.iter().map(|row| row[j]).collect())
-            .collect()
+        rows
     }
+}
+
+/// A block's share of the normal equations: the upper triangle of Jᵀ_b J_b (row-major n × n) and
+/// Jᵀ_b r_b, from its rows (row-major, n wide) and its residuals (the first rows of `r`).
+fn normal_share(rows: &[f64], r: &[f64], n: usize) -> (Vec<f64>, Vec<f64>) {
+    let mut jtj = vec![0.0; n * n];
+    let mut jtr = vec![0.0; n];
+    for (row, &ri) in rows.chunks_exact(n.max(1)).zip(r) {
+        for (a, &ja) in row.iter().enumerate() {
+            if ja == 0.0 {
+                continue;
+            }
+            jtr[a] += ja * ri;
+            jtj[a * n + a..(a + 1) * n]
+                .iter_mut()
+                .zip(&row[a..])
+                .for_each(|(x, &jb)| *x += ja * jb);
+        }
+    }
+    (jtj, jtr)
 }
 
 /// Pose and its sensitivities at `t` [s] from the segment's start, interpolated between steps as the
@@ -456,8 +497,8 @@ pub fn refine<P: Parametric>(
     let mut iterations = 0;
     for _ in 0..opts.max_iterations {
         iterations += 1;
-        let jac = problem.jacobian(&at.p);
-        let step = lm_step(&jac, &mut at, &mut lambda, 10, project, |q| {
+        let normal = problem.normal_equations(&at.p, &at.r);
+        let step = lm_step_normal(&normal, &mut at, &mut lambda, 10, project, |q| {
             problem.residuals(q)
         });
         if !step.is_some_and(|rel| rel > opts.tolerance) {
