@@ -92,6 +92,10 @@ impl EstimatorSpec {
     pub fn validate(&self) -> Result<(), PipelineError> {
         let need = |v: Option<f64>, flag: &str| -> Result<(), PipelineError> {
             match v {
+                // C = 0 drops the data term of the SVR: every coefficient would be 0.
+                Some(x) if flag == "c" && x == 0.0 => {
+                    Err(bad_input("--c must be > 0, got 0 (C = 0 ignores the data)"))
+                }
                 Some(x) if x.is_finite() && x >= 0.0 => Ok(()),
                 Some(x) => Err(bad_input(format!(
                     "--{flag} must be a non-negative number, not {x}"
@@ -107,6 +111,33 @@ impl EstimatorSpec {
             return Err(bad_input(
                 "--similarity applies to --estimator sparse-gp only",
             ));
+        }
+        // A hyper-parameter the estimator has not would be silently ignored.
+        let owns: &[&str] = match self.name.as_str() {
+            "lsq" | "bounded-lsq" => &[],
+            "ridge" => &["lambda"],
+            "lasso" => &["alpha"],
+            "svr" => &["c", "epsilon"],
+            _ => &["lambda", "alpha", "c", "epsilon"],
+        };
+        for (given, flag) in [
+            (self.lambda.is_some(), "lambda"),
+            (self.alpha.is_some(), "alpha"),
+            (self.c.is_some(), "c"),
+            (self.epsilon.is_some(), "epsilon"),
+        ] {
+            if given && !owns.contains(&flag) && self.name != GP {
+                return Err(bad_input(format!(
+                    "--{flag} does not apply to --estimator {}",
+                    self.name
+                )));
+            }
+        }
+        if self.tune && owns.is_empty() {
+            return Err(bad_input(format!(
+                "--tune does not apply to --estimator {} (it has no hyper-parameter)",
+                self.name
+            )));
         }
         match self.name.as_str() {
             "lsq" | "bounded-lsq" => Ok(()),
@@ -195,8 +226,12 @@ pub fn window_range(
             let lo = rec.t.partition_point(|&t| t < start_s);
             let hi = end_at(end_s);
             if hi <= lo + 10 {
+                let span = match (rec.t.first(), rec.t.last()) {
+                    (Some(a), Some(b)) => format!(" (the recording runs {a}–{b} s)"),
+                    _ => String::new(),
+                };
                 return Err(bad_input(format!(
-                    "{}: time window {start_s}–{end_s} s holds {} samples, too few to fit",
+                    "{}: time window {start_s}–{end_s} s holds {} samples, too few to fit{span}",
                     r.file,
                     hi.saturating_sub(lo)
                 )));

@@ -6,25 +6,125 @@ use shipid_sim::{Dynamics, SimOptions, SimOutput, State, controller_for};
 use crate::error::{PipelineError, bad_input};
 use crate::generate::{DT_S, SAMPLE_INTERVAL_S, T_EXECUTE_S, standard_duration_s};
 
-/// Simulate a standard manoeuvre from a steady approach at U0.
+/// RK4 steps a simulation may take unless the user insists (`--allow-large`): about ten seconds of
+/// work, some 4000 times a standard manoeuvre of the KVLCC2 model at the default step.
+pub const MAX_STEPS_UNLESS_ALLOWED: f64 = 1e7;
+/// Samples kept of a run's history at most: 96 bytes each (twelve channels), so under 100 MB. A longer
+/// run stores every k-th step (the history is decimated, the integration is not).
+pub const MAX_STORED_SAMPLES: f64 = 1e6;
+/// Largest RK4 step as a fraction of L/U0: the yaw response of a ship takes about L/U0, and a step
+/// beyond a tenth of it no longer resolves it (the default 0.05 s is 0.008 L/U0 for the KVLCC2 model).
+pub const MAX_STEP_OVER_L_OVER_U0: f64 = 0.1;
+
+/// What `shipid simulate` asks for: the step and duration as given (defaults otherwise), and whether a
+/// run above [`MAX_STEPS_UNLESS_ALLOWED`] may start.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SimRequest {
+    pub dt_s: Option<f64>,
+    pub duration_s: Option<f64>,
+    pub allow_large: bool,
+}
+
+/// The grid a request resolves to.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SimGrid {
+    pub dt_s: f64,
+    pub duration_s: f64,
+    /// RK4 steps.
+    pub steps: f64,
+    /// Interval of the stored samples [s]: 0.1 s when the step divides it, else the step, times the
+    /// decimation that keeps at most [`MAX_STORED_SAMPLES`].
+    pub sample_interval_s: f64,
+    /// Whether the history was thinned to bound memory.
+    pub decimated: bool,
+}
+
+/// Checks `request` against the ship and the manoeuvre before any work: positive finite step and
+/// duration, a step shorter than the run and than [`MAX_STEP_OVER_L_OVER_U0`] L/U0, and no more than
+/// [`MAX_STEPS_UNLESS_ALLOWED`] steps unless allowed. Messages name the flags.
+pub fn sim_grid(
+    model: &dyn Dynamics,
+    m: &Manoeuvre,
+    request: &SimRequest,
+) -> Result<SimGrid, PipelineError> {
+    let ship = *model.ship();
+    let dt = request.dt_s.unwrap_or(DT_S);
+    if !(dt.is_finite() && dt > 0.0) {
+        return Err(bad_input(format!(
+            "--dt must be a positive number of seconds, got {dt}"
+        )));
+    }
+    let max_dt = MAX_STEP_OVER_L_OVER_U0 * ship.lpp / ship.u0;
+    // Only a step the user chose: the default suits every model-scale ship.
+    if request.dt_s.is_some() && dt > max_dt {
+        return Err(bad_input(format!(
+            "--dt {dt} s is more than {MAX_STEP_OVER_L_OVER_U0} L/U0 = {max_dt:.3} s for this ship (L = {} m, U0 = {} m/s): RK4 would step over its yaw response",
+            ship.lpp, ship.u0
+        )));
+    }
+    let duration = request
+        .duration_s
+        .unwrap_or_else(|| standard_duration_s(m, &ship));
+    if !(duration.is_finite() && duration > 0.0) {
+        return Err(bad_input(format!(
+            "--duration must be a positive number of seconds, got {duration}"
+        )));
+    }
+    if dt >= duration {
+        return Err(bad_input(format!(
+            "--dt {dt} s is not shorter than the simulated time {duration} s: the run would have no step to measure"
+        )));
+    }
+    let steps = (duration / dt).round();
+    if steps > MAX_STEPS_UNLESS_ALLOWED && !request.allow_large {
+        return Err(bad_input(format!(
+            "--duration {duration} s at --dt {dt} s is {steps:.3e} RK4 steps (more than {MAX_STEPS_UNLESS_ALLOWED:.0e}; a standard manoeuvre takes about {:.0}): give --allow-large to run it anyway (its stored history is then thinned to at most {MAX_STORED_SAMPLES:.0e} samples)",
+            (standard_duration_s(m, &ship) / DT_S).round()
+        )));
+    }
+    // Sample at 10 Hz when the step divides it, otherwise every step.
+    let ratio = (SAMPLE_INTERVAL_S / dt).round();
+    let base = if ratio >= 1.0 && (ratio * dt - SAMPLE_INTERVAL_S).abs() < 1e-9 {
+        ratio * dt
+    } else {
+        dt
+    };
+    let thin = (duration / base / MAX_STORED_SAMPLES).ceil().max(1.0);
+    Ok(SimGrid {
+        dt_s: dt,
+        duration_s: duration,
+        steps,
+        sample_interval_s: thin * base,
+        decimated: thin > 1.0,
+    })
+}
+
+/// Simulate a standard manoeuvre from a steady approach at U0 (default step and duration, no large
+/// runs).
 pub fn simulate_manoeuvre(
     model: &dyn Dynamics,
     m: &Manoeuvre,
     dt_s: Option<f64>,
     duration_s: Option<f64>,
 ) -> Result<SimOutput, PipelineError> {
+    let request = SimRequest {
+        dt_s,
+        duration_s,
+        allow_large: false,
+    };
+    let grid = sim_grid(model, m, &request)?;
+    simulate_on_grid(model, m, &grid)
+}
+
+/// Simulate a standard manoeuvre from a steady approach at U0 on a checked grid ([`sim_grid`]).
+pub fn simulate_on_grid(
+    model: &dyn Dynamics,
+    m: &Manoeuvre,
+    grid: &SimGrid,
+) -> Result<SimOutput, PipelineError> {
     let ship = *model.ship();
     let mut controller = controller_for(m, T_EXECUTE_S).map_err(bad_input)?;
-    let dt = dt_s.unwrap_or(DT_S);
-    // Sample at 10 Hz when the step divides it, otherwise every step.
-    let ratio = (SAMPLE_INTERVAL_S / dt).round();
-    let sample = if ratio >= 1.0 && (ratio * dt - SAMPLE_INTERVAL_S).abs() < 1e-9 {
-        ratio * dt
-    } else {
-        dt
-    };
-    let options = SimOptions::new(duration_s.unwrap_or_else(|| standard_duration_s(m, &ship)))
-        .with_step(dt, sample);
+    let options = SimOptions::new(grid.duration_s).with_step(grid.dt_s, grid.sample_interval_s);
     shipid_sim::simulate(
         model,
         controller.as_mut(),

@@ -25,7 +25,7 @@ enum Command {
         #[arg(long, default_value = "data/kvlcc2-mmg")]
         out: PathBuf,
         /// Add seeded Gaussian measurement noise (README: noise model).
-        #[arg(long, value_name = "SEED")]
+        #[arg(long, value_name = "SEED", allow_negative_numbers = true)]
         noise: Option<u64>,
         /// Apply a physical effect, concealed (e.g. `current:speed=0.05,from=120`); repeatable.
         #[arg(long, value_name = "KIND:KEY=VALUE,...")]
@@ -60,19 +60,19 @@ enum Command {
         #[arg(long, default_value = "lsq")]
         estimator: String,
         /// sparse-gp: similarity threshold d_gen in (0, 1] of the sparsification (default 0.96).
-        #[arg(long, value_name = "D")]
+        #[arg(long, value_name = "D", allow_negative_numbers = true)]
         similarity: Option<f64>,
         /// Ridge λ (on the column-scaled design, least-squares term as a mean).
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         lambda: Option<f64>,
         /// Lasso α (scikit-learn convention on the column-scaled design).
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         alpha: Option<f64>,
         /// SVR C.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         c: Option<f64>,
         /// SVR ε (units of the prime target; default 1 % of its RMS, or tuned with --tune).
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         epsilon: Option<f64>,
         /// Choose the hyper-parameters by blocked cross-validation: λ, α, or the SVR's C and ε (C
         /// alone when --epsilon is given).
@@ -86,10 +86,10 @@ enum Command {
         #[arg(long, value_delimiter = ',')]
         recordings: Vec<String>,
         /// Truncate each training zig-zag after N overshoots.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         overshoots: Option<u32>,
         /// Time window START:END [s] of each training recording.
-        #[arg(long, value_name = "START:END")]
+        #[arg(long, value_name = "START:END", allow_hyphen_values = true)]
         window: Option<String>,
         /// qp (clarabel reference) or fast.
         #[arg(long, default_value = "fast")]
@@ -106,7 +106,7 @@ enum Command {
     Run {
         study: PathBuf,
         /// Parallel cases (default: all cores).
-        #[arg(long)]
+        #[arg(long, value_parser = at_least_one_job)]
         jobs: Option<usize>,
         #[arg(long)]
         out: Option<PathBuf>,
@@ -117,6 +117,9 @@ enum Command {
         /// study, counted in its summary line, and the run exits 0).
         #[arg(long)]
         strict: bool,
+        /// Run a grid of more than 5000 cases (refused without it).
+        #[arg(long)]
+        allow_large: bool,
     },
     /// Print a comparison table of a study's summary (markdown).
     Table {
@@ -154,8 +157,12 @@ enum Command {
         /// Store the fresh tables as the new reference.
         #[arg(long)]
         bless: bool,
-        #[arg(long)]
+        /// Parallel cases (default: all cores).
+        #[arg(long, value_parser = at_least_one_job)]
         jobs: Option<usize>,
+        /// Run a grid of more than 5000 cases (refused without it).
+        #[arg(long)]
+        allow_large: bool,
     },
     /// Diagnose why a model and recordings it did not see differ: locate the mismatch, name the
     /// physical effect left out, fit it, show the held-out fit improve (docs/diagnosis.md).
@@ -173,7 +180,7 @@ enum Command {
         #[arg(long, value_name = "MODEL.toml")]
         model_out: Option<PathBuf>,
         /// Replay segment length ÷ (L/U0).
-        #[arg(long, default_value_t = 10.0)]
+        #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
         horizon: f64,
     },
     /// Validate a model on a data set: replayed-rudder RMSEs and closed-loop manoeuvre metrics.
@@ -195,10 +202,10 @@ enum Command {
         #[arg(long, value_name = "DATASET.toml")]
         replay: Option<PathBuf>,
         /// RK4 step [s].
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         dt: Option<f64>,
         /// Simulated time [s].
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         duration: Option<f64>,
         /// Run even more than 1e7 RK4 steps (the stored history is thinned to at most 1e6 samples).
         #[arg(long)]
@@ -217,18 +224,18 @@ enum Command {
         #[arg(long)]
         ships: Option<PathBuf>,
         /// Simulated ships per target (paper 003: 2603 for KVLCC2).
-        #[arg(long, default_value_t = 2603)]
+        #[arg(long, default_value_t = 2603, allow_negative_numbers = true)]
         samples: usize,
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
         seed: u64,
         /// Number of modes (default: the fewest reaching 95 % of the variation).
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         modes: Option<usize>,
         /// Held-out test samples to re-simulate with their predicted weights.
-        #[arg(long, default_value_t = 200)]
+        #[arg(long, default_value_t = 200, allow_negative_numbers = true)]
         resimulate: usize,
         /// Simulations per start of the Nelder–Mead refinement of the network's answer (0: off).
-        #[arg(long, default_value_t = 150)]
+        #[arg(long, default_value_t = 150, allow_negative_numbers = true)]
         refine_evals: usize,
         #[arg(long, default_value = "results/paper003")]
         out: PathBuf,
@@ -299,6 +306,11 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                 (Some(_), Some(_)) => {
                     return Err(shipid::bad_input("give --overshoots or --window, not both"));
                 }
+                (Some(0), None) => {
+                    return Err(shipid::bad_input(
+                        "--overshoots must be at least 1 (the record is cut at the peak of overshoot N)",
+                    ));
+                }
                 (Some(n), None) => shipid_pipeline::fit::WindowSpec::Overshoots(n),
                 (None, Some(w)) => parse_window(&w)?,
                 (None, None) => shipid_pipeline::fit::WindowSpec::Whole,
@@ -351,7 +363,22 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             json,
             out,
         } => match (manoeuvre, replay) {
-            (_, Some(ds)) => shipid::simulate_cmd::run_replay(&model, &ds, json),
+            (_, Some(ds)) => {
+                // A replay follows each recording's own time base: these would be silently ignored.
+                for (given, flag) in [
+                    (dt.is_some(), "--dt"),
+                    (duration.is_some(), "--duration"),
+                    (allow_large, "--allow-large"),
+                    (out.is_some(), "--out"),
+                ] {
+                    if given {
+                        return Err(shipid::bad_input(format!(
+                            "{flag} does not apply to --replay (each recording is replayed on its own time base)"
+                        )));
+                    }
+                }
+                shipid::simulate_cmd::run_replay(&model, &ds, json)
+            }
             (Some(m), None) => shipid::simulate_cmd::run(&shipid::simulate_cmd::SimulateArgs {
                 model: &model,
                 manoeuvre: &m,
@@ -369,12 +396,14 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             out,
             force,
             strict,
+            allow_large,
         } => shipid::study_cmd::run(
             &study,
             out.as_deref(),
             jobs.unwrap_or_else(default_jobs),
             force,
             strict,
+            allow_large,
         ),
         Command::Table { study, pivot, out } => {
             shipid::study_cmd::table(&study, out.as_deref(), pivot.as_deref())
@@ -386,7 +415,14 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             reference,
             bless,
             jobs,
-        } => shipid::study_cmd::check(&study, &reference, bless, jobs.unwrap_or_else(default_jobs)),
+            allow_large,
+        } => shipid::study_cmd::check(
+            &study,
+            &reference,
+            bless,
+            jobs.unwrap_or_else(default_jobs),
+            allow_large,
+        ),
         Command::Validate {
             model,
             dataset,
@@ -429,6 +465,15 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
     }
 }
 
+/// `--jobs`: 0 would mean no worker at all, so it is refused rather than read as one.
+fn at_least_one_job(text: &str) -> Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(0) => Err("give at least 1 parallel case".into()),
+        Ok(n) => Ok(n),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
 fn default_jobs() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get())
 }
@@ -436,7 +481,7 @@ fn default_jobs() -> usize {
 fn parse_window(text: &str) -> Result<shipid_pipeline::fit::WindowSpec, CliError> {
     let bad = || {
         shipid::bad_input(format!(
-            "--window `{text}`: expected START:END in seconds, e.g. 0:120"
+            "--window `{text}`: expected START:END in seconds with END after START, e.g. 0:120"
         ))
     };
     let (a, b) = text.split_once(':').ok_or_else(bad)?;

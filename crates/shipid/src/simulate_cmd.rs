@@ -6,11 +6,11 @@ use serde_json::{Map, Value, json};
 use shipid_io::Manoeuvre;
 use shipid_io::write::{recording_csv, write_atomic};
 use shipid_pipeline::model_file::load_model;
-use shipid_pipeline::simulate::simulate_manoeuvre;
+use shipid_pipeline::simulate::{MAX_STORED_SAMPLES, SimRequest, sim_grid, simulate_on_grid};
 use shipid_pipeline::spec::parse_manoeuvre;
 use shipid_sim::{Dynamics, SimOutput, SimStatus, metrics};
 
-use crate::{CliError, Outcome, bad_input, failed};
+use crate::{CliError, Outcome, bad_input};
 
 /// The JSON of a simulated manoeuvre: `"status"` and the metric keys, or the divergence instead.
 pub fn outcome_json(out: &SimOutput, m: &Manoeuvre, model: &dyn Dynamics) -> Value {
@@ -79,26 +79,69 @@ pub fn run_replay(model_spec: &str, dataset: &Path, as_json: bool) -> Result<Out
     })
 }
 
-pub fn run(
-    model_spec: &str,
-    manoeuvre: &str,
-    dt_s: Option<f64>,
-    duration_s: Option<f64>,
-    as_json: bool,
-    out_csv: Option<&Path>,
-) -> Result<Outcome, CliError> {
-    let m = parse_manoeuvre(manoeuvre).map_err(bad_input)?;
-    let model = load_model(model_spec)?;
-    let out = simulate_manoeuvre(model.as_ref(), &m, dt_s, duration_s)?;
-    if let Some(path) = out_csv {
+/// Flags of `shipid simulate --manoeuvre`.
+pub struct SimulateArgs<'a> {
+    pub model: &'a str,
+    pub manoeuvre: &'a str,
+    pub dt_s: Option<f64>,
+    pub duration_s: Option<f64>,
+    pub allow_large: bool,
+    pub json: bool,
+    pub out_csv: Option<&'a Path>,
+}
+
+pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
+    let m = parse_manoeuvre(a.manoeuvre).map_err(|e| bad_input(format!("--manoeuvre: {e}")))?;
+    let model = load_model(a.model)?;
+    let request = SimRequest {
+        dt_s: a.dt_s,
+        duration_s: a.duration_s,
+        allow_large: a.allow_large,
+    };
+    let grid = sim_grid(model.as_ref(), &m, &request)?;
+    if grid.decimated {
+        eprintln!(
+            "note: {:.3e} RK4 steps of {} s; the stored history keeps one sample every {} s (at most {:.0e} samples) to bound memory",
+            grid.steps, grid.dt_s, grid.sample_interval_s, MAX_STORED_SAMPLES
+        );
+    }
+    let out = simulate_on_grid(model.as_ref(), &m, &grid)?;
+    if let Some(path) = a.out_csv {
         let comments = vec![format!(
-            "shipid {} simulate {model_spec} --manoeuvre {manoeuvre}; midship, SI, rudder positive to starboard",
-            env!("CARGO_PKG_VERSION")
+            "shipid {} simulate {} --manoeuvre {}; midship, SI, rudder positive to starboard",
+            env!("CARGO_PKG_VERSION"),
+            a.model,
+            a.manoeuvre
         )];
-        write_atomic(path, recording_csv(&out.recording, &comments).as_bytes()).map_err(failed)?;
+        write_atomic(path, recording_csv(&out.recording, &comments).as_bytes())
+            .map_err(|e| crate::write_failed(path, e))?;
     }
     let value = outcome_json(&out, &m, model.as_ref());
-    if as_json {
+    if matches!(out.status, SimStatus::Ok) {
+        let undefined: Vec<&str> = metrics(&out.recording, &m, model.ship())
+            .entries()
+            .iter()
+            .filter(|(key, v)| v.is_none() && applies(key, &m))
+            .map(|(key, _)| *key)
+            .collect();
+        if !undefined.is_empty() {
+            let why = if grid.decimated {
+                format!(
+                    "the run ends before the manoeuvre reaches them, or its history, thinned to a sample every {} s, is too coarse for them",
+                    grid.sample_interval_s
+                )
+            } else {
+                "the run ends before the manoeuvre reaches them; a longer --duration defines them"
+                    .into()
+            };
+            eprintln!(
+                "warning: {} undefined after {} s of simulated time (left out of the output): {why}",
+                undefined.join(", "),
+                grid.duration_s
+            );
+        }
+    }
+    if a.json {
         println!(
             "{}",
             serde_json::to_string_pretty(&value).unwrap_or_default()
@@ -112,4 +155,14 @@ pub fn run(
         SimStatus::Ok => Outcome::Ok,
         SimStatus::Diverged { .. } => Outcome::SomeFailed,
     })
+}
+
+/// Whether a metric key belongs to the manoeuvre (zig-zag keys to zig-zags, turning keys to turns).
+fn applies(key: &str, m: &Manoeuvre) -> bool {
+    let zigzag_key = matches!(key, "overshoot_1" | "overshoot_2" | "t_a" | "t_check");
+    match m {
+        Manoeuvre::ZigZag { .. } => zigzag_key,
+        Manoeuvre::Turning { .. } => !zigzag_key,
+        Manoeuvre::Free => false,
+    }
 }

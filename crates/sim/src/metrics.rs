@@ -120,7 +120,7 @@ pub fn metrics(rec: &Recording, manoeuvre: &Manoeuvre, ship: &Ship) -> Metrics {
     if !(usable(rec) && ship.lpp > 0.0 && ship.u0 > 0.0) {
         return Metrics::default();
     }
-    match *manoeuvre {
+    let m = match *manoeuvre {
         Manoeuvre::ZigZag {
             rudder_deg,
             check_deg,
@@ -128,6 +128,25 @@ pub fn metrics(rec: &Recording, manoeuvre: &Manoeuvre, ship: &Ship) -> Metrics {
         } => zigzag_metrics(rec, rudder_deg, check_deg, side, ship),
         Manoeuvre::Turning { rudder_deg, side } => turning_metrics(rec, rudder_deg, side, ship),
         Manoeuvre::Free => Metrics::default(),
+    };
+    m.finite_only()
+}
+
+impl Metrics {
+    /// Every non-finite value undefined: finite samples can still overflow in a difference (a heading
+    /// of 1e308 rad), and JSON would write such a value as `null` instead of leaving the key out.
+    fn finite_only(self) -> Metrics {
+        let keep = |v: Option<f64>| v.filter(|x| x.is_finite());
+        Metrics {
+            overshoot_1: keep(self.overshoot_1),
+            overshoot_2: keep(self.overshoot_2),
+            t_a: keep(self.t_a),
+            t_check: keep(self.t_check),
+            advance: keep(self.advance),
+            transfer: keep(self.transfer),
+            tactical_diameter: keep(self.tactical_diameter),
+            steady_diameter: keep(self.steady_diameter),
+        }
     }
 }
 
