@@ -6,7 +6,8 @@ use std::path::{Path, PathBuf};
 use shipid_report::RunMeta;
 use shipid_study::tables::write_tables;
 use shipid_study::{
-    CaseResult, OutcomeCounts, RunRecord, Study, default_out, load_study, run_study,
+    CaseResult, LARGE_RUN_CASES, OutcomeCounts, RunLock, RunPlan, RunRecord, Study, default_out,
+    load_study, run_study,
 };
 use shipid_tables::{Table, Tolerance, compare};
 
@@ -14,7 +15,8 @@ use crate::{CliError, Outcome, bad_input, failed};
 
 /// Run a study and write its tables, figures, run record (`study.toml`, `run.json`) and the HTML
 /// report; returns the results and the report's path (`None` when it could not be written: figures and
-/// the report are a convenience, one that cannot be made is a warning, never a failed run).
+/// the report are a convenience, one that cannot be made is a warning, never a failed run). Holds the
+/// output folder's lock throughout: a second run into the same folder refuses (exit 2).
 pub fn run_and_write(
     study: &Study,
     out: &Path,
@@ -22,8 +24,30 @@ pub fn run_and_write(
     force: bool,
     progress: bool,
 ) -> Result<(Vec<CaseResult>, Option<PathBuf>), CliError> {
+    check_out_dir(out)?;
+    let lock = RunLock::acquire(out)?;
+    if let Some(pid) = lock.taken_over_from {
+        eprintln!(
+            "warning: {}: taken over from pid {pid}, which ended without releasing it (killed?); its finished cases are kept",
+            lock.path().display()
+        );
+    }
+    if progress {
+        let plan = RunPlan::of(study, out, force);
+        eprintln!(
+            "{}: {} cases ({}), {} finished earlier, {} to run with {jobs} job(s), each tested on {} recording(s); results in {}",
+            study.name,
+            plan.cases,
+            study.grid,
+            plan.finished,
+            plan.cases - plan.finished,
+            study.tests.len(),
+            out.display()
+        );
+    }
     let started = std::time::SystemTime::now();
-    let results = run_study(study, out, jobs, force, progress).map_err(failed)?;
+    let results = run_study(study, out, jobs, force, progress)
+        .map_err(|e| failed(anyhow::anyhow!("writing into {}: {e}", out.display())))?;
     write_tables(study, &results, out)?;
     let mut warnings = shipid_figures::write_figures(study, out).warnings;
     RunRecord::new(
@@ -54,7 +78,37 @@ pub fn run_and_write(
     for w in &warnings {
         eprintln!("warning: {w}");
     }
+    drop(lock);
     Ok((results, report))
+}
+
+/// An output folder that is a file (or under one) is the user's mistake, named before any work.
+fn check_out_dir(out: &Path) -> Result<(), CliError> {
+    let mut p = Some(out);
+    while let Some(dir) = p {
+        if dir.exists() && !dir.is_dir() {
+            return Err(bad_input(format!(
+                "--out {}: {} is a file, not a folder",
+                out.display(),
+                dir.display()
+            )));
+        }
+        p = dir.parent();
+    }
+    Ok(())
+}
+
+/// A grid larger than [`LARGE_RUN_CASES`] runs only when the user insists.
+fn check_size(study: &Study, allow_large: bool) -> Result<(), CliError> {
+    let n = study.cases.len();
+    if n > LARGE_RUN_CASES && !allow_large {
+        return Err(bad_input(format!(
+            "{}: {n} cases ({}), more than {LARGE_RUN_CASES}: nothing was run; give --allow-large to run them all",
+            study.path.display(),
+            study.grid
+        )));
+    }
+    Ok(())
 }
 
 /// `shipid run STUDY.toml`: exit 0 when every case ended with a recorded status (a diverged prediction
@@ -65,11 +119,13 @@ pub fn run(
     jobs: usize,
     force: bool,
     strict: bool,
+    allow_large: bool,
 ) -> Result<Outcome, CliError> {
     if jobs == 0 {
         return Err(bad_input("--jobs 0: give at least 1"));
     }
     let study = load_study(study_path)?;
+    check_size(&study, allow_large)?;
     let out = out
         .map(PathBuf::from)
         .unwrap_or_else(|| default_out(&study));
@@ -112,7 +168,10 @@ pub fn plot(study_path: &Path, out: Option<&Path>) -> Result<Outcome, CliError> 
             study_path.display()
         )));
     }
+    // Not while a run is rewriting the tables the figures are drawn from.
+    let lock = RunLock::acquire(&out)?;
     let report = shipid_figures::write_figures(&study, &out);
+    drop(lock);
     for w in &report.warnings {
         eprintln!("warning: {w}");
     }
@@ -188,9 +247,30 @@ pub fn check(
     reference: &Path,
     bless: bool,
     jobs: usize,
+    allow_large: bool,
 ) -> Result<Outcome, CliError> {
+    if jobs == 0 {
+        return Err(bad_input("--jobs 0: give at least 1"));
+    }
     let study = load_study(study_path)?;
-    let fresh_dir = tempfile_dir(&study)?;
+    check_size(&study, allow_large)?;
+    // Named before the run, not after minutes of it.
+    if bless {
+        check_out_dir(reference)
+            .map_err(|_| bad_input(format!("--reference {}: not a folder", reference.display())))?;
+    } else {
+        for stem in ["summary", "coefficients"] {
+            let path = reference.join(format!("{stem}.csv"));
+            if !path.is_file() {
+                return Err(bad_input(format!(
+                    "{} not found (create it with --bless)",
+                    path.display()
+                )));
+            }
+        }
+    }
+    let fresh = ScratchDir::new(&study)?;
+    let fresh_dir = fresh.0.clone();
     // Only the tables are compared: no figures, run record or report for a run that is thrown away.
     let results = run_study(&study, &fresh_dir, jobs, true, false).map_err(failed)?;
     write_tables(&study, &results, &fresh_dir)?;
@@ -206,11 +286,16 @@ pub fn check(
         );
     }
     if bless {
-        std::fs::create_dir_all(reference).map_err(failed)?;
+        let named = |p: &Path| {
+            let p = p.display().to_string();
+            move |e: std::io::Error| failed(anyhow::anyhow!("{p}: {e}"))
+        };
+        std::fs::create_dir_all(reference).map_err(named(reference))?;
         for stem in ["summary", "coefficients", "diagnostics"] {
             for ext in ["csv", "parquet"] {
                 let name = format!("{stem}.{ext}");
-                std::fs::copy(fresh_dir.join(&name), reference.join(&name)).map_err(failed)?;
+                let to = reference.join(&name);
+                std::fs::copy(fresh_dir.join(&name), &to).map_err(named(&to))?;
             }
         }
         eprintln!(
@@ -219,19 +304,13 @@ pub fn check(
             study.name,
             results.len()
         );
-        let _ = std::fs::remove_dir_all(&fresh_dir);
         return Ok(Outcome::Ok);
     }
     let mut all = Vec::new();
     for stem in ["summary", "coefficients"] {
         let reference_path = reference.join(format!("{stem}.csv"));
-        if !reference_path.is_file() {
-            return Err(bad_input(format!(
-                "{} not found (create it with --bless)",
-                reference_path.display()
-            )));
-        }
-        let r = Table::read_csv(&reference_path).map_err(failed)?;
+        // A reference that cannot be read is the user's input, not a failed run.
+        let r = Table::read_csv(&reference_path).map_err(|e| bad_input(e.to_string()))?;
         let f = Table::read_csv(&fresh_dir.join(format!("{stem}.csv"))).map_err(failed)?;
         all.extend(
             compare(&f, &r, &per_column, DEFAULT_TOLERANCE)
@@ -239,7 +318,7 @@ pub fn check(
                 .map(|d| format!("{stem}: {d}")),
         );
     }
-    let _ = std::fs::remove_dir_all(&fresh_dir);
+    drop(fresh);
     if all.is_empty() {
         eprintln!(
             "{}: {} cases match the reference {}",
@@ -265,12 +344,24 @@ pub fn check(
     }
 }
 
-fn tempfile_dir(study: &Study) -> Result<PathBuf, CliError> {
-    let dir = std::env::temp_dir().join(format!(
-        "shipid-check-{}-{}",
-        study.name,
-        std::process::id()
-    ));
-    std::fs::create_dir_all(&dir).map_err(failed)?;
-    Ok(dir)
+/// The private folder of `check`'s fresh run, removed however the check ends.
+struct ScratchDir(PathBuf);
+
+impl ScratchDir {
+    fn new(study: &Study) -> Result<ScratchDir, CliError> {
+        let dir = std::env::temp_dir().join(format!(
+            "shipid-check-{}-{}",
+            study.name,
+            std::process::id()
+        ));
+        std::fs::create_dir_all(&dir)
+            .map_err(|e| failed(anyhow::anyhow!("{}: {e}", dir.display())))?;
+        Ok(ScratchDir(dir))
+    }
+}
+
+impl Drop for ScratchDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
 }

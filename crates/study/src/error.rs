@@ -16,6 +16,13 @@ pub enum StudyError {
         path: PathBuf,
         source: std::io::Error,
     },
+    /// Another run holds the output folder's lock.
+    #[error(
+        "{}: another shipid run{} is writing into this folder; wait for it to finish or give another --out",
+        path.display(),
+        holder.map(|p| format!(" (pid {p})")).unwrap_or_default()
+    )]
+    Locked { path: PathBuf, holder: Option<u32> },
     /// A result table could not be written or read.
     #[error("{}: {message}", path.display())]
     Table { path: PathBuf, message: String },
@@ -24,6 +31,6 @@ pub enum StudyError {
 impl StudyError {
     /// Whether the user's input is to blame.
     pub fn is_bad_input(&self) -> bool {
-        matches!(self, StudyError::Input(_))
+        matches!(self, StudyError::Input(_) | StudyError::Locked { .. })
     }
 }

@@ -5,15 +5,22 @@
 //!
 //! Module map: `study` (the file, its checks, the case grid) ← `runner` (per-case fit, validation,
 //! stored results, typed statuses and outcomes) ← `tables` (summary, coefficients, diagnostics) and
-//! `record` (`study.toml`, `run.json`); `error`.
+//! `record` (`study.toml`, `run.json`); `lock` (one run per output folder), `progress` (a bar or
+//! plain lines); `error`.
 
 pub mod error;
+pub mod lock;
+pub mod progress;
 pub mod record;
 pub mod runner;
 pub mod study;
 pub mod tables;
 
 pub use error::StudyError;
+pub use lock::RunLock;
 pub use record::RunRecord;
-pub use runner::{CaseOutcome, CaseResult, CaseStatus, OutcomeCounts, default_out, run_study};
+pub use runner::{
+    CaseOutcome, CaseResult, CaseStatus, LARGE_RUN_CASES, OutcomeCounts, RunPlan, default_out,
+    run_study,
+};
 pub use study::{Case, Study, load_study};

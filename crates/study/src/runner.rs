@@ -7,9 +7,7 @@
 //! depend on the number of threads (except the measured fit times).
 
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
 
-use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use shipid_estimators::{Solver, Status};
@@ -18,6 +16,7 @@ use shipid_io::write::write_atomic;
 use shipid_model::IdentificationRange;
 use shipid_sim::{AbkowitzDynamics, Dynamics, Metrics, SimStatus};
 
+use crate::progress::Progress;
 use crate::study::{Case, Study};
 use shipid_pipeline::fit::{fit_dataset, load_set};
 use shipid_pipeline::range::outside_fraction;
@@ -197,7 +196,7 @@ impl OutcomeCounts {
         c
     }
 
-    fn add(&mut self, o: CaseOutcome) {
+    pub(crate) fn add(&mut self, o: CaseOutcome) {
         match o {
             CaseOutcome::Ok => self.every_prediction_ok += 1,
             CaseOutcome::Diverged => self.some_prediction_diverged += 1,
@@ -218,14 +217,83 @@ fn case_status(s: &Status) -> CaseStatus {
     }
 }
 
-/// The configuration stored beside a case's results.
+/// The configuration stored beside a case's results. It names its inputs by content, not by path,
+/// so a finished case is reused wherever the study is run from, and never for changed data.
 #[derive(Debug, Serialize)]
 struct StoredConfig<'a> {
     shipid_version: &'static str,
     study: &'a str,
-    dataset: String,
+    dataset: &'a str,
+    data_fnv1a: &'a str,
+    /// A set file's content hash (a shipped set is named by `case.set` alone).
+    set_fnv1a: Option<String>,
     tests: &'a [String],
     case: &'a Case,
+}
+
+/// The text of a case's `config.toml`.
+fn stored_config(study: &Study, case: &Case) -> std::io::Result<String> {
+    let set_fnv1a = (shipid_model::CoefficientSet::builtin(&case.set).is_none()
+        && case.set != crate::study::NO_SET)
+        .then(|| std::fs::read(resolve_set(study, &case.set)).ok())
+        .flatten()
+        .map(|b| {
+            format!(
+                "{:016x}",
+                shipid_pipeline::generate::fnv1a(&String::from_utf8_lossy(&b))
+            )
+        });
+    toml::to_string(&StoredConfig {
+        shipid_version: env!("CARGO_PKG_VERSION"),
+        study: &study.name,
+        dataset: &study.dataset.name,
+        data_fnv1a: &study.data_fnv1a,
+        set_fnv1a,
+        tests: &study.tests,
+        case,
+    })
+    .map_err(std::io::Error::other)
+}
+
+/// The stored result of a case finished with this configuration, if there is one.
+fn finished_result(dir: &Path, config: &str) -> Option<CaseResult> {
+    let same = std::fs::read_to_string(dir.join("config.toml")).is_ok_and(|c| c == config);
+    if !same {
+        return None;
+    }
+    let bytes = std::fs::read(dir.join("result.json")).ok()?;
+    serde_json::from_slice::<CaseResult>(&bytes).ok()
+}
+
+/// How much of a study is left to do in an output folder.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RunPlan {
+    pub cases: usize,
+    /// Finished earlier with the same configuration (reused unless `force`).
+    pub finished: usize,
+}
+
+impl RunPlan {
+    /// The cases of `study` already finished in `out` (none with `force`).
+    pub fn of(study: &Study, out: &Path, force: bool) -> RunPlan {
+        let finished = if force {
+            0
+        } else {
+            study
+                .cases
+                .iter()
+                .filter(|c| {
+                    stored_config(study, c).is_ok_and(|cfg| {
+                        finished_result(&out.join("cases").join(&c.id), &cfg).is_some()
+                    })
+                })
+                .count()
+        };
+        RunPlan {
+            cases: study.cases.len(),
+            finished,
+        }
+    }
 }
 
 /// Run one case: fit, then validate on every test recording.
@@ -442,12 +510,18 @@ pub fn resolve_set(study: &Study, set: &str) -> String {
         .to_string()
 }
 
+/// Runs of more cases than this are refused unless the user insists (`shipid run --allow-large`):
+/// at a tenth of a second to a second per case, 5 000 cases already take minutes to hours, and a
+/// grid that large is more often a typo (a value list pasted twice as a range) than a plan.
+pub const LARGE_RUN_CASES: usize = 5_000;
+
 /// Where a study's results go by default: `results/<name>/`.
 pub fn default_out(study: &Study) -> PathBuf {
     PathBuf::from("results").join(&study.name)
 }
 
-/// Run (or resume) every case; results in case order.
+/// Run (or resume) every case; results in case order. `progress`: a bar on a terminal, plain
+/// progress lines on stderr otherwise (a log, a pipe, CI).
 pub fn run_study(
     study: &Study,
     out: &Path,
@@ -462,44 +536,21 @@ pub fn run_study(
         .num_threads(jobs.max(1))
         .build()
         .map_err(std::io::Error::other)?;
-    let bar = if progress {
-        ProgressBar::new(study.cases.len() as u64)
-    } else {
-        ProgressBar::hidden()
-    };
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{bar:40} {pos}/{len} cases  {msg}  elapsed {elapsed} eta {eta}",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    let counts = Mutex::new(OutcomeCounts::default());
+    let meter = Progress::new(study.cases.len(), progress);
     let results: Vec<std::io::Result<CaseResult>> = pool.install(|| {
         study
             .cases
             .par_iter()
             .map(|case| {
                 let dir = out.join("cases").join(&case.id);
-                let config = toml::to_string(&StoredConfig {
-                    shipid_version: env!("CARGO_PKG_VERSION"),
-                    study: &study.name,
-                    dataset: study.dataset_path.display().to_string(),
-                    tests: &study.tests,
-                    case,
-                })
-                .map_err(std::io::Error::other)?;
-                let result_path = dir.join("result.json");
-                let reuse = !force
-                    && std::fs::read_to_string(dir.join("config.toml")).is_ok_and(|c| c == config)
-                    && result_path.is_file();
-                let result = match reuse
-                    .then(|| {
-                        std::fs::read(&result_path)
-                            .ok()
-                            .and_then(|b| serde_json::from_slice::<CaseResult>(&b).ok())
-                    })
-                    .flatten()
-                {
+                let config = stored_config(study, case)?;
+                let reused = if force {
+                    None
+                } else {
+                    finished_result(&dir, &config)
+                };
+                let computed = reused.is_none();
+                let result = match reused {
                     Some(r) => r,
                     None => {
                         let (r, model) = run_case(study, case);
@@ -509,7 +560,7 @@ pub fn run_study(
                         }
                         // Written last: its presence marks the case as finished.
                         write_atomic(
-                            &result_path,
+                            &dir.join("result.json"),
                             serde_json::to_string_pretty(&r)
                                 .map_err(std::io::Error::other)?
                                 .as_bytes(),
@@ -517,20 +568,11 @@ pub fn run_study(
                         r
                     }
                 };
-                let counts = {
-                    let mut c = counts.lock().unwrap_or_else(|p| p.into_inner());
-                    c.add(result.outcome());
-                    *c
-                };
-                bar.set_message(format!(
-                    "{} fit failed, {} diverged",
-                    counts.fit_failed, counts.some_prediction_diverged
-                ));
-                bar.inc(1);
+                meter.case_done(result.outcome(), computed);
                 Ok(result)
             })
             .collect()
     });
-    bar.finish();
+    meter.finish();
     results.into_iter().collect()
 }

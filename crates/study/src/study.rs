@@ -162,6 +162,11 @@ pub struct Study {
     pub description: String,
     pub dataset_path: PathBuf,
     pub dataset: Dataset,
+    /// A hash of the data set file and its recordings' bytes: a finished case is reused only for
+    /// the same data, wherever the study is run from.
+    pub data_fnv1a: String,
+    /// How the case count comes about, for messages (`2 sets × 5 estimator settings × …`).
+    pub grid: String,
     pub cases: Vec<Case>,
     pub tests: Vec<String>,
     pub check: BTreeMap<String, Tolerance>,
@@ -189,6 +194,7 @@ pub struct CheckedStudy {
     pub description: String,
     pub dataset_path: PathBuf,
     pub dataset: Dataset,
+    pub data_fnv1a: String,
     /// May be empty when every estimator is the GP.
     pub sets: Vec<String>,
     /// Combinations of recordings.
@@ -222,12 +228,14 @@ impl CheckedStudy {
         let windows = training_windows(path, &raw.training, &dataset)?;
         let estimators = check_estimators(path, &raw.estimators)?;
         let tests = test_recordings(path, &raw.test.recordings, known)?;
+        let data_fnv1a = data_fingerprint(path, &dataset_path, &dataset)?;
         Ok(CheckedStudy {
             path: path.to_path_buf(),
             name: raw.name,
             description: raw.description,
             dataset_path,
             dataset,
+            data_fnv1a,
             sets: raw.sets,
             training: raw.training.recordings,
             windows,
@@ -263,14 +271,39 @@ impl CheckedStudy {
         }
     }
 
+    /// How the case count comes about: the polynomial axes crossed, plus the GP's settings.
+    pub fn grid(&self) -> String {
+        let gp = self.estimators.iter().filter(|e| e.spec.name == GP).count();
+        let polynomial = self.estimators.len() - gp;
+        let per_training = format!(
+            "{} training combination(s) × {} window(s)",
+            self.training.len(),
+            self.windows.len()
+        );
+        let mut parts = Vec::new();
+        if polynomial > 0 {
+            parts.push(format!(
+                "{} set(s) × {polynomial} estimator setting(s) × {per_training}",
+                self.sets.len()
+            ));
+        }
+        if gp > 0 {
+            parts.push(format!("{gp} sparse-GP setting(s) × {per_training}"));
+        }
+        parts.join(" + ")
+    }
+
     pub fn into_study(self) -> Study {
         let cases = self.cases();
+        let grid = self.grid();
         Study {
             path: self.path,
             name: self.name,
             description: self.description,
             dataset_path: self.dataset_path,
             dataset: self.dataset,
+            data_fnv1a: self.data_fnv1a,
+            grid,
             cases,
             tests: self.tests,
             check: self.check,
@@ -308,6 +341,25 @@ fn load_dataset(path: &Path, dataset: &str) -> Result<(PathBuf, Dataset), InputE
     Ok((dataset_path, dataset))
 }
 
+/// FNV-1a of the data set file and of every recording file it names, in order.
+fn data_fingerprint(
+    path: &Path,
+    dataset_path: &Path,
+    dataset: &Dataset,
+) -> Result<String, InputError> {
+    let dir = dataset_path.parent().unwrap_or(Path::new("."));
+    let mut text = String::new();
+    let files = std::iter::once(dataset_path.to_path_buf())
+        .chain(dataset.recordings.iter().map(|r| dir.join(&r.file)));
+    for f in files {
+        let bytes = std::fs::read(&f)
+            .map_err(|e| InputError::key(path, "dataset", format!("{}: {e}", f.display())))?;
+        let h = shipid_pipeline::generate::fnv1a(&String::from_utf8_lossy(&bytes));
+        text.push_str(&format!("{h:016x}"));
+    }
+    Ok(format!("{:016x}", shipid_pipeline::generate::fnv1a(&text)))
+}
+
 fn beside(path: &Path, file: &str) -> PathBuf {
     path.parent().unwrap_or(Path::new(".")).join(file)
 }
@@ -330,7 +382,11 @@ fn check_sets(path: &Path, sets: &[String], polynomial: bool) -> Result<(), Inpu
         ));
     }
     for (i, s) in sets.iter().enumerate() {
-        if CoefficientSet::builtin(s).is_none() && !beside(path, s).is_file() {
+        if CoefficientSet::builtin(s).is_some() {
+            continue;
+        }
+        let file = beside(path, s);
+        if !file.is_file() {
             return Err(InputError::key(
                 path,
                 format!("sets[{i}]"),
@@ -339,6 +395,10 @@ fn check_sets(path: &Path, sets: &[String], polynomial: bool) -> Result<(), Inpu
                     CoefficientSet::builtin_names().join(", ")
                 ),
             ));
+        }
+        // Read now: a broken set file is the study's input error, not a failed fit in every case.
+        if let Err(e) = shipid_pipeline::fit::load_set(&file.display().to_string()) {
+            return Err(InputError::key(path, format!("sets[{i}]"), e.to_string()));
         }
     }
     Ok(())
@@ -394,6 +454,14 @@ fn check_training(
                 "empty combination",
             ));
         }
+        // The same recording twice would weigh its samples double without a word.
+        if let Some((j, k)) = first_repeat(combo) {
+            return Err(InputError::key(
+                path,
+                format!("training.recordings[{i}][{j}]"),
+                format!("`{}` repeats training.recordings[{i}][{k}]", combo[j]),
+            ));
+        }
         for (j, f) in combo.iter().enumerate() {
             known.check(path, format!("training.recordings[{i}][{j}]"), f)?;
         }
@@ -440,18 +508,33 @@ fn overshoot_windows(
     dataset: &Dataset,
     combos: &[Vec<String>],
 ) -> Result<Vec<WindowSpec>, InputError> {
-    let list: Vec<u32> = match spec {
-        OvershootSpec::List(l) => l.clone(),
-        OvershootSpec::Range { from, to } => (*from..=*to).collect(),
+    let (least, most) = match spec {
+        OvershootSpec::List(l) => (
+            l.iter().copied().min().unwrap_or(0),
+            l.iter().copied().max().unwrap_or(0),
+        ),
+        OvershootSpec::Range { from, to } if from > to => {
+            return Err(InputError::key(
+                path,
+                "training.overshoots",
+                format!("from = {from} is past to = {to}: the grid is empty"),
+            ));
+        }
+        OvershootSpec::Range { from, to } => (*from, *to),
     };
-    if list.is_empty() || list.contains(&0) {
+    if least == 0 {
         return Err(InputError::key(
             path,
             "training.overshoots",
             "needs overshoot counts of 1 or more",
         ));
     }
-    check_overshoots(path, dataset, combos, &list)?;
+    // Checked before the range is expanded: `to = 4000000000` must be refused, not allocated.
+    check_overshoots(path, dataset, combos, most)?;
+    let list: Vec<u32> = match spec {
+        OvershootSpec::List(l) => l.clone(),
+        OvershootSpec::Range { from, to } => (*from..=*to).collect(),
+    };
     Ok(list.into_iter().map(WindowSpec::Overshoots).collect())
 }
 
@@ -587,6 +670,7 @@ fn polynomial_estimators(
             format!("applies to {GP} only"),
         ));
     }
+    reject_foreign_keys(path, i, e)?;
     let solver = e.solver.clone().unwrap_or_else(|| "fast".into());
     if let Err(err) = solver.parse::<shipid_estimators::Solver>() {
         return Err(InputError::key(
@@ -615,6 +699,50 @@ fn polynomial_estimators(
             })
         })
         .collect()
+}
+
+/// A key that the estimator would ignore (a λ grid on LSQ, values beside `tune = true`) is a mistake
+/// the user should hear about, not a grid that silently collapses to one case.
+fn reject_foreign_keys(path: &Path, i: usize, e: &RawEstimator) -> Result<(), InputError> {
+    let applies: &[&str] = match e.name.as_str() {
+        "lsq" | "bounded-lsq" => &[],
+        "ridge" => &["lambda", "tune"],
+        "lasso" => &["alpha", "tune"],
+        "svr" => &["c", "epsilon", "tune"],
+        _ => return Ok(()),
+    };
+    for (given, key) in [
+        (e.lambda.is_some(), "lambda"),
+        (e.alpha.is_some(), "alpha"),
+        (e.c.is_some(), "c"),
+        (e.epsilon.is_some(), "epsilon"),
+        (e.tune, "tune"),
+    ] {
+        if given && !applies.contains(&key) {
+            return Err(InputError::key(
+                path,
+                entry_key(i, key),
+                format!("does not apply to {}", e.name),
+            ));
+        }
+    }
+    let grid = grid_key(&e.name);
+    let grid_given = match e.name.as_str() {
+        "ridge" => e.lambda.is_some(),
+        "lasso" => e.alpha.is_some(),
+        "svr" => e.c.is_some(),
+        _ => false,
+    };
+    if e.tune && grid_given {
+        return Err(InputError::key(
+            path,
+            entry_key(i, grid),
+            format!(
+                "give {grid} values or tune = true, not both (the cross-validation chooses {grid})"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// One spec per value of the estimator's grid key; a tuned estimator picks its own value, so it is
@@ -696,6 +824,20 @@ fn test_recordings(
             format!("\"{w}\": expected \"all\" or a list of files"),
         )),
         TestRecordings::List(l) => {
+            if l.is_empty() {
+                return Err(InputError::key(
+                    path,
+                    "test.recordings",
+                    "no test recording: give a list of files or \"all\"",
+                ));
+            }
+            if let Some((i, j)) = first_repeat(l) {
+                return Err(InputError::key(
+                    path,
+                    format!("test.recordings[{i}]"),
+                    format!("`{}` repeats test.recordings[{j}]", l[i]),
+                ));
+            }
             for (i, f) in l.iter().enumerate() {
                 known.check(path, format!("test.recordings[{i}]"), f)?;
             }
@@ -708,9 +850,9 @@ fn check_overshoots(
     path: &Path,
     ds: &Dataset,
     combos: &[Vec<String>],
-    wanted: &[u32],
+    max: u32,
 ) -> Result<(), InputError> {
-    let max = wanted.iter().copied().max().unwrap_or(0);
+    let mut zigzags = 0;
     for combo in combos {
         for f in combo {
             let Some(r) = ds.recording(f) else { continue };
@@ -720,6 +862,7 @@ fn check_overshoots(
                 side,
             } = r.manoeuvre
             {
+                zigzags += 1;
                 let have = zigzag_events(&r.recording, rudder_deg, check_deg, side, &ds.ship)
                     .map_or(0, |e| e.overshoots.len());
                 if (have as u32) < max {
@@ -731,6 +874,14 @@ fn check_overshoots(
                 }
             }
         }
+    }
+    // Overshoot counts cut zig-zags only: without one, every count would give the same fit.
+    if zigzags == 0 {
+        return Err(InputError::key(
+            path,
+            "training.overshoots",
+            "no training recording is a zig-zag, and overshoot counts cut zig-zags only: leave overshoots out",
+        ));
     }
     Ok(())
 }
@@ -745,12 +896,14 @@ fn grid_key(estimator: &str) -> &'static str {
     }
 }
 
-/// The first `(i, j)` with `j < i` and `items[i] == items[j]`.
-fn first_repeat<T: PartialEq>(items: &[T]) -> Option<(usize, usize)> {
+/// The first `(i, j)` with `j < i` and `items[i]` the same grid value as `items[j]` (the same
+/// written form, as in case ids). Linear, so a huge grid is checked before it is refused for its size.
+fn first_repeat<T: std::fmt::Debug>(items: &[T]) -> Option<(usize, usize)> {
+    let mut seen = std::collections::HashMap::new();
     items
         .iter()
         .enumerate()
-        .find_map(|(i, a)| items[..i].iter().position(|b| b == a).map(|j| (i, j)))
+        .find_map(|(i, a)| seen.insert(format!("{a:?}"), i).map(|j| (i, j)))
 }
 
 fn case(set: &str, est: &EstimatorSpec, solver: &str, combo: &[String], w: WindowSpec) -> Case {
