@@ -178,7 +178,7 @@ pub fn run_gp(
     let (mut file, _model, report) = fit_gp_dataset(&ds, recordings, window, threshold)?;
     shipid_pipeline::model_file::anchor_training(&mut file.training, out);
     let text = model_text(&file).map_err(failed)?;
-    write_atomic(out, text.as_bytes()).map_err(failed)?;
+    write_atomic(out, text.as_bytes()).map_err(|e| crate::write_failed(out, e))?;
     if json {
         println!(
             "{}",

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use shipid::{CliError, Outcome, failed};
+use shipid::{CliError, Outcome};
 
 #[derive(Parser)]
 #[command(
@@ -270,7 +270,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                 &recs,
                 &shipid_pipeline::generate::provenance(noise),
             )
-            .map_err(failed)?;
+            .map_err(|e| shipid::write_failed(&out, e))?;
             eprintln!(
                 "wrote {} recordings and {}",
                 recs.len(),
