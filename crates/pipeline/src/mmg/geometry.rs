@@ -2,6 +2,7 @@
 //! identified. No I/O.
 
 use serde::{Deserialize, Serialize};
+use shipid_io::Dataset;
 
 use crate::error::{PipelineError, bad_input};
 
@@ -34,6 +35,37 @@ impl MmgGeometry {
             rudder_span_m: 0.345,
             rudder_x_m: -0.5 * 7.0,
         }
+    }
+
+    /// The data set's `[propeller]` and `[rudder]` tables.
+    pub fn of_dataset(ds: &Dataset) -> Result<MmgGeometry, PipelineError> {
+        let missing = |table: &str, what: &str| {
+            bad_input(format!(
+                "{}: no [{table}] table; the mmg family needs the {what} (docs/mmg.md)",
+                ds.path.display()
+            ))
+        };
+        let p = ds
+            .propeller
+            .as_ref()
+            .ok_or_else(|| missing("propeller", "propeller diameter, position and K_T(J)"))?;
+        let r = ds
+            .rudder
+            .as_ref()
+            .ok_or_else(|| missing("rudder", "rudder area, span and position"))?;
+        let g = MmgGeometry {
+            propeller_diameter_m: p.diameter_m,
+            propeller_x_m: p.x_m,
+            k_t: p.k_t,
+            rudder_area_m2: r.area_m2,
+            rudder_span_m: r.span_m,
+            rudder_x_m: r.x_m,
+        };
+        g.check(
+            ds.ship.lpp,
+            &format!("{}: [propeller]/[rudder]", ds.path.display()),
+        )?;
+        Ok(g)
     }
 
     /// Positive sizes, positions within the ship, a thrust curve with positive bollard thrust.

@@ -211,7 +211,18 @@ pub fn training_samples(
     Ok((samples, windows))
 }
 
-/// Identify the MMG model of `ds` with the priors of [`priors`].
+/// Identify the MMG model of `ds` with its `[propeller]` and `[rudder]` tables and the priors of
+/// [`priors`]; recordings without an `n` column take the table's `rate_rps` unless `opts` gives a rate.
+pub fn fit_mmg_dataset(ds: &Dataset, opts: &MmgFitOptions) -> Result<MmgFit, PipelineError> {
+    let geometry = MmgGeometry::of_dataset(ds)?;
+    let mut opts = opts.clone();
+    if opts.propeller_rate_hz.is_none() {
+        opts.propeller_rate_hz = ds.propeller.as_ref().and_then(|p| p.rate_rps);
+    }
+    fit_mmg(ds, &geometry, &opts)
+}
+
+/// Identify the MMG model of `ds` with the given propeller and rudder and the priors of [`priors`].
 pub fn fit_mmg(
     ds: &Dataset,
     geometry: &MmgGeometry,

@@ -319,3 +319,19 @@ fn a_recording_without_propeller_rate_is_bad_input() {
     o.propeller_rate_hz = Some(11.8515903);
     assert!(fit_mmg(&ds, &MmgGeometry::kvlcc2_model_scale(), &o).is_ok());
 }
+
+#[test]
+fn default_data_set_gives_the_reference_propeller_and_rudder() {
+    let ds = default_data();
+    assert_eq!(
+        MmgGeometry::of_dataset(&ds).unwrap(),
+        MmgGeometry::kvlcc2_model_scale()
+    );
+    let mut bare = ds.clone();
+    bare.rudder = None;
+    let err = MmgGeometry::of_dataset(&bare).unwrap_err();
+    assert!(
+        err.is_bad_input() && err.to_string().contains("no [rudder] table"),
+        "{err}"
+    );
+}
