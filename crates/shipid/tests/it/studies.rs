@@ -4,6 +4,7 @@
 
 use crate::common;
 
+use std::collections::BTreeMap;
 use std::path::Path;
 
 use shipid::study_cmd::run_and_write;
@@ -415,4 +416,359 @@ fn the_summary_holds_the_epsilon_every_svr_fit_used() {
         assert!(e[0] != e[1] && e[1] != e[2], "{e:?}");
     }
     assert_ne!(epsilons[1], epsilons[2]);
+}
+
+/// Every case of `study` with one test row per test recording, each with its own MRAE (k / 1000 for
+/// the k-th row, so no two cells print alike), as a run would give them.
+fn fabricated_results(study: &shipid_study::Study) -> Vec<shipid_study::CaseResult> {
+    use shipid_study::runner::{TestRow, TestStatus};
+    let mut k = 0;
+    study
+        .cases
+        .iter()
+        .map(|c| shipid_study::CaseResult {
+            case_id: c.id.clone(),
+            status: shipid_study::CaseStatus::Ok,
+            message: None,
+            fit_time_s: Some(0.0),
+            samples: 1,
+            dofs: vec![],
+            coefficients: vec![],
+            vif: vec![],
+            tests: study
+                .tests
+                .iter()
+                .map(|t| {
+                    k += 1;
+                    TestRow {
+                        test: t.clone(),
+                        kind: "zigzag".into(),
+                        status: TestStatus::Ok,
+                        diverged_at_s: None,
+                        replay_status: TestStatus::Ok,
+                        position_rmse_over_l: 0.0,
+                        heading_rmse_deg: 0.0,
+                        u_rmse_m_s: 0.0,
+                        v_rmse_m_s: 0.0,
+                        r_rmse_deg_s: 0.0,
+                        recorded: Default::default(),
+                        predicted: None,
+                        relative_error: Default::default(),
+                        mrae: Some(k as f64 / 1000.0),
+                        outside_identification_range: None,
+                    }
+                })
+                .collect(),
+        })
+        .collect()
+}
+
+/// The body cells of a markdown table (header and rule left out), without the row labels.
+fn pivot_cells(md: &str) -> Vec<String> {
+    md.lines()
+        .skip(2)
+        .flat_map(|l| {
+            let cells: Vec<String> = l
+                .trim_matches('|')
+                .split('|')
+                .map(|c| c.trim().to_string())
+                .collect();
+            cells.into_iter().skip(1)
+        })
+        .filter(|c| !c.is_empty())
+        .collect()
+}
+
+/// Every shipped study (`studies/*.toml`) as `shipid table` loads it; the HSVA one on recordings
+/// imported from ../shared (skipped visibly without them).
+fn shipped_studies(scratch: &Path) -> Vec<shipid_study::Study> {
+    let mut paths: Vec<_> = std::fs::read_dir(common::root().join("studies"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    paths.sort();
+    let mut studies = Vec::new();
+    for path in paths {
+        let text = std::fs::read_to_string(&path).unwrap();
+        let path = if text.contains("kvlcc2-hsva/imported") {
+            let Some(source) = common::shared_hsva("hsva-parametric.toml's default pivot") else {
+                continue;
+            };
+            let data = common::import_hsva(&source, &scratch.join("hsva"));
+            let copy = scratch.join(path.file_name().unwrap());
+            let text = text.replace(
+                "../data/kvlcc2-hsva/imported/dataset.toml",
+                data.to_str().unwrap(),
+            );
+            std::fs::write(&copy, text).unwrap();
+            copy
+        } else {
+            path
+        };
+        studies.push(load_study(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display())));
+    }
+    studies
+}
+
+/// Regression (issue 25): the default pivot `window,test,mrae` put all cases of a window in one row,
+/// so every cell showed the last case's MRAE and nine of ten cases of `estimators` vanished. Now
+/// every case × test of every shipped study has its own cell, and an explicit pivot that would put
+/// cases together is refused, naming them.
+#[test]
+fn every_shipped_studys_default_pivot_shows_every_case_and_test_once() {
+    let scratch = tempfile::tempdir().unwrap();
+    let studies = shipped_studies(scratch.path());
+    assert!(studies.len() >= 6, "{} studies", studies.len());
+    for study in &studies {
+        let summary = shipid_study::tables::summary_table(study, &fabricated_results(study));
+        let md = shipid_study::tables::summary_pivot(&summary, None)
+            .unwrap_or_else(|e| panic!("{}: {e}", study.name));
+        let mut cells = pivot_cells(&md);
+        let n = study.cases.len() * study.tests.len();
+        let mut expected: Vec<String> = (1..=n)
+            .map(|k| format!("{:.1} %", k as f64 / 10.0))
+            .collect();
+        cells.sort();
+        expected.sort();
+        assert_eq!(cells, expected, "{}:\n{md}", study.name);
+        if study.cases.len() > 1
+            && study
+                .cases
+                .iter()
+                .all(|c| c.window == study.cases[0].window)
+        {
+            let err = shipid_study::tables::summary_pivot(&summary, Some("window,test,mrae"))
+                .unwrap_err()
+                .to_string();
+            let expected = format!(
+                "{} rows fall into one cell (window `{}`, test `{}`), so all but the last would vanish: {}, {}",
+                study.cases.len(),
+                study.cases[0].window.label(),
+                study.tests[0],
+                study.cases[0].id,
+                study.cases[1].id
+            );
+            assert!(err.starts_with(&expected), "{}: {err}", study.name);
+        }
+    }
+}
+
+#[test]
+fn table_refuses_a_pivot_that_merges_cases_naming_them_and_the_pivot_that_separates_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let study = format!("{FIXTURES}/small.toml");
+    common::shipid_ok(&["run", &study, "--out", out.to_str().unwrap()]);
+    let ids: Vec<String> = small_study().cases.iter().map(|c| c.id.clone()).collect();
+    let merged = common::shipid(&[
+        "table",
+        &study,
+        "--out",
+        out.to_str().unwrap(),
+        "--pivot",
+        "set,test,mrae",
+    ]);
+    let err = String::from_utf8_lossy(&merged.stderr);
+    assert_eq!(merged.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(&format!(
+            "3 rows fall into one cell (set `reduced32`, test `zz20_20_ps.csv`), so all but the last would vanish: {}, {}, {}",
+            ids[0], ids[1], ids[2]
+        )),
+        "{err}"
+    );
+    assert!(
+        err.contains("to tell them apart: --pivot window+set,test,mrae"),
+        "{err}"
+    );
+    let shown = common::shipid_ok(&["table", &study, "--out", out.to_str().unwrap()]);
+    let md = String::from_utf8_lossy(&shown.stdout);
+    assert_eq!(pivot_cells(&md).len(), 3 * 2, "{md}");
+}
+
+fn lines_of(path: &Path) -> Vec<String> {
+    // fit_time_s is the one column that differs between runs of the same cases (the measured time).
+    let t = Table::read_csv(path).unwrap();
+    let t = without_timing(&t);
+    (0..t.rows())
+        .map(|i| {
+            t.columns
+                .iter()
+                .map(|(_, c)| c.cell(i))
+                .collect::<Vec<_>>()
+                .join(",")
+        })
+        .collect()
+}
+
+fn spawn_run(study: &Path, out: &Path, jobs: &str) -> std::process::Child {
+    std::process::Command::new(env!("CARGO_BIN_EXE_shipid"))
+        .args([
+            "run",
+            study.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--jobs",
+            jobs,
+        ])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+fn finished_cases(out: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut v: Vec<_> = std::fs::read_dir(out.join("cases"))
+        .map(|d| {
+            d.flatten()
+                .filter_map(|e| {
+                    let p = e.path().join("result.json");
+                    std::fs::read(&p).ok().map(|b| (p.display().to_string(), b))
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    v.sort();
+    v
+}
+
+/// Regression (issue 25): two runs into one folder shared fixed temporary names and killed each
+/// other, sometimes leaving no tables, exit 1. The second now refuses at once (exit 2), naming the
+/// lock and the first run's pid; the first completes with every table.
+#[test]
+fn a_second_run_into_the_same_folder_refuses_and_the_first_completes() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let study = common::root().join("studies/gp.toml");
+    let first = spawn_run(&study, &out, "1");
+    let lock = out.join(shipid_study::lock::LOCK_FILE);
+    while !std::fs::read_to_string(&lock).is_ok_and(|t| t.starts_with("pid ")) {
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    let second = common::shipid(&[
+        "run",
+        study.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&second.stderr);
+    assert_eq!(second.status.code(), Some(2), "{err}");
+    assert_eq!(
+        err.trim(),
+        format!(
+            "error: {}: another shipid run (pid {}) is writing into this folder; wait for it to finish or give another --out",
+            lock.display(),
+            first.id()
+        )
+    );
+    let first_out = first.wait_with_output().unwrap();
+    assert!(
+        first_out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&first_out.stderr)
+    );
+    assert!(!lock.exists(), "released at the end");
+    let cases = load_study(&study).unwrap().cases.len();
+    assert_eq!(lines_of(&out.join("summary.csv")).len(), cases * 6);
+    assert_eq!(finished_cases(&out).len(), cases);
+}
+
+/// A run killed with `kill -9` halfway leaves its lock file and some finished cases; the next run
+/// takes the lock over (saying so), keeps the finished cases as they were (their result.json,
+/// measured fit times included, byte for byte: not recomputed) and ends with the tables of a clean
+/// run (equal cell for cell but for the measured fit times).
+#[test]
+fn a_run_killed_halfway_resumes_without_recomputing_and_ends_with_a_clean_runs_tables() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let study = common::root().join("studies/gp.toml");
+    let cases = load_study(&study).unwrap().cases.len();
+    let mut victim = spawn_run(&study, &out, "1");
+    while finished_cases(&out).len() < 3 {
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    victim.kill().unwrap();
+    victim.wait().unwrap();
+    let before = finished_cases(&out);
+    assert!(
+        before.len() < cases,
+        "killed halfway: {} of {cases} cases finished",
+        before.len()
+    );
+    assert!(out.join(shipid_study::lock::LOCK_FILE).exists());
+    assert!(!out.join("summary.csv").exists());
+    let resumed = common::shipid(&[
+        "run",
+        study.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&resumed.stderr);
+    assert!(resumed.status.success(), "{err}");
+    assert!(
+        err.contains(&format!(
+            "taken over from pid {}, which ended without releasing it (killed?)",
+            victim.id()
+        )),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!(
+            "{} finished earlier, {} to run",
+            before.len(),
+            cases - before.len()
+        )),
+        "{err}"
+    );
+    let after: BTreeMap<String, Vec<u8>> = finished_cases(&out).into_iter().collect();
+    assert_eq!(after.len(), cases);
+    for (path, bytes) in &before {
+        assert_eq!(&after[path], bytes, "{path} was recomputed");
+    }
+    let clean = dir.path().join("clean");
+    common::shipid_ok(&[
+        "run",
+        study.to_str().unwrap(),
+        "--out",
+        clean.to_str().unwrap(),
+    ]);
+    for stem in ["summary", "coefficients", "diagnostics"] {
+        let name = format!("{stem}.csv");
+        assert_eq!(
+            lines_of(&out.join(&name)),
+            lines_of(&clean.join(&name)),
+            "{name}"
+        );
+    }
+}
+
+#[test]
+fn jobs_0_is_refused_by_every_command_that_has_jobs() {
+    let study = format!("{FIXTURES}/small.toml");
+    for command in [
+        vec![
+            "run",
+            &study,
+            "--jobs",
+            "0",
+            "--out",
+            "/tmp/shipid-never-written",
+        ],
+        vec![
+            "check",
+            &study,
+            "--jobs",
+            "0",
+            "--reference",
+            "/tmp/shipid-never-written",
+        ],
+    ] {
+        common::check_exit(
+            &command,
+            2,
+            "invalid value '0' for '--jobs <JOBS>': give at least 1 parallel case",
+        );
+    }
+    assert!(!Path::new("/tmp/shipid-never-written").exists());
 }
