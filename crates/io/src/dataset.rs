@@ -135,6 +135,7 @@ impl Dataset {
             .map(|p| propeller_data(path, dir, p))
             .transpose()?;
         let mut recordings = Vec::new();
+        let mut opened: Vec<(usize, PathBuf)> = Vec::new();
         for (i, entry) in file.recordings.iter().enumerate() {
             if !keep(&entry.file) {
                 continue;
@@ -147,6 +148,20 @@ impl Dataset {
                     format!("recording[{i}].file"),
                     format!("recording file `{}` not found", csv.display()),
                 ));
+            }
+            // Different names of one file (a link, `sub/../a.csv`) are caught here, where the files exist.
+            if let Ok(real) = csv.canonicalize() {
+                if let Some((j, _)) = opened.iter().find(|(_, p)| *p == real) {
+                    return Err(InputError::key(
+                        path,
+                        format!("recording[{i}].file"),
+                        format!(
+                            "`{}` is the same file as recording[{j}].file `{}`; list each recording once",
+                            entry.file, file.recordings[*j].file
+                        ),
+                    ));
+                }
+                opened.push((i, real));
             }
             let mut recording = read_recording(&csv)?;
             to_project_conventions(&mut recording, &file);
@@ -217,6 +232,8 @@ pub fn parse_dataset(path: &Path, text: &str) -> Result<DatasetFile, InputError>
             ),
         ));
     }
+    check_ship_ranges(path, s)?;
+    check_distinct_recordings(path, &file.recordings)?;
     if let Some(p) = &file.propeller {
         check_propeller(path, p, s.lpp)?;
     }
@@ -227,6 +244,76 @@ pub fn parse_dataset(path: &Path, text: &str) -> Result<DatasetFile, InputError>
         manoeuvre_of(path, i, entry)?;
     }
     Ok(file)
+}
+
+/// Physical ranges of the ship keys (`docs/data-format.md`): from a small tank model to the largest
+/// ships with a wide margin. Outside them a value is a wrong unit or a typo, and prime scaling by it
+/// (division by L, U0, the mass) would overflow or vanish downstream.
+pub const SHIP_RANGES: [(&str, f64, f64, &str); 8] = [
+    ("lpp", 1e-2, 1e4, "m"),
+    ("beam", 1e-3, 1e4, "m"),
+    ("draft", 1e-3, 1e4, "m"),
+    ("displacement", 1e-9, 1e10, "m³"),
+    ("rho", 500.0, 2000.0, "kg/m³"),
+    ("kzz", 1e-3, 1e4, "m"),
+    ("u0", 1e-3, 1e3, "m/s"),
+    ("rudder_rate", 1e-3, 1e4, "deg/s"),
+];
+
+fn check_ship_ranges(path: &Path, s: &Ship) -> Result<(), InputError> {
+    let values = [
+        s.lpp,
+        s.beam,
+        s.draft,
+        s.displacement,
+        s.rho,
+        s.kzz,
+        s.u0,
+        s.rudder_rate,
+    ];
+    for ((key, lo, hi, unit), v) in SHIP_RANGES.iter().zip(values) {
+        if !(*lo..=*hi).contains(&v) {
+            return Err(InputError::key(
+                path,
+                format!("ship.{key}"),
+                format!(
+                    "{} {unit} is outside the physical range {} … {} {unit} (a wrong unit?)",
+                    number(v),
+                    number(*lo),
+                    number(*hi)
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A recording file name without `.` components and repeated separators: `./a.csv`, `a.csv` and
+/// `sub//a.csv` name files the way the loader opens them.
+fn normalised(file: &str) -> String {
+    file.split(['/', '\\'])
+        .filter(|c| !c.is_empty() && *c != ".")
+        .collect::<Vec<_>>()
+        .join("/")
+}
+
+/// Each recording may be listed once: a second entry would count it twice in fits and validation,
+/// and results keyed by file name would keep only one of them.
+fn check_distinct_recordings(path: &Path, entries: &[RecordingEntry]) -> Result<(), InputError> {
+    let mut seen: std::collections::HashMap<String, usize> = std::collections::HashMap::new();
+    for (i, e) in entries.iter().enumerate() {
+        if let Some(j) = seen.insert(normalised(&e.file), i) {
+            return Err(InputError::key(
+                path,
+                format!("recording[{i}].file"),
+                format!(
+                    "`{}` is the same file as recording[{j}].file `{}`; list each recording once",
+                    e.file, entries[j].file
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 fn positive(path: &Path, key: &str, value: f64) -> Result<(), InputError> {

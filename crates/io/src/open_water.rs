@@ -15,13 +15,7 @@ pub const MIN_POINTS: usize = 3;
 /// Read an open-water CSV and fit the quadratic. `named` is the file as the data set names it (kept in
 /// the result); `path` is where it was read from (named in errors).
 pub fn read_open_water(path: &Path, named: &str) -> Result<([f64; 3], OpenWaterCurve), InputError> {
-    let bytes = std::fs::read(path).map_err(|e| InputError::read(path, &e))?;
-    let text = String::from_utf8(bytes).map_err(|e| {
-        InputError::file(
-            path,
-            format!("not UTF-8 (byte {})", e.utf8_error().valid_up_to()),
-        )
-    })?;
+    let text = crate::recording::read_text(path)?;
     parse_open_water(path, named, &text)
 }
 

@@ -8,23 +8,61 @@ use crate::table::{Columns, parse_cell};
 use crate::types::Recording;
 use crate::units::Quantity;
 
+/// Largest input file read (recordings, open-water tables, import sources): ten hours at 100 Hz of a
+/// dozen channels is about 0.5 GB, and a larger file would be read whole into memory several times.
+pub const MAX_FILE_BYTES: u64 = 1 << 30;
+
 /// Read and validate a recording file. Values are converted to SI; the origin and rudder sign are the
 /// source's (the data set loader converts them, since only it knows them).
 pub fn read_recording(path: &Path) -> Result<Recording, InputError> {
-    let bytes = std::fs::read(path).map_err(|e| InputError::read(path, &e))?;
-    let text = String::from_utf8(bytes).map_err(|e| {
-        InputError::file(
-            path,
-            format!("not UTF-8 (byte {})", e.utf8_error().valid_up_to()),
-        )
-    })?;
+    let text = read_text(path)?;
     parse_recording(path, &text)
+}
+
+/// The bytes of an input file, refused before reading when larger than [`MAX_FILE_BYTES`].
+pub fn read_bytes(path: &Path) -> Result<Vec<u8>, InputError> {
+    let meta = std::fs::metadata(path).map_err(|e| InputError::read(path, &e))?;
+    if meta.is_dir() {
+        return Err(InputError::file(path, "is a directory, not a file"));
+    }
+    if meta.len() > MAX_FILE_BYTES {
+        return Err(InputError::file(
+            path,
+            format!(
+                "{:.1} GiB is larger than the {} GiB shipid reads (split the recording)",
+                meta.len() as f64 / (1u64 << 30) as f64,
+                MAX_FILE_BYTES >> 30
+            ),
+        ));
+    }
+    std::fs::read(path).map_err(|e| InputError::read(path, &e))
+}
+
+/// An input file's UTF-8 text (size-checked by [`read_bytes`]); a byte that is not UTF-8 is named with
+/// its line.
+pub fn read_text(path: &Path) -> Result<String, InputError> {
+    let bytes = read_bytes(path)?;
+    String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let bytes = e.as_bytes();
+        let line = bytes[..at].iter().filter(|&&b| b == b'\n').count() + 1;
+        InputError::line(
+            path,
+            line,
+            format!(
+                "not UTF-8 text (byte {at}, value 0x{:02x}); save the file as UTF-8, or import it with a mapping that names its encoding",
+                bytes[at]
+            ),
+        )
+    })
 }
 
 /// Parse recording text; `path` only names the source in errors.
 pub fn parse_recording(path: &Path, text: &str) -> Result<Recording, InputError> {
     // Comments are allowed before the header only; skip them (and blank lines) and remember how many
     // lines we skipped so that errors point at the real line.
+    // A byte-order mark is not part of the first line (else `#` comments after it read as a header).
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut skipped = 0usize;
     let mut rest = text;
     loop {
@@ -55,6 +93,11 @@ pub fn parse_recording(path: &Path, text: &str) -> Result<Recording, InputError>
         None => return Err(InputError::file(path, "no header row")),
     };
     let header_line = skipped + 1;
+    if header.len() == 1
+        && let Some(hint) = separator_hint(&header[0], rest)
+    {
+        return Err(InputError::line(path, header_line, hint));
+    }
     let mut slots: Vec<Option<(Quantity, f64)>> = Vec::with_capacity(header.len());
     let mut column_of: HashMap<Quantity, (usize, String)> = HashMap::new();
     for (i, raw) in header.iter().enumerate() {
@@ -104,11 +147,17 @@ pub fn parse_recording(path: &Path, text: &str) -> Result<Recording, InputError>
             continue; // a blank line
         }
         if rec.len() != header.len() {
+            // More fields than names: typically `0,25` split by a decimal comma.
+            let hint = if rec.len() > header.len() {
+                " (decimal commas? shipid reads `.` as the decimal mark)"
+            } else {
+                ""
+            };
             return Err(InputError::line(
                 path,
                 line,
                 format!(
-                    "expected {} fields as in the header, found {}",
+                    "expected {} fields as in the header, found {}{hint}",
                     header.len(),
                     rec.len()
                 ),
@@ -116,8 +165,9 @@ pub fn parse_recording(path: &Path, text: &str) -> Result<Recording, InputError>
         }
         for (i, cell) in rec.iter().enumerate() {
             if let Some((q, factor)) = slots[i] {
-                let x = parse_cell(cell)
-                    .map_err(|m| InputError::cell(path, line, i + 1, &header[i], m))?;
+                let x = parse_cell(cell).map_err(|m| {
+                    InputError::cell(path, line, i + 1, &header[i], with_comma_hint(m, cell))
+                })?;
                 if let Some(col) = values.get_mut(&q) {
                     col.push(x * factor);
                 }
@@ -162,4 +212,38 @@ fn split_unit(raw: &str) -> Result<(&str, Option<&str>), String> {
 fn csv_error(path: &Path, skipped: usize, e: &csv::Error) -> InputError {
     let line = e.position().map_or(0, |p| p.line() as usize) + skipped;
     InputError::line(path, line.max(1), format!("malformed CSV: {e}"))
+}
+
+/// A one-field header that holds the column names joined by another separator: say so instead of
+/// "missing required column `t`".
+fn separator_hint(header: &str, rest: &str) -> Option<String> {
+    let (sep, word, key) = if header.contains(';') {
+        (';', "';'-separated", "\";\"")
+    } else if header.contains('\t') {
+        ('\t', "tab-separated", "\"\\t\"")
+    } else {
+        return None;
+    };
+    let comma = rest
+        .lines()
+        .skip(1)
+        .take(5)
+        .any(|l| l.split(sep).any(|c| c.trim().contains(',')));
+    let decimal = if comma { " with decimal commas" } else { "" };
+    Some(format!(
+        "the header `{header}` looks like {word}{decimal}; shipid reads comma-separated recordings with `.` as the decimal mark (convert the file, or import it with a mapping with `delimiter = {key}`)"
+    ))
+}
+
+/// A quoted cell such as `"0,5"` is one field with a decimal comma.
+fn with_comma_hint(message: String, cell: &str) -> String {
+    let c = cell.trim();
+    if c.contains(',') && c.replacen(',', ".", 1).parse::<f64>().is_ok() {
+        format!(
+            "{message} (a decimal comma? write `{}`)",
+            c.replacen(',', ".", 1)
+        )
+    } else {
+        message
+    }
 }

@@ -5,13 +5,17 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use crate::error::InputError;
+use crate::error::{InputError, number};
 use crate::types::{Accelerations, Recording};
 use crate::units::Quantity;
+use crate::write::fmt_sig;
 
 /// Fewest samples a recording may have: shorter records cannot hold a manoeuvre, and the acceleration
 /// estimator needs a few points on each side of a sample.
 pub const MIN_SAMPLES: usize = 20;
+
+/// A time step longer than this many median steps is a gap (`docs/data-format.md`).
+pub const GAP_FACTOR: f64 = 10.0;
 
 /// Columns read from a file, already in SI, with the file line of every row (for error messages).
 pub struct Columns {
@@ -33,6 +37,7 @@ impl Columns {
                 format!("too short: {rows} samples, at least {MIN_SAMPLES} are needed"),
             ));
         }
+        self.check_bounds(path)?;
         if let (Some(xd), Some(yd)) = (
             self.values.remove(&Quantity::X0Dot),
             self.values.remove(&Quantity::Y0Dot),
@@ -80,6 +85,7 @@ impl Columns {
                 ));
             }
         }
+        self.check_gaps(path)?;
         let mut take = |q: Quantity| self.values.remove(&q);
         let mut psi = take(Quantity::Psi).unwrap_or_default();
         unwrap_angle(&mut psi);
@@ -107,6 +113,92 @@ impl Columns {
             n: take(Quantity::N),
             accelerations,
         })
+    }
+
+    /// Every value after unit conversion must be finite and within its quantity's bound
+    /// ([`Quantity::bound_si`]): a huge value in a large unit (`t[min]`, 1e308) overflows to inf on
+    /// conversion, and values near the limits of f64 overflow later in products the models form. Columns
+    /// are checked in file order so that the first fault in the file is the one reported.
+    fn check_bounds(&self, path: &Path) -> Result<(), InputError> {
+        let mut columns: Vec<(&Quantity, &Vec<f64>)> = self.values.iter().collect();
+        columns.sort_by_key(|(q, _)| self.column_of.get(q).map_or(usize::MAX, |c| c.0));
+        let mut first: Option<(usize, usize, InputError)> = None;
+        for (&q, values) in columns {
+            let bound = q.bound_si();
+            let Some(i) = values.iter().position(|v| !(v.abs() <= bound)) else {
+                continue;
+            };
+            let (col, name) = self
+                .column_of
+                .get(&q)
+                .cloned()
+                .unwrap_or((0, q.name().to_string()));
+            let v = values[i];
+            let message = if v.is_finite() {
+                let hint = if q == Quantity::Delta && !name.contains('[') {
+                    "; a rudder angle in degrees needs the header `delta[deg]`"
+                } else {
+                    ""
+                };
+                format!(
+                    "{} {} (after unit conversion) is beyond the bound ±{} of `{}` in docs/data-format.md: a wrong unit or a corrupt value{hint}",
+                    number(v),
+                    q.si_unit(),
+                    q.bound_text(),
+                    q.name()
+                )
+            } else {
+                format!(
+                    "the value is not finite after conversion to {} (too large for its unit)",
+                    q.si_unit()
+                )
+            };
+            let line = self.lines.get(i).copied().unwrap_or(0);
+            if first
+                .as_ref()
+                .is_none_or(|(l, c, _)| (line, col) < (*l, *c))
+            {
+                first = Some((line, col, InputError::cell(path, line, col, &name, message)));
+            }
+        }
+        first.map_or(Ok(()), |(_, _, e)| Err(e))
+    }
+
+    /// A step longer than [`GAP_FACTOR`] times the median step is a gap (lost samples), an error: the
+    /// acceleration estimate and every replay would bridge it with invented motion.
+    fn check_gaps(&self, path: &Path) -> Result<(), InputError> {
+        let t = &self.values[&Quantity::T];
+        let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+        if steps.is_empty() {
+            return Ok(());
+        }
+        steps.sort_by(f64::total_cmp);
+        let median = steps[steps.len() / 2];
+        for i in 1..t.len() {
+            let step = t[i] - t[i - 1];
+            if step > GAP_FACTOR * median {
+                let (col, name) = self
+                    .column_of
+                    .get(&Quantity::T)
+                    .cloned()
+                    .unwrap_or((1, "t".into()));
+                return Err(InputError::cell(
+                    path,
+                    self.lines[i],
+                    col,
+                    &name,
+                    format!(
+                        "gap in time: {} s after {} s (line {}), a step of {} s, more than {GAP_FACTOR} × the median step {} s",
+                        number(t[i]),
+                        number(t[i - 1]),
+                        self.lines[i - 1],
+                        fmt_sig(step),
+                        fmt_sig(median)
+                    ),
+                ));
+            }
+        }
+        Ok(())
     }
 
     fn header_line(&self) -> usize {

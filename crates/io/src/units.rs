@@ -150,6 +150,32 @@ impl Quantity {
         }
     }
 
+    /// The largest magnitude a value of this quantity may have in SI, after unit conversion
+    /// (`docs/data-format.md`). Far beyond anything a ship (model or full scale) records, yet small
+    /// enough that squares and cubes of prime-scaled values stay finite: a value beyond it is a wrong
+    /// unit, a corrupt file or a sentinel, never data.
+    pub fn bound_si(self) -> f64 {
+        match self {
+            Quantity::T => 1e8,
+            Quantity::X0 | Quantity::Y0 => 1e8,
+            Quantity::Psi => 1e5,
+            Quantity::U | Quantity::V | Quantity::X0Dot | Quantity::Y0Dot => 1e3,
+            Quantity::R => 1e2,
+            Quantity::Delta => std::f64::consts::PI,
+            Quantity::N => 1e4,
+            Quantity::UDot | Quantity::VDot => 1e4,
+            Quantity::RDot => 1e4,
+        }
+    }
+
+    /// The bound as a message writes it.
+    pub fn bound_text(self) -> String {
+        match self {
+            Quantity::Delta => "π rad (180°)".into(),
+            q => format!("{:e} {}", q.bound_si(), q.si_unit()),
+        }
+    }
+
     /// Required in every recording.
     pub fn required(self) -> bool {
         matches!(
