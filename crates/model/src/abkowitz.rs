@@ -42,6 +42,8 @@ pub enum ModelError {
     UnknownCoefficient(String),
     #[error("coefficient `{0}` is missing")]
     MissingCoefficient(String),
+    #[error("[bootstrap]: {0}")]
+    Bootstrap(String),
 }
 
 impl AbkowitzModel {
@@ -303,6 +305,77 @@ pub struct ModelFile {
     /// model applies them.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub effects: Vec<EffectEntry>,
+    /// Block-bootstrap replicates of the coefficients (`shipid fit --bootstrap N`), from which
+    /// `simulate --bands` and `validate` draw their bands.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bootstrap: Option<BootstrapRecord>,
+}
+
+/// The coefficient uncertainty of a fit by a moving-block bootstrap, as stored in its model file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BootstrapRecord {
+    /// How the replicates were drawn and refitted, in words.
+    pub method: String,
+    /// Seed of the replicate draws (SplitMix64 per replicate).
+    pub seed: u64,
+    /// Rows per block, and why that length.
+    pub block_rows: usize,
+    pub block_reason: String,
+    /// Replicate refits that did not converge or lost a regressor's information (not stored).
+    pub rejected: usize,
+    /// Bootstrap standard error per DOF and coefficient (prime system, as `coefficients`).
+    pub standard_error: BTreeMap<String, BTreeMap<String, f64>>,
+    /// Correlation matrix per DOF, rows and columns in the set's term order.
+    pub correlation: BTreeMap<String, Vec<Vec<f64>>>,
+    /// Replicate values per DOF and coefficient; entry k of every list belongs to replicate k.
+    pub replicates: BTreeMap<String, BTreeMap<String, Vec<f64>>>,
+}
+
+impl BootstrapRecord {
+    /// The replicates as coefficient vectors in the set's term order, checked against the set.
+    pub fn coefficient_vectors(
+        &self,
+        set: &CoefficientSet,
+    ) -> Result<Vec<[Vec<f64>; 3]>, ModelError> {
+        let mut count: Option<usize> = None;
+        let mut per_dof: [Vec<&Vec<f64>>; 3] = Default::default();
+        for d in Dof::ALL {
+            let given = self.replicates.get(d.as_str());
+            for name in set.names(d) {
+                let values = given
+                    .and_then(|g| g.get(&name))
+                    .ok_or_else(|| ModelError::Bootstrap(format!("no replicates of {name}")))?;
+                match count {
+                    None => count = Some(values.len()),
+                    Some(n) if n != values.len() => {
+                        return Err(ModelError::Bootstrap(format!(
+                            "{name} has {} replicates, other coefficients {n}",
+                            values.len()
+                        )));
+                    }
+                    Some(_) => {}
+                }
+                if values.iter().any(|v| !v.is_finite()) {
+                    return Err(ModelError::Bootstrap(format!(
+                        "a replicate of {name} is not finite"
+                    )));
+                }
+                per_dof[d.index()].push(values);
+            }
+            if let Some(g) = given {
+                if let Some(extra) = g.keys().find(|k| !set.names(d).contains(k)) {
+                    return Err(ModelError::Bootstrap(format!(
+                        "{extra} is not a term of the set"
+                    )));
+                }
+            }
+        }
+        let n = count.unwrap_or(0);
+        Ok((0..n)
+            .map(|k| Dof::ALL.map(|d| per_dof[d.index()].iter().map(|v| v[k]).collect()))
+            .collect())
+    }
 }
 
 /// A physical effect that is part of a model, with where it came from.
@@ -361,6 +434,7 @@ impl ModelFile {
             training,
             coefficients,
             effects: Vec::new(),
+            bootstrap: None,
         }
     }
 
