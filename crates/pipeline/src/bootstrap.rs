@@ -14,11 +14,18 @@ use rayon::prelude::*;
 use serde::Serialize;
 use shipid_estimators::{Bounds, Estimator, Solver, Status, predict};
 use shipid_io::Dataset;
-use shipid_model::{AbkowitzModel, Design, Dof, PrimeInertia, Samples, design};
+use std::collections::BTreeMap;
+
+use shipid_model::{AbkowitzModel, BootstrapRecord, Design, Dof, PrimeInertia, Samples, design};
 use shipid_sim::{AbkowitzDynamics, Dynamics};
-use shipid_uncertainty::{BlockLength, SplitMix64, block_length, replicate_rows};
+use shipid_uncertainty::{BlockLength, SplitMix64, block_length, replicate_rows, spread};
 
 use crate::error::{PipelineError, bad_input};
+
+/// The bootstrap in words, as the model file states it.
+pub const METHOD: &str = "moving-block bootstrap of the training rows (blocks within each recording), \
+every DOF refitted with the estimator and hyper-parameters the fit chose; a refined model's \
+replicates are its coefficients shifted by each replicate's departure from the equation-error fit";
 
 /// Largest number of replicates a fit may ask for (memory: replicates × coefficients numbers, and
 /// each is one refit of three DOFs).
@@ -38,6 +45,56 @@ pub struct Bootstrap {
 }
 
 impl Bootstrap {
+    /// The model file's `[bootstrap]` table for replicates of `model`'s set.
+    pub fn record(&self, model: &AbkowitzModel) -> BootstrapRecord {
+        let mut standard_error = BTreeMap::new();
+        let mut correlation = BTreeMap::new();
+        let mut replicates = BTreeMap::new();
+        for dof in Dof::ALL {
+            let names = model.set.names(dof);
+            let vectors: Vec<Vec<f64>> = self
+                .replicates
+                .iter()
+                .map(|r| r[dof.index()].clone())
+                .collect();
+            if let Ok(s) = spread(&vectors) {
+                standard_error.insert(
+                    dof.as_str().to_string(),
+                    names.iter().cloned().zip(s.std_error).collect(),
+                );
+                correlation.insert(dof.as_str().to_string(), s.correlation);
+            }
+            replicates.insert(
+                dof.as_str().to_string(),
+                names
+                    .iter()
+                    .enumerate()
+                    .map(|(j, n)| (n.clone(), vectors.iter().map(|v| v[j]).collect()))
+                    .collect(),
+            );
+        }
+        BootstrapRecord {
+            method: METHOD.into(),
+            seed: self.seed,
+            block_rows: self.block.rows,
+            block_reason: match self.block.decorrelation_lag {
+                Some(lag) => format!(
+                    "the equation-error residuals decorrelate after {lag} rows (autocorrelation \
+                     inside ±2/√n); floor n^(1/3) = {}, cap n/4 = {} rows",
+                    self.block.floor_rows, self.block.cap_rows
+                ),
+                None => format!(
+                    "the equation-error residuals stay correlated up to n/4 = {} rows: the cap",
+                    self.block.cap_rows
+                ),
+            },
+            rejected: self.rejected,
+            standard_error,
+            correlation,
+            replicates,
+        }
+    }
+
     /// The replicates as simulation models of `base`'s set, ship and added masses (a replicate the model
     /// constructor rejects, e.g. a singular mass matrix, is left out).
     pub fn models(&self, base: &AbkowitzModel) -> Vec<Box<dyn Dynamics + Send + Sync>> {

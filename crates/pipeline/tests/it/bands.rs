@@ -146,3 +146,42 @@ fn turning_circle_bands_count_every_replicate() {
     let track = bands.track.expect("a run gives a track band");
     assert_eq!(track.t_s.len(), track.psi_deg.len());
 }
+
+#[test]
+fn bootstrap_record_round_trips_through_the_model_file() {
+    let ds = default_data();
+    let mut out = zz35_fit(&ds);
+    let boot = replicates(&ds, &out, 25, 3);
+    out.file.bootstrap = Some(boot.record(&out.model));
+    let text = toml::to_string(&out.file).unwrap();
+    let read: shipid_model::ModelFile = toml::from_str(&text).unwrap();
+    let record = read.bootstrap.expect("the [bootstrap] table is read back");
+    assert_eq!(
+        record.coefficient_vectors(&out.model.set).unwrap(),
+        boot.replicates
+    );
+    assert_eq!(record.block_rows, boot.block.rows);
+    // Every coefficient has a standard error, and a correlation matrix per DOF of the set's size.
+    for dof in shipid_model::Dof::ALL {
+        let n = out.model.set.names(dof).len();
+        assert_eq!(record.standard_error[dof.as_str()].len(), n);
+        assert_eq!(record.correlation[dof.as_str()].len(), n);
+    }
+}
+
+#[test]
+fn a_damaged_bootstrap_table_names_the_fault() {
+    let ds = default_data();
+    let mut out = zz35_fit(&ds);
+    let boot = replicates(&ds, &out, 25, 3);
+    let mut record = boot.record(&out.model);
+    let x = record.replicates.get_mut("X").unwrap();
+    let first = x.keys().next().unwrap().clone();
+    x.get_mut(&first).unwrap().pop();
+    out.file.bootstrap = Some(record.clone());
+    let err = record.coefficient_vectors(&out.model.set).unwrap_err();
+    assert!(err.to_string().contains("replicates"), "{err}");
+    record.replicates.get_mut("X").unwrap().remove(&first);
+    let err = record.coefficient_vectors(&out.model.set).unwrap_err();
+    assert!(err.to_string().contains(&first), "{err}");
+}
