@@ -35,6 +35,10 @@ pub struct GpFitReport {
     /// Per output: name, log marginal likelihood, optimiser iterations, training RMS residual at the kept
     /// points and over all training samples (in the output's unit).
     pub outputs: Vec<GpOutputReport>,
+    /// What the user must know about this fit (an output fitted worse than predicting zero); absent
+    /// when empty.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -166,9 +170,26 @@ pub fn fit_gp_dataset(
             kept: keep.len(),
             sparsify_time_s,
             train_time_s,
+            warnings: worse_than_zero(&reports),
             outputs: reports,
         },
     ))
+}
+
+/// Outputs whose RMS residual over the training samples exceeds the RMS of their targets: the GP
+/// predicts them worse than a model that always says 0 (e.g. a similarity threshold that keeps too few
+/// points, or hyper-parameters stuck at a poor optimum).
+fn worse_than_zero(outputs: &[GpOutputReport]) -> Vec<String> {
+    outputs
+        .iter()
+        .filter(|o| !(o.rms_residual_all_samples <= o.target_rms))
+        .map(|o| {
+            format!(
+                "{}: the sparse GP fits its training targets worse than predicting zero (RMS residual {:.3e} > target RMS {:.3e}); try a higher --similarity or other training windows",
+                o.name, o.rms_residual_all_samples, o.target_rms
+            )
+        })
+        .collect()
 }
 
 /// The model file's text: a header naming the units, then the TOML.

@@ -294,3 +294,68 @@ pub fn validate_dataset(
     };
     (rows, source)
 }
+
+/// Relative spread of the propeller rate above which a recording is warned about: every model family
+/// takes the rate as constant (the MMG reference at its self-propulsion point, the polynomial sets and
+/// the sparse GP have no `n` input), so a recording whose rate changes by more than a few per cent
+/// carries forces none of them can explain.
+pub const PROPELLER_RATE_SPREAD_WARNING: f64 = 0.05;
+
+/// A recording whose propeller rate varies although the model ignores it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PropellerRateVariation {
+    pub recording: String,
+    /// 2nd and 98th percentiles of n [1/s] (robust to single spikes).
+    pub n_low_hz: f64,
+    pub n_high_hz: f64,
+    /// (high − low) / median.
+    pub relative_spread: f64,
+}
+
+impl std::fmt::Display for PropellerRateVariation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{}: the propeller rate n varies by {:.0} % ({:.3}–{:.3} 1/s) but the model takes it as constant: its forces there are not explained by any model family",
+            self.recording,
+            100.0 * self.relative_spread,
+            self.n_low_hz,
+            self.n_high_hz
+        )
+    }
+}
+
+/// The recordings of `recordings` whose recorded propeller rate spreads by more than
+/// [`PROPELLER_RATE_SPREAD_WARNING`] of its median (recordings without `n` are not judged).
+pub fn propeller_rate_variations<'a>(
+    recordings: impl IntoIterator<Item = &'a DatasetRecording>,
+) -> Vec<PropellerRateVariation> {
+    recordings
+        .into_iter()
+        .filter_map(|r| {
+            let mut n: Vec<f64> = r
+                .recording
+                .n
+                .as_ref()?
+                .iter()
+                .copied()
+                .filter(|x| x.is_finite())
+                .collect();
+            if n.len() < 3 {
+                return None;
+            }
+            n.sort_by(f64::total_cmp);
+            let at = |q: f64| n[((n.len() - 1) as f64 * q).round() as usize];
+            let (low, median, high) = (at(0.02), at(0.5), at(0.98));
+            let spread = (high - low) / median.abs();
+            (median != 0.0 && spread > PROPELLER_RATE_SPREAD_WARNING).then(|| {
+                PropellerRateVariation {
+                    recording: r.file.clone(),
+                    n_low_hz: low,
+                    n_high_hz: high,
+                    relative_spread: spread,
+                }
+            })
+        })
+        .collect()
+}

@@ -10,6 +10,7 @@ use shipid_io::write::write_atomic;
 use shipid_pipeline::fit::{EstimatorSpec, FitOutput, WindowSpec, fit_dataset, load_set};
 use shipid_pipeline::fit_gp::{DEFAULT_SIMILARITY, fit_gp_dataset, model_text};
 use shipid_pipeline::model_file::load_model;
+use shipid_pipeline::validate::propeller_rate_variations;
 
 use crate::{CliError, Outcome, failed};
 
@@ -31,7 +32,7 @@ pub struct FitArgs<'a> {
 const TOP_VIFS: usize = 5;
 
 /// The `--json` report: fit time, residual RMS per DOF, condition numbers, the largest VIFs, status.
-pub fn report_json(out: &FitOutput) -> Value {
+pub fn report_json(out: &FitOutput, warnings: &[String]) -> Value {
     let mut dofs = serde_json::Map::new();
     for d in &out.dofs {
         let mut vifs: Vec<(&String, f64)> = d
@@ -62,13 +63,40 @@ pub fn report_json(out: &FitOutput) -> Value {
             }),
         );
     }
-    json!({
+    let mut report = json!({
         "fit_time_s": out.fit_time_s,
         "samples": out.training.len(),
         "set": out.model.set.name,
         "estimator": out.file.estimator,
         "dofs": dofs,
-    })
+    });
+    if !warnings.is_empty()
+        && let Value::Object(o) = &mut report
+    {
+        o.insert("warnings".into(), json!(warnings));
+    }
+    report
+}
+
+/// Warnings about the training recordings (printed on stderr and kept in the JSON report): a
+/// propeller rate that varies although every model family takes it as constant. With `--validate`
+/// the validation warns about every recording instead.
+fn training_warnings(ds: &Dataset, recordings: &[String], validate: bool) -> Vec<String> {
+    if validate {
+        return Vec::new();
+    }
+    let warnings: Vec<String> = propeller_rate_variations(
+        ds.recordings
+            .iter()
+            .filter(|r| recordings.is_empty() || recordings.contains(&r.file)),
+    )
+    .iter()
+    .map(ToString::to_string)
+    .collect();
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
+    warnings
 }
 
 /// A fit's status in words: `ok`, `ill-conditioned`, `rank-deficient (no information on …)`, …
@@ -95,11 +123,11 @@ fn status_words(d: &shipid_pipeline::fit::DofReport) -> String {
 
 /// The fit's summary on stdout: the JSON report, or one line per DOF; `out` is the model file
 /// written, if any.
-fn print_summary(out: &FitOutput, written: Option<&Path>, as_json: bool) {
+fn print_summary(out: &FitOutput, written: Option<&Path>, as_json: bool, warnings: &[String]) {
     if as_json {
         println!(
             "{}",
-            serde_json::to_string_pretty(&report_json(out)).unwrap_or_default()
+            serde_json::to_string_pretty(&report_json(out, warnings)).unwrap_or_default()
         );
         return;
     }
@@ -128,10 +156,11 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     let set = load_set(a.set)?;
     let ds = Dataset::load(a.dataset)?;
     let out = fit_dataset(&ds, set, &a.estimator, &a.recordings, a.window, a.solver)?;
+    let warnings = training_warnings(&ds, &a.recordings, a.validate);
     if let Some(none) = out.no_information() {
         // No model file: a model whose coefficients the data never saw would validate as if it
         // were one.
-        print_summary(&out, None, a.json);
+        print_summary(&out, None, a.json, &warnings);
         return Err(crate::failed_msg(none));
     }
     // The data set's path relative to the model file, so the model reads it from anywhere.
@@ -147,7 +176,7 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     write_atomic(a.out, format!("{header}{text}").as_bytes())
         .map_err(|e| crate::write_failed(a.out, e))?;
     let all_solved = out.dofs.iter().all(|d| d.fit.status.is_solved());
-    print_summary(&out, Some(a.out), a.json);
+    print_summary(&out, Some(a.out), a.json, &warnings);
     let mut outcome = if all_solved {
         Outcome::Ok
     } else {
@@ -175,7 +204,13 @@ pub fn run_gp(
 ) -> Result<Outcome, CliError> {
     let ds = Dataset::load(dataset)?;
     let threshold = similarity.unwrap_or(DEFAULT_SIMILARITY);
-    let (mut file, _model, report) = fit_gp_dataset(&ds, recordings, window, threshold)?;
+    let (mut file, _model, mut report) = fit_gp_dataset(&ds, recordings, window, threshold)?;
+    for w in &report.warnings {
+        eprintln!("warning: {w}");
+    }
+    report
+        .warnings
+        .extend(training_warnings(&ds, recordings, validate));
     shipid_pipeline::model_file::anchor_training(&mut file.training, out);
     let text = model_text(&file).map_err(failed)?;
     write_atomic(out, text.as_bytes()).map_err(|e| crate::write_failed(out, e))?;

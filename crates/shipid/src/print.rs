@@ -2,7 +2,7 @@
 
 use serde_json::{Map, Value, json};
 use shipid_io::Dataset;
-use shipid_pipeline::validate::{RangeSource, validate_dataset};
+use shipid_pipeline::validate::{RangeSource, propeller_rate_variations, validate_dataset};
 use shipid_sim::Dynamics;
 
 use crate::Outcome;
@@ -17,12 +17,24 @@ pub fn validation(model: &dyn Dynamics, model_spec: &str, ds: &Dataset, as_json:
         .iter()
         .map(|r| (r.file.clone(), serde_json::to_value(r).unwrap_or_default()))
         .collect();
-    let value = json!({
+    let mut value = json!({
         "model": model_spec,
         "dataset": dataset.display().to_string(),
         "method": "replay: recorded rudder from the recorded initial state (RMSEs); manoeuvre: the recording's standard manoeuvre re-simulated in closed loop (metrics)",
         "recordings": recs,
     });
+    let warnings: Vec<String> = propeller_rate_variations(&ds.recordings)
+        .iter()
+        .map(ToString::to_string)
+        .collect();
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
+    if !warnings.is_empty()
+        && let Value::Object(o) = &mut value
+    {
+        o.insert("warnings".into(), json!(warnings));
+    }
     if as_json {
         println!(
             "{}",
