@@ -354,3 +354,98 @@ pub fn load_gp_model(path: &Path, text: &str) -> Result<Option<GpDynamics>, Pipe
         .map(Some)
         .map_err(|e| bad_input(format!("{}: {e}", path.display())))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A fresh folder under the system's temporary folder, removed when dropped.
+    struct Scratch(PathBuf);
+
+    impl Scratch {
+        fn new(name: &str) -> Scratch {
+            let dir = std::env::temp_dir()
+                .join(format!("shipid-model-file-{}-{name}", std::process::id()));
+            let _ = std::fs::remove_dir_all(&dir);
+            std::fs::create_dir_all(&dir).unwrap();
+            Scratch(dir)
+        }
+
+        fn path(&self) -> &Path {
+            &self.0
+        }
+    }
+
+    impl Drop for Scratch {
+        fn drop(&mut self) {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+
+    fn check_relative(from_dir: &str, to: &str, expected: Option<&str>) {
+        assert_eq!(
+            relative_path(Path::new(from_dir), Path::new(to)),
+            expected.map(PathBuf::from),
+            "{from_dir} → {to}"
+        );
+    }
+
+    #[test]
+    fn relative_paths_climb_to_the_common_folder() {
+        check_relative("/a/b", "/a/b/c.toml", Some("c.toml"));
+        check_relative("/a/b", "/a/d/c.toml", Some("../d/c.toml"));
+        check_relative("/x/y/z", "/a/c.toml", Some("../../../a/c.toml"));
+        check_relative("/", "/a/c.toml", Some("a/c.toml"));
+    }
+
+    #[test]
+    fn a_stored_path_resolves_back_to_its_target_from_the_file_that_names_it() {
+        let dir = Scratch::new("stored");
+        let data = dir.path().join("data/set/dataset.toml");
+        std::fs::create_dir_all(data.parent().unwrap()).unwrap();
+        std::fs::write(&data, "x").unwrap();
+        // The model's folder need not exist yet (fit writes it after).
+        let model = dir.path().join("results/run/model.toml");
+        let stored = stored_path(&model, &data);
+        assert_eq!(stored, "../../data/set/dataset.toml");
+        std::fs::create_dir_all(model.parent().unwrap()).unwrap();
+        assert_eq!(
+            absolute_path(&resolve_stored(&model, &stored)),
+            absolute_path(&data)
+        );
+        // Spelled with `..` and `.`, the same file.
+        let odd = dir.path().join("results/./run/../../data/set/dataset.toml");
+        assert_eq!(absolute_path(&odd), absolute_path(&data));
+    }
+
+    #[test]
+    fn fnv1a64_matches_the_published_test_vectors() {
+        let offset = 0xcbf2_9ce4_8422_2325_u64;
+        assert_eq!(fnv1a64(offset, b""), 0xcbf2_9ce4_8422_2325);
+        assert_eq!(fnv1a64(offset, b"a"), 0xaf63_dc4c_8601_ec8c);
+        assert_eq!(fnv1a64(offset, b"foobar"), 0x8594_4171_f739_67e8);
+    }
+
+    #[test]
+    fn moving_bytes_between_two_files_changes_their_fingerprint() {
+        let dir = Scratch::new("hash");
+        let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+        std::fs::write(&a, "ab").unwrap();
+        std::fs::write(&b, "c").unwrap();
+        let before = files_hash(&[&a, &b]).unwrap();
+        std::fs::write(&a, "a").unwrap();
+        std::fs::write(&b, "bc").unwrap();
+        assert_ne!(files_hash(&[&a, &b]).unwrap(), before);
+    }
+
+    #[test]
+    fn lengths_that_differ_by_more_than_a_thousandth_are_another_ship() {
+        let ship = |lpp| Ship {
+            lpp,
+            ..*MmgModel::kvlcc2().ship()
+        };
+        assert_eq!(ship_mismatch(&ship(7.0), &ship(7.0000001)), None);
+        let m = ship_mismatch(&ship(7.0), &ship(14.0)).unwrap();
+        assert!(m.to_string().contains("L = 7 m") && m.to_string().contains("L = 14 m"));
+    }
+}
