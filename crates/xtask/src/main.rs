@@ -5,7 +5,8 @@
 //! - `inverse-bench`: wall time of paper 003's simulation database (docs/benchmarks.md);
 //! - `circles`: every crate's file import edges, failing on a circle;
 //! - `coverage`: measured coverage of the bootstrap bands on generated noisy data;
-//! - `fit-bench`: fit times of the estimators for the side-by-side comparison in `bench/`.
+//! - `fit-bench`: fit times of the estimators for the side-by-side comparison in `bench/`;
+//! - `refine-bench`: wall time and results of `shipid fit --refine` (`bench/refine.md`).
 
 mod bench_diagnose;
 mod circles;
@@ -13,6 +14,7 @@ mod coverage;
 mod fit_bench;
 mod inverse_bench;
 mod paper001;
+mod refine_bench;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -79,6 +81,13 @@ enum Task {
     },
     /// List every crate's file import edges and fail on a circle (ARCHITECTURE.md's invariant).
     Circles,
+    /// Wall time and results of `shipid fit --refine` on the default data, against a baseline binary
+    /// (flags: see the module's documentation).
+    #[command(disable_help_flag = true)]
+    RefineBench {
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
     /// Fit-time benchmark of the estimators (flags: see the module's documentation).
     #[command(disable_help_flag = true)]
     FitBench {
@@ -133,6 +142,7 @@ fn main() -> ExitCode {
                 ExitCode::from(1)
             })
         }
+        Task::RefineBench { .. } => refine_bench::run().map(|()| ExitCode::SUCCESS),
         Task::FitBench { .. } => {
             fit_bench::main();
             Ok(ExitCode::SUCCESS)
