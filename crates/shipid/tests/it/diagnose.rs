@@ -358,3 +358,99 @@ fn states_a_model_was_not_identified_on_are_reported_outside_its_identification_
     .unwrap();
     assert_eq!(report.outside_identification_range, Some(0.0));
 }
+
+/// Regression (issue 25): an augmented model named its base by an absolute path and lost the base's
+/// training data, and a copy of a polynomial base kept data-set paths relative to the working
+/// directory. Now both name what they need relative to themselves, with fingerprints: they keep working
+/// wherever they are used from and when moved together with what they name, and a changed base is
+/// refused.
+#[test]
+fn augmented_models_name_their_base_and_data_relative_to_themselves() {
+    let top = tempfile::tempdir().unwrap();
+    let t = top.path();
+    let path = |p: &str| t.join(p).to_str().unwrap().to_string();
+    common::shipid_ok(&[
+        "generate",
+        "--out",
+        &path("gen"),
+        "--effect",
+        "current:speed=0.05,from=120",
+    ]);
+    common::shipid_ok(&[
+        "fit",
+        "data/kvlcc2-mmg/dataset.toml",
+        "--out",
+        &path("work/base/model.toml"),
+    ]);
+    // A wrapper around the polynomial model (as diagnose writes for a base that is not a polynomial
+    // file): its own base by a relative path with its fingerprint.
+    let base_hash =
+        shipid_pipeline::model_file::files_hash(&[&t.join("work/base/model.toml")]).unwrap();
+    std::fs::write(
+        t.join("work/base/wrap.toml"),
+        format!(
+            "shipid_version = \"0\"\nbase = \"model.toml\"\nbase_hash = \"{base_hash}\"\n[[effects]]\neffect = \"wind:speed=0.01,from=0\"\nsource = \"test\"\n"
+        ),
+    )
+    .unwrap();
+    let run = common::shipid_ok(&[
+        "diagnose",
+        &path("work/base/wrap.toml"),
+        &path("gen/dataset.toml"),
+        "--model-out",
+        &path("work/out/aug.toml"),
+    ]);
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    // The wrapper's training data are its base's.
+    assert!(
+        stdout.contains("model's own level (training data /"),
+        "{stdout}"
+    );
+    let aug = std::fs::read_to_string(t.join("work/out/aug.toml")).unwrap();
+    assert!(
+        aug.contains("base = \"../base/wrap.toml\"") && aug.contains("base_hash = \"fnv1a64:"),
+        "{aug}"
+    );
+    // The copy of a polynomial base: its training data set relative to the copy.
+    common::shipid_ok(&[
+        "diagnose",
+        &path("work/base/model.toml"),
+        &path("gen/dataset.toml"),
+        "--model-out",
+        &path("work/out/copy.toml"),
+    ]);
+    let copy = std::fs::read_to_string(t.join("work/out/copy.toml")).unwrap();
+    let base = std::fs::read_to_string(t.join("work/base/model.toml")).unwrap();
+    let dataset_line = |text: &str| {
+        text.lines()
+            .find(|l| l.starts_with("dataset = "))
+            .unwrap()
+            .to_string()
+    };
+    // Both folders are two levels below `t`: the same relative path.
+    assert_eq!(dataset_line(&copy), dataset_line(&base));
+    // Moved together, the wrapper and its base still load and still find the training data, from a
+    // working directory that is neither.
+    std::fs::rename(t.join("work"), t.join("moved")).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_shipid"))
+        .args(["validate", "out/aug.toml", "../gen/dataset.toml"])
+        .current_dir(t.join("moved"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert!(!err.contains("warning"), "{err}");
+    // A changed base is refused, naming the key and both files.
+    let wrap = t.join("moved/base/wrap.toml");
+    let text = std::fs::read_to_string(&wrap).unwrap();
+    std::fs::write(&wrap, format!("{text}# edited\n")).unwrap();
+    common::check_exit(
+        &[
+            "validate",
+            &path("moved/out/aug.toml"),
+            &path("gen/dataset.toml"),
+        ],
+        2,
+        "aug.toml: key `base_hash`",
+    );
+}
