@@ -306,8 +306,9 @@ impl MassMatrix {
 /// The refinement integrates the sensitivities of a replay, S = ∂x/∂θ, alongside the state with
 /// the same RK4 stages (which gives the exact Jacobian of the discretised replay), so it needs at each
 /// stage ∂a/∂(u, v, r) and ∂a/∂θ ([`Parametric::sensitivities`]). The default is finite differences,
-/// central over the three velocities and over θ through [`Parametric::accelerations_at`]; a model that
-/// knows its derivatives (the Abkowitz polynomial is linear in θ) overrides it.
+/// central over the three velocities and forward over θ through [`Parametric::accelerations_at`]
+/// (3 + 3 + dim θ evaluations per stage); a model that knows its derivatives (the Abkowitz polynomial
+/// is linear in θ) overrides it.
 pub trait Parametric: Dynamics + Clone + Send + Sync {
     /// The parameter vector θ.
     fn parameters(&self) -> Vec<f64>;
@@ -401,16 +402,16 @@ pub trait Parametric: Dynamics + Clone + Send + Sync {
             let (plus, minus) = (shifted(1.0)?, shifted(-1.0)?);
             (0..3).for_each(|i| d_state[i][k] = (plus[i] - minus[i]) / (2.0 * h));
         }
+        // Forward differences over θ (one evaluation per parameter: θ is the long side), steps of
+        // √ε relative, which balance truncation and rounding at about 1e-8 relative.
         let mut theta = self.parameters();
         for (j, out) in d_theta.iter_mut().enumerate().take(theta.len()) {
             let t0 = theta[j];
-            let h = 1e-6 * t0.abs().max(1e-3);
+            let h = 1.5e-8 * t0.abs().max(1e-3);
             theta[j] = t0 + h;
             let plus = self.accelerations_at(&theta, state, delta_rad)?;
-            theta[j] = t0 - h;
-            let minus = self.accelerations_at(&theta, state, delta_rad)?;
             theta[j] = t0;
-            *out = std::array::from_fn(|i| (plus[i] - minus[i]) / (2.0 * h));
+            *out = std::array::from_fn(|i| (plus[i] - a[i]) / h);
         }
         Ok(a)
     }
