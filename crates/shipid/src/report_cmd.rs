@@ -12,6 +12,12 @@ pub fn run(dir: &Path, study: Option<&Path>) -> Result<Outcome, CliError> {
         study_file: study.map(Path::to_path_buf),
         ..RunMeta::default()
     };
+    if !dir.is_dir() {
+        return Err(bad_input(format!(
+            "{}: no such folder (give the output folder of `shipid run` or of `shipid diagnose --plots`)",
+            dir.display()
+        )));
+    }
     let html = if dir.join("report.json").is_file() {
         shipid_report::diagnosis_page(&DiagnosisFiles::in_dir(dir), &meta)
     } else if dir.join("summary.csv").is_file() {

@@ -207,13 +207,58 @@ pub fn table(
             study_path.display()
         )));
     }
-    let t = Table::read_csv(&path).map_err(failed)?;
+    let t = Table::read_csv(&path).map_err(|e| bad_input(e.to_string()))?;
+    check_cases_of(&t, &study, &path)?;
     let md = shipid_study::tables::summary_pivot(&t, pivot).map_err(|e| {
         let hint = pivot_hint(&t, pivot, &e).unwrap_or_default();
         bad_input(format!("--pivot: {e} in {}{hint}", path.display()))
     })?;
     println!("{md}");
     Ok(Outcome::Ok)
+}
+
+/// A summary written by another study (or by an older version of this one) would be shown under this
+/// study's name: its cases must be the study's.
+fn check_cases_of(summary: &Table, study: &Study, path: &Path) -> Result<(), CliError> {
+    let Some(col) = summary.column("case") else {
+        return Err(bad_input(format!(
+            "{}: no `case` column: not a summary written by shipid run",
+            path.display()
+        )));
+    };
+    let known: std::collections::BTreeSet<&str> =
+        study.cases.iter().map(|c| c.id.as_str()).collect();
+    let foreign: std::collections::BTreeSet<String> = (0..summary.rows())
+        .map(|i| col.cell(i))
+        .filter(|id| !known.contains(id.as_str()))
+        .collect();
+    if let Some(first) = foreign.iter().next() {
+        return Err(bad_input(format!(
+            "{}: {} case(s) are not cases of {} (e.g. {first}): written by another study or an older version of it; run `shipid run {}` first",
+            path.display(),
+            foreign.len(),
+            study.path.display(),
+            study.path.display()
+        )));
+    }
+    let shown: std::collections::BTreeSet<String> =
+        (0..summary.rows()).map(|i| col.cell(i)).collect();
+    let missing: Vec<&str> = known
+        .iter()
+        .copied()
+        .filter(|id| !shown.contains(*id))
+        .collect();
+    if let Some(first) = missing.first() {
+        return Err(bad_input(format!(
+            "{}: lacks {} of the {} cases of {} (e.g. {first}): run `shipid run {}` first",
+            path.display(),
+            missing.len(),
+            known.len(),
+            study.path.display(),
+            study.path.display()
+        )));
+    }
+    Ok(())
 }
 
 /// For a pivot refused because it puts cases together: the pivot that tells them apart.

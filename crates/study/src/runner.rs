@@ -510,6 +510,19 @@ pub fn resolve_set(study: &Study, set: &str) -> String {
         .to_string()
 }
 
+/// A run killed while writing a case leaves its temporary files; the lock is ours, so they are
+/// nobody's now.
+fn remove_temporaries(dir: &Path) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        if e.file_name().to_string_lossy().ends_with(".tmp") {
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
+}
+
 /// Runs of more cases than this are refused unless the user insists (`shipid run --allow-large`):
 /// at a tenth of a second to a second per case, 5 000 cases already take minutes to hours, and a
 /// grid that large is more often a typo (a value list pasted twice as a range) than a plan.
@@ -553,6 +566,7 @@ pub fn run_study(
                 let result = match reused {
                     Some(r) => r,
                     None => {
+                        remove_temporaries(&dir);
                         let (r, model) = run_case(study, case);
                         write_atomic(&dir.join("config.toml"), config.as_bytes())?;
                         if let Some(m) = model {

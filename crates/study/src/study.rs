@@ -691,8 +691,16 @@ fn polynomial_estimators(
     expanded
         .into_iter()
         .map(|spec| {
-            spec.validate()
-                .map_err(|err| InputError::key(path, entry_key(i, "name"), err.to_string()))?;
+            spec.validate().map_err(|err| {
+                let msg = err.to_string();
+                // Name the key that holds the bad value (a λ of NaN is `lambda`'s fault, not `name`'s).
+                let key = match e.name.as_str() {
+                    "ridge" | "lasso" | "svr" if msg.contains("--epsilon") => "epsilon",
+                    "ridge" | "lasso" | "svr" => grid_key(&e.name),
+                    _ => "name",
+                };
+                InputError::key(path, entry_key(i, key), msg)
+            })?;
             Ok(CheckedEstimator {
                 spec,
                 solver: solver.clone(),
