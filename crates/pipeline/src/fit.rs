@@ -183,7 +183,7 @@ impl EstimatorSpec {
     }
 
     /// Bounds of the set apply to every estimator but plain LSQ (the unconstrained baseline).
-    fn uses_bounds(&self) -> bool {
+    pub fn uses_bounds(&self) -> bool {
         self.name != "lsq"
     }
 }
