@@ -27,7 +27,7 @@ use serde::Deserialize;
 
 use crate::dataset::{DatasetFile, Kind, Origin, RecordingEntry};
 use crate::error::InputError;
-use crate::table::{Columns, parse_cell};
+use crate::table::{Columns, parse_cell, with_comma_hint};
 use crate::types::{AddedMass, Recording, Ship, Side};
 use crate::units::Quantity;
 
@@ -212,7 +212,57 @@ pub fn read_mapping(path: &Path) -> Result<Mapping, InputError> {
             e
         })?;
     }
+    check_outputs(path, &m.recordings)?;
     Ok(m)
+}
+
+/// Output names must stay inside `--out` and be distinct (else one recording silently overwrites
+/// another); a source imported twice would put one recording in the data set twice.
+fn check_outputs(path: &Path, recordings: &[ImportRecording]) -> Result<(), InputError> {
+    let mut outputs: HashMap<String, usize> = HashMap::new();
+    let mut sources: HashMap<String, usize> = HashMap::new();
+    for (i, r) in recordings.iter().enumerate() {
+        crate::write::check_output_name(&r.file).map_err(|reason| {
+            InputError::key(
+                path,
+                format!("recording[{i}].file"),
+                format!("`{}` {reason}", r.file),
+            )
+        })?;
+        if let Some(j) = outputs.insert(crate::write::output_key(&r.file), i) {
+            return Err(InputError::key(
+                path,
+                format!("recording[{i}].file"),
+                format!(
+                    "`{}` is the same output file as recording[{j}].file `{}`{}; give each recording its own file",
+                    r.file,
+                    recordings[j].file,
+                    if r.file == recordings[j].file {
+                        ""
+                    } else {
+                        " (names differing only in case are one file on some systems)"
+                    }
+                ),
+            ));
+        }
+        let source = r
+            .source
+            .split(['/', '\\'])
+            .filter(|c| !c.is_empty() && *c != ".")
+            .collect::<Vec<_>>()
+            .join("/");
+        if let Some(j) = sources.insert(source, i) {
+            return Err(InputError::key(
+                path,
+                format!("recording[{i}].source"),
+                format!(
+                    "`{}` is already imported by recording[{j}] (as `{}`); import each source once",
+                    r.source, recordings[j].file
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 impl ImportRecording {
@@ -258,7 +308,7 @@ pub fn import(mapping_path: &Path, source_dir: Option<&Path>) -> Result<Imported
     let mut provenance = Vec::new();
     for r in &m.recordings {
         let src = dir.join(&r.source);
-        let bytes = std::fs::read(&src).map_err(|e| InputError::read(&src, &e))?;
+        let bytes = crate::recording::read_bytes(&src)?;
         let (text, _, had_errors) = encoding.decode(&bytes);
         if had_errors {
             return Err(InputError::file(
@@ -316,12 +366,23 @@ pub fn parse_table(path: &Path, text: &str, m: &Mapping) -> Result<Recording, In
             return Err(InputError::line(
                 path,
                 line_no,
-                format!("expected at least {needed} fields, found {}", fields.len()),
+                format!(
+                    "expected at least {needed} fields, found {}{}",
+                    fields.len(),
+                    delimiter_hint(line, &m.format.delimiter)
+                ),
             ));
         }
         for (idx, q, factor, label) in &slots {
-            let x = parse_cell(fields[*idx])
-                .map_err(|msg| InputError::cell(path, line_no, idx + 1, label, msg))?;
+            let x = parse_cell(fields[*idx]).map_err(|msg| {
+                InputError::cell(
+                    path,
+                    line_no,
+                    idx + 1,
+                    label,
+                    with_comma_hint(msg, fields[*idx]),
+                )
+            })?;
             if let Some(col) = values.get_mut(q) {
                 col.push(x * factor);
             }
@@ -334,4 +395,17 @@ pub fn parse_table(path: &Path, text: &str, m: &Mapping) -> Result<Recording, In
         column_of,
     }
     .into_recording(path)
+}
+
+/// A line split into too few fields often uses another delimiter than the mapping says.
+fn delimiter_hint(line: &str, delimiter: &str) -> String {
+    let found = [(';', "\";\""), ('\t', "\"\\t\""), (',', "\",\"")]
+        .into_iter()
+        .find(|(c, _)| delimiter.chars().next() != Some(*c) && line.contains(*c));
+    match found {
+        Some((_, key)) if delimiter != "whitespace" || key != "\"\\t\"" => {
+            format!(" (the line contains {key}: should `format.delimiter` be {key}?)")
+        }
+        _ => String::new(),
+    }
 }

@@ -166,7 +166,13 @@ pub fn parse_recording(path: &Path, text: &str) -> Result<Recording, InputError>
         for (i, cell) in rec.iter().enumerate() {
             if let Some((q, factor)) = slots[i] {
                 let x = parse_cell(cell).map_err(|m| {
-                    InputError::cell(path, line, i + 1, &header[i], with_comma_hint(m, cell))
+                    InputError::cell(
+                        path,
+                        line,
+                        i + 1,
+                        &header[i],
+                        crate::table::with_comma_hint(m, cell),
+                    )
                 })?;
                 if let Some(col) = values.get_mut(&q) {
                     col.push(x * factor);
@@ -233,17 +239,4 @@ fn separator_hint(header: &str, rest: &str) -> Option<String> {
     Some(format!(
         "the header `{header}` looks like {word}{decimal}; shipid reads comma-separated recordings with `.` as the decimal mark (convert the file, or import it with a mapping with `delimiter = {key}`)"
     ))
-}
-
-/// A quoted cell such as `"0,5"` is one field with a decimal comma.
-fn with_comma_hint(message: String, cell: &str) -> String {
-    let c = cell.trim();
-    if c.contains(',') && c.replacen(',', ".", 1).parse::<f64>().is_ok() {
-        format!(
-            "{message} (a decimal comma? write `{}`)",
-            c.replacen(',', ".", 1)
-        )
-    } else {
-        message
-    }
 }

@@ -240,3 +240,16 @@ pub fn parse_cell(text: &str) -> Result<f64, String> {
         Err(_) => Err(format!("not a number: `{text}`")),
     }
 }
+
+/// A quoted cell such as `"0,5"` is one field with a decimal comma.
+pub fn with_comma_hint(message: String, cell: &str) -> String {
+    let c = cell.trim();
+    if c.contains(',') && c.replacen(',', ".", 1).parse::<f64>().is_ok() {
+        format!(
+            "{message} (a decimal comma? write `{}`)",
+            c.replacen(',', ".", 1)
+        )
+    } else {
+        message
+    }
+}

@@ -172,6 +172,7 @@ impl Quantity {
     pub fn bound_text(self) -> String {
         match self {
             Quantity::Delta => "π rad (180°)".into(),
+            q if q.bound_si() < 1e4 => format!("{} {}", q.bound_si(), q.si_unit()),
             q => format!("{:e} {}", q.bound_si(), q.si_unit()),
         }
     }

@@ -1,9 +1,10 @@
 //! Writing data sets and recordings in the data format of `docs/data-format.md`, atomically (temporary file, then rename), in
 //! the project's conventions (SI, midship, rudder positive to starboard).
 
+use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::io::Write as _;
-use std::path::Path;
+use std::path::{Component, Path, PathBuf};
 
 use crate::dataset::DatasetFile;
 use crate::types::Recording;
@@ -88,21 +89,145 @@ pub fn recording_csv(rec: &Recording, comments: &[String]) -> String {
     out
 }
 
+/// Why a data set could not be written. Every variant names the path or the file name at fault (an
+/// `io::Error` alone says only "No such file or directory").
+#[derive(Debug, thiserror::Error)]
+pub enum WriteError {
+    // The io::Error is shown in the message, not chained as a source: chained, every report that
+    // prints causes would repeat it.
+    #[error("cannot write {}: {error}", path.display())]
+    Io {
+        path: PathBuf,
+        error: std::io::Error,
+    },
+    #[error("output folder {}: exists and is not a directory", dir.display())]
+    NotADirectory { dir: PathBuf },
+    #[error("output file name `{name}`: {reason}")]
+    UnsafeName { name: String, reason: &'static str },
+    #[error("output files `{first}` and `{second}` are the same file in {}", dir.display())]
+    SameOutput {
+        dir: PathBuf,
+        first: String,
+        second: String,
+    },
+    #[error("{} leads outside the output folder {} (through a symbolic link)", path.display(), dir.display())]
+    Escapes { path: PathBuf, dir: PathBuf },
+}
+
+impl WriteError {
+    /// True when the caller's input is at fault (an output name or an `--out` that is a file), not the
+    /// file system.
+    pub fn is_bad_input(&self) -> bool {
+        !matches!(self, WriteError::Io { .. })
+    }
+}
+
+fn io_at(path: &Path) -> impl Fn(std::io::Error) -> WriteError + '_ {
+    move |error| WriteError::Io {
+        path: path.to_path_buf(),
+        error,
+    }
+}
+
+/// An output file name must be a plain relative path that stays inside the output folder: no absolute
+/// path, no `..`, no backslash (a separator elsewhere), not the data set file itself.
+pub fn check_output_name(name: &str) -> Result<(), &'static str> {
+    if name.trim().is_empty() {
+        return Err("is empty");
+    }
+    if name.contains('\\') {
+        return Err("contains `\\`; use `/` between folders");
+    }
+    let path = Path::new(name);
+    if path.is_absolute() || name.starts_with('/') {
+        return Err("is absolute; it must be relative to the output folder");
+    }
+    for c in path.components() {
+        match c {
+            Component::Normal(_) | Component::CurDir => {}
+            Component::ParentDir => {
+                return Err("contains `..`; it must stay inside the output folder");
+            }
+            Component::RootDir | Component::Prefix(_) => {
+                return Err("is absolute; it must be relative to the output folder");
+            }
+        }
+    }
+    if name.ends_with('/') {
+        return Err("names a folder, not a file");
+    }
+    if output_key(name) == "dataset.toml" {
+        return Err("is the data set file itself");
+    }
+    Ok(())
+}
+
+/// The name two outputs collide on: `.` components dropped and case folded, since `A.csv` and `a.csv`
+/// are one file on case-insensitive file systems.
+pub fn output_key(name: &str) -> String {
+    name.split('/')
+        .filter(|c| !c.is_empty() && *c != ".")
+        .collect::<Vec<_>>()
+        .join("/")
+        .to_lowercase()
+}
+
 /// Write a data set: `dir/dataset.toml` and one CSV per entry of `file.recordings` (same order as
 /// `recordings`). The file must describe the recordings in the project's conventions (origin midship,
 /// rudder_sign 1), which is what the recordings are.
+///
+/// Nothing is written outside `dir`: names are checked first ([`check_output_name`], no two the same),
+/// and a folder reached through a symbolic link that leaves `dir` is refused. A previous `dataset.toml`
+/// is removed before the recordings are written and the new one is written last, so a folder whose
+/// writing failed half-way has no `dataset.toml` and cannot be mistaken for a complete data set.
 pub fn write_dataset(
     dir: &Path,
     file: &DatasetFile,
     recordings: &[&Recording],
     header_comments: &[String],
-) -> std::io::Result<()> {
-    std::fs::create_dir_all(dir)?;
+) -> Result<(), WriteError> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(WriteError::NotADirectory {
+            dir: dir.to_path_buf(),
+        });
+    }
+    let mut seen: HashMap<String, &str> = HashMap::new();
+    for entry in &file.recordings {
+        check_output_name(&entry.file).map_err(|reason| WriteError::UnsafeName {
+            name: entry.file.clone(),
+            reason,
+        })?;
+        if let Some(first) = seen.insert(output_key(&entry.file), &entry.file) {
+            return Err(WriteError::SameOutput {
+                dir: dir.to_path_buf(),
+                first: first.to_string(),
+                second: entry.file.clone(),
+            });
+        }
+    }
+    std::fs::create_dir_all(dir).map_err(io_at(dir))?;
+    let real_dir = dir.canonicalize().map_err(io_at(dir))?;
+    let dataset_path = dir.join("dataset.toml");
+    match std::fs::remove_file(&dataset_path) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            return Err(io_at(&dataset_path)(e));
+        }
+        _ => {}
+    }
     for (entry, rec) in file.recordings.iter().zip(recordings) {
-        write_atomic(
-            &dir.join(&entry.file),
-            recording_csv(rec, header_comments).as_bytes(),
-        )?;
+        let target = dir.join(&entry.file);
+        if let Some(parent) = target.parent() {
+            std::fs::create_dir_all(parent).map_err(io_at(parent))?;
+            let real = parent.canonicalize().map_err(io_at(parent))?;
+            if !real.starts_with(&real_dir) {
+                return Err(WriteError::Escapes {
+                    path: target,
+                    dir: dir.to_path_buf(),
+                });
+            }
+        }
+        write_atomic(&target, recording_csv(rec, header_comments).as_bytes())
+            .map_err(io_at(&target))?;
     }
     let mut text = String::new();
     for c in header_comments {
@@ -110,6 +235,7 @@ pub fn write_dataset(
             let _ = writeln!(text, "# {line}");
         }
     }
-    text.push_str(&toml::to_string(file).map_err(std::io::Error::other)?);
-    write_atomic(&dir.join("dataset.toml"), text.as_bytes())
+    let toml = toml::to_string(file).map_err(|e| io_at(&dataset_path)(std::io::Error::other(e)))?;
+    text.push_str(&toml);
+    write_atomic(&dataset_path, text.as_bytes()).map_err(io_at(&dataset_path))
 }

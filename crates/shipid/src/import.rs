@@ -4,9 +4,16 @@ use std::path::Path;
 
 use shipid_io::write::write_dataset;
 
-use crate::{CliError, Outcome, failed};
+use crate::{CliError, Outcome, bad_input, failed};
 
 pub fn run(mapping: &Path, out: &Path, source: Option<&Path>) -> Result<Outcome, CliError> {
+    // Refused before any source is read: the mistake is in the command line, not in the data.
+    if out.exists() && !out.is_dir() {
+        return Err(bad_input(format!(
+            "--out {}: exists and is not a directory",
+            out.display()
+        )));
+    }
     let imported = shipid_io::import::import(mapping, source)?;
     let comments = vec![
         format!(
@@ -19,7 +26,13 @@ pub fn run(mapping: &Path, out: &Path, source: Option<&Path>) -> Result<Outcome,
             .into(),
     ];
     let recs: Vec<_> = imported.recordings.iter().collect();
-    write_dataset(out, &imported.dataset, &recs, &comments).map_err(failed)?;
+    write_dataset(out, &imported.dataset, &recs, &comments).map_err(|e| {
+        if e.is_bad_input() {
+            bad_input(e)
+        } else {
+            failed(e)
+        }
+    })?;
     for line in &imported.provenance {
         eprintln!("imported {line}");
     }

@@ -28,8 +28,10 @@ pub fn metrics_json(rows: &[(String, &'static str, Metrics)]) -> Value {
     for (file, kind, m) in rows {
         let mut o = Map::new();
         o.insert("kind".into(), json!(kind));
+        // An undefined metric is absent, never `null`: JSON has no NaN or infinity, and serde_json
+        // would write a non-finite value as null.
         for (key, value) in m.entries() {
-            if let Some(v) = value {
+            if let Some(v) = value.filter(|v| v.is_finite()) {
                 o.insert(key.into(), json!(v));
             }
         }
@@ -77,7 +79,10 @@ pub fn metrics_table(rows: &[(String, &'static str, Metrics)]) -> String {
     for (file, kind, m) in rows {
         let mut cells = vec![format!("{file:<width$}"), format!("{kind:>11}")];
         for (_, v) in m.entries() {
-            cells.push(v.map_or_else(|| format!("{:>11}", "-"), |x| format!("{x:>11.3}")));
+            cells.push(
+                v.filter(|x| x.is_finite())
+                    .map_or_else(|| format!("{:>11}", "-"), |x| format!("{x:>11.3}")),
+            );
         }
         lines.push(cells.join(" "));
     }

@@ -4,6 +4,7 @@
 
 mod bad_input;
 mod conventions;
+mod input_checks;
 mod prime_and_derivatives;
 mod propeller_rudder;
 mod readers_never_panic;

@@ -1,0 +1,417 @@
+//! Issue 25's input checks of the I/O layer: values checked after unit conversion, time gaps, separator
+//! and decimal-comma hints, a byte-order mark, oversized files, a recording listed twice, and the
+//! safety of writing a data set (names that leave the output folder, collisions, symbolic links, a
+//! failure half-way). Each concern has one `check…` helper and a table of cases.
+
+use std::path::{Path, PathBuf};
+
+use shipid_io::dataset::parse_dataset;
+use shipid_io::recording::{MAX_FILE_BYTES, parse_recording, read_recording};
+use shipid_io::write::{WriteError, check_output_name, write_dataset};
+use shipid_io::{Dataset, DatasetFile, Recording};
+
+const HEADER: &str = "t,x0,y0,psi,u,v,r,delta";
+
+/// 30 samples at 0.1 s of a ship going straight at 1 m/s, one row per line after `header`; `edit`
+/// changes row i (0-based) before it is written.
+fn recording_text(header: &str, edit: impl Fn(usize, &mut Vec<String>)) -> String {
+    let mut text = format!("{header}\n");
+    for i in 0..30 {
+        let t = i as f64 * 0.1;
+        let mut row: Vec<String> = [t, t, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]
+            .iter()
+            .map(|v| format!("{v:.1}"))
+            .collect();
+        edit(i, &mut row);
+        text.push_str(&row.join(","));
+        text.push('\n');
+    }
+    text
+}
+
+/// The message for recording text, which must be refused.
+fn check_refused(text: &str, expected: &str) {
+    match parse_recording(Path::new("rec.csv"), text) {
+        Ok(_) => panic!("accepted, expected {expected}:\n{text}"),
+        Err(e) => assert_eq!(e.to_string(), expected),
+    }
+}
+
+#[test]
+fn values_are_checked_after_unit_conversion() {
+    let cases = [
+        (
+            "t[min],x0,y0,psi,u,v,r,delta",
+            29,
+            0,
+            "1e307",
+            "rec.csv:31:1: column `t[min]`: the value is not finite after conversion to s (too large for its unit)",
+        ),
+        (
+            HEADER,
+            3,
+            3,
+            "1e308",
+            "rec.csv:5:4: column `psi`: 1e308 rad (after unit conversion) is beyond the bound ±1e5 rad of `psi` in docs/data-format.md: a wrong unit or a corrupt value",
+        ),
+        (
+            HEADER,
+            4,
+            7,
+            "35",
+            "rec.csv:6:8: column `delta`: 35 rad (after unit conversion) is beyond the bound ±π rad (180°) of `delta` in docs/data-format.md: a wrong unit or a corrupt value; a rudder angle in degrees needs the header `delta[deg]`",
+        ),
+        (
+            "t,x0,y0,psi,u[kn],v,r,delta",
+            2,
+            4,
+            "5000",
+            "rec.csv:4:5: column `u[kn]`: 2572.2222222222226 m/s (after unit conversion) is beyond the bound ±1000 m/s of `u` in docs/data-format.md: a wrong unit or a corrupt value",
+        ),
+        (
+            HEADER,
+            7,
+            6,
+            "-1e150",
+            "rec.csv:9:7: column `r`: -1e150 rad/s (after unit conversion) is beyond the bound ±100 rad/s of `r` in docs/data-format.md: a wrong unit or a corrupt value",
+        ),
+    ];
+    for (header, row, col, value, expected) in cases {
+        let text = recording_text(header, |i, r| {
+            if i == row {
+                r[col] = value.into();
+            }
+        });
+        check_refused(&text, expected);
+    }
+}
+
+#[test]
+fn the_first_fault_in_file_order_is_reported() {
+    // Two out-of-bound values: the earlier line wins, whatever the column order of the checks.
+    let text = recording_text(HEADER, |i, r| match i {
+        9 => r[6] = "1e9".into(),
+        4 => r[5] = "1e9".into(),
+        _ => {}
+    });
+    check_refused(
+        &text,
+        "rec.csv:6:6: column `v`: 1000000000 m/s (after unit conversion) is beyond the bound ±1000 m/s of `v` in docs/data-format.md: a wrong unit or a corrupt value",
+    );
+}
+
+#[test]
+fn time_gaps_repeats_and_reversals_are_refused_with_their_lines() {
+    let shift = |from: usize, by: f64| {
+        recording_text(HEADER, move |i, r| {
+            if i >= from {
+                r[0] = format!("{:.1}", i as f64 * 0.1 + by);
+            }
+        })
+    };
+    check_refused(
+        &shift(12, 5.0),
+        "rec.csv:14:1: column `t`: gap in time: 6.2 s after 1.1 s (line 13), a step of 5.1 s, more than 10 × the median step 0.1 s",
+    );
+    check_refused(
+        &shift(12, -0.1),
+        "rec.csv:14:1: column `t`: time is not strictly increasing (1.1 s after 1.1 s)",
+    );
+    // Uneven sampling within ten median steps is allowed.
+    assert!(parse_recording(Path::new("rec.csv"), &shift(12, 0.8)).is_ok());
+}
+
+#[test]
+fn separators_and_decimal_commas_get_a_hint() {
+    let semicolons = recording_text(HEADER, |_, _| {}).replace(',', ";");
+    check_refused(
+        &semicolons,
+        "rec.csv:1: the header `t;x0;y0;psi;u;v;r;delta` looks like ';'-separated; shipid reads comma-separated recordings with `.` as the decimal mark (convert the file, or import it with a mapping with `delimiter = \";\"`)",
+    );
+    check_refused(
+        &semicolons.replace('.', ","),
+        "rec.csv:1: the header `t;x0;y0;psi;u;v;r;delta` looks like ';'-separated with decimal commas; shipid reads comma-separated recordings with `.` as the decimal mark (convert the file, or import it with a mapping with `delimiter = \";\"`)",
+    );
+    check_refused(
+        &recording_text(HEADER, |_, _| {}).replace(',', "\t"),
+        "rec.csv:1: the header `t\tx0\ty0\tpsi\tu\tv\tr\tdelta` looks like tab-separated; shipid reads comma-separated recordings with `.` as the decimal mark (convert the file, or import it with a mapping with `delimiter = \"\\t\"`)",
+    );
+    check_refused(
+        &recording_text(HEADER, |i, r| {
+            if i == 2 {
+                r[4] = "1,5".into();
+            }
+        }),
+        "rec.csv:4: expected 8 fields as in the header, found 9 (decimal commas? shipid reads `.` as the decimal mark)",
+    );
+    check_refused(
+        &recording_text(HEADER, |i, r| {
+            if i == 2 {
+                r[4] = "\"1,5\"".into();
+            }
+        }),
+        "rec.csv:4:5: column `u`: not a number: `1,5` (a decimal comma? write `1.5`)",
+    );
+}
+
+#[test]
+fn a_byte_order_mark_before_comments_and_crlf_are_read() {
+    let plain = parse_recording(Path::new("rec.csv"), &recording_text(HEADER, |_, _| {})).unwrap();
+    let variants = [
+        format!(
+            "\u{feff}# exported\n# by a spreadsheet\n{}",
+            recording_text(HEADER, |_, _| {})
+        ),
+        format!("\u{feff}{}", recording_text(HEADER, |_, _| {})),
+        recording_text(HEADER, |_, _| {}).replace('\n', "\r\n"),
+    ];
+    for text in variants {
+        let got: Recording = parse_recording(Path::new("rec.csv"), &text)
+            .unwrap_or_else(|e| panic!("{e}\n{text:?}"));
+        assert_eq!(got, plain);
+    }
+}
+
+/// A fresh directory under the system's temporary folder, removed when dropped.
+struct TempDir(PathBuf);
+
+impl TempDir {
+    fn new(name: &str) -> TempDir {
+        let dir = std::env::temp_dir().join(format!("shipid-io-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        TempDir(dir)
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+#[test]
+fn files_beyond_the_size_limit_are_refused_before_reading() {
+    let dir = TempDir::new("huge");
+    let path = dir.0.join("huge.csv");
+    // A sparse file: its length is over the limit without using the disk space.
+    let f = std::fs::File::create(&path).unwrap();
+    f.set_len(MAX_FILE_BYTES + 1).unwrap();
+    let e = read_recording(&path).unwrap_err().to_string();
+    assert!(
+        e.ends_with(
+            "huge.csv: 1.0 GiB is larger than the 1 GiB shipid reads (split the recording)"
+        ),
+        "{e}"
+    );
+}
+
+#[test]
+fn non_utf8_bytes_are_named_with_their_line() {
+    let dir = TempDir::new("latin1");
+    let path = dir.0.join("rec.csv");
+    let mut bytes = recording_text(HEADER, |_, _| {}).into_bytes();
+    let at = bytes.iter().position(|&b| b == b'\n').unwrap() + 3;
+    bytes[at] = 0xb0; // the Latin-1 degree sign
+    std::fs::write(&path, bytes).unwrap();
+    let e = read_recording(&path).unwrap_err().to_string();
+    assert!(
+        e.ends_with(&format!(
+            "rec.csv:2: not UTF-8 text (byte {at}, value 0xb0); save the file as UTF-8, or import it with a mapping that names its encoding"
+        )),
+        "{e}"
+    );
+}
+
+const SHIP: &str = "name = \"d\"\n[ship]\nlpp = 7.0\nbeam = 1.27\ndraft = 0.46\ndisplacement = 3.27\nrho = 1000.0\nxg = 0.25\nkzz = 1.75\nu0 = 1.179\nrudder_rate = 15.8\n";
+
+fn check_dataset_refused(text: &str, expected: &str) {
+    match parse_dataset(Path::new("ds.toml"), text) {
+        Ok(_) => panic!("accepted, expected {expected}:\n{text}"),
+        Err(e) => assert_eq!(e.to_string(), expected),
+    }
+}
+
+#[test]
+fn ship_keys_outside_physical_ranges_are_refused() {
+    let cases = [
+        (
+            "u0 = 1.179",
+            "u0 = 1e-300",
+            "ds.toml: key `ship.u0`: 1e-300 m/s is outside the physical range 0.001 … 1000 m/s (a wrong unit?)",
+        ),
+        (
+            "rho = 1000.0",
+            "rho = 1.025",
+            "ds.toml: key `ship.rho`: 1.025 kg/m³ is outside the physical range 500 … 2000 kg/m³ (a wrong unit?)",
+        ),
+        (
+            "lpp = 7.0",
+            "lpp = 7000000.0",
+            "ds.toml: key `ship.lpp`: 7000000 m is outside the physical range 0.01 … 10000 m (a wrong unit?)",
+        ),
+        (
+            "displacement = 3.27",
+            "displacement = 1e300",
+            "ds.toml: key `ship.displacement`: 1e300 m³ is outside the physical range 1e-9 … 10000000000 m³ (a wrong unit?)",
+        ),
+    ];
+    for (from, to, expected) in cases {
+        check_dataset_refused(&SHIP.replace(from, to), expected);
+    }
+}
+
+#[test]
+fn a_recording_listed_twice_is_refused_naming_both_entries() {
+    let entry = |f: &str| format!("[[recording]]\nfile = \"{f}\"\nkind = \"free\"\n");
+    let cases = [
+        ("a.csv", "a.csv"),
+        ("a.csv", "./a.csv"),
+        ("sub/a.csv", "sub//a.csv"),
+    ];
+    for (first, second) in cases {
+        check_dataset_refused(
+            &format!("{SHIP}{}{}", entry(first), entry(second)),
+            &format!(
+                "ds.toml: key `recording[1].file`: `{second}` is the same file as recording[0].file `{first}`; list each recording once"
+            ),
+        );
+    }
+}
+
+#[test]
+fn one_file_under_two_names_is_found_when_loading() {
+    let dir = TempDir::new("two-names");
+    std::fs::create_dir_all(dir.0.join("sub")).unwrap();
+    std::fs::write(dir.0.join("a.csv"), recording_text(HEADER, |_, _| {})).unwrap();
+    let ds = dir.0.join("ds.toml");
+    std::fs::write(
+        &ds,
+        format!(
+            "{SHIP}[[recording]]\nfile = \"a.csv\"\nkind = \"free\"\n[[recording]]\nfile = \"sub/../a.csv\"\nkind = \"free\"\n"
+        ),
+    )
+    .unwrap();
+    let e = Dataset::load(&ds).unwrap_err().to_string();
+    assert!(
+        e.ends_with("ds.toml: key `recording[1].file`: `sub/../a.csv` is the same file as recording[0].file `a.csv`; list each recording once"),
+        "{e}"
+    );
+}
+
+#[test]
+fn output_names_must_stay_inside_the_output_folder() {
+    let cases = [
+        ("a.csv", Ok(())),
+        ("runs/a.csv", Ok(())),
+        ("./a.csv", Ok(())),
+        (
+            "../victim.csv",
+            Err("contains `..`; it must stay inside the output folder"),
+        ),
+        (
+            "runs/../../victim.csv",
+            Err("contains `..`; it must stay inside the output folder"),
+        ),
+        (
+            "/tmp/victim.csv",
+            Err("is absolute; it must be relative to the output folder"),
+        ),
+        (
+            "..\\victim.csv",
+            Err("contains `\\`; use `/` between folders"),
+        ),
+        ("", Err("is empty")),
+        ("runs/", Err("names a folder, not a file")),
+        ("DATASET.TOML", Err("is the data set file itself")),
+    ];
+    for (name, expected) in cases {
+        assert_eq!(check_output_name(name), expected, "{name:?}");
+    }
+}
+
+fn one_recording_dataset(files: &[&str]) -> (DatasetFile, Recording) {
+    let rec = parse_recording(Path::new("rec.csv"), &recording_text(HEADER, |_, _| {})).unwrap();
+    let mut text = SHIP.to_string();
+    for f in files {
+        text.push_str(&format!("[[recording]]\nfile = \"{f}\"\nkind = \"free\"\n"));
+    }
+    (parse_dataset(Path::new("ds.toml"), &text).unwrap(), rec)
+}
+
+#[test]
+fn write_dataset_refuses_escapes_and_collisions_and_names_paths() {
+    let dir = TempDir::new("write");
+    let out = dir.0.join("out");
+    let victim = dir.0.join("victim.csv");
+    std::fs::write(&victim, "keep\n").unwrap();
+
+    let (file, rec) = one_recording_dataset(&["a.csv"]);
+    let mut escaping = file.clone();
+    escaping.recordings[0].file = "../victim.csv".into();
+    let e = write_dataset(&out, &escaping, &[&rec], &[]).unwrap_err();
+    assert!(e.is_bad_input());
+    assert_eq!(
+        e.to_string(),
+        "output file name `../victim.csv`: contains `..`; it must stay inside the output folder"
+    );
+
+    let (two, _) = one_recording_dataset(&["Run.csv", "x.csv"]);
+    let mut two = two;
+    two.recordings[1].file = "run.csv".into();
+    let e = write_dataset(&out, &two, &[&rec, &rec], &[]).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        format!(
+            "output files `Run.csv` and `run.csv` are the same file in {}",
+            out.display()
+        )
+    );
+
+    // A folder inside `out` that is a symbolic link to the outside.
+    std::fs::create_dir_all(&out).unwrap();
+    std::os::unix::fs::symlink(&dir.0, out.join("link")).unwrap();
+    let mut linked = file.clone();
+    linked.recordings[0].file = "link/victim.csv".into();
+    let e = write_dataset(&out, &linked, &[&rec], &[]).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        format!(
+            "{} leads outside the output folder {} (through a symbolic link)",
+            out.join("link/victim.csv").display(),
+            out.display()
+        )
+    );
+
+    // An output file that is a symbolic link to the victim: replaced, the victim untouched.
+    std::os::unix::fs::symlink(&victim, out.join("a.csv")).unwrap();
+    write_dataset(&out, &file, &[&rec], &[]).unwrap();
+    assert!(!out.join("a.csv").is_symlink());
+    assert_eq!(std::fs::read_to_string(&victim).unwrap(), "keep\n");
+
+    // `out` is a file.
+    let e = write_dataset(&victim, &file, &[&rec], &[]).unwrap_err();
+    assert!(matches!(e, WriteError::NotADirectory { .. }));
+    assert_eq!(std::fs::read_to_string(&victim).unwrap(), "keep\n");
+}
+
+#[test]
+fn a_write_failing_half_way_leaves_no_dataset_toml() {
+    let dir = TempDir::new("half-way");
+    let out = dir.0.join("out");
+    let (file, rec) = one_recording_dataset(&["a.csv", "sub/b.csv"]);
+    write_dataset(&out, &file, &[&rec, &rec], &[]).unwrap();
+    assert!(Dataset::load(&out.join("dataset.toml")).is_ok());
+    // Rewrite with the second recording's folder replaced by a file: the old dataset.toml must not
+    // survive beside a half-written set.
+    std::fs::remove_dir_all(out.join("sub")).unwrap();
+    std::fs::write(out.join("sub"), "not a folder\n").unwrap();
+    let e = write_dataset(&out, &file, &[&rec, &rec], &[]).unwrap_err();
+    assert!(!e.is_bad_input());
+    assert!(
+        e.to_string()
+            .starts_with(&format!("cannot write {}: ", out.join("sub").display())),
+        "{e}"
+    );
+    assert!(!out.join("dataset.toml").exists());
+}
