@@ -51,12 +51,21 @@ impl Family {
         self.verdict().word()
     }
 
-    /// Name of the candidate in reports (the word, and for `asymmetry` its form).
-    pub fn label(self) -> &'static str {
+    /// The form of the effect when its word has several (`asymmetry`: a rudder neutral offset or a
+    /// constant side force and yaw moment); the report keeps it beside the word, never in it.
+    pub fn variant(self) -> Option<&'static str> {
         match self {
-            Family::RudderOffset => "asymmetry(rudder_offset)",
-            Family::SideForce => "asymmetry(side_force)",
-            f => f.word(),
+            Family::RudderOffset => Some("rudder_offset"),
+            Family::SideForce => Some("side_force"),
+            _ => None,
+        }
+    }
+
+    /// The family in prose, in the words of the vocabulary: `asymmetry (rudder_offset form)`.
+    pub fn describe(self) -> String {
+        match self.variant() {
+            Some(v) => format!("{} ({v} form)", self.word()),
+            None => self.word().into(),
         }
     }
 
@@ -409,6 +418,33 @@ pub(crate) fn standard_errors(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_candidate_is_named_by_a_word_of_the_vocabulary_with_its_form_apart() {
+        // Regression: candidates were named `asymmetry(rudder_offset)` and pairs `wind+current`,
+        // words outside the documented vocabulary.
+        let words: Vec<&str> = Verdict::ALL.iter().map(|v| v.word()).collect();
+        let named: Vec<(&str, Option<&str>)> = Family::ALL
+            .iter()
+            .map(|f| (f.word(), f.variant()))
+            .collect();
+        assert_eq!(
+            named,
+            [
+                ("current", None),
+                ("wind", None),
+                ("rudder_lag", None),
+                ("asymmetry", Some("rudder_offset")),
+                ("asymmetry", Some("side_force")),
+                ("shallow_water", None),
+            ]
+        );
+        assert!(named.iter().all(|(w, _)| words.contains(w)));
+        assert_eq!(
+            Family::RudderOffset.describe(),
+            "asymmetry (rudder_offset form)"
+        );
+    }
 
     #[test]
     fn a_rudder_offset_reports_the_error_of_the_offset_only() {

@@ -143,9 +143,9 @@ impl<'a> Judge<'a> {
             .all(|f| self.typical_ratio(f, scores) < 0.9)
     }
 
-    /// The held-out assessment of a candidate named `name` with `k` parameters from its per-recording
-    /// held-out `scores`.
-    fn assess(&self, name: String, k: usize, scores: &[ReplayScore]) -> Assessed {
+    /// The held-out assessment of a candidate with `k` parameters from its per-recording held-out
+    /// `scores`.
+    fn assess(&self, k: usize, scores: &[ReplayScore]) -> Assessed {
         let b = self.baseline;
         let lpp = b.ship.lpp;
         let all: Vec<usize> = (0..b.prep.len()).collect();
@@ -161,7 +161,6 @@ impl<'a> Judge<'a> {
         let accepted =
             gain >= self.opts.min_gain && self.fold_ok(scores) && median_drop > 2.0 * b.noise_floor;
         Assessed {
-            name,
             n_parameters: k,
             after_l,
             score: gain - self.opts.parsimony * k as f64,
@@ -196,7 +195,7 @@ impl<'a> Judge<'a> {
             .into_iter()
             .map(|(f, cross)| Judged {
                 families: vec![f],
-                assessed: self.assess(f.label().into(), f.dim(), &cross.0),
+                assessed: self.assess(f.dim(), &cross.0),
                 cross,
             })
             .collect()
@@ -270,9 +269,8 @@ impl<'a> Judge<'a> {
         crosses
             .into_iter()
             .map(|(fams, cross)| {
-                let name = fams.iter().map(|f| f.label()).collect::<Vec<_>>().join("+");
                 let k = fams.iter().map(|f| f.dim()).sum();
-                let mut a = self.assess(name, k, &cross.0);
+                let mut a = self.assess(k, &cross.0);
                 // A pair must beat the single effect clearly, on the held-out recordings.
                 a.accepted = a.accepted && a.after_l < 0.7 * after_l;
                 Judged {
@@ -331,8 +329,6 @@ fn by_score(judged: &[Judged]) -> Vec<usize> {
 
 /// A candidate's held-out assessment.
 pub(crate) struct Assessed {
-    /// The candidate's name in the report: its families' labels joined by `+`.
-    pub name: String,
     pub n_parameters: usize,
     /// Pooled held-out position RMSE ÷ L with the effect.
     pub after_l: f64,

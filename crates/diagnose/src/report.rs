@@ -6,6 +6,7 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 use shipid_io::Dataset;
 use shipid_pipeline::range::share;
+use shipid_pipeline::validate::propeller_rate_variations;
 use shipid_sim::Effect;
 
 use crate::compare::{Baseline, ReplayScore, outside_counts, pooled};
@@ -15,10 +16,27 @@ use crate::judge::{Judge, Judged, rival_of};
 use crate::locate::{Located, Regime, locate, regimes};
 use crate::verdict::Verdict;
 
-/// A candidate effect in the report.
+/// One effect of a candidate: its word of the vocabulary (docs/diagnosis.md) and, for a word with
+/// several forms, which form.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EffectName {
+    pub effect: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub variant: Option<&'static str>,
+}
+
+/// A candidate effect in the report: `effect` is always a word of the vocabulary; the form of the
+/// effect (`variant`) and the other members of a pair (`combined_with`) have their own fields.
 #[derive(Debug, Clone, Serialize)]
 pub struct Candidate {
-    pub effect: String,
+    /// The word of the vocabulary (of the first member for a pair).
+    pub effect: &'static str,
+    /// The form of the effect, for `asymmetry`: `rudder_offset` or `side_force`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub variant: Option<&'static str>,
+    /// The other effects of a pair, fitted together with this one.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub combined_with: Vec<EffectName>,
     /// Typical held-out relative reduction of a recording's position RMSE (1 − geometric mean of
     /// after/before over recordings), less `parsimony` per parameter.
     pub score: f64,
@@ -78,6 +96,10 @@ pub struct Report {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub outside_identification_range: Option<f64>,
     pub explanation: String,
+    /// What weakens the diagnosis beyond the explanation: recordings whose propeller rate varies
+    /// although every model family takes it as constant. Absent when empty.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 /// The explanation mentions the identification range when at least this fraction of the recorded
@@ -96,14 +118,19 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
         Some(b) => conclude_effect(&baseline, &judged, &finals, b),
         None => conclude_nothing(&baseline, real_threshold, opts),
     };
-    Some(assemble(
+    let mut report = assemble(
         input,
         &baseline,
         &judged,
         &finals,
         conclusion,
         real_threshold,
-    ))
+    );
+    report.warnings = propeller_rate_variations(&ds.recordings)
+        .iter()
+        .map(ToString::to_string)
+        .collect();
+    Some(report)
 }
 
 /// What the diagnosis concludes, before the report is laid out.
@@ -131,7 +158,7 @@ fn conclude_effect(
         let r = &judged[i].assessed;
         format!(
             "; but {} explains nearly as much ({:.0} %, score {:.3} against {:.3}): these recordings hardly tell the two apart with this model",
-            r.name,
+            describe(&judged[i].families),
             100.0 * r.explains,
             r.score,
             a.score
@@ -144,13 +171,37 @@ fn conclude_effect(
         after_scores: winner.cross.0.clone(),
         explanation: format!(
             "{} explains {:.0} % of the held-out mismatch (position RMSE {:.4} L → {:.4} L, noise floor {:.4} L){}",
-            a.name,
+            describe(&winner.families),
             100.0 * a.explains,
             baseline.before_l,
             a.after_l,
             baseline.noise_floor,
             rival.unwrap_or_default()
         ),
+    }
+}
+
+/// A candidate in prose, in the words of the vocabulary: `wind together with current`.
+fn describe(families: &[crate::families::Family]) -> String {
+    families
+        .iter()
+        .map(|f| f.describe())
+        .collect::<Vec<_>>()
+        .join(" together with ")
+}
+
+impl Candidate {
+    /// A short title for tables: the word, its form in brackets, `+` and the other members of a
+    /// pair (`asymmetry [rudder_offset] + current`).
+    pub fn title(&self) -> String {
+        let one = |effect: &str, variant: Option<&str>| match variant {
+            Some(v) => format!("{effect} [{v}]"),
+            None => effect.to_string(),
+        };
+        std::iter::once(one(self.effect, self.variant))
+            .chain(self.combined_with.iter().map(|e| one(e.effect, e.variant)))
+            .collect::<Vec<_>>()
+            .join(" + ")
     }
 }
 
@@ -192,8 +243,20 @@ fn candidates(judged: &[Judged], finals: &[(Vec<Effect>, FitResult)]) -> Vec<Can
         .zip(finals)
         .map(|(j, (effects, _))| {
             let a = &j.assessed;
+            let (first, others) = j
+                .families
+                .split_first()
+                .map_or((None, &[][..]), |(f, o)| (Some(*f), o));
             Candidate {
-                effect: a.name.clone(),
+                effect: first.map_or(Verdict::Unexplained.word(), |f| f.word()),
+                variant: first.and_then(|f| f.variant()),
+                combined_with: others
+                    .iter()
+                    .map(|f| EffectName {
+                        effect: f.word(),
+                        variant: f.variant(),
+                    })
+                    .collect(),
                 score: a.score,
                 parameters: effects
                     .iter()
@@ -308,5 +371,6 @@ fn assemble(
         model_level_position_rmse_over_l: input.model_level_over_l,
         outside_identification_range: outside_all,
         explanation,
+        warnings: Vec::new(),
     }
 }
