@@ -107,6 +107,9 @@ pub fn run(
             dataset.display()
         ))
     })?;
+    for w in &report.warnings {
+        eprintln!("warning: {w}");
+    }
     print_summary(
         &report,
         model_spec,
@@ -250,7 +253,7 @@ fn print_summary(r: &Report, model: &str, dataset: &Path, level_from: Option<&st
     for c in &r.candidates {
         println!(
             "  {:<16} {:>6} {:>10.4} {:>8.0}% {:>8}",
-            c.effect,
+            c.title(),
             c.n_parameters,
             c.held_out_position_rmse_over_l,
             100.0 * c.explains,
