@@ -201,7 +201,7 @@ pub fn diagnosis_page(files: &DiagnosisFiles, meta: &RunMeta) -> Result<String, 
                     b,
                     "<tr class=\"{}\"><td><code>{}</code></td><td>{}</td>",
                     if accepted == Some(true) { "good" } else { "" },
-                    esc(&str_field(c, "effect")),
+                    esc(&candidate_title(c)),
                     match accepted {
                         Some(true) => badge("accepted"),
                         Some(false) => "<span class=\"muted\">no</span>".into(),
@@ -409,6 +409,28 @@ fn readable_effect(e: &str) -> String {
         })
         .collect();
     format!("{name}: {}", params.join(", "))
+}
+
+/// A candidate's word with its form (`variant`) and the other members of a pair (`combined_with`):
+/// `asymmetry [rudder_offset] + current`. Reports written before these fields show `effect` alone.
+fn candidate_title(c: &Value) -> String {
+    let one = |v: &Value| {
+        let effect = str_field(v, "effect");
+        match v.get("variant").and_then(Value::as_str) {
+            Some(form) => format!("{effect} [{form}]"),
+            None => effect,
+        }
+    };
+    std::iter::once(one(c))
+        .chain(
+            c.get("combined_with")
+                .and_then(Value::as_array)
+                .into_iter()
+                .flatten()
+                .map(one),
+        )
+        .collect::<Vec<_>>()
+        .join(" + ")
 }
 
 fn str_field(v: &Value, k: &str) -> String {
