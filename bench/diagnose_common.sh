@@ -17,7 +17,7 @@ import json, sys
 r = json.load(open(sys.argv[1]))
 v = r["verdict"]
 # Candidates of one word may come in variants, "asymmetry(rudder_offset)"; the best-scoring one won.
-won = [c for c in r.get("candidates", []) if c["effect"].split("(")[0] == v]
+won = [c for c in r.get("candidates", []) if c["effect"].split("(")[0] == v and not c.get("combined_with")]
 par = max(won, key=lambda c: c["score"])["parameters"] if won else {}
 par = {k: x for k, x in par.items() if x != 0.0}
 b, a = r["fit_before"]["position_rmse_over_l"], r["fit_after"]["position_rmse_over_l"]
