@@ -27,7 +27,7 @@ use rayon::prelude::*;
 use shipid_io::{Recording, deriv::accelerations_or_estimate};
 use shipid_model::{AbkowitzModel, Refinement};
 use shipid_sim::AbkowitzDynamics;
-use shipid_sim::dynamics::{Parametric, State};
+use shipid_sim::dynamics::{FiniteDifferences, Parametric, State};
 
 use crate::lm::{LmPoint, Normal, lm_step_normal};
 use crate::replay::{
@@ -296,10 +296,15 @@ impl<P: Parametric> Problem<'_, P> {
         let mut d_state = [[0.0; 3]; 3];
         let mut d_theta = vec![[0.0; 3]; self.theta0.len()];
         let mut rows = Vec::with_capacity(3 * n * self.ee.len());
+        let fd = (!model.analytic_sensitivities())
+            .then(|| FiniteDifferences::new(model, self.free.iter().map(|&(j, _)| j)));
         for &(k, i, a) in &self.ee {
             let x = self.state(k, i);
-            let f =
-                model.sensitivities(&x, self.recordings[k].delta[i], &mut d_state, &mut d_theta);
+            let delta = self.recordings[k].delta[i];
+            let f = match &fd {
+                Some(fd) => fd.sensitivities(&x, delta, &mut d_state, &mut d_theta),
+                None => model.sensitivities(&x, delta, &mut d_state, &mut d_theta),
+            };
             for d in 0..3 {
                 let live = f.as_ref().is_ok_and(|f| (a[d] - f[d]).is_finite());
                 let w = if live { -self.w_ee[d] } else { 0.0 };

@@ -3,7 +3,7 @@
 //! a model by these). No I/O.
 
 use shipid_io::Recording;
-use shipid_sim::dynamics::{NoFilter, Parametric, RudderFilter};
+use shipid_sim::dynamics::{FiniteDifferences, NoFilter, Parametric, RudderFilter};
 use shipid_sim::{DivergenceBounds, Dynamics, Replay, SimOptions, SimStatus, State};
 
 use crate::lm::solve_small;
@@ -153,7 +153,8 @@ pub struct SegmentSensitivities {
 /// (θ = θ_model + Σ_j p_j unit_j e_{index_j}, given as `(index, unit)`): each RK4 stage also gives
 /// dK = (∂f/∂x) S_stage + ∂f/∂p at the stage's state, so S is the exact derivative of the
 /// discretised replay (not of the differential equation), in one pass instead of one replay per
-/// parameter. The rudder filter of the model, if any, does not depend on θ.
+/// parameter. A model without analytic derivatives is differentiated by [`FiniteDifferences`] built
+/// once for the segment. The rudder filter of the model, if any, does not depend on θ.
 pub fn replay_segment_sensitivities<P: Parametric>(
     model: &P,
     rec: &Recording,
@@ -186,12 +187,16 @@ pub fn replay_segment_sensitivities<P: Parametric>(
     let mut dk: [Vec<f64>; 4] = std::array::from_fn(|_| vec![0.0; 6 * n]);
     let mut state = start.init;
     let bounds = DivergenceBounds::default();
+    let fd = (!model.analytic_sensitivities())
+        .then(|| FiniteDifferences::new(model, directions.iter().map(|&(j, _)| j)));
     // One stage: the derivative at `x` and, in `dk_out`, (∂f/∂x) `s` + ∂f/∂p.
     let mut stage = |x: &State, delta: f64, s: &[f64], dk_out: &mut [f64]| -> Option<[f64; 6]> {
         let mut d_state = [[0.0; 3]; 3];
-        let acc = model
-            .sensitivities(x, delta, &mut d_state, &mut d_theta)
-            .ok()?;
+        let acc = match &fd {
+            Some(fd) => fd.sensitivities(x, delta, &mut d_state, &mut d_theta),
+            None => model.sensitivities(x, delta, &mut d_state, &mut d_theta),
+        }
+        .ok()?;
         if !acc.iter().all(|v| v.is_finite()) {
             return None;
         }

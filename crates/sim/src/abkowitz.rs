@@ -97,6 +97,10 @@ impl Parametric for AbkowitzDynamics {
         units
     }
 
+    fn analytic_sensitivities(&self) -> bool {
+        true
+    }
+
     fn sensitivities(
         &self,
         state: &State,

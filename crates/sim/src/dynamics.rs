@@ -305,10 +305,10 @@ impl MassMatrix {
 ///
 /// The refinement integrates the sensitivities of a replay, S = ∂x/∂θ, alongside the state with
 /// the same RK4 stages (which gives the exact Jacobian of the discretised replay), so it needs at each
-/// stage ∂a/∂(u, v, r) and ∂a/∂θ ([`Parametric::sensitivities`]). The default is finite differences,
-/// central over the three velocities and forward over θ through [`Parametric::accelerations_at`]
-/// (3 + 3 + dim θ evaluations per stage); a model that knows its derivatives (the Abkowitz polynomial
-/// is linear in θ) overrides it.
+/// stage ∂a/∂(u, v, r) and ∂a/∂θ. A model that knows them (the Abkowitz polynomial is linear in θ)
+/// overrides [`Parametric::sensitivities`] and says so in [`Parametric::analytic_sensitivities`];
+/// any other gets [`FiniteDifferences`], whose perturbed models are built once per replay, not at every
+/// stage.
 pub trait Parametric: Dynamics + Clone + Send + Sync {
     /// The parameter vector θ.
     fn parameters(&self) -> Vec<f64>;
@@ -328,13 +328,18 @@ pub trait Parametric: Dynamics + Clone + Send + Sync {
     /// Default: 1 / RMS over the states of ‖∂a/∂θ_j ⊘ rms(a)‖.
     fn parameter_units(&self, states: &[(State, f64)]) -> Vec<Option<f64>> {
         let k = self.parameters().len();
+        let fd = (!self.analytic_sensitivities()).then(|| FiniteDifferences::new(self, 0..k));
         let mut d_theta = vec![[0.0; 3]; k];
         let mut d_state = [[0.0; 3]; 3];
         let mut acc_sq = [0.0; 3];
         let mut col_sq = vec![[0.0; 3]; k];
         let mut n = 0.0;
         for (s, delta) in states {
-            let Ok(a) = self.sensitivities(s, *delta, &mut d_state, &mut d_theta) else {
+            let a = match &fd {
+                Some(fd) => fd.sensitivities(s, *delta, &mut d_state, &mut d_theta),
+                None => self.sensitivities(s, *delta, &mut d_state, &mut d_theta),
+            };
+            let Ok(a) = a else {
                 continue;
             };
             if !a
@@ -362,21 +367,15 @@ pub trait Parametric: Dynamics + Clone + Send + Sync {
             .collect()
     }
 
-    /// Accelerations with parameters `theta` (default: through [`Parametric::with_parameters`]; a
-    /// model that can evaluate them without building a copy overrides it).
-    fn accelerations_at(
-        &self,
-        theta: &[f64],
-        state: &State,
-        delta_rad: f64,
-    ) -> Result<[f64; 3], DynamicsError> {
-        self.with_parameters(theta)
-            .ok_or_else(|| DynamicsError::OutOfDomain("parameters give no valid model".into()))?
-            .accelerations(state, delta_rad)
+    /// Whether [`Parametric::sensitivities`] is analytic (overridden); otherwise the refinement
+    /// differentiates through [`FiniteDifferences`] built once per replay.
+    fn analytic_sensitivities(&self) -> bool {
+        false
     }
 
     /// [`Dynamics::accelerations`] with `d_state[i][k]` = ∂a_i/∂x_k for x = (u [m/s], v [m/s],
-    /// r [rad/s]) and `d_theta[j]` = ∂a/∂θ_j (`d_theta` as long as θ).
+    /// r [rad/s]) and `d_theta[j]` = ∂a/∂θ_j (`d_theta` as long as θ). Default: [`FiniteDifferences`]
+    /// over every parameter, built for this one call.
     fn sensitivities(
         &self,
         state: &State,
@@ -384,8 +383,52 @@ pub trait Parametric: Dynamics + Clone + Send + Sync {
         d_state: &mut [[f64; 3]; 3],
         d_theta: &mut [[f64; 3]],
     ) -> Result<[f64; 3], DynamicsError> {
-        let a = self.accelerations(state, delta_rad)?;
-        let ship = self.ship();
+        FiniteDifferences::new(self, 0..self.parameters().len())
+            .sensitivities(state, delta_rad, d_state, d_theta)
+    }
+}
+
+/// Finite-difference derivatives of a [`Parametric`] model at its θ: central over the three
+/// velocities, one-sided over the chosen parameters with models perturbed once at construction (a
+/// replay evaluates them at every stage, so building a model per parameter per stage would cost more
+/// than the replay). A parameter that cannot be moved forwards (at a bound where the model refuses
+/// it) is moved backwards; one that moves neither way gets a zero derivative.
+pub struct FiniteDifferences<'a, P> {
+    model: &'a P,
+    /// (parameter index, perturbed model, its step).
+    probes: Vec<(usize, P, f64)>,
+}
+
+impl<'a, P: Parametric> FiniteDifferences<'a, P> {
+    /// Probes for the parameters `indices` of `model`, steps of √ε relative (1e-3 absolute floor),
+    /// which balance truncation and rounding at about 1e-8 relative.
+    pub fn new(model: &'a P, indices: impl IntoIterator<Item = usize>) -> FiniteDifferences<'a, P> {
+        let theta = model.parameters();
+        let probes = indices
+            .into_iter()
+            .filter(|&j| j < theta.len())
+            .filter_map(|j| {
+                let h = 1.5e-8 * theta[j].abs().max(1e-3);
+                [h, -h].into_iter().find_map(|step| {
+                    let mut q = theta.clone();
+                    q[j] += step;
+                    model.with_parameters(&q).map(|m| (j, m, step))
+                })
+            })
+            .collect();
+        FiniteDifferences { model, probes }
+    }
+
+    /// As [`Parametric::sensitivities`]; entries of `d_theta` of parameters without a probe are zero.
+    pub fn sensitivities(
+        &self,
+        state: &State,
+        delta_rad: f64,
+        d_state: &mut [[f64; 3]; 3],
+        d_theta: &mut [[f64; 3]],
+    ) -> Result<[f64; 3], DynamicsError> {
+        let a = self.model.accelerations(state, delta_rad)?;
+        let ship = self.model.ship();
         // Central differences, steps of a millionth of the state's natural scale (U0, U0/L).
         let scales = [ship.u0, ship.u0, ship.u0 / ship.lpp];
         for (k, scale) in scales.into_iter().enumerate() {
@@ -397,21 +440,20 @@ pub trait Parametric: Dynamics + Clone + Send + Sync {
                     1 => x.v += sign * h,
                     _ => x.r += sign * h,
                 }
-                self.accelerations(&x, delta_rad)
+                self.model.accelerations(&x, delta_rad)
             };
             let (plus, minus) = (shifted(1.0)?, shifted(-1.0)?);
             (0..3).for_each(|i| d_state[i][k] = (plus[i] - minus[i]) / (2.0 * h));
         }
-        // Forward differences over θ (one evaluation per parameter: θ is the long side), steps of
-        // √ε relative, which balance truncation and rounding at about 1e-8 relative.
-        let mut theta = self.parameters();
-        for (j, out) in d_theta.iter_mut().enumerate().take(theta.len()) {
-            let t0 = theta[j];
-            let h = 1.5e-8 * t0.abs().max(1e-3);
-            theta[j] = t0 + h;
-            let plus = self.accelerations_at(&theta, state, delta_rad)?;
-            theta[j] = t0;
-            *out = std::array::from_fn(|i| (plus[i] - a[i]) / h);
+        d_theta.iter_mut().for_each(|d| *d = [0.0; 3]);
+        for (j, probe, h) in &self.probes {
+            let Some(out) = d_theta.get_mut(*j) else {
+                continue;
+            };
+            // A probe that fails where the model does not is a parameter the state cannot resolve.
+            if let Ok(moved) = probe.accelerations(state, delta_rad) {
+                *out = std::array::from_fn(|i| (moved[i] - a[i]) / h);
+            }
         }
         Ok(a)
     }

@@ -12,7 +12,7 @@ use shipid_pipeline::fit::{EstimatorSpec, WindowSpec, fit_dataset, load_set};
 use shipid_pipeline::refine::{RefineOptions, refine, refinement_cost};
 use shipid_pipeline::replay::{replay_segment, replay_segment_sensitivities, segments};
 use shipid_sim::AbkowitzDynamics;
-use shipid_sim::dynamics::{Dynamics, DynamicsError, Parametric, State};
+use shipid_sim::dynamics::{Dynamics, DynamicsError, FiniteDifferences, Parametric, State};
 
 fn embedded() -> Dataset {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
@@ -40,9 +40,9 @@ fn lsq_on_zz35(ds: &Dataset, set: &str) -> (AbkowitzModel, Recording) {
 /// The Abkowitz model with the trait's default derivatives (finite differences): what a model family
 /// without analytic derivatives gets.
 #[derive(Debug, Clone)]
-struct FiniteDifferences(AbkowitzDynamics);
+struct NoAnalyticDerivatives(AbkowitzDynamics);
 
-impl Dynamics for FiniteDifferences {
+impl Dynamics for NoAnalyticDerivatives {
     fn accelerations(&self, s: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
         self.0.accelerations(s, delta_rad)
     }
@@ -54,12 +54,12 @@ impl Dynamics for FiniteDifferences {
     }
 }
 
-impl Parametric for FiniteDifferences {
+impl Parametric for NoAnalyticDerivatives {
     fn parameters(&self) -> Vec<f64> {
         self.0.parameters()
     }
     fn with_parameters(&self, theta: &[f64]) -> Option<Self> {
-        self.0.with_parameters(theta).map(FiniteDifferences)
+        self.0.with_parameters(theta).map(NoAnalyticDerivatives)
     }
     fn parameter_units(&self, states: &[(State, f64)]) -> Vec<Option<f64>> {
         self.0.parameter_units(states)
@@ -70,7 +70,7 @@ impl Parametric for FiniteDifferences {
 fn check_model_derivatives(model: &AbkowitzModel, state: State, delta: f64, tolerance: f64) {
     let k = model.coefficient_total();
     let analytic = AbkowitzDynamics(model.clone());
-    let fd = FiniteDifferences(analytic.clone());
+    let fd = NoAnalyticDerivatives(analytic.clone());
     let (mut ds_a, mut ds_f) = ([[0.0; 3]; 3], [[0.0; 3]; 3]);
     let (mut dt_a, mut dt_f) = (vec![[0.0; 3]; k], vec![[0.0; 3]; k]);
     let a = analytic
@@ -201,7 +201,7 @@ fn refinement_with_finite_difference_derivatives_matches_the_analytic_one() {
     };
     let start = AbkowitzDynamics(model);
     let analytic = refine(&start, &recs, &opts).unwrap();
-    let fd = refine(&FiniteDifferences(start.clone()), &recs, &opts).unwrap();
+    let fd = refine(&NoAnalyticDerivatives(start.clone()), &recs, &opts).unwrap();
     assert!(
         analytic.cost_after < 0.9 * analytic.cost_before,
         "{analytic:?}"
@@ -225,5 +225,65 @@ fn refinement_with_finite_difference_derivatives_matches_the_analytic_one() {
         close(recomputed, analytic.cost_after),
         "{recomputed} vs {}",
         analytic.cost_after
+    );
+}
+
+/// A model that refuses any coefficient above its current value for the first one (as a physical
+/// family refuses a parameter past its bound).
+#[derive(Debug, Clone)]
+struct AtUpperBound(AbkowitzDynamics, f64);
+
+impl Dynamics for AtUpperBound {
+    fn accelerations(&self, s: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
+        self.0.accelerations(s, delta_rad)
+    }
+    fn ship(&self) -> &Ship {
+        self.0.ship()
+    }
+    fn added_mass(&self) -> &AddedMass {
+        self.0.added_mass()
+    }
+}
+
+impl Parametric for AtUpperBound {
+    fn parameters(&self) -> Vec<f64> {
+        self.0.parameters()
+    }
+    fn with_parameters(&self, theta: &[f64]) -> Option<Self> {
+        (theta[0] <= self.1)
+            .then(|| {
+                self.0
+                    .with_parameters(theta)
+                    .map(|m| AtUpperBound(m, self.1))
+            })
+            .flatten()
+    }
+}
+
+/// At a parameter's bound the finite differences step backwards instead of losing the derivative
+/// (or the whole stage): ∂a/∂θ_0 still matches the analytic one.
+#[test]
+fn finite_differences_step_backwards_at_a_refused_bound() {
+    let ds = embedded();
+    let (model, rec) = lsq_on_zz35(&ds, "reduced32");
+    let analytic = AbkowitzDynamics(model);
+    let bounded = AtUpperBound(analytic.clone(), analytic.parameters()[0]);
+    let k = analytic.parameters().len();
+    let i = rec.len() / 2;
+    let (state, delta) = (State::of_recording(&rec, i), rec.delta[i]);
+    let (mut ds_a, mut ds_f) = ([[0.0; 3]; 3], [[0.0; 3]; 3]);
+    let (mut dt_a, mut dt_f) = (vec![[0.0; 3]; k], vec![[0.0; 3]; k]);
+    analytic
+        .sensitivities(&state, delta, &mut ds_a, &mut dt_a)
+        .unwrap();
+    FiniteDifferences::new(&bounded, 0..k)
+        .sensitivities(&state, delta, &mut ds_f, &mut dt_f)
+        .unwrap();
+    assert!(dt_a[0][0] != 0.0);
+    assert!(
+        (dt_a[0][0] - dt_f[0][0]).abs() < 1e-6 * dt_a[0][0].abs(),
+        "{:?} vs {:?}",
+        dt_a[0],
+        dt_f[0]
     );
 }
