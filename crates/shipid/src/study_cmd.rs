@@ -267,7 +267,7 @@ fn pivot_hint(
     pivot: Option<&str>,
     e: &shipid_tables::TableError,
 ) -> Option<String> {
-    let shipid_tables::TableError::Collision { .. } = e else {
+    let shipid_tables::TableError::Collision(_) = e else {
         return None;
     };
     let mut p: shipid_tables::Pivot = pivot?.parse().ok()?;

@@ -65,18 +65,37 @@ pub enum TableError {
     )]
     BadPivot(String),
     /// A pivot would show only the last of several rows in one cell.
-    #[error(
-        "{count} rows fall into one cell ({rows} `{row}`, {cols} `{col}`), so all but the last would vanish: {}",
-        short_list(keys)
-    )]
-    Collision {
-        rows: String,
-        row: String,
-        cols: String,
-        col: String,
-        count: usize,
-        keys: Vec<String>,
-    },
+    #[error("{0}")]
+    Collision(Box<Collision>),
+}
+
+/// Several rows of a table that a pivot would put in one cell.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Collision {
+    /// The pivot's row and column columns (joined by +) and the cell's labels.
+    pub rows: String,
+    pub row: String,
+    pub cols: String,
+    pub col: String,
+    /// How many table rows fall into the cell.
+    pub count: usize,
+    /// Their keys (case ids), each once, in order of appearance.
+    pub keys: Vec<String>,
+}
+
+impl std::fmt::Display for Collision {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} rows fall into one cell ({} `{}`, {} `{}`), so all but the last would vanish: {}",
+            self.count,
+            self.rows,
+            self.row,
+            self.cols,
+            self.col,
+            short_list(&self.keys)
+        )
+    }
 }
 
 /// The first few of `keys` and how many more.
@@ -315,14 +334,14 @@ impl Table {
                         keys.push(k);
                     }
                 }
-                TableError::Collision {
+                TableError::Collision(Box::new(Collision {
                     rows: rows.join("+"),
                     row: row_label(members[0]),
                     cols: cols.join("+"),
                     col: col_label(members[0]),
                     count: members.len(),
                     keys,
-                }
+                }))
             })
             .collect())
     }
