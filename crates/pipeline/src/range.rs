@@ -25,7 +25,8 @@ pub enum TrainingSource {
     NotRecorded,
     /// Read, and unchanged since the fit; `unverified` when the file predates the fingerprints.
     Read {
-        data: TrainingData,
+        // Boxed: a data set is large beside the other variants.
+        data: Box<TrainingData>,
         /// The model file whose windows these are (the base of an augmented file).
         model: PathBuf,
         unverified: bool,
@@ -183,7 +184,7 @@ fn windows_source(path: &Path, text: &str) -> TrainingSource {
     let file = toml::from_str::<ModelFile>(text).ok();
     // Named as the file system knows it: the same wherever the model was named from.
     TrainingSource::Read {
-        data: (file, ds, absolute_path(&ds_path)),
+        data: Box::new((file, ds, absolute_path(&ds_path))),
         model: path.to_path_buf(),
         unverified,
     }
@@ -192,7 +193,7 @@ fn windows_source(path: &Path, text: &str) -> TrainingSource {
 /// The model's training data when it can be used (see [`training_source`] for why it cannot).
 pub fn training_data(model_spec: &str) -> Option<TrainingData> {
     match training_source(model_spec) {
-        TrainingSource::Read { data, .. } => Some(data),
+        TrainingSource::Read { data, .. } => Some(*data),
         _ => None,
     }
 }

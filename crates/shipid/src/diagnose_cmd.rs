@@ -49,7 +49,7 @@ fn training_for_diagnosis(model_spec: &str) -> Result<Option<TrainingData>, CliE
                     data.2.display()
                 );
             }
-            Ok(Some(data))
+            Ok(Some(*data))
         }
         TrainingSource::NotRecorded => {
             if !model_spec.starts_with("mmg:") {
