@@ -300,7 +300,7 @@ impl std::fmt::Display for NoInformation {
             .collect();
         write!(
             f,
-            "rank-deficient: the training window ({}) carries no information on {} (identically zero there; e.g. the window ends before the rudder first moves): widen --window or choose other recordings",
+            "rank-deficient: the training window ({}) carries no information on {} (identically zero there; e.g. the window ends before the rudder first moves): widen the window or choose other recordings",
             self.windows.join("; "),
             regressors.join("; ")
         )
