@@ -13,7 +13,7 @@
 //! error plus equation error, each ÷ its value at the LSQ start; [`refinement_cost`] of this build,
 //! the same yardstick for both) on the training windows, and the validation of every recording of the
 //! data set (whole replay position and heading RMSE, closed-loop MRAE) with the largest difference
-//! between the binaries.
+//! between the binaries. A set that is not a polynomial one (`mmg`) gets its times only.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -67,11 +67,11 @@ fn parse_args() -> Result<Args> {
     Ok(a)
 }
 
-/// One binary's runs of one set: median wall and printed fit times [s], and the model it wrote.
+/// One binary's runs of one set: median wall and printed fit times [s].
 struct Timed {
     wall_s: f64,
-    fit_s: f64,
-    model: AbkowitzModel,
+    /// `None` when the command prints no "in … ms".
+    fit_s: Option<f64>,
 }
 
 fn median(mut x: Vec<f64>) -> f64 {
@@ -100,21 +100,31 @@ fn time_fit(bin: &Path, dataset: &Path, set: &str, repeats: usize, out: &Path) -
             );
         }
         // "fitted full74 with lsq on 27618 samples in 1330.58 ms → …"
-        let ms = stdout
+        if let Some(ms) = stdout
             .split(" in ")
             .nth(1)
             .and_then(|s| s.split(" ms").next())
             .and_then(|s| s.trim().parse::<f64>().ok())
-            .with_context(|| format!("no fit time in {stdout:?}"))?;
-        fits.push(ms / 1e3);
+        {
+            fits.push(ms / 1e3);
+        }
     }
-    let text = std::fs::read_to_string(out).with_context(|| format!("{}", out.display()))?;
-    let file: ModelFile = toml::from_str(&text).with_context(|| format!("{}", out.display()))?;
     Ok(Timed {
         wall_s: median(walls),
-        fit_s: median(fits),
-        model: file.to_model()?,
+        fit_s: (fits.len() == repeats).then(|| median(fits)),
     })
+}
+
+/// A refined polynomial model file: the model and its refinement's iterations and training RMSEs.
+fn refined_polynomial(out: &Path) -> Result<(AbkowitzModel, shipid_model::Refinement)> {
+    let text = std::fs::read_to_string(out).with_context(|| format!("{}", out.display()))?;
+    let file: ModelFile = toml::from_str(&text).with_context(|| format!("{}", out.display()))?;
+    let how = file
+        .estimator
+        .refinement
+        .clone()
+        .context("the model file has no [estimator.refinement]")?;
+    Ok((file.to_model()?, how))
 }
 
 /// Validation of a model on every recording: (position RMSE ÷ L, heading RMSE [deg], MRAE).
@@ -159,10 +169,29 @@ pub fn run() -> Result<()> {
     println!("|---|---|---|---|---|---|---|---|");
     let mut comparisons = Vec::new();
     for set in &a.sets {
+        let binaries: Vec<(&str, &PathBuf)> = a
+            .baseline
+            .iter()
+            .map(|b| ("baseline", b))
+            .chain(std::iter::once(("current", &a.shipid)))
+            .collect();
+        let Ok(polynomial) = load_set(set) else {
+            // Not a polynomial set (the mmg family): its time only.
+            for (label, bin) in binaries {
+                let out = scratch.join(format!("{label}_{set}.toml"));
+                let timed = time_fit(bin, &a.dataset, set, a.repeats, &out)?;
+                let fit = timed.fit_s.map_or("–".into(), |s| format!("{s:.2}"));
+                println!(
+                    "| {set} | {label} | {:.2} | {fit} | – | – | – | – |",
+                    timed.wall_s
+                );
+            }
+            continue;
+        };
         // The LSQ start every binary refines, and its training windows.
         let start = fit_dataset(
             &ds,
-            load_set(set)?,
+            polynomial,
             &EstimatorSpec::named("lsq"),
             &[],
             WindowSpec::Whole,
@@ -182,37 +211,26 @@ pub fn run() -> Result<()> {
         let start_dynamics = AbkowitzDynamics(start.model.clone());
         let opts = RefineOptions::default();
         let mut runs = Vec::new();
-        let binaries: Vec<(&str, &PathBuf)> = a
-            .baseline
-            .iter()
-            .map(|b| ("baseline", b))
-            .chain(std::iter::once(("current", &a.shipid)))
-            .collect();
         for (label, bin) in binaries {
             let out = scratch.join(format!("{label}_{set}.toml"));
             let timed = time_fit(bin, &a.dataset, set, a.repeats, &out)?;
+            let (model, how) = refined_polynomial(&out)?;
             let cost = refinement_cost(
                 &start_dynamics,
-                &AbkowitzDynamics(timed.model.clone()),
+                &AbkowitzDynamics(model.clone()),
                 &recs,
                 &opts,
             )?;
-            let text = std::fs::read_to_string(&out)?;
-            let file: ModelFile = toml::from_str(&text)?;
-            let how = file
-                .estimator
-                .refinement
-                .context("the model file has no [estimator.refinement]")?;
+            let fit = timed.fit_s.map_or("–".into(), |s| format!("{s:.2}"));
             println!(
-                "| {set} | {label} | {:.2} | {:.2} | {} | {:.9} | {:.6} | {:.4} |",
+                "| {set} | {label} | {:.2} | {fit} | {} | {:.9} | {:.6} | {:.4} |",
                 timed.wall_s,
-                timed.fit_s,
                 how.iterations,
                 cost,
                 how.after_position_rmse_over_l,
                 how.after_heading_rmse_deg
             );
-            runs.push((label, validation(&timed.model, &ds)));
+            runs.push((label, validation(&model, &ds)));
         }
         comparisons.push((set.clone(), runs));
     }
