@@ -6,13 +6,16 @@
 
 use rayon::prelude::*;
 use serde::Serialize;
-use shipid_io::{Manoeuvre, Ship};
+use shipid_io::{InputError, Manoeuvre, Ship};
+use shipid_model::{AbkowitzModel, ModelFile};
 use shipid_sim::metrics::metrics;
-use shipid_sim::{Dynamics, SimStatus};
+use shipid_sim::{AbkowitzDynamics, Dynamics, Effect, SimStatus, WithEffects};
 use shipid_uncertainty::{Band, UncertaintyError, percentile_band};
 
-use crate::error::PipelineError;
-use crate::simulate::simulate_manoeuvre;
+use crate::error::{PipelineError, bad_input};
+use crate::simulate::{SimGrid, simulate_manoeuvre, simulate_on_grid};
+
+pub use shipid_uncertainty::band::MIN_FINITE_REPLICATES;
 
 /// One metric's point prediction and band.
 #[derive(Debug, Clone, Serialize)]
@@ -65,20 +68,25 @@ pub struct ManoeuvreBands {
 /// Largest number of track samples kept per band (enough for a figure; bounds memory for long runs).
 const TRACK_SAMPLES: usize = 400;
 
-/// Simulate `point` and every model of `replicates` through `m`; the `level` bands of the metrics and
-/// of the track.
+/// Simulate `point` and every model of `replicates` through `m` (on `grid`, or the standard step and
+/// duration); the `level` bands of the metrics and of the track.
 pub fn manoeuvre_bands(
     point: &dyn Dynamics,
     replicates: &[Box<dyn Dynamics + Send + Sync>],
     m: &Manoeuvre,
     ship: &Ship,
     level: f64,
+    grid: Option<&SimGrid>,
 ) -> Result<ManoeuvreBands, PipelineError> {
-    let point_run = simulate_manoeuvre(point, m, None, None)?;
+    let run = |model: &dyn Dynamics| match grid {
+        Some(g) => simulate_on_grid(model, m, g),
+        None => simulate_manoeuvre(model, m, None, None),
+    };
+    let point_run = run(point)?;
     let point_metrics = metrics(&point_run.recording, m, ship);
     let runs: Vec<Option<shipid_sim::SimOutput>> = replicates
         .par_iter()
-        .map(|model| simulate_manoeuvre(model.as_ref(), m, None, None).ok())
+        .map(|model| run(model.as_ref()).ok())
         .collect();
     let diverged = runs
         .iter()
@@ -158,4 +166,65 @@ fn track_band(
         psi_deg: band_of(|r| &r.psi, 180.0 / std::f64::consts::PI),
         t_s: times,
     }
+}
+
+/// The bootstrap replicates of the model file `spec` as simulation models, each with the file's
+/// effects; bad input when the file holds no `[bootstrap]` table (a model without replicates has no
+/// band, and saying so beats a band of zero width).
+pub fn replicate_models(spec: &str) -> Result<Vec<Box<dyn Dynamics + Send + Sync>>, PipelineError> {
+    let path = std::path::Path::new(spec);
+    if !path.is_file() {
+        return Err(bad_input(format!(
+            "{spec}: --bands needs a model file with bootstrap replicates (`shipid fit … --bootstrap \
+             N`); `{spec}` is not one"
+        )));
+    }
+    let text = std::fs::read_to_string(path).map_err(|e| InputError::read(path, &e))?;
+    let kind = toml::from_str::<toml::Table>(&text)
+        .ok()
+        .and_then(|t| t.get("kind").and_then(|k| k.as_str()).map(String::from));
+    if kind.as_deref() != Some("abkowitz") {
+        return Err(bad_input(format!(
+            "{spec}: --bands needs the bootstrap replicates of a polynomial model file (`shipid fit \
+             … --bootstrap N`); this model is {}: bands for other families are not available yet",
+            kind.map_or("not a fitted model file".into(), |k| format!(
+                "of kind `{k}`"
+            ))
+        )));
+    }
+    let file: ModelFile = toml::from_str(&text).map_err(|e| InputError::toml(path, &text, &e))?;
+    let Some(record) = &file.bootstrap else {
+        return Err(InputError::key(
+            path,
+            "bootstrap",
+            "missing: --bands needs replicates; refit with `shipid fit … --bootstrap 200`",
+        )
+        .into());
+    };
+    let model = file
+        .to_model()
+        .map_err(|e| bad_input(format!("{spec}: {e}")))?;
+    let vectors = record
+        .coefficient_vectors(&model.set)
+        .map_err(|e| InputError::key(path, "bootstrap", e.to_string()))?;
+    let effects: Vec<Effect> = file
+        .effects
+        .iter()
+        .map(|e| e.effect.parse::<Effect>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| InputError::key(path, "effects", e.to_string()))?;
+    let mut models: Vec<Box<dyn Dynamics + Send + Sync>> = Vec::with_capacity(vectors.len());
+    for c in vectors {
+        let Ok(m) = AbkowitzModel::new(model.set.clone(), c, model.ship, model.added_mass) else {
+            continue;
+        };
+        if effects.is_empty() {
+            models.push(Box::new(AbkowitzDynamics(m)));
+        } else {
+            let wrapped = WithEffects::new(AbkowitzDynamics(m), &effects)
+                .map_err(|e| InputError::key(path, "effects", e.to_string()))?;
+            models.push(Box::new(wrapped));
+        }
+    }
+    Ok(models)
 }

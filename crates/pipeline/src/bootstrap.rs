@@ -221,3 +221,35 @@ pub fn bootstrap_abkowitz(
         rejected,
     })
 }
+
+/// Bootstrap a finished fit (`shipid fit --bootstrap N`): replicates around the model the fit wrote
+/// (refined or not), with the estimators it resolved.
+pub fn bootstrap_fit(
+    ds: &Dataset,
+    out: &crate::fit::FitOutput,
+    spec: &crate::fit::EstimatorSpec,
+    solver: Solver,
+    replicates: usize,
+    seed: u64,
+) -> Result<Bootstrap, PipelineError> {
+    let estimators = [0, 1, 2].map(|i| out.dofs[i].fit.estimator.clone());
+    // The equation-error coefficients (before any refinement) are what each replicate departs from.
+    let equation_error = AbkowitzModel::new(
+        out.model.set.clone(),
+        [0, 1, 2].map(|i| out.dofs[i].fit.coefficients.clone()),
+        out.model.ship,
+        out.model.added_mass,
+    )
+    .map_err(|e| bad_input(format!("the equation-error fit is unusable: {e}")))?;
+    bootstrap_abkowitz(
+        ds,
+        &equation_error,
+        &out.model.coefficients,
+        &out.training,
+        &estimators,
+        spec.uses_bounds(),
+        solver,
+        replicates,
+        seed,
+    )
+}

@@ -7,6 +7,7 @@ use shipid_estimators::Solver;
 use shipid_io::Dataset;
 use shipid_io::write::write_atomic;
 
+use shipid_pipeline::bootstrap::bootstrap_fit;
 use shipid_pipeline::fit::{EstimatorSpec, FitOutput, WindowSpec, fit_dataset, load_set};
 use shipid_pipeline::fit_gp::{DEFAULT_SIMILARITY, fit_gp_dataset, model_text};
 use shipid_pipeline::model_file::load_model;
@@ -26,6 +27,8 @@ pub struct FitArgs<'a> {
     pub json: bool,
     /// After fitting, validate the model on every recording of the data set (trained on or not).
     pub validate: bool,
+    /// Bootstrap replicates and their seed (`--bootstrap N --bootstrap-seed S`).
+    pub bootstrap: Option<(usize, u64)>,
 }
 
 /// How many of the largest VIFs the report lists per DOF.
@@ -165,6 +168,27 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     }
     // The data set's path relative to the model file, so the model reads it from anywhere.
     let mut file = out.file.clone();
+    if let Some((n, seed)) = a.bootstrap {
+        let boot = bootstrap_fit(&ds, &out, &a.estimator, a.solver, n, seed)?;
+        eprintln!(
+            "bootstrap: {} replicates kept ({} rejected), blocks of {} rows ({}); standard errors and correlations in the model file's [bootstrap]",
+            boot.replicates.len(),
+            boot.rejected,
+            boot.block.rows,
+            boot.block
+                .decorrelation_lag
+                .map_or("residuals correlated up to the cap".into(), |l| format!(
+                    "residuals decorrelate after {l} rows"
+                ))
+        );
+        if boot.replicates.len() < shipid_pipeline::bands::MIN_FINITE_REPLICATES {
+            return Err(crate::failed_msg(format!(
+                "only {} of {n} bootstrap replicates could be refitted: too few for a band",
+                boot.replicates.len()
+            )));
+        }
+        file.bootstrap = Some(boot.record(&out.model));
+    }
     shipid_pipeline::model_file::anchor_training(&mut file.training, a.out);
     let text = toml::to_string(&file).map_err(failed)?;
     let header = format!(

@@ -101,6 +101,13 @@ enum Command {
         /// Then validate the model on every recording of the data set.
         #[arg(long)]
         validate: bool,
+        /// Store N moving-block bootstrap replicates of the coefficients in the model file (the
+        /// replicates `simulate --bands` draws its bands from; docs/uncertainty.md).
+        #[arg(long, value_name = "N", allow_negative_numbers = true)]
+        bootstrap: Option<i64>,
+        /// Seed of the bootstrap draws.
+        #[arg(long, default_value_t = 1, requires = "bootstrap")]
+        bootstrap_seed: u64,
     },
     /// Run a study: its grid of cases in parallel, result tables under results/<study>/.
     Run {
@@ -215,6 +222,15 @@ enum Command {
         /// Write the time series (the recording CSV of docs/data-format.md).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Central band of every metric at this level (e.g. 0.9) over the model's bootstrap
+        /// replicates (`fit --bootstrap N`); JSON adds `<metric>_band: [lo, hi]` and the track band.
+        #[arg(
+            long,
+            value_name = "LEVEL",
+            allow_negative_numbers = true,
+            conflicts_with = "replay"
+        )]
+        bands: Option<f64>,
     },
     /// Paper 003: hydrodynamics of a ship from its motion indexes (SVD modes, simulated database, MLP).
     Inverse {
@@ -301,7 +317,21 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             out,
             json,
             validate,
+            bootstrap,
+            bootstrap_seed,
         } => {
+            let bootstrap = match bootstrap {
+                None => None,
+                Some(n) if (2..=shipid_pipeline::bootstrap::MAX_REPLICATES as i64).contains(&n) => {
+                    Some(n as usize)
+                }
+                Some(n) => {
+                    return Err(shipid::bad_input(format!(
+                        "--bootstrap must be between 2 and {} replicates, got {n}",
+                        shipid_pipeline::bootstrap::MAX_REPLICATES
+                    )));
+                }
+            };
             let window = match (overshoots, window) {
                 (Some(_), Some(_)) => {
                     return Err(shipid::bad_input("give --overshoots or --window, not both"));
@@ -327,6 +357,11 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             };
             spec.validate()?;
             if estimator == shipid_pipeline::fit::GP {
+                if bootstrap.is_some() {
+                    return Err(shipid::bad_input(
+                        "--bootstrap applies to polynomial fits; the sparse GP's uncertainty is its posterior variance (bands for it are not available yet)",
+                    ));
+                }
                 return shipid::fit_cmd::run_gp(
                     &dataset,
                     &recordings,
@@ -350,6 +385,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                 out: &out,
                 json,
                 validate,
+                bootstrap: bootstrap.map(|n| (n, bootstrap_seed)),
             })
         }
         Command::Metrics { dataset, json } => shipid::metrics_cmd::run(&dataset, json),
@@ -362,6 +398,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             allow_large,
             json,
             out,
+            bands,
         } => match (manoeuvre, replay) {
             (_, Some(ds)) => {
                 // A replay follows each recording's own time base: these would be silently ignored.
@@ -387,6 +424,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                 allow_large,
                 json,
                 out_csv: out.as_deref(),
+                bands,
             }),
             (None, None) => Err(shipid::bad_input("give --manoeuvre or --replay")),
         },

@@ -5,6 +5,7 @@ use std::path::Path;
 use serde_json::{Map, Value, json};
 use shipid_io::Manoeuvre;
 use shipid_io::write::{recording_csv, write_atomic};
+use shipid_pipeline::bands::{ManoeuvreBands, manoeuvre_bands, replicate_models};
 use shipid_pipeline::model_file::load_model;
 use shipid_pipeline::simulate::{MAX_STORED_SAMPLES, SimRequest, sim_grid, simulate_on_grid};
 use shipid_pipeline::spec::parse_manoeuvre;
@@ -88,11 +89,22 @@ pub struct SimulateArgs<'a> {
     pub allow_large: bool,
     pub json: bool,
     pub out_csv: Option<&'a Path>,
+    /// `--bands LEVEL`: bands over the model file's bootstrap replicates.
+    pub bands: Option<f64>,
 }
 
 pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
     let m = parse_manoeuvre(a.manoeuvre).map_err(|e| bad_input(format!("--manoeuvre: {e}")))?;
+    if let Some(level) = a.bands {
+        if !(level > 0.0 && level < 1.0) {
+            return Err(bad_input(format!(
+                "--bands must be a level strictly between 0 and 1 (e.g. 0.9), got {level}"
+            )));
+        }
+    }
     let model = load_model(a.model)?;
+    // Before the simulation: a model without replicates is refused at once.
+    let replicates = a.bands.map(|_| replicate_models(a.model)).transpose()?;
     let request = SimRequest {
         dt_s: a.dt_s,
         duration_s: a.duration_s,
@@ -116,7 +128,18 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
         write_atomic(path, recording_csv(&out.recording, &comments).as_bytes())
             .map_err(|e| crate::write_failed(path, e))?;
     }
-    let value = outcome_json(&out, &m, model.as_ref());
+    let mut value = outcome_json(&out, &m, model.as_ref());
+    if let (Some(level), Some(replicates)) = (a.bands, &replicates) {
+        let bands = manoeuvre_bands(
+            model.as_ref(),
+            replicates,
+            &m,
+            model.ship(),
+            level,
+            Some(&grid),
+        )?;
+        add_bands(&mut value, &bands, a.json);
+    }
     if matches!(out.status, SimStatus::Ok) {
         let undefined: Vec<&str> = metrics(&out.recording, &m, model.ship())
             .entries()
@@ -148,13 +171,74 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
         );
     } else if let Value::Object(o) = &value {
         for (k, v) in o {
-            println!("{k:>18}: {v}");
+            if k == "bands" || k.ends_with("_band") {
+                continue;
+            }
+            match o.get(&format!("{k}_band")) {
+                Some(band) => println!("{k:>18}: {v}  band {band}"),
+                None => println!("{k:>18}: {v}"),
+            }
+        }
+        if let Some(about) = o.get("bands") {
+            println!(
+                "{:>18}: {} % over {} bootstrap replicates ({} diverged): {}",
+                "bands",
+                about["level"].as_f64().unwrap_or(f64::NAN) * 100.0,
+                about["replicates"],
+                about["diverged"],
+                about["what"].as_str().unwrap_or_default()
+            );
         }
     }
     Ok(match out.status {
         SimStatus::Ok => Outcome::Ok,
         SimStatus::Diverged { .. } => Outcome::SomeFailed,
     })
+}
+
+/// The bands into the output: `<metric>_band: [lo, hi]` for every metric with a band, and a `bands`
+/// object saying what they are (level, replicates, diverged runs, metrics without a band and why,
+/// and with `--json` the track band).
+fn add_bands(value: &mut Value, bands: &ManoeuvreBands, with_track: bool) {
+    let Value::Object(o) = value else { return };
+    let mut without = Map::new();
+    for b in &bands.metrics {
+        match &b.band {
+            Ok(band) => {
+                o.insert(format!("{}_band", b.metric), json!([band.lo, band.hi]));
+            }
+            Err(e) if b.point.is_some() => {
+                without.insert(b.metric.into(), json!(e.to_string()));
+            }
+            Err(_) => {}
+        }
+    }
+    let mut about = Map::new();
+    about.insert("level".into(), json!(bands.level));
+    about.insert("replicates".into(), json!(bands.replicates));
+    about.insert("diverged".into(), json!(bands.diverged));
+    about.insert(
+        "what".into(),
+        json!("coefficient uncertainty of the fit (moving-block bootstrap), given the model's structure; not the structure's own error (docs/uncertainty.md)"),
+    );
+    if !without.is_empty() {
+        about.insert("without_band".into(), Value::Object(without));
+    }
+    if with_track {
+        if let Some(track) = &bands.track {
+            about.insert(
+                "track".into(),
+                serde_json::to_value(track).unwrap_or_default(),
+            );
+        }
+    }
+    o.insert("bands".into(), Value::Object(about));
+    if bands.diverged > 0 {
+        eprintln!(
+            "warning: {} of {} bootstrap replicates diverged in this manoeuvre (their metrics are undefined; the band is over the others)",
+            bands.diverged, bands.replicates
+        );
+    }
 }
 
 /// Whether a metric key belongs to the manoeuvre (zig-zag keys to zig-zags, turning keys to turns).

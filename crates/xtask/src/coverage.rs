@@ -124,7 +124,7 @@ pub fn run(out: &Path, seeds: u64, replicates: usize, level: f64) -> Result<()> 
             let models = boot.models(&fit.model);
             let point = AbkowitzDynamics(fit.model.clone());
             for (r, (file, true_metrics)) in truth_data.recordings.iter().zip(&truth) {
-                let bands = manoeuvre_bands(&point, &models, &r.manoeuvre, &ship, level)?;
+                let bands = manoeuvre_bands(&point, &models, &r.manoeuvre, &ship, level, None)?;
                 let place = if files.contains(&file.as_str()) {
                     "trained"
                 } else {

@@ -125,6 +125,7 @@ fn turning_circle_bands_count_every_replicate() {
         &m,
         &ds.ship,
         0.9,
+        None,
     )
     .unwrap();
     assert_eq!(bands.replicates, 40);
