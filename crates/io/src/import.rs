@@ -25,10 +25,10 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use crate::dataset::{DatasetFile, Kind, Origin, RecordingEntry};
+use crate::dataset::{DatasetFile, Kind, Origin, PropellerTable, RecordingEntry};
 use crate::error::InputError;
 use crate::table::{Columns, parse_cell, with_comma_hint};
-use crate::types::{AddedMass, Recording, Ship, Side};
+use crate::types::{AddedMass, Recording, RudderData, Ship, Side};
 use crate::units::Quantity;
 
 #[derive(Debug, Clone, Deserialize)]
@@ -93,6 +93,12 @@ pub struct DatasetHeader {
     pub ship: Ship,
     #[serde(default)]
     pub added_mass: Option<AddedMass>,
+    /// The `[propeller]` table to write; its `open_water` file is read from the source folder and
+    /// copied into the output folder under its file name.
+    #[serde(default)]
+    pub propeller: Option<PropellerTable>,
+    #[serde(default)]
+    pub rudder: Option<RudderData>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -117,6 +123,8 @@ pub struct Imported {
     pub recordings: Vec<Recording>,
     /// One line per recording saying where it came from.
     pub provenance: Vec<String>,
+    /// Other files the data set names (the open-water table): output name and contents.
+    pub files: Vec<(String, Vec<u8>)>,
 }
 
 /// Read a mapping file and check it.
@@ -213,7 +221,38 @@ pub fn read_mapping(path: &Path) -> Result<Mapping, InputError> {
         })?;
     }
     check_outputs(path, &m.recordings)?;
+    if let Some(f) = m
+        .dataset
+        .propeller
+        .as_ref()
+        .and_then(|p| p.open_water.as_deref())
+    {
+        let name = open_water_output(f);
+        let key = crate::write::output_key(&name);
+        let clash = m
+            .recordings
+            .iter()
+            .position(|r| crate::write::output_key(&r.file) == key);
+        if crate::write::check_output_name(&name).is_err() || clash.is_some() {
+            return Err(InputError::key(
+                path,
+                "dataset.propeller.open_water",
+                format!(
+                    "`{f}` would be copied to `{name}` in the output folder{}; rename it",
+                    clash.map_or(String::new(), |i| format!(", the file of recording[{i}]"))
+                ),
+            ));
+        }
+    }
     Ok(m)
+}
+
+/// The name the open-water table gets in the output folder: its file name (it is read from the source
+/// folder, whose layout the output does not copy).
+fn open_water_output(source: &str) -> String {
+    Path::new(source)
+        .file_name()
+        .map_or_else(|| source.to_string(), |n| n.to_string_lossy().into_owned())
 }
 
 /// Output names must stay inside `--out` and be distinct (else one recording silently overwrites
@@ -286,8 +325,11 @@ impl Mapping {
             rudder_sign: 1,
             ship: self.dataset.ship,
             added_mass: self.dataset.added_mass,
-            propeller: None,
-            rudder: None,
+            propeller: self.dataset.propeller.clone().map(|mut p| {
+                p.open_water = p.open_water.as_deref().map(open_water_output);
+                p
+            }),
+            rudder: self.dataset.rudder,
             recordings: recordings.to_vec(),
         }
     }
@@ -323,11 +365,24 @@ pub fn import(mapping_path: &Path, source_dir: Option<&Path>) -> Result<Imported
         provenance.push(format!("{} <- {}", r.file, src.display()));
         recordings.push(rec);
     }
+    let mut files = Vec::new();
+    if let Some(f) = m
+        .dataset
+        .propeller
+        .as_ref()
+        .and_then(|p| p.open_water.as_deref())
+    {
+        let src = dir.join(f);
+        // Read and fitted now so that a bad table is refused before anything is written.
+        crate::open_water::read_open_water(&src, f)?;
+        files.push((open_water_output(f), crate::recording::read_bytes(&src)?));
+    }
     let entries: Vec<RecordingEntry> = m.recordings.iter().map(ImportRecording::entry).collect();
     Ok(Imported {
         dataset: m.dataset_file(&entries),
         recordings,
         provenance,
+        files,
     })
 }
 

@@ -186,22 +186,39 @@ pub fn write_dataset(
     recordings: &[&Recording],
     header_comments: &[String],
 ) -> Result<(), WriteError> {
+    write_dataset_with(dir, file, recordings, header_comments, &[])
+}
+
+/// [`write_dataset`] plus other files the data set names (`files`: output name and contents, e.g. the
+/// open-water table), under the same name checks, written before `dataset.toml`.
+pub fn write_dataset_with(
+    dir: &Path,
+    file: &DatasetFile,
+    recordings: &[&Recording],
+    header_comments: &[String],
+    files: &[(String, Vec<u8>)],
+) -> Result<(), WriteError> {
     if dir.exists() && !dir.is_dir() {
         return Err(WriteError::NotADirectory {
             dir: dir.to_path_buf(),
         });
     }
     let mut seen: HashMap<String, &str> = HashMap::new();
-    for entry in &file.recordings {
-        check_output_name(&entry.file).map_err(|reason| WriteError::UnsafeName {
-            name: entry.file.clone(),
+    let names = file
+        .recordings
+        .iter()
+        .map(|e| e.file.as_str())
+        .chain(files.iter().map(|f| f.0.as_str()));
+    for name in names {
+        check_output_name(name).map_err(|reason| WriteError::UnsafeName {
+            name: name.to_string(),
             reason,
         })?;
-        if let Some(first) = seen.insert(output_key(&entry.file), &entry.file) {
+        if let Some(first) = seen.insert(output_key(name), name) {
             return Err(WriteError::SameOutput {
                 dir: dir.to_path_buf(),
                 first: first.to_string(),
-                second: entry.file.clone(),
+                second: name.to_string(),
             });
         }
     }
@@ -214,8 +231,23 @@ pub fn write_dataset(
         }
         _ => {}
     }
-    for (entry, rec) in file.recordings.iter().zip(recordings) {
-        let target = dir.join(&entry.file);
+    let contents = file
+        .recordings
+        .iter()
+        .zip(recordings)
+        .map(|(entry, rec)| {
+            (
+                entry.file.as_str(),
+                recording_csv(rec, header_comments).into_bytes(),
+            )
+        })
+        .chain(
+            files
+                .iter()
+                .map(|(name, bytes)| (name.as_str(), bytes.clone())),
+        );
+    for (name, bytes) in contents {
+        let target = dir.join(name);
         if let Some(parent) = target.parent() {
             std::fs::create_dir_all(parent).map_err(io_at(parent))?;
             let real = parent.canonicalize().map_err(io_at(parent))?;
@@ -226,8 +258,7 @@ pub fn write_dataset(
                 });
             }
         }
-        write_atomic(&target, recording_csv(rec, header_comments).as_bytes())
-            .map_err(io_at(&target))?;
+        write_atomic(&target, &bytes).map_err(io_at(&target))?;
     }
     let mut text = String::new();
     for c in header_comments {

@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use shipid_io::write::write_dataset;
+use shipid_io::write::write_dataset_with;
 
 use crate::{CliError, Outcome, bad_input, failed};
 
@@ -26,7 +26,7 @@ pub fn run(mapping: &Path, out: &Path, source: Option<&Path>) -> Result<Outcome,
             .into(),
     ];
     let recs: Vec<_> = imported.recordings.iter().collect();
-    write_dataset(out, &imported.dataset, &recs, &comments).map_err(|e| {
+    write_dataset_with(out, &imported.dataset, &recs, &comments, &imported.files).map_err(|e| {
         if e.is_bad_input() {
             bad_input(e)
         } else {

@@ -415,3 +415,54 @@ fn a_write_failing_half_way_leaves_no_dataset_toml() {
     );
     assert!(!out.join("dataset.toml").exists());
 }
+
+#[test]
+fn an_import_copies_the_open_water_table_beside_the_data_set() {
+    let dir = TempDir::new("import-open-water");
+    std::fs::create_dir_all(dir.0.join("raw/tables")).unwrap();
+    std::fs::write(
+        dir.0.join("raw/a.dat"),
+        recording_text(HEADER, |_, _| {}).replace(',', " "),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.0.join("raw/tables/ow.csv"),
+        "J,Kt,10Kq\n0,0.3,0.4\n0.2,0.25,0.35\n0.4,0.18,0.3\n0.6,0.1,0.2\n",
+    )
+    .unwrap();
+    let columns: String = HEADER
+        .split(',')
+        .enumerate()
+        .map(|(i, q)| format!("[[column]]\nindex = {}\nquantity = \"{q}\"\n", i + 1))
+        .collect();
+    let ship = SHIP.replace("name = \"d\"\n[ship]", "[dataset.ship]");
+    let mapping = format!(
+        "source_dir = \"raw\"\n[format]\ndelimiter = \"whitespace\"\nskip_lines = 1\n{columns}[dataset]\nname = \"i\"\n{ship}[dataset.propeller]\ndiameter_m = 0.2\nx_m = -3.3\nopen_water = \"tables/ow.csv\"\n[dataset.rudder]\narea_m2 = 0.05\nspan_m = 0.3\nx_m = -3.5\n[[recording]]\nsource = \"a.dat\"\nfile = \"a.csv\"\nkind = \"free\"\n"
+    );
+    let mapping_path = dir.0.join("mapping.toml");
+    std::fs::write(&mapping_path, &mapping).unwrap();
+    let imported = shipid_io::import::import(&mapping_path, None).unwrap();
+    let out = dir.0.join("out");
+    let recs: Vec<&Recording> = imported.recordings.iter().collect();
+    shipid_io::write::write_dataset_with(&out, &imported.dataset, &recs, &[], &imported.files)
+        .unwrap();
+    let ds = Dataset::load(&out.join("dataset.toml")).unwrap();
+    let p = ds.propeller.unwrap();
+    assert_eq!(p.open_water.unwrap().file, "ow.csv");
+    assert_eq!(ds.rudder.map(|r| r.area_m2), Some(0.05));
+
+    // The copy must not take a recording's name.
+    std::fs::write(
+        &mapping_path,
+        mapping.replace("file = \"a.csv\"", "file = \"OW.csv\""),
+    )
+    .unwrap();
+    let e = shipid_io::import::import(&mapping_path, None)
+        .err()
+        .map(|e| e.to_string())
+        .unwrap_or_default();
+    assert!(
+        e.ends_with("mapping.toml: key `dataset.propeller.open_water`: `tables/ow.csv` would be copied to `ow.csv` in the output folder, the file of recording[0]; rename it"),
+        "{e}"
+    );
+}
