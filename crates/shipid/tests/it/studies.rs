@@ -772,3 +772,48 @@ fn jobs_0_is_refused_by_every_command_that_has_jobs() {
     }
     assert!(!Path::new("/tmp/shipid-never-written").exists());
 }
+
+/// Regression: a case's stored configuration named its data set by the path as typed, so a rerun from
+/// another directory recomputed everything, while a rerun on changed recordings at the same path
+/// silently reused results of the old data. Now the data are named by content.
+#[test]
+fn finished_cases_are_reused_for_the_same_data_from_anywhere_and_never_for_changed_data() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    std::fs::create_dir_all(&data).unwrap();
+    for e in std::fs::read_dir(common::root().join("data/kvlcc2-mmg")).unwrap() {
+        let p = e.unwrap().path();
+        std::fs::copy(&p, data.join(p.file_name().unwrap())).unwrap();
+    }
+    let study = dir.path().join("study.toml");
+    std::fs::write(
+        &study,
+        "name = \"one\"\ndataset = \"data/dataset.toml\"\nsets = [\"reduced32\"]\n[training]\nrecordings = [[\"zz35_35_ps.csv\"]]\novershoots = [4]\n[[estimator]]\nname = \"lsq\"\n[test]\nrecordings = [\"zz20_20_ps.csv\"]\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let run_from = |cwd: &Path, study: &str| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_shipid"))
+            .args(["run", study, "--out", out.to_str().unwrap()])
+            .current_dir(cwd)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr).to_string();
+        assert!(o.status.success(), "{err}");
+        err
+    };
+    assert!(run_from(dir.path(), "study.toml").contains("0 finished earlier, 1 to run"));
+    let elsewhere = run_from(&common::root(), study.to_str().unwrap());
+    assert!(
+        elsewhere.contains("1 finished earlier, 0 to run"),
+        "{elsewhere}"
+    );
+    let test = data.join("zz20_20_ps.csv");
+    let text = std::fs::read_to_string(&test).unwrap();
+    std::fs::write(&test, format!("# edited\n{text}")).unwrap();
+    let changed = run_from(dir.path(), "study.toml");
+    assert!(
+        changed.contains("0 finished earlier, 1 to run"),
+        "{changed}"
+    );
+}
