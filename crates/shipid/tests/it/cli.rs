@@ -40,7 +40,7 @@ fn bad_input_exits_with_2_and_names_the_problem() {
             "--dt=-1",
         ],
         2,
-        "invalid simulation option dt_s = -1",
+        "--dt must be a positive number of seconds, got -1",
     );
     check_exit(
         &[

@@ -344,3 +344,65 @@ fn svr_tuning_chooses_epsilon_too_unless_it_is_given() {
         ));
     }
 }
+
+/// Which regressors a fit of the embedded zig-zag on `window` finds without information, per DOF
+/// (empty when every coefficient is identified).
+fn check_information(window: WindowSpec, expected: &[(&str, &[&str])]) {
+    let ds = embedded();
+    let out = fit_dataset(
+        &ds,
+        load_set("reduced32").unwrap(),
+        &spec("lsq", false),
+        &["zz20_20_ps.csv".to_string()],
+        window,
+        Solver::Fast,
+    )
+    .unwrap();
+    let got: Vec<(String, Vec<String>)> = out
+        .no_information()
+        .map(|n| {
+            n.regressors
+                .into_iter()
+                .map(|(dof, names)| (dof.to_string(), names))
+                .collect()
+        })
+        .unwrap_or_default();
+    let expected: Vec<(String, Vec<String>)> = expected
+        .iter()
+        .map(|(dof, names)| {
+            (
+                dof.to_string(),
+                names.iter().map(|s| s.to_string()).collect(),
+            )
+        })
+        .collect();
+    assert_eq!(got, expected, "{window:?}");
+}
+
+#[test]
+fn window_before_rudder_action_is_rank_deficient() {
+    // Regression: `fit --window 0:3` (the rudder first moves at 5 s) reported status Ok with every
+    // coefficient 0, and `validate` called that model ok.
+    let uv: &[&str] = &["v", "r", "d", "vvv", "vvr", "vrr", "uv", "ur", "ud"];
+    let y: Vec<String> = uv.iter().map(|t| format!("Y_{t}")).collect();
+    let n: Vec<String> = uv.iter().map(|t| format!("N_{t}")).collect();
+    let x = [
+        "X_u", "X_uu", "X_uuu", "X_vv", "X_rr", "X_dd", "X_vr", "X_vd", "X_rd",
+    ];
+    let y: Vec<&str> = y.iter().map(String::as_str).collect();
+    let n: Vec<&str> = n.iter().map(String::as_str).collect();
+    check_information(
+        WindowSpec::Time {
+            start_s: 0.0,
+            end_s: 3.0,
+        },
+        &[("X", &x), ("Y", &y), ("N", &n)],
+    );
+    check_information(
+        WindowSpec::Time {
+            start_s: 0.0,
+            end_s: 60.0,
+        },
+        &[],
+    );
+}
