@@ -36,6 +36,12 @@ pub const HULL_COLUMNS: [usize; 3] = [5, 6, 6];
 /// precision comes from the data rather than from the prior.
 pub const DETERMINED_SHARE: f64 = 0.5;
 
+/// Hull derivatives per DOF (X: 5, Y: 6, N: 6), in the order of [`HULL_NAMES`].
+pub type HullDerivatives = [Vec<f64>; 3];
+
+/// φ, the hull derivatives β at φ and the outer iterations taken.
+pub type Solution = (Vec<f64>, HullDerivatives, usize);
+
 /// One training sample: state, rudder, propeller rate and the forces the motion needs.
 #[derive(Debug, Clone, Copy)]
 pub struct EqSample {
@@ -46,6 +52,8 @@ pub struct EqSample {
     pub needed: [f64; 3],
     /// Training window (recording) the sample comes from, for the cross-validation folds.
     pub group: usize,
+    /// Time of the sample in its recording [s].
+    pub t_s: f64,
 }
 
 /// What the estimate of one parameter is, and how much of it the data determine.
@@ -101,11 +109,11 @@ impl Problem {
     ) -> Result<Problem, PipelineError> {
         let mut hull_idx: [Vec<usize>; 3] = Default::default();
         for (d, idx) in hull_idx.iter_mut().enumerate() {
-            for c in 0..HULL_COLUMNS[d] {
+            for (c, name) in HULL_NAMES[d].iter().take(HULL_COLUMNS[d]).enumerate() {
                 let k = specs
                     .iter()
                     .position(|s| s.role == Role::Hull { dof: d, column: c })
-                    .ok_or_else(|| failed(format!("no prior for {}", HULL_NAMES[d][c])))?;
+                    .ok_or_else(|| failed(format!("no prior for {name}")))?;
                 idx.push(k);
             }
         }
@@ -180,14 +188,29 @@ impl Problem {
         assemble(&self.ship, &self.added, &self.geometry, &get)
     }
 
+    /// The model of (φ, β) with its propeller at `rate_hz`.
+    pub fn model_of(
+        &self,
+        phi: &[f64],
+        beta: &[Vec<f64>; 3],
+        rate_hz: f64,
+    ) -> Result<MmgModel, PipelineError> {
+        MmgModel::at_rate(
+            self.ship,
+            self.parameters(&self.theta_of(phi, beta)),
+            rate_hz,
+        )
+        .map_err(|e| failed(format!("the identified MMG model is unusable: {e}")))
+    }
+
     fn theta_of(&self, phi: &[f64], beta: &[Vec<f64>; 3]) -> Vec<f64> {
         let mut theta: Vec<f64> = self.specs.iter().map(|s| s.prior).collect();
         for (k, &i) in self.nl_idx.iter().enumerate() {
             theta[i] = phi[k];
         }
-        for d in 0..3 {
-            for (c, &i) in self.hull_idx[d].iter().enumerate() {
-                theta[i] = beta[d][c];
+        for (idx, b) in self.hull_idx.iter().zip(beta) {
+            for (&i, &value) in idx.iter().zip(b) {
+                theta[i] = value;
             }
         }
         theta
@@ -307,7 +330,7 @@ impl Problem {
         start: &[f64],
         idx: &[usize],
         lambda: f64,
-    ) -> Result<(Vec<f64>, [Vec<f64>; 3], usize), PipelineError> {
+    ) -> Result<Solution, PipelineError> {
         const MAX_ITERATIONS: usize = 200;
         let mut phi = start.to_vec();
         self.clamp_phi(&mut phi);
@@ -396,9 +419,8 @@ impl Problem {
         // Unweighted residuals ê = e/s_dof, stacked X, Y, N, and their Jacobian column by parameter.
         let mut resid = Vec::with_capacity(3 * m);
         for d in 0..3 {
-            for row in 0..m {
-                let pred = dot(&self.rows[row].0[d], &beta[d]);
-                resid.push((y[d][row] - pred) / self.scales[d]);
+            for (row, target) in self.rows.iter().zip(&y[d]) {
+                resid.push((target - dot(&row.0[d], &beta[d])) / self.scales[d]);
             }
         }
         let p = self.specs.len();

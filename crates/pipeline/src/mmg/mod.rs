@@ -8,32 +8,39 @@
 //!   the estimators crate inside, propeller and rudder parameters by projected Levenberg–Marquardt
 //!   outside), the posterior and the data's share of each parameter's precision.
 //! - `file`: the model file `kind = "mmg"` and its loader.
+//! - `refine`: the output-error refinement of [`crate::refine`] over the identified parameters.
 //!
 //! The identified model is a [`shipid_sim::MmgModel`] (a `Dynamics`) with its propeller at the mean
 //! recorded rate of the training windows: the identification uses each sample's recorded `n`, a
 //! simulation holds the rate constant, as free-running manoeuvring tests do.
 //!
-//! Module imports: `geometry` ← `priors` ← `identify` ← this file → `file`.
+//! Module imports: `geometry` ← `priors` ← `identify` ← this file → `file`, `refine`.
 
 pub mod file;
 pub mod geometry;
 pub mod identify;
 pub mod priors;
+pub mod refine;
 
 use std::time::Instant;
 
-use shipid_io::Dataset;
+use rayon::prelude::*;
+
 use shipid_io::deriv::accelerations_or_estimate;
+use shipid_io::{Dataset, Recording};
 use shipid_model::TrainingWindow;
-use shipid_sim::{MmgModel, State};
+use shipid_sim::{Dynamics, MmgModel, State};
 
 pub use file::{MMG_KIND, MmgModelFile, load_mmg_model, write_mmg_model};
 pub use geometry::MmgGeometry;
 pub use identify::{DETERMINED_SHARE, EqSample, Estimate, ParamEstimate, Problem};
 pub use priors::{ParamSpec, Role, priors};
+pub use refine::{ParametricMmg, refine_mmg};
 
 use crate::error::{PipelineError, bad_input, failed};
 use crate::fit::{WindowSpec, chosen_recordings, training_window, window_range};
+use crate::replay::{replay_segment, segments};
+use crate::validate::interp;
 
 /// How the hull derivatives are solved inside: bounded least squares on the prior-augmented design
 /// (the physical sign bounds of [`priors`] hold), or the same without bounds (a ridge toward the
@@ -69,13 +76,25 @@ impl MmgEstimator {
 pub enum PriorWeight {
     Fixed(f64),
     /// Chosen from [`CV_GRID`] by blocked cross-validation (by recording when there are several).
-    CrossValidated,
+    CrossValidated(CvCriterion),
+}
+
+/// What a held-out fold scores.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CvCriterion {
+    /// The replay of the held-out part's recorded rudder from its recorded start: position RMSE ÷ L
+    /// plus heading RMSE [rad] (a diverged replay adds 1). What a prediction needs; the default.
+    Replay,
+    /// The equation error J's data term on the held-out samples.
+    EquationError,
 }
 
 /// λ without `--tune`: the prior acts only where the data say little.
 pub const DEFAULT_PRIOR_WEIGHT: f64 = 1e-6;
 /// The candidates of the cross-validation.
 pub const CV_GRID: [f64; 5] = [1e-8, 1e-6, 1e-4, 1e-2, 1.0];
+/// Most equation-error samples used: longer training windows are thinned evenly to this many.
+pub const MAX_SAMPLES: usize = 10_000;
 /// Blocks of the cross-validation when there is one training window.
 pub const CV_BLOCKS: usize = 5;
 
@@ -126,11 +145,16 @@ pub struct MmgFit {
     pub fit_time_s: f64,
 }
 
-/// The equation-error samples of the chosen recordings and window, and the windows used.
-pub fn training_samples(
-    ds: &Dataset,
-    opts: &MmgFitOptions,
-) -> Result<(Vec<EqSample>, Vec<TrainingWindow>), PipelineError> {
+/// The equation-error samples of the chosen recordings and window, the windows used and their
+/// recordings (one per sample group).
+pub struct TrainingData {
+    pub samples: Vec<EqSample>,
+    pub windows: Vec<TrainingWindow>,
+    pub recordings: Vec<Recording>,
+}
+
+/// The [`TrainingData`] of `opts` on `ds`.
+pub fn training_samples(ds: &Dataset, opts: &MmgFitOptions) -> Result<TrainingData, PipelineError> {
     let added = ds.added_mass.ok_or_else(|| {
         bad_input(format!(
             "{}: no [added_mass] table; the MMG fit needs m_x, m_y and J_z",
@@ -153,9 +177,11 @@ pub fn training_samples(
     let chosen = chosen_recordings(ds, &opts.recordings)?;
     let mut samples = Vec::new();
     let mut windows = Vec::new();
+    let mut recordings = Vec::new();
     for (g, r) in chosen.iter().enumerate() {
         let range = window_range(r, ds, opts.window)?;
         let rec = &r.recording;
+        recordings.push(rec.slice(range.clone()));
         let (acc, estimated) = accelerations_or_estimate(rec, ship);
         for i in range.clone() {
             let n_hz = match (&rec.n, opts.propeller_rate_hz) {
@@ -171,7 +197,9 @@ pub fn training_samples(
                 }
             };
             let state = State::of_recording(rec, i);
-            if !(state.speed() > 0.05 * ship.u0) || !n_hz.is_finite() {
+            // Below 5 % of U0 (or NaN) the MMG non-dimensionalisation is meaningless.
+            let slow = state.speed().is_nan() || state.speed() <= 0.05 * ship.u0;
+            if slow || !n_hz.is_finite() {
                 continue;
             }
             let (u, v, rr) = (state.u, state.v, state.r);
@@ -187,6 +215,7 @@ pub fn training_samples(
                 n_hz,
                 needed,
                 group: g,
+                t_s: rec.t[i],
             });
         }
         let t = &rec.t;
@@ -201,6 +230,10 @@ pub fn training_samples(
             estimated,
         ));
     }
+    // Neighbouring samples of a smoothed acceleration carry nearly the same information; evenly
+    // thinned, the problem keeps its content and the cross-validation its speed.
+    let stride = samples.len().div_ceil(MAX_SAMPLES).max(1);
+    let samples: Vec<EqSample> = samples.into_iter().step_by(stride).collect();
     if samples.len() < 40 {
         return Err(bad_input(format!(
             "{}: {} usable samples in the training windows, too few for the 31 MMG parameters",
@@ -208,7 +241,11 @@ pub fn training_samples(
             samples.len()
         )));
     }
-    Ok((samples, windows))
+    Ok(TrainingData {
+        samples,
+        windows,
+        recordings,
+    })
 }
 
 /// Identify the MMG model of `ds` with its `[propeller]` and `[rudder]` tables and the priors of
@@ -252,7 +289,11 @@ pub fn fit_mmg_with_priors(
             "the prior weight λ must be a positive number, not {l}"
         )));
     }
-    let (samples, windows) = training_samples(ds, opts)?;
+    let TrainingData {
+        samples,
+        windows,
+        recordings,
+    } = training_samples(ds, opts)?;
     let added = ds.added_mass.unwrap_or_default();
     let rate = samples.iter().map(|s| s.n_hz).sum::<f64>() / samples.len() as f64;
     let problem = Problem::new(
@@ -267,7 +308,9 @@ pub fn fit_mmg_with_priors(
     let all: Vec<usize> = (0..problem.samples.len()).collect();
     let (lambda, cv, start) = match opts.prior_weight {
         PriorWeight::Fixed(l) => (l, Vec::new(), problem.prior_phi()),
-        PriorWeight::CrossValidated => cross_validate(&problem, &all)?,
+        PriorWeight::CrossValidated(criterion) => {
+            cross_validate(&problem, &all, &recordings, criterion, rate)?
+        }
     };
     let (phi, beta, iterations) = problem.solve(&start, &all, lambda)?;
     let estimate = problem.estimate(&phi, &beta, lambda, iterations)?;
@@ -289,20 +332,24 @@ pub fn fit_mmg_with_priors(
     })
 }
 
-/// λ from [`CV_GRID`] by blocked cross-validation: leave one recording out when there are several,
-/// otherwise [`CV_BLOCKS`] contiguous blocks. Each λ is fitted on all data first (warm start from the
+/// λ from [`CV_GRID`] by blocked cross-validation: whole recordings held out when there are several
+/// (at most [`CV_BLOCKS`] folds), otherwise [`CV_BLOCKS`] contiguous blocks; the folds in parallel. Each λ is fitted on all data first (warm start from the
 /// previous λ), its folds start there. Returns λ, the scores and the full-data φ of the chosen λ.
 fn cross_validate(
     problem: &Problem,
     all: &[usize],
+    recordings: &[Recording],
+    criterion: CvCriterion,
+    rate_hz: f64,
 ) -> Result<(f64, Vec<CvScore>, Vec<f64>), PipelineError> {
     let groups = problem.samples.iter().map(|s| s.group).max().unwrap_or(0) + 1;
     let folds: Vec<Vec<usize>> = if groups > 1 {
-        (0..groups)
-            .map(|g| {
+        // Whole recordings are held out; more than CV_BLOCKS recordings share folds round-robin.
+        (0..groups.min(CV_BLOCKS))
+            .map(|f| {
                 all.iter()
                     .copied()
-                    .filter(|&i| problem.samples[i].group == g)
+                    .filter(|&i| problem.samples[i].group % CV_BLOCKS == f)
                     .collect()
             })
             .collect()
@@ -317,17 +364,25 @@ fn cross_validate(
     let mut best: Option<(f64, f64, Vec<f64>)> = None;
     for &lambda in &CV_GRID {
         let (phi, _, _) = problem.solve(&start, all, lambda)?;
-        let mut total = 0.0;
-        for held in &folds {
-            let train: Vec<usize> = all
-                .iter()
-                .copied()
-                .filter(|i| held.binary_search(i).is_err())
-                .collect();
-            let (phi_k, beta_k, _) = problem.solve(&phi, &train, lambda)?;
-            total += problem.data_cost(&phi_k, &beta_k, held)?;
-        }
-        let score = total / folds.len() as f64;
+        let held_out: Vec<f64> = folds
+            .par_iter()
+            .map(|held| {
+                let train: Vec<usize> = all
+                    .iter()
+                    .copied()
+                    .filter(|i| held.binary_search(i).is_err())
+                    .collect();
+                let (phi_k, beta_k, _) = problem.solve(&phi, &train, lambda)?;
+                match criterion {
+                    CvCriterion::EquationError => problem.data_cost(&phi_k, &beta_k, held),
+                    CvCriterion::Replay => {
+                        let model = problem.model_of(&phi_k, &beta_k, rate_hz)?;
+                        Ok(replay_score(&model, problem, held, recordings))
+                    }
+                }
+            })
+            .collect::<Result<_, _>>()?;
+        let score = held_out.iter().sum::<f64>() / folds.len() as f64;
         scores.push(CvScore {
             lambda,
             held_out_cost: score,
@@ -339,4 +394,66 @@ fn cross_validate(
     }
     let (lambda, _, phi) = best.ok_or_else(|| failed("mmg: empty cross-validation grid"))?;
     Ok((lambda, scores, phi))
+}
+
+/// Segment-replay horizon of the replay criterion ÷ (L/U0): the output-error refinement's and the
+/// diagnosis's, long enough for the hull forces to show, short enough not to drift off.
+pub const CV_REPLAY_HORIZON_L_OVER_U0: f64 = 10.0;
+
+/// Mean replay error of `model` over the held-out parts: per recording, the span of its held-out
+/// samples cut into segments of [`CV_REPLAY_HORIZON_L_OVER_U0`], each replayed with the recorded
+/// rudder from the recorded state; RMS over the compared samples of position error ÷ L plus heading
+/// error [rad], a diverged segment counting 1.
+fn replay_score(
+    model: &MmgModel,
+    problem: &Problem,
+    held: &[usize],
+    recordings: &[Recording],
+) -> f64 {
+    let mut spans: Vec<(usize, f64, f64)> = Vec::new();
+    for &i in held {
+        let s = &problem.samples[i];
+        match spans.iter_mut().find(|(g, _, _)| *g == s.group) {
+            Some(span) => {
+                span.1 = span.1.min(s.t_s);
+                span.2 = span.2.max(s.t_s);
+            }
+            None => spans.push((s.group, s.t_s, s.t_s)),
+        }
+    }
+    let ship = *model.ship();
+    let horizon_s = CV_REPLAY_HORIZON_L_OVER_U0 * ship.lpp / ship.u0;
+    let (mut sum_sq, mut count) = (0.0, 0usize);
+    for &(g, t0, t1) in &spans {
+        let Some(rec) = recordings.get(g) else {
+            continue;
+        };
+        let lo = rec.t.partition_point(|&t| t < t0);
+        let hi = rec.t.partition_point(|&t| t <= t1);
+        if hi <= lo + 10 {
+            continue;
+        }
+        let part = rec.slice(lo..hi);
+        for (a, b) in segments(&part, horizon_s) {
+            let (sim, completed) = replay_segment(model, &part, a, b);
+            let t_start = part.t[a];
+            for i in a..b {
+                let t = part.t[i] - t_start;
+                let e = if !completed || sim.is_empty() || t > *sim.t.last().unwrap_or(&0.0) + 1e-9
+                {
+                    1.0
+                } else {
+                    let at = |y: &[f64]| interp(&sim.t, y, t);
+                    let dp = (at(&sim.x0) - part.x0[i]).hypot(at(&sim.y0) - part.y0[i]) / ship.lpp;
+                    (dp + (at(&sim.psi) - part.psi[i]).abs()).min(1.0)
+                };
+                sum_sq += e * e;
+                count += 1;
+            }
+        }
+    }
+    if count == 0 {
+        return f64::INFINITY;
+    }
+    (sum_sq / count as f64).sqrt()
 }

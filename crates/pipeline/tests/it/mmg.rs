@@ -6,8 +6,8 @@ use std::path::Path;
 use shipid_io::{Dataset, Manoeuvre, Side};
 use shipid_pipeline::fit::{EstimatorSpec, WindowSpec, fit_dataset, load_set};
 use shipid_pipeline::mmg::{
-    MmgFit, MmgFitOptions, MmgGeometry, PriorWeight, fit_mmg, fit_mmg_with_priors, load_mmg_model,
-    priors, write_mmg_model,
+    CvCriterion, MmgFit, MmgFitOptions, MmgGeometry, PriorWeight, fit_mmg, fit_mmg_with_priors,
+    load_mmg_model, priors, refine_mmg, write_mmg_model,
 };
 use shipid_pipeline::simulate::simulate_manoeuvre;
 use shipid_sim::{AbkowitzDynamics, Dynamics, Metrics, MmgModel, MmgParameters, State, metrics};
@@ -222,7 +222,7 @@ fn a_bound_holds_an_estimate_the_data_would_push_past_it() {
 fn cross_validation_chooses_the_prior_weight_with_the_lowest_held_out_cost() {
     let ds = default_data();
     let mut o = options(&["zz35_35_ps.csv", "zz35_35_sb.csv"]);
-    o.prior_weight = PriorWeight::CrossValidated;
+    o.prior_weight = PriorWeight::CrossValidated(CvCriterion::Replay);
     let f = fit_mmg(&ds, &MmgGeometry::kvlcc2_model_scale(), &o).unwrap();
     let best =
         f.cv.iter()
@@ -334,4 +334,29 @@ fn default_data_set_gives_the_reference_propeller_and_rudder() {
         err.is_bad_input() && err.to_string().contains("no [rudder] table"),
         "{err}"
     );
+}
+
+#[test]
+fn mmg_refinement_stays_in_bounds_and_does_not_worsen_the_training_replays() {
+    let ds = default_data();
+    let f = fit(&["zz35_35_ps.csv"]);
+    let recs = [ds.recording("zz35_35_ps.csv").unwrap().recording.clone()];
+    let opts = shipid_pipeline::refine::RefineOptions {
+        max_iterations: 3,
+        ..Default::default()
+    };
+    let (refined, how) = refine_mmg(&f, ds.added_mass.unwrap(), &recs, &opts).unwrap();
+    assert!(
+        how.after_position_rmse_over_l <= how.before_position_rmse_over_l + 1e-9,
+        "{how:?}"
+    );
+    for p in &refined.estimate.params {
+        assert!(
+            p.value >= p.spec.lower && p.value <= p.spec.upper,
+            "{}",
+            p.spec.name
+        );
+    }
+    let (rel, deg) = prediction_errors(&refined.model);
+    assert!(rel < 0.01 && deg < 0.5, "{rel} {deg}");
 }
