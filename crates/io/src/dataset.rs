@@ -126,7 +126,7 @@ impl Dataset {
 
     /// Read a data set but only the recordings whose file name `keep` accepts.
     pub fn load_filtered(path: &Path, keep: impl Fn(&str) -> bool) -> Result<Dataset, InputError> {
-        let text = std::fs::read_to_string(path).map_err(|e| InputError::read(path, &e))?;
+        let text = crate::recording::read_text(path)?;
         let file = parse_dataset(path, &text)?;
         let dir = path.parent().unwrap_or(Path::new("."));
         let propeller = file

@@ -125,11 +125,13 @@ pub struct Imported {
     pub provenance: Vec<String>,
     /// Other files the data set names (the open-water table): output name and contents.
     pub files: Vec<(String, Vec<u8>)>,
+    /// Every file the import read (mapping, sources, open-water table): the output must not overwrite them.
+    pub inputs: Vec<PathBuf>,
 }
 
 /// Read a mapping file and check it.
 pub fn read_mapping(path: &Path) -> Result<Mapping, InputError> {
-    let text = std::fs::read_to_string(path).map_err(|e| InputError::read(path, &e))?;
+    let text = crate::recording::read_text(path)?;
     let m: Mapping = toml::from_str(&text).map_err(|e| InputError::toml(path, &text, &e))?;
     if m.rudder_sign != 1 && m.rudder_sign != -1 {
         return Err(InputError::key(
@@ -348,9 +350,11 @@ pub fn import(mapping_path: &Path, source_dir: Option<&Path>) -> Result<Imported
         .unwrap_or(encoding_rs::UTF_8);
     let mut recordings = Vec::new();
     let mut provenance = Vec::new();
+    let mut inputs = vec![mapping_path.to_path_buf()];
     for r in &m.recordings {
         let src = dir.join(&r.source);
         let bytes = crate::recording::read_bytes(&src)?;
+        inputs.push(src.clone());
         let (text, _, had_errors) = encoding.decode(&bytes);
         if had_errors {
             return Err(InputError::file(
@@ -376,6 +380,7 @@ pub fn import(mapping_path: &Path, source_dir: Option<&Path>) -> Result<Imported
         // Read and fitted now so that a bad table is refused before anything is written.
         crate::open_water::read_open_water(&src, f)?;
         files.push((open_water_output(f), crate::recording::read_bytes(&src)?));
+        inputs.push(src);
     }
     let entries: Vec<RecordingEntry> = m.recordings.iter().map(ImportRecording::entry).collect();
     Ok(Imported {
@@ -383,6 +388,7 @@ pub fn import(mapping_path: &Path, source_dir: Option<&Path>) -> Result<Imported
         recordings,
         provenance,
         files,
+        inputs,
     })
 }
 

@@ -53,19 +53,26 @@ pub fn parse_open_water(
     let mut k_t = Vec::new();
     for (line, row) in lines {
         let fields: Vec<&str> = row.split(',').collect();
+        if fields.len() != names.len() {
+            // More fields than names: typically `0,25` split by a decimal comma.
+            let hint = if fields.len() > names.len() {
+                " (decimal commas? shipid reads `.` as the decimal mark)"
+            } else {
+                ""
+            };
+            return Err(InputError::line(
+                path,
+                line,
+                format!(
+                    "expected {} fields as in the header, found {}{hint}",
+                    names.len(),
+                    fields.len()
+                ),
+            ));
+        }
         let cell = |col: usize| -> Result<f64, InputError> {
-            let raw = fields.get(col).ok_or_else(|| {
-                InputError::line(
-                    path,
-                    line,
-                    format!(
-                        "expected {} fields as in the header, found {}",
-                        names.len(),
-                        fields.len()
-                    ),
-                )
-            })?;
-            parse_cell(raw).map_err(|m| InputError::cell(path, line, col + 1, names[col], m))
+            parse_cell(fields[col])
+                .map_err(|m| InputError::cell(path, line, col + 1, names[col], m))
         };
         let (x, y) = (cell(j_col)?, cell(kt_col)?);
         if let Some(&prev) = j.last()

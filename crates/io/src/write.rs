@@ -112,6 +112,8 @@ pub enum WriteError {
     },
     #[error("{} leads outside the output folder {} (through a symbolic link)", path.display(), dir.display())]
     Escapes { path: PathBuf, dir: PathBuf },
+    #[error("{} is an input of this command ({}); refusing to overwrite it: choose another output folder", path.display(), input.display())]
+    WouldOverwriteInput { path: PathBuf, input: PathBuf },
 }
 
 impl WriteError {
@@ -186,17 +188,20 @@ pub fn write_dataset(
     recordings: &[&Recording],
     header_comments: &[String],
 ) -> Result<(), WriteError> {
-    write_dataset_with(dir, file, recordings, header_comments, &[])
+    write_dataset_with(dir, file, recordings, header_comments, &[], &[])
 }
 
 /// [`write_dataset`] plus other files the data set names (`files`: output name and contents, e.g. the
-/// open-water table), under the same name checks, written before `dataset.toml`.
+/// open-water table), under the same name checks, written before `dataset.toml`. No output may be one
+/// of the `inputs` (an import's mapping and sources when `--out` is their folder): that is refused
+/// before anything is written.
 pub fn write_dataset_with(
     dir: &Path,
     file: &DatasetFile,
     recordings: &[&Recording],
     header_comments: &[String],
     files: &[(String, Vec<u8>)],
+    inputs: &[PathBuf],
 ) -> Result<(), WriteError> {
     if dir.exists() && !dir.is_dir() {
         return Err(WriteError::NotADirectory {
@@ -219,6 +224,27 @@ pub fn write_dataset_with(
                 dir: dir.to_path_buf(),
                 first: first.to_string(),
                 second: name.to_string(),
+            });
+        }
+    }
+    let real_inputs: Vec<(PathBuf, &PathBuf)> = inputs
+        .iter()
+        .filter_map(|p| p.canonicalize().ok().map(|c| (c, p)))
+        .collect();
+    let targets = file
+        .recordings
+        .iter()
+        .map(|e| e.file.as_str())
+        .chain(files.iter().map(|f| f.0.as_str()))
+        .chain(["dataset.toml"]);
+    for name in targets {
+        let target = dir.join(name);
+        if let Ok(real) = target.canonicalize()
+            && let Some((_, input)) = real_inputs.iter().find(|(c, _)| *c == real)
+        {
+            return Err(WriteError::WouldOverwriteInput {
+                path: target,
+                input: input.to_path_buf(),
             });
         }
     }

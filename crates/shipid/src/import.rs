@@ -26,7 +26,15 @@ pub fn run(mapping: &Path, out: &Path, source: Option<&Path>) -> Result<Outcome,
             .into(),
     ];
     let recs: Vec<_> = imported.recordings.iter().collect();
-    write_dataset_with(out, &imported.dataset, &recs, &comments, &imported.files).map_err(|e| {
+    write_dataset_with(
+        out,
+        &imported.dataset,
+        &recs,
+        &comments,
+        &imported.files,
+        &imported.inputs,
+    )
+    .map_err(|e| {
         if e.is_bad_input() {
             bad_input(e)
         } else {

@@ -444,8 +444,15 @@ fn an_import_copies_the_open_water_table_beside_the_data_set() {
     let imported = shipid_io::import::import(&mapping_path, None).unwrap();
     let out = dir.0.join("out");
     let recs: Vec<&Recording> = imported.recordings.iter().collect();
-    shipid_io::write::write_dataset_with(&out, &imported.dataset, &recs, &[], &imported.files)
-        .unwrap();
+    shipid_io::write::write_dataset_with(
+        &out,
+        &imported.dataset,
+        &recs,
+        &[],
+        &imported.files,
+        &imported.inputs,
+    )
+    .unwrap();
     let ds = Dataset::load(&out.join("dataset.toml")).unwrap();
     let p = ds.propeller.unwrap();
     assert_eq!(p.open_water.unwrap().file, "ow.csv");
