@@ -7,6 +7,7 @@ mod effects;
 mod hsva_metrics;
 mod metrics_synthetic;
 mod mmg_check_values;
+mod mmg_rate;
 
 // Public paths other crates use (`shipid diagnose` imports `shipid_sim::sim::RudderFilter`): the rudder
 // filter lives in `dynamics`, next to `Dynamics`, and `sim` and the crate root re-export it.
