@@ -462,7 +462,7 @@ pub fn parse_table(path: &Path, text: &str, m: &Mapping) -> Result<Recording, In
 fn delimiter_hint(line: &str, delimiter: &str) -> String {
     let found = [(';', "\";\""), ('\t', "\"\\t\""), (',', "\",\"")]
         .into_iter()
-        .find(|(c, _)| delimiter.chars().next() != Some(*c) && line.contains(*c));
+        .find(|(c, _)| !delimiter.starts_with(*c) && line.contains(*c));
     match found {
         Some((_, key)) if delimiter != "whitespace" || key != "\"\\t\"" => {
             format!(" (the line contains {key}: should `format.delimiter` be {key}?)")

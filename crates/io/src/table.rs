@@ -125,7 +125,11 @@ impl Columns {
         let mut first: Option<(usize, usize, InputError)> = None;
         for (&q, values) in columns {
             let bound = q.bound_si();
-            let Some(i) = values.iter().position(|v| !(v.abs() <= bound)) else {
+            // `is_finite` first: NaN compares false with everything.
+            let Some(i) = values
+                .iter()
+                .position(|v| !v.is_finite() || v.abs() > bound)
+            else {
                 continue;
             };
             let (col, name) = self
