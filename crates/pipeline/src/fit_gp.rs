@@ -16,7 +16,7 @@ use shipid_sim::{
     GP_INPUTS, GP_KIND, GP_OUTPUTS, GpDynamics, GpModelFile, GpOutputFile, SparsificationInfo,
 };
 
-use crate::error::{PipelineError, bad_input};
+use crate::error::{PipelineError, bad_input, failed};
 use crate::fit::{WindowSpec, training_window, window_range};
 
 /// Default similarity threshold d_gen. On the HSVA 15/5+20/5+30/5+35/5 training data (15 444 samples)
@@ -99,6 +99,25 @@ pub fn fit_gp_dataset(
         }
     }
     let scales = half_ranges(&all);
+    // An input without spread carries no information (the similarity walk then keeps a single
+    // point and the GPs predict a constant): the GP counterpart of a rank-deficient design.
+    let constant: Vec<&str> = GP_INPUTS
+        .iter()
+        .enumerate()
+        .filter(|&(d, _)| (1..all.len()).all(|i| all.row(i)[d] == all.row(0)[d]))
+        .map(|(_, name)| *name)
+        .collect();
+    if !constant.is_empty() {
+        let spans: Vec<String> = windows
+            .iter()
+            .map(|w| format!("{} {}–{} s", w.recording, w.t_start_s, w.t_end_s))
+            .collect();
+        return Err(failed(format!(
+            "rank-deficient: the training window ({}) carries no information on the inputs {} (constant there; e.g. the window ends before the rudder first moves): widen the window or choose other recordings",
+            spans.join("; "),
+            constant.join(", ")
+        )));
+    }
     let sim = Similarity {
         scales: scales.clone(),
         threshold: similarity_threshold,
