@@ -2,7 +2,7 @@
 //! for `bench/refine.md`.
 //!
 //! ```text
-//! cargo xtask refine-bench [--shipid BIN] [--baseline BIN] [--sets reduced32,full68,full74]
+//! cargo xtask refine-bench [--shipid BIN] [--baseline BIN] [--sets reduced32,full68,full74,mmg]
 //!     [--repeats N] [--dataset FILE]
 //! ```
 //!
@@ -13,7 +13,8 @@
 //! error plus equation error, each ÷ its value at the LSQ start; [`refinement_cost`] of this build,
 //! the same yardstick for both) on the training windows, and the validation of every recording of the
 //! data set (whole replay position and heading RMSE, closed-loop MRAE) with the largest difference
-//! between the binaries. A set that is not a polynomial one (`mmg`) gets its times only.
+//! between the binaries. The set `mmg` (the MMG family) is fitted and refined in this process through
+//! the library on ZZ35/35 PS and on all recordings, whole (current build only).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -24,6 +25,7 @@ use shipid_estimators::Solver;
 use shipid_io::{Dataset, Recording};
 use shipid_model::{AbkowitzModel, ModelFile};
 use shipid_pipeline::fit::{EstimatorSpec, WindowSpec, fit_dataset, load_set};
+use shipid_pipeline::mmg::{MmgFitOptions, fit_mmg_dataset, refine_mmg};
 use shipid_pipeline::refine::{RefineOptions, refinement_cost};
 use shipid_pipeline::validate::validate_recording;
 use shipid_sim::AbkowitzDynamics;
@@ -41,7 +43,12 @@ fn parse_args() -> Result<Args> {
     let mut a = Args {
         shipid: root.join("target/release/shipid"),
         baseline: None,
-        sets: vec!["reduced32".into(), "full68".into(), "full74".into()],
+        sets: vec![
+            "reduced32".into(),
+            "full68".into(),
+            "full74".into(),
+            "mmg".into(),
+        ],
         repeats: 3,
         dataset: root.join("data/kvlcc2-mmg/dataset.toml"),
     };
@@ -127,6 +134,55 @@ fn refined_polynomial(out: &Path) -> Result<(AbkowitzModel, shipid_model::Refine
     Ok((file.to_model()?, how))
 }
 
+/// The mmg family fitted and refined in this process on ZZ35/35 PS and on every recording (whole),
+/// median times over `repeats`: table rows.
+fn mmg_refinement(ds: &Dataset, repeats: usize) -> Result<Vec<String>> {
+    let mut rows = Vec::new();
+    for (label, recordings) in [
+        ("zz35_35_ps.csv", vec!["zz35_35_ps.csv".to_string()]),
+        ("all six", Vec::new()),
+    ] {
+        let opts = MmgFitOptions {
+            recordings,
+            window: WindowSpec::Whole,
+            ..MmgFitOptions::default()
+        };
+        let added = ds.added_mass.context("the data set has no [added_mass]")?;
+        let (mut fits, mut refines, mut last) = (Vec::new(), Vec::new(), None);
+        for _ in 0..repeats {
+            let started = Instant::now();
+            let fit = fit_mmg_dataset(ds, &opts)?;
+            fits.push(started.elapsed().as_secs_f64());
+            let windows: Vec<Recording> = fit
+                .windows
+                .iter()
+                .filter_map(|w| {
+                    let r = &ds.recording(&w.recording)?.recording;
+                    let lo = r.t.partition_point(|&t| t < w.t_start_s);
+                    let hi = r.t.partition_point(|&t| t <= w.t_end_s);
+                    Some(r.slice(lo..hi))
+                })
+                .collect();
+            let started = Instant::now();
+            let (_, how) = refine_mmg(&fit, added, &windows, &RefineOptions::default())?;
+            refines.push(started.elapsed().as_secs_f64());
+            last = Some((fit.estimate.params.len(), how));
+        }
+        let (parameters, how) = last.context("no repeat")?;
+        rows.push(format!(
+            "| {label} | {parameters} | {:.2} | {:.2} | {} | {:.2e} → {:.2e} | {:.4} → {:.4} |",
+            median(fits),
+            median(refines),
+            how.iterations,
+            how.before_position_rmse_over_l,
+            how.after_position_rmse_over_l,
+            how.before_heading_rmse_deg,
+            how.after_heading_rmse_deg
+        ));
+    }
+    Ok(rows)
+}
+
 /// Validation of a model on every recording: (position RMSE ÷ L, heading RMSE [deg], MRAE).
 fn validation(model: &AbkowitzModel, ds: &Dataset) -> Vec<(String, f64, f64, Option<f64>)> {
     let dynamics = AbkowitzDynamics(model.clone());
@@ -168,6 +224,7 @@ pub fn run() -> Result<()> {
     );
     println!("|---|---|---|---|---|---|---|---|");
     let mut comparisons = Vec::new();
+    let mut mmg_rows = Vec::new();
     for set in &a.sets {
         let binaries: Vec<(&str, &PathBuf)> = a
             .baseline
@@ -175,19 +232,11 @@ pub fn run() -> Result<()> {
             .map(|b| ("baseline", b))
             .chain(std::iter::once(("current", &a.shipid)))
             .collect();
-        let Ok(polynomial) = load_set(set) else {
-            // Not a polynomial set (the mmg family): its time only.
-            for (label, bin) in binaries {
-                let out = scratch.join(format!("{label}_{set}.toml"));
-                let timed = time_fit(bin, &a.dataset, set, a.repeats, &out)?;
-                let fit = timed.fit_s.map_or("–".into(), |s| format!("{s:.2}"));
-                println!(
-                    "| {set} | {label} | {:.2} | {fit} | – | – | – | – |",
-                    timed.wall_s
-                );
-            }
+        if set == "mmg" {
+            mmg_rows.extend(mmg_refinement(&ds, a.repeats)?);
             continue;
-        };
+        }
+        let polynomial = load_set(set)?;
         // The LSQ start every binary refines, and its training windows.
         let start = fit_dataset(
             &ds,
@@ -233,6 +282,20 @@ pub fn run() -> Result<()> {
             runs.push((label, validation(&model, &ds)));
         }
         comparisons.push((set.clone(), runs));
+    }
+    if !mmg_rows.is_empty() {
+        println!();
+        println!(
+            "MMG family in this build (`fit_mmg_dataset` + `refine_mmg`, Parametric's finite-difference derivatives):"
+        );
+        println!();
+        println!(
+            "| training (whole) | parameters | equation-error fit [s] | refinement [s] | iterations | pos/L before → after | ψ before → after [°] |"
+        );
+        println!("|---|---|---|---|---|---|---|");
+        for row in &mmg_rows {
+            println!("{row}");
+        }
     }
     println!();
     println!("Validation on every recording (whole replay; closed-loop MRAE):");
