@@ -7,8 +7,6 @@ use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::runner::{CaseOutcome, OutcomeCounts};
-
 /// A plain line is printed each time this share of the cases has finished …
 const LINE_EVERY_SHARE: f64 = 0.05;
 /// … or this long after the previous line, whichever comes first.
@@ -21,7 +19,9 @@ pub struct Tally {
     pub done: usize,
     /// Of `done`, the cases computed in this run (the rest were finished earlier and reused).
     pub computed: usize,
-    pub counts: OutcomeCounts,
+    /// Of `done`, the cases whose fit could not be computed, and those with a diverged prediction.
+    pub failed: usize,
+    pub diverged: usize,
     pub elapsed_s: f64,
 }
 
@@ -40,11 +40,7 @@ impl Tally {
         };
         format!(
             "progress: {}/{} cases, {} failed, {} diverged, elapsed {:.0} s{eta}",
-            self.done,
-            self.total,
-            self.counts.fit_failed,
-            self.counts.some_prediction_diverged,
-            self.elapsed_s
+            self.done, self.total, self.failed, self.diverged, self.elapsed_s
         )
     }
 }
@@ -70,7 +66,8 @@ enum Display {
 struct State {
     done: usize,
     computed: usize,
-    counts: OutcomeCounts,
+    failed: usize,
+    diverged: usize,
     last_line_done: usize,
     last_line: Instant,
 }
@@ -108,26 +105,26 @@ impl Progress {
             state: Mutex::new(State {
                 done: 0,
                 computed: 0,
-                counts: OutcomeCounts::default(),
+                failed: 0,
+                diverged: 0,
                 last_line_done: 0,
                 last_line: now,
             }),
         }
     }
 
-    /// One more case finished (`computed`: in this run, not reused).
-    pub fn case_done(&self, outcome: CaseOutcome, computed: bool) {
+    /// One more case finished (`computed`: in this run, not reused; `failed`: its fit could not be
+    /// computed; `diverged`: a prediction of its model diverged).
+    pub fn case_done(&self, computed: bool, failed: bool, diverged: bool) {
         let mut s = self.state.lock().unwrap_or_else(|p| p.into_inner());
         s.done += 1;
         s.computed += usize::from(computed);
-        s.counts.add(outcome);
+        s.failed += usize::from(failed);
+        s.diverged += usize::from(diverged);
         match &self.display {
             Display::Hidden => {}
             Display::Bar(bar) => {
-                bar.set_message(format!(
-                    "{} fit failed, {} diverged",
-                    s.counts.fit_failed, s.counts.some_prediction_diverged
-                ));
+                bar.set_message(format!("{} fit failed, {} diverged", s.failed, s.diverged));
                 bar.inc(1);
             }
             Display::Lines => {
@@ -136,7 +133,8 @@ impl Progress {
                         total: self.total,
                         done: s.done,
                         computed: s.computed,
-                        counts: s.counts,
+                        failed: s.failed,
+                        diverged: s.diverged,
                         elapsed_s: self.started.elapsed().as_secs_f64(),
                     };
                     eprintln!("{}", tally.line());
@@ -183,11 +181,8 @@ mod tests {
             total: 800,
             done: 120,
             computed: 100,
-            counts: OutcomeCounts {
-                every_prediction_ok: 116,
-                some_prediction_diverged: 1,
-                fit_failed: 3,
-            },
+            failed: 3,
+            diverged: 1,
             elapsed_s: 40.0,
         };
         assert_eq!(

@@ -196,7 +196,7 @@ impl OutcomeCounts {
         c
     }
 
-    pub(crate) fn add(&mut self, o: CaseOutcome) {
+    fn add(&mut self, o: CaseOutcome) {
         match o {
             CaseOutcome::Ok => self.every_prediction_ok += 1,
             CaseOutcome::Diverged => self.some_prediction_diverged += 1,
@@ -582,7 +582,12 @@ pub fn run_study(
                         r
                     }
                 };
-                meter.case_done(result.outcome(), computed);
+                let outcome = result.outcome();
+                meter.case_done(
+                    computed,
+                    outcome == CaseOutcome::FitFailed,
+                    outcome == CaseOutcome::Diverged,
+                );
                 Ok(result)
             })
             .collect()
