@@ -188,8 +188,10 @@ pub fn compare_manoeuvre(
     let mut relative_error = std::collections::BTreeMap::new();
     if let Some(p) = &predicted {
         for ((key, a), (_, b)) in recorded.entries().iter().zip(p.entries().iter()) {
+            // A subnormal recorded value would give an infinite error, which JSON writes as null.
             if let (Some(a), Some(b)) = (a, b)
                 && a.abs() > 0.0
+                && ((b - a) / a).is_finite()
             {
                 relative_error.insert(key.to_string(), (b - a) / a);
             }

@@ -45,26 +45,47 @@ pub fn report_json(out: &FitOutput, warnings: &[String]) -> Value {
             .filter_map(|(n, v)| v.map(|v| (n, v)))
             .collect();
         vifs.sort_by(|a, b| b.1.total_cmp(&a.1));
+        // An infinite VIF (exactly collinear) is not a JSON number: those regressors are listed
+        // apart.
+        let collinear: Vec<&String> = vifs
+            .iter()
+            .filter(|(_, v)| !v.is_finite())
+            .map(|(n, _)| *n)
+            .collect();
         let largest: serde_json::Map<String, Value> = vifs
             .iter()
+            .filter(|(_, v)| v.is_finite())
             .take(TOP_VIFS)
             .map(|(n, v)| ((*n).clone(), json!(v)))
             .collect();
-        dofs.insert(
-            d.dof.to_string(),
-            json!({
-                "status": d.fit.status,
-                "residual_rms": d.residual_rms,
-                "target_rms": d.target_rms,
-                "condition_number": d.condition_number,
-                "scaled_condition_number": d.scaled_condition_number,
-                "largest_vif": largest,
-                "objective": d.fit.objective,
-                "iterations": d.fit.iterations,
-                "hyper_parameter": d.tuning.as_ref().map(|t| t.best),
-                "epsilon": shipid_pipeline::fit::svr_epsilon(&d.fit.estimator),
-            }),
-        );
+        let mut entry = json!({
+            "status": d.fit.status,
+            "residual_rms": d.residual_rms,
+            "target_rms": d.target_rms,
+            "condition_number": d.condition_number,
+            "scaled_condition_number": d.scaled_condition_number,
+            "largest_vif": largest,
+            "objective": d.fit.objective,
+            "iterations": d.fit.iterations,
+            "hyper_parameter": d.tuning.as_ref().map(|t| t.best),
+            "epsilon": shipid_pipeline::fit::svr_epsilon(&d.fit.estimator),
+        });
+        if let Value::Object(o) = &mut entry {
+            // Undefined (an estimator without the hyper-parameter) or infinite (a rank-deficient
+            // design) values are left out: JSON would write both as null.
+            o.retain(|_, v| !v.is_null());
+            if !collinear.is_empty() {
+                o.insert("collinear_regressors".into(), json!(collinear));
+            }
+            if let shipid_estimators::Status::RankDeficient { zero_columns } = &d.fit.status {
+                let names: Vec<&String> = zero_columns
+                    .iter()
+                    .filter_map(|&j| d.names.get(j))
+                    .collect();
+                o.insert("regressors_without_information".into(), json!(names));
+            }
+        }
+        dofs.insert(d.dof.to_string(), entry);
     }
     let mut report = json!({
         "fit_time_s": out.fit_time_s,
