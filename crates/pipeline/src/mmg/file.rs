@@ -6,7 +6,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 use shipid_io::{AddedMass, Ship};
-use shipid_model::TrainingWindow;
+use shipid_model::{Refinement, TrainingWindow};
 use shipid_sim::MmgModel;
 
 use super::MmgFit;
@@ -64,6 +64,10 @@ pub struct MmgEstimatorEntry {
     pub residual_rms: [f64; 3],
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub cv: Vec<CvEntry>,
+    /// The output-error refinement after the equation error (`fit --refine`); the standard errors
+    /// and data shares are then those of the equation-error estimate.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub refinement: Option<Refinement>,
 }
 
 /// `[[parameter]]` of the model file.
@@ -140,6 +144,7 @@ impl MmgModelFile {
                         held_out_cost: c.held_out_cost,
                     })
                     .collect(),
+                refinement: None,
             },
             training: fit.windows.clone(),
             parameters: fit
@@ -253,17 +258,38 @@ impl MmgModelFile {
     }
 }
 
-/// The TOML text of a fit's model file, with a comment on what it is.
-pub fn write_mmg_model(fit: &MmgFit, added: AddedMass) -> Result<String, PipelineError> {
-    let file = MmgModelFile::of_fit(fit, added);
+/// The TOML text of a model file, with a comment on what it is.
+pub fn write_mmg_model_file(file: &MmgModelFile) -> Result<String, PipelineError> {
     let body =
-        toml::to_string(&file).map_err(|e| crate::error::failed(format!("mmg model file: {e}")))?;
+        toml::to_string(file).map_err(|e| crate::error::failed(format!("mmg model file: {e}")))?;
     Ok(format!(
-        "# MMG model (Yasukawa & Yoshimura 2015 structure) identified by shipid from free-running \
+        "# MMG model (Yasukawa & Yoshimura 2015 structure) identified by shipid {} from free-running \
          recordings.\n# Each [[parameter]]: value, bounds, prior with its source, standard error, \
          the data's share of its precision\n# and whether the data determine it (share > {DETERMINED_SHARE}). \
-         docs/mmg.md explains the fields.\n{body}"
+         docs/mmg.md explains the fields.\n{body}",
+        env!("CARGO_PKG_VERSION")
     ))
+}
+
+/// The TOML text of a fit's model file.
+pub fn write_mmg_model(fit: &MmgFit, added: AddedMass) -> Result<String, PipelineError> {
+    write_mmg_model_file(&MmgModelFile::of_fit(fit, added))
+}
+
+/// The model of `text` when its `kind` is `mmg`; `None` for any other kind (or text that is not TOML,
+/// which the other readers then name).
+pub fn load_mmg_model_if_kind(path: &Path, text: &str) -> Result<Option<MmgModel>, PipelineError> {
+    let is_mmg = toml::from_str::<toml::Table>(text)
+        .ok()
+        .and_then(|t| {
+            t.get("kind")
+                .and_then(|k| k.as_str().map(|k| k == MMG_KIND))
+        })
+        .unwrap_or(false);
+    if !is_mmg {
+        return Ok(None);
+    }
+    load_mmg_model(path, text).map(Some)
 }
 
 /// The model of an MMG model file's text (`path` names it in errors).

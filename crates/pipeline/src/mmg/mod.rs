@@ -31,14 +31,18 @@ use shipid_io::{Dataset, Recording};
 use shipid_model::TrainingWindow;
 use shipid_sim::{Dynamics, MmgModel, State};
 
-pub use file::{MMG_KIND, MmgModelFile, load_mmg_model, write_mmg_model};
+pub use file::{
+    MMG_KIND, MmgModelFile, load_mmg_model, load_mmg_model_if_kind, write_mmg_model,
+    write_mmg_model_file,
+};
 pub use geometry::MmgGeometry;
 pub use identify::{DETERMINED_SHARE, EqSample, Estimate, ParamEstimate, Problem};
 pub use priors::{ParamSpec, Role, priors};
 pub use refine::{ParametricMmg, refine_mmg};
 
 use crate::error::{PipelineError, bad_input, failed};
-use crate::fit::{WindowSpec, chosen_recordings, training_window, window_range};
+use crate::fit::{EstimatorSpec, WindowSpec, chosen_recordings, training_window, window_range};
+use crate::refine::RefineOptions;
 use crate::replay::{replay_segment, segments};
 use crate::validate::interp;
 
@@ -456,4 +460,98 @@ fn replay_score(
         return f64::INFINITY;
     }
     (sum_sq / count as f64).sqrt()
+}
+
+/// The set name that selects this family on the command line and in studies.
+pub const SET_NAME: &str = "mmg";
+
+impl MmgFitOptions {
+    /// The options of `shipid fit --set mmg`: `--estimator bounded-lsq|ridge`, `--lambda` (the prior
+    /// weight) or `--tune` (cross-validated by segment replays); the other estimators' settings are
+    /// refused.
+    pub fn from_spec(
+        spec: &EstimatorSpec,
+        recordings: &[String],
+        window: WindowSpec,
+    ) -> Result<MmgFitOptions, PipelineError> {
+        let estimator = MmgEstimator::parse(&spec.name)?;
+        for (given, flag) in [
+            (spec.alpha.is_some(), "alpha"),
+            (spec.c.is_some(), "c"),
+            (spec.epsilon.is_some(), "epsilon"),
+            (spec.similarity.is_some(), "similarity"),
+        ] {
+            if given {
+                return Err(bad_input(format!("--{flag} does not apply to --set mmg")));
+            }
+        }
+        let prior_weight = match (spec.lambda, spec.tune) {
+            (Some(_), true) => {
+                return Err(bad_input(
+                    "--set mmg: give the prior weight --lambda or --tune, not both",
+                ));
+            }
+            (Some(l), false) if l.is_finite() && l > 0.0 => PriorWeight::Fixed(l),
+            (Some(l), false) => {
+                return Err(bad_input(format!(
+                    "--lambda (the prior weight of --set mmg) must be a positive number, not {l}"
+                )));
+            }
+            (None, true) => PriorWeight::CrossValidated(CvCriterion::Replay),
+            (None, false) => PriorWeight::Fixed(DEFAULT_PRIOR_WEIGHT),
+        };
+        Ok(MmgFitOptions {
+            recordings: recordings.to_vec(),
+            window,
+            estimator,
+            prior_weight,
+            propeller_rate_hz: None,
+        })
+    }
+}
+
+/// `shipid fit --set mmg`: the fit of `ds` (propeller and rudder from its tables), refined when asked,
+/// and its model file (the caller anchors its training paths to where it writes it,
+/// `model_file::anchor_training`, which imports this module's loader).
+pub fn fit_mmg_model_file(
+    ds: &Dataset,
+    opts: &MmgFitOptions,
+    refine_after: bool,
+) -> Result<(MmgFit, MmgModelFile), PipelineError> {
+    let added = ds.added_mass.ok_or_else(|| {
+        bad_input(format!(
+            "{}: no [added_mass] table; the MMG fit needs m_x, m_y and J_z",
+            ds.path.display()
+        ))
+    })?;
+    let fit = fit_mmg_dataset(ds, opts)?;
+    let (fit, refinement) = if refine_after {
+        let started = Instant::now();
+        let (mut refined, how) = refine_mmg(
+            &fit,
+            added,
+            &fit_recordings(&fit, ds),
+            &RefineOptions::default(),
+        )?;
+        refined.fit_time_s += started.elapsed().as_secs_f64();
+        (refined, Some(how))
+    } else {
+        (fit, None)
+    };
+    let mut file = MmgModelFile::of_fit(&fit, added);
+    file.estimator.refinement = refinement;
+    Ok((fit, file))
+}
+
+/// The training windows of a fit as recordings (for the refinement).
+fn fit_recordings(fit: &MmgFit, ds: &Dataset) -> Vec<Recording> {
+    fit.windows
+        .iter()
+        .filter_map(|w| {
+            let r = &ds.recording(&w.recording)?.recording;
+            let lo = r.t.partition_point(|&t| t < w.t_start_s);
+            let hi = r.t.partition_point(|&t| t <= w.t_end_s);
+            Some(r.slice(lo..hi))
+        })
+        .collect()
 }

@@ -360,3 +360,91 @@ fn mmg_refinement_stays_in_bounds_and_does_not_worsen_the_training_replays() {
     let (rel, deg) = prediction_errors(&refined.model);
     assert!(rel < 0.01 && deg < 0.5, "{rel} {deg}");
 }
+
+#[test]
+fn command_line_settings_become_mmg_options() {
+    use shipid_pipeline::mmg::{DEFAULT_PRIOR_WEIGHT, MmgEstimator};
+    let check = |name: &str,
+                 edit: &dyn Fn(&mut EstimatorSpec),
+                 expected: Result<(MmgEstimator, PriorWeight), &str>| {
+        let mut spec = EstimatorSpec::named(name);
+        edit(&mut spec);
+        match (
+            MmgFitOptions::from_spec(&spec, &[], WindowSpec::Whole),
+            expected,
+        ) {
+            (Ok(o), Ok((e, w))) => assert_eq!((o.estimator, o.prior_weight), (e, w), "{name}"),
+            (Err(err), Err(msg)) => {
+                assert!(err.is_bad_input() && err.to_string().contains(msg), "{err}")
+            }
+            (got, want) => panic!("{name}: {:?} vs {want:?}", got.map(|o| o.prior_weight)),
+        }
+    };
+    check(
+        "bounded-lsq",
+        &|_| {},
+        Ok((
+            MmgEstimator::BoundedLsq,
+            PriorWeight::Fixed(DEFAULT_PRIOR_WEIGHT),
+        )),
+    );
+    check(
+        "ridge",
+        &|s| s.lambda = Some(1e-3),
+        Ok((MmgEstimator::Ridge, PriorWeight::Fixed(1e-3))),
+    );
+    check(
+        "bounded-lsq",
+        &|s| s.tune = true,
+        Ok((
+            MmgEstimator::BoundedLsq,
+            PriorWeight::CrossValidated(CvCriterion::Replay),
+        )),
+    );
+    check("lsq", &|_| {}, Err("expected bounded-lsq or ridge"));
+    check("svr", &|_| {}, Err("expected bounded-lsq or ridge"));
+    check(
+        "ridge",
+        &|s| s.alpha = Some(1.0),
+        Err("--alpha does not apply"),
+    );
+    check(
+        "ridge",
+        &|s| s.lambda = Some(0.0),
+        Err("must be a positive number"),
+    );
+    check(
+        "ridge",
+        &|s| {
+            s.lambda = Some(1.0);
+            s.tune = true
+        },
+        Err("not both"),
+    );
+}
+
+#[test]
+fn only_an_mmg_kind_is_read_as_mmg() {
+    use shipid_pipeline::mmg::load_mmg_model_if_kind;
+    let text = write_mmg_model(
+        &fit(&["zz35_35_ps.csv"]),
+        default_data().added_mass.unwrap(),
+    )
+    .unwrap();
+    assert!(
+        load_mmg_model_if_kind(Path::new("m.toml"), &text)
+            .unwrap()
+            .is_some()
+    );
+    let other = text.replacen("kind = \"mmg\"", "kind = \"abkowitz\"", 1);
+    assert!(
+        load_mmg_model_if_kind(Path::new("m.toml"), &other)
+            .unwrap()
+            .is_none()
+    );
+    assert!(
+        load_mmg_model_if_kind(Path::new("m.toml"), "not toml [")
+            .unwrap()
+            .is_none()
+    );
+}
