@@ -218,11 +218,13 @@ pub fn run() -> Result<()> {
             .collect::<Vec<_>>()
             .join(" ")
     );
-    println!();
-    println!(
-        "| set | binary | wall [s] | fit [s] | iterations | training cost | pos/L after | ψ after [°] |"
-    );
-    println!("|---|---|---|---|---|---|---|---|");
+    if a.sets.iter().any(|s| s != "mmg") {
+        println!();
+        println!(
+            "| set | binary | wall [s] | fit [s] | iterations | training cost | pos/L after | ψ after [°] |"
+        );
+        println!("|---|---|---|---|---|---|---|---|");
+    }
     let mut comparisons = Vec::new();
     let mut mmg_rows = Vec::new();
     for set in &a.sets {
@@ -296,6 +298,10 @@ pub fn run() -> Result<()> {
         for row in &mmg_rows {
             println!("{row}");
         }
+    }
+    if comparisons.is_empty() {
+        std::fs::remove_dir_all(&scratch).ok();
+        return Ok(());
     }
     println!();
     println!("Validation on every recording (whole replay; closed-loop MRAE):");
