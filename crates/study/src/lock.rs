@@ -88,7 +88,6 @@ impl Drop for RunLock {
         // Removed while still locked (the file handle closes after this), so a waiting run sees
         // that its handle is stale and retries on a new file.
         let _ = std::fs::remove_file(&self.path);
-        let _ = &self.file;
     }
 }
 
