@@ -320,7 +320,7 @@ pub fn run() -> Result<()> {
                 .map(|(_, v)| {
                     let (_, p, s, m) = &v[k];
                     let dm = match (m, mrae) {
-                        (Some(a), Some(b)) => (a - b).abs(),
+                        (Some(a), Some(b)) => 100.0 * (a - b).abs(),
                         _ => 0.0,
                     };
                     ((p - pos).abs(), (s - psi).abs(), dm)
@@ -330,7 +330,7 @@ pub fn run() -> Result<()> {
                 });
             let mrae = mrae.map_or("–".into(), |m| format!("{:.2} %", 100.0 * m));
             println!(
-                "| {set} | {file} | {pos:.4} | {psi:.4} | {mrae} | pos/L {:.1e}, ψ {:.1e}°, MRAE {:.1e} |",
+                "| {set} | {file} | {pos:.4} | {psi:.4} | {mrae} | pos/L {:.1e}, ψ {:.1e}°, MRAE {:.1e} %-points |",
                 diff.0, diff.1, diff.2
             );
         }
