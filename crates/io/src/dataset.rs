@@ -164,6 +164,19 @@ impl Dataset {
                 opened.push((i, real));
             }
             let mut recording = read_recording(&csv)?;
+            if let Some(p) = &file.propeller
+                && p.rate_rps.is_none()
+                && recording.n.is_none()
+            {
+                return Err(InputError::key(
+                    path,
+                    "propeller.rate_rps",
+                    format!(
+                        "needed: recording[{i}] `{}` has no `n` column, and the model family that uses [propeller] needs the propeller rate (give the constant rate_rps, or record n)",
+                        entry.file
+                    ),
+                ));
+            }
             to_project_conventions(&mut recording, &file);
             recordings.push(DatasetRecording {
                 file: entry.file.clone(),

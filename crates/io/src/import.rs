@@ -223,6 +223,18 @@ pub fn read_mapping(path: &Path) -> Result<Mapping, InputError> {
         })?;
     }
     check_outputs(path, &m.recordings)?;
+    if m.dataset
+        .propeller
+        .as_ref()
+        .is_some_and(|p| p.rate_rps.is_none())
+        && !m.columns.iter().any(|c| c.quantity == Quantity::N.name())
+    {
+        return Err(InputError::key(
+            path,
+            "dataset.propeller.rate_rps",
+            "needed: no column is mapped to `n`, and the model family that uses [propeller] needs the propeller rate (give the constant rate_rps, or map n)",
+        ));
+    }
     if let Some(f) = m
         .dataset
         .propeller

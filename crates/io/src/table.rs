@@ -14,6 +14,10 @@ use crate::write::fmt_sig;
 /// estimator needs a few points on each side of a sample.
 pub const MIN_SAMPLES: usize = 20;
 
+/// Shortest time step [s] (`docs/data-format.md`): 1 MHz sampling is far beyond any ship recording,
+/// and accelerations estimated over shorter steps can overflow.
+pub const MIN_STEP_S: f64 = 1e-6;
+
 /// A time step longer than this many median steps is a gap (`docs/data-format.md`).
 pub const GAP_FACTOR: f64 = 10.0;
 
@@ -168,7 +172,8 @@ impl Columns {
         first.map_or(Ok(()), |(_, _, e)| Err(e))
     }
 
-    /// A step longer than [`GAP_FACTOR`] times the median step is a gap (lost samples), an error: the
+    /// A step shorter than [`MIN_STEP_S`] is not a ship's sampling; a step longer than [`GAP_FACTOR`]
+    /// times the median step is a gap (lost samples), an error: the
     /// acceleration estimate and every replay would bridge it with invented motion.
     fn check_gaps(&self, path: &Path) -> Result<(), InputError> {
         let t = &self.values[&Quantity::T];
@@ -180,6 +185,24 @@ impl Columns {
         let median = steps[steps.len() / 2];
         for i in 1..t.len() {
             let step = t[i] - t[i - 1];
+            if step < MIN_STEP_S {
+                let (col, name) = self
+                    .column_of
+                    .get(&Quantity::T)
+                    .cloned()
+                    .unwrap_or((1, "t".into()));
+                return Err(InputError::cell(
+                    path,
+                    self.lines[i],
+                    col,
+                    &name,
+                    format!(
+                        "a time step of {} s after {} s is shorter than {MIN_STEP_S} s: no ship recording samples that fast (a wrong unit?), and derivatives over it would overflow",
+                        number(step),
+                        number(t[i - 1])
+                    ),
+                ));
+            }
             if step > GAP_FACTOR * median {
                 let (col, name) = self
                     .column_of

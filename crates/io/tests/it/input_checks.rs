@@ -117,6 +117,10 @@ fn time_gaps_repeats_and_reversals_are_refused_with_their_lines() {
         &shift(12, -0.1),
         "rec.csv:14:1: column `t`: time is not strictly increasing (1.1 s after 1.1 s)",
     );
+    check_refused(
+        &recording_text(HEADER, |i, r| r[0] = format!("{}", i as f64 * 1e-9)),
+        "rec.csv:3:1: column `t`: a time step of 1e-9 s after 0 s is shorter than 0.000001 s: no ship recording samples that fast (a wrong unit?), and derivatives over it would overflow",
+    );
     // Uneven sampling within ten median steps is allowed.
     assert!(parse_recording(Path::new("rec.csv"), &shift(12, 0.8)).is_ok());
 }
@@ -437,7 +441,7 @@ fn an_import_copies_the_open_water_table_beside_the_data_set() {
         .collect();
     let ship = SHIP.replace("name = \"d\"\n[ship]", "[dataset.ship]");
     let mapping = format!(
-        "source_dir = \"raw\"\n[format]\ndelimiter = \"whitespace\"\nskip_lines = 1\n{columns}[dataset]\nname = \"i\"\n{ship}[dataset.propeller]\ndiameter_m = 0.2\nx_m = -3.3\nopen_water = \"tables/ow.csv\"\n[dataset.rudder]\narea_m2 = 0.05\nspan_m = 0.3\nx_m = -3.5\n[[recording]]\nsource = \"a.dat\"\nfile = \"a.csv\"\nkind = \"free\"\n"
+        "source_dir = \"raw\"\n[format]\ndelimiter = \"whitespace\"\nskip_lines = 1\n{columns}[dataset]\nname = \"i\"\n{ship}[dataset.propeller]\ndiameter_m = 0.2\nx_m = -3.3\nopen_water = \"tables/ow.csv\"\nrate_rps = 10.0\n[dataset.rudder]\narea_m2 = 0.05\nspan_m = 0.3\nx_m = -3.5\n[[recording]]\nsource = \"a.dat\"\nfile = \"a.csv\"\nkind = \"free\"\n"
     );
     let mapping_path = dir.0.join("mapping.toml");
     std::fs::write(&mapping_path, &mapping).unwrap();
