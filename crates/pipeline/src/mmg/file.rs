@@ -167,6 +167,54 @@ impl MmgModelFile {
         }
     }
 
+    /// The lines `shipid fit --set mmg` prints below its first line: residuals, the parameters the
+    /// data determine and those that stayed at their prior (with their data share).
+    pub fn summary(&self) -> Vec<String> {
+        let e = &self.estimator;
+        let mut lines = vec![format!(
+            "  prior weight λ = {:e}{}; equation-error residual RMS X' {:.3e}, Y' {:.3e}, N' {:.3e}",
+            e.prior_weight,
+            if e.tuned { " (cross-validated)" } else { "" },
+            e.residual_rms[0],
+            e.residual_rms[1],
+            e.residual_rms[2]
+        )];
+        if let Some(r) = &e.refinement {
+            lines.push(format!(
+                "  refined: segment-replay position RMSE {:.4} L → {:.4} L, heading {:.3}° → {:.3}° ({} iterations)",
+                r.before_position_rmse_over_l,
+                r.after_position_rmse_over_l,
+                r.before_heading_rmse_deg,
+                r.after_heading_rmse_deg,
+                r.iterations
+            ));
+        }
+        let (data, prior): (Vec<&ParamEntry>, Vec<&ParamEntry>) =
+            self.parameters.iter().partition(|p| p.determined_by_data);
+        lines.push(format!(
+            "  determined by the data ({}): {}",
+            data.len(),
+            data.iter()
+                .map(|p| p.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+        lines.push(format!(
+            "  prior-held ({}): {}",
+            prior.len(),
+            if prior.is_empty() {
+                "none".to_string()
+            } else {
+                prior
+                    .iter()
+                    .map(|p| format!("{} (data share {:.2})", p.name, p.data_share))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            }
+        ));
+        lines
+    }
+
     fn geometry(&self) -> MmgGeometry {
         MmgGeometry {
             propeller_diameter_m: self.propeller.diameter_m,
