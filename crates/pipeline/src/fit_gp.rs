@@ -201,7 +201,7 @@ pub fn fit_gp_dataset(
 fn worse_than_zero(outputs: &[GpOutputReport]) -> Vec<String> {
     outputs
         .iter()
-        .filter(|o| !(o.rms_residual_all_samples <= o.target_rms))
+        .filter(|o| o.rms_residual_all_samples.is_nan() || o.rms_residual_all_samples > o.target_rms)
         .map(|o| {
             format!(
                 "{}: the sparse GP fits its training targets worse than predicting zero (RMS residual {:.3e} > target RMS {:.3e}); try a higher --similarity or other training windows",
