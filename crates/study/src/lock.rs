@@ -21,8 +21,9 @@ pub struct RunLock {
     path: PathBuf,
     /// The pid recorded by a holder that ended without releasing the lock (killed), if any.
     pub taken_over_from: Option<u32>,
-    // Dropped after `Drop::drop` removed the file: the lock is released last.
-    file: File,
+    /// Never read: holding it open holds the OS lock. Dropped after `Drop::drop` removed the file,
+    /// so the lock is released last.
+    _held: File,
 }
 
 impl RunLock {
@@ -69,7 +70,7 @@ impl RunLock {
             return Ok(RunLock {
                 path,
                 taken_over_from,
-                file,
+                _held: file,
             });
         }
         Err(io(std::io::Error::other(
