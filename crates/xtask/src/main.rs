@@ -78,6 +78,9 @@ enum Task {
         /// Nominal level of the bands.
         #[arg(long, default_value_t = 0.9)]
         level: f64,
+        /// Coefficient sets whose replicates are pooled (the first gives the point prediction).
+        #[arg(long, value_delimiter = ',', default_value = "reduced32")]
+        structures: Vec<String>,
     },
     /// List every crate's file import edges and fail on a circle (ARCHITECTURE.md's invariant).
     Circles,
@@ -133,7 +136,8 @@ fn main() -> ExitCode {
             seeds,
             replicates,
             level,
-        } => coverage::run(&out, seeds, replicates, level).map(|()| ExitCode::SUCCESS),
+            structures,
+        } => coverage::run(&out, seeds, replicates, level, &structures).map(|()| ExitCode::SUCCESS),
         Task::Circles => {
             let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
             Ok(if circles::run(&root) {
