@@ -351,6 +351,17 @@ pub(crate) fn chosen_recordings<'a>(
             ds.path.display()
         )));
     }
+    // A recording named twice would be fitted with twice the weight, silently.
+    if let Some((_, r)) = chosen
+        .iter()
+        .enumerate()
+        .find(|(i, r)| chosen[..*i].iter().any(|o| o.file == r.file))
+    {
+        return Err(bad_input(format!(
+            "recording `{}` is named twice in --recordings",
+            r.file
+        )));
+    }
     Ok(chosen)
 }
 

@@ -198,7 +198,7 @@ pub fn fit_gp_dataset(
 /// Outputs whose RMS residual over the training samples exceeds the RMS of their targets: the GP
 /// predicts them worse than a model that always says 0 (e.g. a similarity threshold that keeps too few
 /// points, or hyper-parameters stuck at a poor optimum).
-fn worse_than_zero(outputs: &[GpOutputReport]) -> Vec<String> {
+pub fn worse_than_zero(outputs: &[GpOutputReport]) -> Vec<String> {
     outputs
         .iter()
         .filter(|o| o.rms_residual_all_samples.is_nan() || o.rms_residual_all_samples > o.target_rms)

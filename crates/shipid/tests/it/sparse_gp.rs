@@ -212,3 +212,42 @@ fn a_sparse_gp_covers_its_training_states_and_not_an_unseen_manoeuvre() {
     let outside = shipid_pipeline::range::gp_outside_fraction(&gp, unseen);
     assert!(outside > 0.9, "{outside}");
 }
+
+/// The outputs `worse_than_zero` warns about, for (RMS residual, target RMS) per output.
+fn check_worse_than_zero(fits: &[(f64, f64)], expected: &[&str]) {
+    let outputs: Vec<shipid_pipeline::fit_gp::GpOutputReport> = fits
+        .iter()
+        .enumerate()
+        .map(
+            |(k, &(resid, target))| shipid_pipeline::fit_gp::GpOutputReport {
+                name: ["u_dot_m_s2", "v_dot_m_s2", "r_dot_rad_s2"][k].into(),
+                log_marginal_likelihood: 0.0,
+                iterations: 1,
+                train_time_s: 0.0,
+                rms_residual_all_samples: resid,
+                target_rms: target,
+            },
+        )
+        .collect();
+    let warned: Vec<String> = shipid_pipeline::fit_gp::worse_than_zero(&outputs)
+        .iter()
+        .map(|w| w.split(':').next().unwrap_or_default().to_string())
+        .collect();
+    assert_eq!(warned, expected, "{fits:?}");
+}
+
+#[test]
+fn a_sparse_gp_worse_than_predicting_zero_is_warned_about() {
+    check_worse_than_zero(
+        &[(1e-4, 1e-3), (2e-3, 1e-3), (f64::NAN, 1e-3)],
+        &["v_dot_m_s2", "r_dot_rad_s2"],
+    );
+    // A perfect fit of an all-zero target is not worse than zero.
+    check_worse_than_zero(&[(0.0, 0.0), (1e-3, 1e-3), (0.0, 1e-3)], &[]);
+    // The trained model on the embedded data fits every output better than zero.
+    let ds =
+        shipid_io::Dataset::load(&common::root().join("data/kvlcc2-mmg/dataset.toml")).unwrap();
+    let training: Vec<String> = TRAINING.iter().map(|s| s.to_string()).collect();
+    let (_, _, report) = fit_gp_dataset(&ds, &training, WindowSpec::Whole, 0.9).unwrap();
+    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+}
