@@ -369,9 +369,18 @@ pub fn import(mapping_path: &Path, source_dir: Option<&Path>) -> Result<Imported
         inputs.push(src.clone());
         let (text, _, had_errors) = encoding.decode(&bytes);
         if had_errors {
-            return Err(InputError::file(
+            // The decoder put U+FFFD where the bytes were invalid: its line is the one to fix.
+            let line = text
+                .find('\u{fffd}')
+                .map_or(1, |at| text[..at].matches('\n').count() + 1);
+            return Err(InputError::line(
                 &src,
-                format!("not valid {} text", encoding.name()),
+                line,
+                format!(
+                    "not valid {} text (check `format.encoding` in {})",
+                    encoding.name(),
+                    mapping_path.display()
+                ),
             ));
         }
         let mut rec = parse_table(&src, &text, &m)?;
