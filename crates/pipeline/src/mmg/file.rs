@@ -1,6 +1,7 @@
 //! The model file `kind = "mmg"`: every identified parameter with its value, bounds, prior, the prior's
 //! source, standard error, the data's share of its precision and whether the data determine it; the
-//! ship, added masses, propeller and rudder data; the training windows and the estimator.
+//! ship, added masses, propeller and rudder data; the training windows and the estimator. (The file
+//! of a fit is built in the parent module: this one, read by `model_file`, imports no fit.)
 
 use std::path::Path;
 
@@ -9,7 +10,6 @@ use shipid_io::{AddedMass, Ship};
 use shipid_model::{Refinement, TrainingWindow};
 use shipid_sim::MmgModel;
 
-use super::MmgFit;
 use super::geometry::MmgGeometry;
 use super::identify::{DETERMINED_SHARE, assemble};
 use super::priors::{HULL_NAMES, NONLINEAR_NAMES};
@@ -105,68 +105,6 @@ pub struct MmgModelFile {
 }
 
 impl MmgModelFile {
-    /// The file of a fit.
-    pub fn of_fit(fit: &MmgFit, added: AddedMass) -> MmgModelFile {
-        use shipid_sim::Dynamics;
-        let g = &fit.geometry;
-        MmgModelFile {
-            shipid_version: env!("CARGO_PKG_VERSION").into(),
-            kind: MMG_KIND.into(),
-            ship: *fit.model.ship(),
-            added_mass: added,
-            propeller: PropellerEntry {
-                diameter_m: g.propeller_diameter_m,
-                x_m: g.propeller_x_m,
-                k_t: g.k_t,
-                rate_rps: fit.propeller_rate_hz,
-            },
-            rudder: RudderEntry {
-                area_m2: g.rudder_area_m2,
-                span_m: g.rudder_span_m,
-                x_m: g.rudder_x_m,
-            },
-            estimator: MmgEstimatorEntry {
-                name: fit.estimator.name().into(),
-                method: "equation error, variable projection: hull derivatives by the estimator on the \
-                         prior-augmented design inside, propeller and rudder parameters by projected \
-                         Levenberg–Marquardt outside; maximum a posteriori with the priors"
-                    .into(),
-                prior_weight: fit.lambda,
-                tuned: !fit.cv.is_empty(),
-                determined_share: DETERMINED_SHARE,
-                samples: fit.samples,
-                residual_rms: fit.estimate.residual_rms,
-                cv: fit
-                    .cv
-                    .iter()
-                    .map(|c| CvEntry {
-                        lambda: c.lambda,
-                        held_out_cost: c.held_out_cost,
-                    })
-                    .collect(),
-                refinement: None,
-            },
-            training: fit.windows.clone(),
-            parameters: fit
-                .estimate
-                .params
-                .iter()
-                .map(|p| ParamEntry {
-                    name: p.spec.name.into(),
-                    value: p.value,
-                    lower: p.spec.lower,
-                    upper: p.spec.upper,
-                    prior: p.spec.prior,
-                    prior_sd: p.spec.prior_sd,
-                    prior_source: p.spec.source.clone(),
-                    standard_error: p.standard_error,
-                    data_share: p.data_share,
-                    determined_by_data: p.determined_by_data,
-                })
-                .collect(),
-        }
-    }
-
     /// The lines `shipid fit --set mmg` prints below its first line: residuals, the parameters the
     /// data determine and those that stayed at their prior (with their data share).
     pub fn summary(&self) -> Vec<String> {
@@ -317,11 +255,6 @@ pub fn write_mmg_model_file(file: &MmgModelFile) -> Result<String, PipelineError
          docs/mmg.md explains the fields.\n{body}",
         env!("CARGO_PKG_VERSION")
     ))
-}
-
-/// The TOML text of a fit's model file.
-pub fn write_mmg_model(fit: &MmgFit, added: AddedMass) -> Result<String, PipelineError> {
-    write_mmg_model_file(&MmgModelFile::of_fit(fit, added))
 }
 
 /// The model of `text` when its `kind` is `mmg`; `None` for any other kind (or text that is not TOML,

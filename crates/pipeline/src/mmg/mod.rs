@@ -27,13 +27,13 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use shipid_io::deriv::accelerations_or_estimate;
-use shipid_io::{Dataset, Recording};
+use shipid_io::{AddedMass, Dataset, Recording};
 use shipid_model::TrainingWindow;
 use shipid_sim::{Dynamics, MmgModel, State};
 
 pub use file::{
-    MMG_KIND, MmgModelFile, load_mmg_model, load_mmg_model_if_kind, write_mmg_model,
-    write_mmg_model_file,
+    CvEntry, MMG_KIND, MmgEstimatorEntry, MmgModelFile, ParamEntry, PropellerEntry, RudderEntry,
+    load_mmg_model, load_mmg_model_if_kind, write_mmg_model_file,
 };
 pub use geometry::MmgGeometry;
 pub use identify::{DETERMINED_SHARE, EqSample, Estimate, ParamEstimate, Problem};
@@ -538,7 +538,7 @@ pub fn fit_mmg_model_file(
     } else {
         (fit, None)
     };
-    let mut file = MmgModelFile::of_fit(&fit, added);
+    let mut file = model_file(&fit, added);
     file.estimator.refinement = refinement;
     Ok((fit, file))
 }
@@ -554,4 +554,71 @@ fn fit_recordings(fit: &MmgFit, ds: &Dataset) -> Vec<Recording> {
             Some(r.slice(lo..hi))
         })
         .collect()
+}
+
+/// The model file of a fit.
+pub fn model_file(fit: &MmgFit, added: AddedMass) -> MmgModelFile {
+    let g = &fit.geometry;
+    MmgModelFile {
+        shipid_version: env!("CARGO_PKG_VERSION").into(),
+        kind: MMG_KIND.into(),
+        ship: *fit.model.ship(),
+        added_mass: added,
+        propeller: PropellerEntry {
+            diameter_m: g.propeller_diameter_m,
+            x_m: g.propeller_x_m,
+            k_t: g.k_t,
+            rate_rps: fit.propeller_rate_hz,
+        },
+        rudder: RudderEntry {
+            area_m2: g.rudder_area_m2,
+            span_m: g.rudder_span_m,
+            x_m: g.rudder_x_m,
+        },
+        estimator: MmgEstimatorEntry {
+            name: fit.estimator.name().into(),
+            method:
+                "equation error, variable projection: hull derivatives by the estimator on the \
+                     prior-augmented design inside, propeller and rudder parameters by projected \
+                     Levenberg–Marquardt outside; maximum a posteriori with the priors"
+                    .into(),
+            prior_weight: fit.lambda,
+            tuned: !fit.cv.is_empty(),
+            determined_share: DETERMINED_SHARE,
+            samples: fit.samples,
+            residual_rms: fit.estimate.residual_rms,
+            cv: fit
+                .cv
+                .iter()
+                .map(|c| CvEntry {
+                    lambda: c.lambda,
+                    held_out_cost: c.held_out_cost,
+                })
+                .collect(),
+            refinement: None,
+        },
+        training: fit.windows.clone(),
+        parameters: fit
+            .estimate
+            .params
+            .iter()
+            .map(|p| ParamEntry {
+                name: p.spec.name.into(),
+                value: p.value,
+                lower: p.spec.lower,
+                upper: p.spec.upper,
+                prior: p.spec.prior,
+                prior_sd: p.spec.prior_sd,
+                prior_source: p.spec.source.clone(),
+                standard_error: p.standard_error,
+                data_share: p.data_share,
+                determined_by_data: p.determined_by_data,
+            })
+            .collect(),
+    }
+}
+
+/// The TOML text of a fit's model file.
+pub fn write_mmg_model(fit: &MmgFit, added: AddedMass) -> Result<String, PipelineError> {
+    write_mmg_model_file(&model_file(fit, added))
 }
