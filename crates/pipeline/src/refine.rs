@@ -1,4 +1,5 @@
-//! Output-error refinement of an identified Abkowitz model (`shipid fit --refine`).
+//! Output-error refinement of an identified model (`shipid fit --refine`): the Abkowitz polynomial,
+//! and any family that implements [`Parametric`] (the MMG family does).
 //!
 //! Every estimator of paper 000 minimises the *equation error*: recorded forces minus the polynomial's at
 //! the recorded states. A model that is best in that sense is not the best simulator — small force
@@ -12,14 +13,15 @@
 //! The Jacobian comes from forward sensitivities: each segment is replayed once with ∂x/∂θ integrated
 //! alongside the state by the same RK4 stages ([`replay_segment_sensitivities`]), segments in parallel
 //! — the exact derivative of the discretised replay, where a finite-difference Jacobian replayed every
-//! segment once per coefficient (74 replays of the training data per iteration for full74). The
+//! segment once per coefficient (65 replays of the training data per iteration for full74). The
 //! refinement is generic over [`Parametric`] models, so any parameterised family refines the same way;
 //! [`refine_output_error`] is the Abkowitz entry point.
 //!
-//! Parameters are scaled so that a unit step of any coefficient changes its DOF's force by the RMS of
-//! that force on the training states: p_j = β_j s_j / c_d, with s_j the RMS of term j's monomial and c_d
-//! the RMS of the DOF's polynomial force. Terms whose monomial never moves on the training data stay
-//! fixed. LM never accepts a step that raises the training cost, so the result is at least as good on
+//! Parameters are scaled by [`Parametric::parameter_units`] so that a unit step of any of them matters
+//! as much on the training states. For the polynomial a unit step changes the coefficient's DOF force
+//! by the RMS of that force: p_j = β_j s_j / c_d, with s_j the RMS of term j's monomial and c_d the RMS
+//! of the DOF's polynomial force. Parameters the training data do not move (a monomial that is zero
+//! there) stay fixed; bounds ([`Parametric::parameter_bounds`]) hold by projection. LM never accepts a step that raises the training cost, so the result is at least as good on
 //! the training segments as the equation-error start; whether it generalises is for validation on
 //! other recordings to show.
 
