@@ -131,7 +131,7 @@ impl AbkowitzModel {
     }
 
     /// [`AbkowitzModel::accelerations`] (the same values to the last bit) with their derivatives:
-    /// `d_state[i][k]` = ∂a_i/∂x_k for x = (u [m/s], v [m/s], r [rad/s]), and `d_coefficients[n]` =
+    /// `d_state[i][k]` = ∂a_i/∂x_k for x = (u \[m/s\], v \[m/s\], r \[rad/s\]), and `d_coefficients[n]` =
     /// ∂a/∂β_n in the order of [`AbkowitzModel::flat_coefficients`] (entries past the model's
     /// coefficients are left alone). The accelerations are linear in the coefficients, so ∂a/∂β is
     /// exact: the inverse mass matrix's column of the coefficient's DOF times its monomial. Sensitivity

@@ -130,7 +130,7 @@ struct Problem<'a, P> {
     lpp: f64,
     /// (parameter index, its step per unit of p) of each free parameter.
     free: Vec<(usize, f64)>,
-    /// Replay position (÷ L) and heading [deg] RMSE of the start.
+    /// Replay position (÷ L) and heading \[deg\] RMSE of the start.
     before_rmse: (f64, f64),
 }
 
@@ -337,7 +337,7 @@ fn normal_share(rows: &[f64], r: &[f64], n: usize) -> (Vec<f64>, Vec<f64>) {
     (jtj, jtr)
 }
 
-/// Pose and its sensitivities at `t` [s] from the segment's start, interpolated between steps as the
+/// Pose and its sensitivities at `t` \[s\] from the segment's start, interpolated between steps as the
 /// residuals interpolate the replay ([`interp`]); `None` past the replay's end.
 fn pose_at(s: &SegmentSensitivities, t: f64) -> Option<([f64; 3], Vec<f64>)> {
     let last = s.t.len().checked_sub(1)?;

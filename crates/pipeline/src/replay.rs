@@ -138,9 +138,9 @@ pub fn replay_segment(
 /// A segment replay with the derivatives of its pose with respect to chosen parameter directions.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct SegmentSensitivities {
-    /// Step times [s] from the segment's start (those of [`replay_segment`]'s recording).
+    /// Step times \[s\] from the segment's start (those of [`replay_segment`]'s recording).
     pub t: Vec<f64>,
-    /// (x0 [m], y0 [m], ψ [rad]) at each step.
+    /// (x0 \[m\], y0 \[m\], ψ \[rad\]) at each step.
     pub pose: Vec<[f64; 3]>,
     /// ∂(x0, y0, ψ)/∂p at each step: `pose_sensitivity[step][3 j + axis]` for direction j.
     pub pose_sensitivity: Vec<Vec<f64>>,
