@@ -246,6 +246,9 @@ pub fn parse_dataset(path: &Path, text: &str) -> Result<DatasetFile, InputError>
         ));
     }
     check_ship_ranges(path, s)?;
+    if let Some(a) = &file.added_mass {
+        check_added_mass(path, a, s)?;
+    }
     check_distinct_recordings(path, &file.recordings)?;
     if let Some(p) = &file.propeller {
         check_propeller(path, p, s.lpp)?;
@@ -294,6 +297,35 @@ fn check_ship_ranges(path: &Path, s: &Ship) -> Result<(), InputError> {
                     number(v),
                     number(*lo),
                     number(*hi)
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Added masses are finite and at most 100 times the ship's mass (times L, L² for the moment terms):
+/// real hulls have about 0.02 … 1 times, so anything beyond is a unit or sign-of-magnitude slip that
+/// would dominate every fitted force.
+fn check_added_mass(path: &Path, a: &AddedMass, s: &Ship) -> Result<(), InputError> {
+    let m = s.mass_kg();
+    let l = s.lpp;
+    let entries = [
+        ("X_udot", a.X_udot, m, "kg"),
+        ("Y_vdot", a.Y_vdot, m, "kg"),
+        ("Y_rdot", a.Y_rdot, m * l, "kg m"),
+        ("N_vdot", a.N_vdot, m * l, "kg m"),
+        ("N_rdot", a.N_rdot, m * l * l, "kg m²"),
+    ];
+    for (key, value, scale, unit) in entries {
+        if !value.is_finite() || value.abs() > 100.0 * scale {
+            return Err(InputError::key(
+                path,
+                format!("added_mass.{key}"),
+                format!(
+                    "{} {unit} is not a finite added mass within 100 × the ship's (±{} {unit} for this ship)",
+                    number(value),
+                    number(100.0 * scale)
                 ),
             ));
         }

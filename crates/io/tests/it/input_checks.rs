@@ -477,3 +477,24 @@ fn an_import_copies_the_open_water_table_beside_the_data_set() {
         "{e}"
     );
 }
+
+#[test]
+fn added_masses_must_be_finite_and_of_a_ship_s_order() {
+    let table = "[added_mass]\nX_udot = -247.9\nY_vdot = -2513.0\nY_rdot = 0.0\nN_vdot = 0.0\nN_rdot = -6074.5\n";
+    let cases = [
+        (
+            "X_udot = -247.9",
+            "X_udot = nan",
+            "ds.toml: key `added_mass.X_udot`: NaN kg is not a finite added mass within 100 × the ship's (±327000 kg for this ship)",
+        ),
+        (
+            "N_rdot = -6074.5",
+            "N_rdot = -6.07e13",
+            "ds.toml: key `added_mass.N_rdot`: -60700000000000 kg m² is not a finite added mass within 100 × the ship's (±16023000 kg m² for this ship)",
+        ),
+    ];
+    assert!(parse_dataset(Path::new("ds.toml"), &format!("{SHIP}{table}")).is_ok());
+    for (from, to, expected) in cases {
+        check_dataset_refused(&format!("{SHIP}{}", table.replace(from, to)), expected);
+    }
+}
