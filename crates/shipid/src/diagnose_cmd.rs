@@ -124,7 +124,7 @@ pub fn run(
     let json_out = json_out.as_deref();
     if let Some(p) = json_out {
         let text = serde_json::to_string_pretty(&report).map_err(failed)?;
-        write_atomic(p, text.as_bytes()).map_err(failed)?;
+        write_atomic(p, text.as_bytes()).map_err(|e| crate::write_failed(p, e))?;
         println!("report: {}", p.display());
     }
     let augmented_path = model_out
@@ -152,7 +152,7 @@ pub fn run(
         all.extend(effects);
         let before = WithEffects::new(base.as_ref(), &base_effects).map_err(failed)?;
         let after = WithEffects::new(base.as_ref(), &all).map_err(failed)?;
-        std::fs::create_dir_all(dir).map_err(failed)?;
+        std::fs::create_dir_all(dir).map_err(|e| crate::write_failed(dir, e))?;
         let residuals = normalised_residuals(&input, &ds, &opts);
         for (file, t, e) in &residuals {
             let path = dir.join(format!("{}-residuals.svg", file.trim_end_matches(".csv")));
@@ -313,7 +313,7 @@ fn write_augmented(
     }
     .map_err(failed)?;
     if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
-        std::fs::create_dir_all(parent).map_err(failed)?;
+        std::fs::create_dir_all(parent).map_err(|e| crate::write_failed(parent, e))?;
     }
-    write_atomic(out, text.as_bytes()).map_err(failed)
+    write_atomic(out, text.as_bytes()).map_err(|e| crate::write_failed(out, e))
 }

@@ -155,7 +155,7 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
             modes.singular_values.len()
         )));
     }
-    std::fs::create_dir_all(a.out).map_err(failed)?;
+    std::fs::create_dir_all(a.out).map_err(|e| crate::write_failed(a.out, e))?;
     write_modes(a.out, &modes).map_err(failed)?;
     println!(
         "SVD of {} ships: mode 1 carries {:.1} %, {} modes reach 95 % ({:.1} %); using {} modes",
@@ -221,9 +221,14 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
             .collect();
         print!("{md}");
         let dir = a.out.join(slug(&target.name));
-        std::fs::create_dir_all(&dir).map_err(failed)?;
-        write_atomic(&dir.join("indexes.csv"), csv.as_bytes()).map_err(failed)?;
-        write_atomic(&dir.join("summary.md"), md.as_bytes()).map_err(failed)?;
+        std::fs::create_dir_all(&dir).map_err(|e| crate::write_failed(&dir, e))?;
+        for (name, text) in [
+            ("indexes.csv", csv.as_bytes()),
+            ("summary.md", md.as_bytes()),
+        ] {
+            let path = dir.join(name);
+            write_atomic(&path, text).map_err(|e| crate::write_failed(&path, e))?;
+        }
         let fig = dir.join("motions.svg");
         if let Err(e) = motions_figure(&fig, target, &figures) {
             eprintln!("warning: figure {} not drawn: {e:#}", fig.display());
