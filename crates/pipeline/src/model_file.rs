@@ -153,6 +153,9 @@ fn load_parts(
         return Ok((base, effects));
     }
     check_kind(path, table.as_ref())?;
+    if let Some(mmg) = crate::mmg::load_mmg_model_if_kind(path, &text)? {
+        return Ok((Box::new(mmg), Vec::new()));
+    }
     if let Some(gp) = load_gp_model(path, &text)? {
         return Ok((Box::new(gp), Vec::new()));
     }
