@@ -95,12 +95,12 @@ pub struct SimulateArgs<'a> {
 
 pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
     let m = parse_manoeuvre(a.manoeuvre).map_err(|e| bad_input(format!("--manoeuvre: {e}")))?;
-    if let Some(level) = a.bands {
-        if !(level > 0.0 && level < 1.0) {
-            return Err(bad_input(format!(
-                "--bands must be a level strictly between 0 and 1 (e.g. 0.9), got {level}"
-            )));
-        }
+    if let Some(level) = a.bands
+        && !(level > 0.0 && level < 1.0)
+    {
+        return Err(bad_input(format!(
+            "--bands must be a level strictly between 0 and 1 (e.g. 0.9), got {level}"
+        )));
     }
     let model = load_model(a.model)?;
     // Before the simulation: a model without replicates is refused at once.
@@ -224,13 +224,11 @@ fn add_bands(value: &mut Value, bands: &ManoeuvreBands, with_track: bool) {
     if !without.is_empty() {
         about.insert("without_band".into(), Value::Object(without));
     }
-    if with_track {
-        if let Some(track) = &bands.track {
-            about.insert(
-                "track".into(),
-                serde_json::to_value(track).unwrap_or_default(),
-            );
-        }
+    if with_track && let Some(track) = &bands.track {
+        about.insert(
+            "track".into(),
+            serde_json::to_value(track).unwrap_or_default(),
+        );
     }
     o.insert("bands".into(), Value::Object(about));
     if bands.diverged > 0 {
