@@ -20,7 +20,7 @@ use shipid_sim::{
 use crate::error::{PipelineError, bad_input};
 
 /// The model kinds a model file may declare in `kind` (an augmented file has `base` instead).
-pub const MODEL_KINDS: [&str; 2] = ["abkowitz", GP_KIND];
+pub const MODEL_KINDS: [&str; 3] = ["abkowitz", GP_KIND, crate::mmg::MMG_KIND];
 
 /// How deep augmented files may wrap each other; deeper is surely a mistake (a loop is caught anyway).
 const MAX_BASE_DEPTH: usize = 8;
