@@ -176,6 +176,9 @@ fn print_summary(out: &FitOutput, written: Option<&Path>, as_json: bool, warning
 }
 
 pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
+    if a.set == shipid_pipeline::mmg::SET_NAME {
+        return run_mmg(a);
+    }
     a.estimator.validate()?;
     let set = load_set(a.set)?;
     let ds = Dataset::load(a.dataset)?;
@@ -235,6 +238,53 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
         }
     }
     Ok(outcome)
+}
+
+/// `shipid fit DATASET --set mmg --estimator bounded-lsq|ridge [--lambda λ | --tune] [--refine]`: the
+/// MMG family (docs/mmg.md); its model file gives every parameter with its prior and standard error.
+fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
+    use shipid_pipeline::mmg::{MmgFitOptions, fit_mmg_model_file, write_mmg_model_file};
+    if a.bootstrap.is_some() {
+        return Err(crate::bad_input(
+            "--bootstrap applies to polynomial fits; the mmg model file gives each parameter's standard error",
+        ));
+    }
+    let opts = MmgFitOptions::from_spec(&a.estimator, &a.recordings, a.window)?;
+    let ds = Dataset::load(a.dataset)?;
+    let warnings = training_warnings(&ds, &a.recordings, a.validate);
+    let (fit, mut file) = fit_mmg_model_file(&ds, &opts, a.estimator.refine)?;
+    shipid_pipeline::model_file::anchor_training(&mut file.training, a.out);
+    let text = write_mmg_model_file(&file)?;
+    write_atomic(a.out, text.as_bytes()).map_err(|e| crate::write_failed(a.out, e))?;
+    if a.json {
+        let report = json!({
+            "fit_time_s": fit.fit_time_s,
+            "samples": fit.samples,
+            "set": "mmg",
+            "estimator": file.estimator,
+            "parameters": file.parameters,
+            "warnings": warnings,
+        });
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&report).unwrap_or_default()
+        );
+    } else {
+        println!(
+            "fitted mmg with {} on {} samples in {:.2} ms → {}",
+            file.estimator.name,
+            fit.samples,
+            fit.fit_time_s * 1e3,
+            a.out.display()
+        );
+        file.summary().iter().for_each(|l| println!("{l}"));
+    }
+    if a.validate {
+        let spec = a.out.to_string_lossy();
+        let model = load_model(&spec)?;
+        return Ok(crate::print::validation(model.as_ref(), &spec, &ds, a.json));
+    }
+    Ok(Outcome::Ok)
 }
 
 /// `shipid fit DATASET --estimator sparse-gp [--similarity D] --out MODEL.toml [--json] [--validate]`.

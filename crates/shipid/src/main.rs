@@ -53,7 +53,9 @@ enum Command {
     /// Identify an Abkowitz model from a data set.
     Fit {
         dataset: PathBuf,
-        /// reduced32, full68, full74 (full68 + port/starboard asymmetry), chen2021 or a set file.
+        /// reduced32, full68, full74 (full68 + port/starboard asymmetry), chen2021, a set file, or mmg
+        /// (the MMG model's parameters, docs/mmg.md; --estimator bounded-lsq|ridge, --lambda = the
+        /// prior weight or --tune).
         #[arg(long, default_value = "reduced32")]
         set: String,
         /// lsq, bounded-lsq, ridge, lasso, svr, or sparse-gp (paper 001; --set does not apply).
@@ -355,7 +357,10 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                 refine,
                 similarity,
             };
-            spec.validate()?;
+            // --set mmg reads the estimator's flags its own way (fit_cmd::run_mmg).
+            if set != shipid_pipeline::mmg::SET_NAME {
+                spec.validate()?;
+            }
             if estimator == shipid_pipeline::fit::GP {
                 if bootstrap.is_some() {
                     return Err(shipid::bad_input(
