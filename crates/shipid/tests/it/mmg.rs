@@ -1,0 +1,115 @@
+//! `shipid fit --set mmg`: the model file it writes is a model every command takes; on the HSVA
+//! zig-zags, the 35° turn it predicts (docs/mmg.md).
+
+use crate::common::{check_exit, import_hsva, shared_hsva, shipid, shipid_ok};
+
+/// A metric of `shipid simulate MODEL --manoeuvre M --json`.
+fn simulated(model: &str, manoeuvre: &str, metric: &str) -> f64 {
+    let out = shipid_ok(&["simulate", model, "--manoeuvre", manoeuvre, "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    v[metric]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{metric} in {v}"))
+}
+
+#[test]
+fn fit_set_mmg_writes_a_model_file_that_simulate_and_validate_take() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("mmg.toml");
+    let model = model.to_str().unwrap();
+    let out = shipid_ok(&[
+        "fit",
+        "data/kvlcc2-mmg/dataset.toml",
+        "--set",
+        "mmg",
+        "--estimator",
+        "bounded-lsq",
+        "--recordings",
+        "zz35_35_ps.csv",
+        "--out",
+        model,
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("prior-held"), "{stdout}");
+    let text = std::fs::read_to_string(model).unwrap();
+    assert!(text.contains("kind = \"mmg\""), "{text}");
+    // The turn the fit never saw, against the reference's.
+    for side in ["port", "starboard"] {
+        let m = format!("turning:35:{side}");
+        let fitted = simulated(model, &m, "tactical_diameter");
+        let reference = simulated("mmg:kvlcc2", &m, "tactical_diameter");
+        assert!(
+            (fitted / reference - 1.0).abs() < 0.01,
+            "{side}: {fitted} vs {reference}"
+        );
+    }
+    shipid_ok(&["validate", model, "data/kvlcc2-mmg/dataset.toml"]);
+}
+
+#[test]
+fn set_mmg_refuses_an_estimator_it_has_not() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("m.toml");
+    check_exit(
+        &[
+            "fit",
+            "data/kvlcc2-mmg/dataset.toml",
+            "--set",
+            "mmg",
+            "--estimator",
+            "svr",
+            "--out",
+            model.to_str().unwrap(),
+        ],
+        2,
+        "expected bounded-lsq or ridge",
+    );
+    assert!(!model.exists());
+}
+
+#[test]
+fn mmg_from_the_hsva_zigzags_predicts_the_35_degree_turn_of_docs_mmg() {
+    let Some(source) =
+        shared_hsva("mmg_from_the_hsva_zigzags_predicts_the_35_degree_turn_of_docs_mmg")
+    else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let dataset = import_hsva(&source, &dir.path().join("hsva"));
+    // The SIMMAN KVLCC2 at L = 7 m: Yasukawa & Yoshimura 2015 Table 1's propeller and rudder, HSVA's
+    // open-water points.
+    let text = std::fs::read_to_string(&dataset).unwrap();
+    let at = text.find("[[recording]]").unwrap();
+    let tables = format!(
+        "[propeller]\ndiameter_m = 0.216\nx_m = -3.36\nopen_water = {:?}\n\n[rudder]\narea_m2 = 0.0539\nspan_m = 0.345\nx_m = -3.5\n\n",
+        source
+            .join("open_water_characteristics_kvlcc2.csv")
+            .to_str()
+            .unwrap()
+    );
+    std::fs::write(&dataset, format!("{}{tables}{}", &text[..at], &text[at..])).unwrap();
+    let model = dir.path().join("mmg.toml");
+    let model = model.to_str().unwrap();
+    let fit = shipid(&[
+        "fit",
+        dataset.to_str().unwrap(),
+        "--set",
+        "mmg",
+        "--estimator",
+        "bounded-lsq",
+        "--tune",
+        "--out",
+        model,
+    ]);
+    assert!(
+        fit.status.success(),
+        "{}",
+        String::from_utf8_lossy(&fit.stderr)
+    );
+    // docs/mmg.md: tactical diameters of 3.9–4.0 L, 25–30 % above the MMG reference's 3.1 L (the
+    // zig-zags' small drift angles leave the cubic hull terms to extrapolate into the turn).
+    for side in ["port", "starboard"] {
+        let d = simulated(model, &format!("turning:35:{side}"), "tactical_diameter");
+        assert!((3.6..4.4).contains(&d), "{side}: tactical diameter {d} L");
+    }
+}
