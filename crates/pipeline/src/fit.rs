@@ -300,10 +300,44 @@ impl std::fmt::Display for NoInformation {
             .collect();
         write!(
             f,
-            "rank-deficient: the training window ({}) carries no information on {} (identically zero there; e.g. the window ends before the rudder first moves): widen the window or choose other recordings",
+            "rank-deficient: the training window ({}) carries no information on {} (identically zero or exactly collinear there; e.g. the window ends before the rudder first moves, or just after): widen the window or choose other recordings",
             self.windows.join("; "),
             regressors.join("; ")
         )
+    }
+}
+
+impl DofReport {
+    /// The regressors the training data say nothing about, when there are any: identically zero
+    /// columns ([`shipid_estimators::Status::RankDeficient`]), or, when the effective condition
+    /// number is infinite (columns exactly collinear in floating point), those with an infinite VIF
+    /// (all of them when the VIFs do not single any out).
+    pub fn uninformative(&self) -> Option<Vec<String>> {
+        match &self.fit.status {
+            shipid_estimators::Status::RankDeficient { zero_columns } => Some(
+                zero_columns
+                    .iter()
+                    .filter_map(|&j| self.names.get(j).cloned())
+                    .collect(),
+            ),
+            shipid_estimators::Status::IllConditioned { condition_number }
+                if !condition_number.is_finite() =>
+            {
+                let collinear: Vec<String> = self
+                    .names
+                    .iter()
+                    .zip(&self.vif)
+                    .filter(|(_, v)| v.is_some_and(|v| !v.is_finite()))
+                    .map(|(n, _)| n.clone())
+                    .collect();
+                Some(if collinear.is_empty() {
+                    self.names.clone()
+                } else {
+                    collinear
+                })
+            }
+            _ => None,
+        }
     }
 }
 
@@ -414,16 +448,7 @@ impl FitOutput {
         let regressors: Vec<(Dof, Vec<String>)> = self
             .dofs
             .iter()
-            .filter_map(|d| match &d.fit.status {
-                shipid_estimators::Status::RankDeficient { zero_columns } => Some((
-                    d.dof,
-                    zero_columns
-                        .iter()
-                        .filter_map(|&j| d.names.get(j).cloned())
-                        .collect(),
-                )),
-                _ => None,
-            })
+            .filter_map(|d| d.uninformative().map(|names| (d.dof, names)))
             .collect();
         if regressors.is_empty() {
             return None;
@@ -544,9 +569,7 @@ pub fn fit_dataset(
         tuned: spec.tune,
         refinement: None,
     };
-    let rank_deficient = reports
-        .iter()
-        .any(|d| !d.fit.status.is_identified() && d.fit.status.is_solved());
+    let rank_deficient = reports.iter().any(|d| d.uninformative().is_some());
     // A rank-deficient fit is no model (see `FitOutput::no_information`): nothing to refine.
     let (model, info) = if spec.refine && !rank_deficient {
         let recs: Vec<Recording> = windows
