@@ -97,7 +97,7 @@ pub struct Report {
     pub outside_identification_range: Option<f64>,
     pub explanation: String,
     /// What weakens the diagnosis beyond the explanation: recordings whose propeller rate varies
-    /// although every model family takes it as constant. Absent when empty.
+    /// although the model runs at one constant rate. Absent when empty.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
 }

@@ -297,10 +297,10 @@ pub fn validate_dataset(
     (rows, source)
 }
 
-/// Relative spread of the propeller rate above which a recording is warned about: every model family
-/// takes the rate as constant (the MMG reference at its self-propulsion point, the polynomial sets and
-/// the sparse GP have no `n` input), so a recording whose rate changes by more than a few per cent
-/// carries forces none of them can explain.
+/// Relative spread of the propeller rate above which a recording is warned about: every model runs at
+/// one constant rate (the MMG reference and a fitted MMG model at theirs; the polynomial sets and the
+/// sparse GP have no `n` input), so where a recording's rate departs from it by more than a few per
+/// cent its forces are not the model's.
 pub const PROPELLER_RATE_SPREAD_WARNING: f64 = 0.05;
 
 /// A recording whose propeller rate varies although the model ignores it.
@@ -318,7 +318,7 @@ impl std::fmt::Display for PropellerRateVariation {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "{}: the propeller rate n varies by {:.0} % ({:.3}–{:.3} 1/s) but the model takes it as constant: its forces there are not explained by any model family",
+            "{}: the propeller rate n varies by {:.0} % ({:.3}–{:.3} 1/s) but the model runs at one constant rate: where n departs from it, the model's forces are not the recording's",
             self.recording,
             100.0 * self.relative_spread,
             self.n_low_hz,

@@ -103,7 +103,7 @@ pub fn report_json(out: &FitOutput, warnings: &[String]) -> Value {
 }
 
 /// Warnings about the training recordings (printed on stderr and kept in the JSON report): a
-/// propeller rate that varies although every model family takes it as constant. With `--validate`
+/// propeller rate that varies although the fitted model runs at one constant rate. With `--validate`
 /// the validation warns about every recording instead.
 fn training_warnings(ds: &Dataset, recordings: &[String], validate: bool) -> Vec<String> {
     if validate {
