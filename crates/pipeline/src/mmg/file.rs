@@ -227,6 +227,39 @@ impl MmgModelFile {
                     .into(),
             ));
         }
+        for (key, value) in [
+            ("propeller.diameter_m", self.propeller.diameter_m),
+            ("rudder.area_m2", self.rudder.area_m2),
+            ("rudder.span_m", self.rudder.span_m),
+        ] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(at(
+                    key.into(),
+                    format!("must be a positive number, not {value}"),
+                ));
+            }
+        }
+        for (key, value) in [
+            ("propeller.x_m", self.propeller.x_m),
+            ("rudder.x_m", self.rudder.x_m),
+        ] {
+            if !(value.is_finite() && value.abs() <= self.ship.lpp) {
+                return Err(at(
+                    key.into(),
+                    format!(
+                        "must be a position within the ship length {} m, not {value}",
+                        self.ship.lpp
+                    ),
+                ));
+            }
+        }
+        let rate = self.propeller.rate_rps;
+        if !(rate.is_finite() && rate >= 0.0) {
+            return Err(at(
+                "propeller.rate_rps".into(),
+                format!("must be a finite rate ≥ 0, not {rate}"),
+            ));
+        }
         let geometry = self.geometry();
         geometry.check(
             self.ship.lpp,
