@@ -302,6 +302,9 @@ pub fn run_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
     if case.estimator.name == crate::study::GP {
         return run_gp_case(study, case);
     }
+    if case.set == shipid_pipeline::mmg::SET_NAME {
+        return run_mmg_case(study, case);
+    }
     let set = match load_set(&resolve_set(study, &case.set)) {
         Ok(s) => s,
         Err(e) => return (failed(e.to_string()), None),
@@ -494,6 +497,51 @@ fn run_gp_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
         tests,
     };
     (result, shipid_pipeline::fit_gp::model_text(&file).ok())
+}
+
+/// An `mmg` case (docs/mmg.md): the MMG family's fit, then validation on every test recording. Its
+/// `dofs` are the equation error's X, Y, N (prime forces): `objective` is each one's term of the data
+/// part of J ((residual RMS ÷ force RMS)²), `hyper_parameter` the prior weight λ.
+fn run_mmg_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
+    use shipid_pipeline::mmg::{MmgFitOptions, fit_mmg_model_file, write_mmg_model_file};
+    let fitted = MmgFitOptions::from_spec(&case.estimator, &case.training, case.window)
+        .and_then(|o| fit_mmg_model_file(&study.dataset, &o, case.estimator.refine));
+    let (fit, file) = match fitted {
+        Ok(x) => x,
+        Err(e) => return (CaseResult::failed_fit(case, e.to_string()), None),
+    };
+    let tests = test_rows(study, &fit.model, &|_| None);
+    let prior_held: Vec<&str> = file
+        .parameters
+        .iter()
+        .filter(|p| !p.determined_by_data)
+        .map(|p| p.name.as_str())
+        .collect();
+    let result = CaseResult {
+        case_id: case.id.clone(),
+        status: CaseStatus::Ok,
+        message: Some(format!("mmg: prior-held {}", prior_held.join(", "))),
+        fit_time_s: Some(fit.fit_time_s),
+        samples: fit.samples,
+        dofs: ["X", "Y", "N"]
+            .iter()
+            .zip(fit.estimate.residual_rms.iter().zip(fit.estimate.force_rms))
+            .map(|(dof, (&rms, scale))| DofSummary {
+                dof: dof.to_string(),
+                status: CaseStatus::Ok,
+                residual_rms: rms,
+                condition_number: None,
+                scaled_condition_number: None,
+                hyper_parameter: Some(fit.lambda),
+                epsilon: None,
+                objective: (rms / scale).powi(2),
+            })
+            .collect(),
+        coefficients: vec![],
+        vif: vec![],
+        tests,
+    };
+    (result, write_mmg_model_file(&file).ok())
 }
 
 /// A set named in a study: shipped name, or a path relative to the study file.

@@ -382,7 +382,7 @@ fn check_sets(path: &Path, sets: &[String], polynomial: bool) -> Result<(), Inpu
         ));
     }
     for (i, s) in sets.iter().enumerate() {
-        if CoefficientSet::builtin(s).is_some() {
+        if CoefficientSet::builtin(s).is_some() || s == shipid_pipeline::mmg::SET_NAME {
             continue;
         }
         let file = beside(path, s);
