@@ -17,6 +17,9 @@ use crate::simulate::{SimGrid, simulate_manoeuvre, simulate_on_grid};
 
 pub use shipid_uncertainty::band::MIN_FINITE_REPLICATES;
 
+/// The eight IMO metrics of one run as `Metrics::entries` gives them.
+type MetricEntries = [(&'static str, Option<f64>); 8];
+
 /// One metric's point prediction and band.
 #[derive(Debug, Clone, Serialize)]
 pub struct MetricBand {
@@ -95,7 +98,7 @@ pub fn manoeuvre_bands(
                 .is_none_or(|r| !matches!(r.status, SimStatus::Ok))
         })
         .count();
-    let replicate_metrics: Vec<Option<[(&'static str, Option<f64>); 8]>> = runs
+    let replicate_metrics: Vec<Option<MetricEntries>> = runs
         .iter()
         .map(|r| {
             r.as_ref()

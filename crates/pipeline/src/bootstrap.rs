@@ -141,7 +141,7 @@ pub fn bootstrap_abkowitz(
     replicates: usize,
     seed: u64,
 ) -> Result<Bootstrap, PipelineError> {
-    if replicates < 2 || replicates > MAX_REPLICATES {
+    if !(2..=MAX_REPLICATES).contains(&replicates) {
         return Err(bad_input(format!(
             "--bootstrap must be between 2 and {MAX_REPLICATES} replicates, got {replicates}"
         )));
@@ -232,7 +232,7 @@ pub fn bootstrap_fit(
     replicates: usize,
     seed: u64,
 ) -> Result<Bootstrap, PipelineError> {
-    let estimators = [0, 1, 2].map(|i| out.dofs[i].fit.estimator.clone());
+    let estimators = [0, 1, 2].map(|i| out.dofs[i].fit.estimator);
     // The equation-error coefficients (before any refinement) are what each replicate departs from.
     let equation_error = AbkowitzModel::new(
         out.model.set.clone(),

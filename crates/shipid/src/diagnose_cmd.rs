@@ -86,6 +86,26 @@ pub fn run(
             dataset.display()
         )));
     }
+    // A horizon raised beyond every recording makes each segment a whole recording: the mismatch
+    // could no longer be located in time, and a model's own drift would be blamed on an effect.
+    // (Short recordings under the default horizon are diagnosed whole, as documented.)
+    let l_over_u0_s = ds.ship.lpp / ds.ship.u0;
+    let longest_s = ds
+        .recordings
+        .iter()
+        .map(|r| r.recording.t.last().unwrap_or(&0.0) - r.recording.t.first().unwrap_or(&0.0))
+        .fold(0.0, f64::max);
+    if horizon_l_over_u0 > DiagnoseOptions::default().horizon_l_over_u0
+        && horizon_l_over_u0 * l_over_u0_s > longest_s
+    {
+        return Err(bad_input(format!(
+            "--horizon {horizon_l_over_u0} L/U0 ({:.0} s) is longer than every recording of {} (the longest lasts {:.0} s = {:.1} L/U0): segments would be whole recordings; the default is 10",
+            horizon_l_over_u0 * l_over_u0_s,
+            dataset.display(),
+            longest_s,
+            longest_s / l_over_u0_s
+        )));
+    }
     let training = training_for_diagnosis(model_spec)?;
     let opts = DiagnoseOptions {
         horizon_l_over_u0,

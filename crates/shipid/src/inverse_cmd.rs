@@ -42,6 +42,8 @@ pub struct InverseArgs<'a> {
     pub max_resim: usize,
     /// Simulations per start of the refinement (0: network only, as in the paper).
     pub refine_evals: usize,
+    /// Run more than [`MAX_SAMPLES`] samples per target.
+    pub allow_large: bool,
 }
 
 fn read_toml<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, CliError> {
@@ -137,12 +139,23 @@ fn dropped_summary(db: &SimulationDatabase) -> String {
         .join("; ")
 }
 
+/// Largest `--samples` run without `--allow-large`.
+pub const MAX_SAMPLES: usize = 100_000;
+
 /// `shipid inverse`.
 pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
     faer::set_global_parallelism(faer::Par::Seq);
     if a.samples < MIN_SAMPLES {
         return Err(bad_input(format!(
             "--samples {}: the network needs at least {MIN_SAMPLES} simulated ships per target",
+            a.samples
+        )));
+    }
+    // Each sample is four simulated manoeuvres (about 2 ms each here) and a row the network trains
+    // on: 2603 (paper 003) takes seconds, a hundred thousand already minutes per target.
+    if a.samples > MAX_SAMPLES && !a.allow_large {
+        return Err(bad_input(format!(
+            "--samples {}: more than {MAX_SAMPLES} simulated ships per target (4 manoeuvres each, simulated and kept in memory); pass --allow-large to run it anyway",
             a.samples
         )));
     }

@@ -108,7 +108,12 @@ enum Command {
         #[arg(long, value_name = "N", allow_negative_numbers = true)]
         bootstrap: Option<i64>,
         /// Seed of the bootstrap draws.
-        #[arg(long, default_value_t = 1, requires = "bootstrap")]
+        #[arg(
+            long,
+            default_value_t = 1,
+            requires = "bootstrap",
+            allow_negative_numbers = true
+        )]
         bootstrap_seed: u64,
     },
     /// Run a study: its grid of cases in parallel, result tables under results/<study>/.
@@ -257,6 +262,9 @@ enum Command {
         refine_evals: usize,
         #[arg(long, default_value = "results/paper003")]
         out: PathBuf,
+        /// Simulate more than 100 000 ships per target (refused without it).
+        #[arg(long)]
+        allow_large: bool,
     },
 }
 
@@ -495,6 +503,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             resimulate,
             refine_evals,
             out,
+            allow_large,
         } => shipid::inverse_cmd::run(&shipid::inverse_cmd::InverseArgs {
             targets: &targets,
             ships: ships.as_deref(),
@@ -504,6 +513,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             out: &out,
             max_resim: resimulate,
             refine_evals,
+            allow_large,
         }),
     }
 }

@@ -48,10 +48,12 @@ pub fn spread(replicates: &[Vec<f64>]) -> Result<Spread, UncertaintyError> {
             }
         }
     }
+    let dof = (n - 1) as f64;
     for i in 0..k {
         for j in i..k {
-            cov[i][j] /= (n - 1) as f64;
-            cov[j][i] = cov[i][j];
+            let c = cov[i][j] / dof;
+            cov[i][j] = c;
+            cov[j][i] = c;
         }
     }
     let std_error: Vec<f64> = (0..k).map(|i| cov[i][i].sqrt()).collect();

@@ -121,7 +121,7 @@ pub fn run(
                     Solver::Fast,
                 )
                 .with_context(|| format!("seed {seed}, {set_name}, {name}"))?;
-                let estimators = [0, 1, 2].map(|i| fit.dofs[i].fit.estimator.clone());
+                let estimators = [0, 1, 2].map(|i| fit.dofs[i].fit.estimator);
                 let boot = bootstrap_abkowitz(
                     &noisy,
                     &fit.model,

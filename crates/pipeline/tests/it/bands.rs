@@ -34,7 +34,7 @@ fn zz35_fit(ds: &Dataset) -> FitOutput {
 }
 
 fn replicates(ds: &Dataset, out: &FitOutput, n: usize, seed: u64) -> Bootstrap {
-    let estimators = [0, 1, 2].map(|i| out.dofs[i].fit.estimator.clone());
+    let estimators = [0, 1, 2].map(|i| out.dofs[i].fit.estimator);
     bootstrap_abkowitz(
         ds,
         &out.model,
@@ -81,7 +81,7 @@ fn bootstrap_is_reproducible_and_centred_on_the_fit() {
 fn too_few_or_absurd_replicate_counts_are_refused() {
     let ds = default_data();
     let out = zz35_fit(&ds);
-    let estimators = [0, 1, 2].map(|i| out.dofs[i].fit.estimator.clone());
+    let estimators = [0, 1, 2].map(|i| out.dofs[i].fit.estimator);
     for n in [0, 1, 10_001] {
         let err = bootstrap_abkowitz(
             &ds,
