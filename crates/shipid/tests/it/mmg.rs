@@ -113,3 +113,38 @@ fn mmg_from_the_hsva_zigzags_predicts_the_35_degree_turn_of_docs_mmg() {
         assert!((3.6..4.4).contains(&d), "{side}: tactical diameter {d} L");
     }
 }
+
+#[test]
+fn a_study_names_set_mmg_beside_a_polynomial_set() {
+    let dir = tempfile::tempdir().unwrap();
+    let study = dir.path().join("mmg.toml");
+    let dataset = crate::common::root().join("data/kvlcc2-mmg/dataset.toml");
+    std::fs::write(
+        &study,
+        format!(
+            "name = \"mmg\"\ndescription = \"mmg beside reduced32\"\ndataset = {:?}\nsets = [\"reduced32\", \"mmg\"]\n\n[training]\nrecordings = [[\"zz35_35_ps.csv\"]]\n\n[[estimator]]\nname = \"bounded-lsq\"\n\n[test]\nrecordings = [\"tc35_sb.csv\"]\n",
+            dataset.to_str().unwrap()
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    shipid_ok(&[
+        "run",
+        study.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let summary = std::fs::read_to_string(out.join("summary.csv")).unwrap();
+    let mmg_row = summary
+        .lines()
+        .find(|l| l.starts_with("mmg_"))
+        .unwrap_or_else(|| panic!("{summary}"));
+    assert!(mmg_row.contains(",ok,"), "{mmg_row}");
+    let case = std::fs::read_dir(out.join("cases"))
+        .unwrap()
+        .flatten()
+        .find(|e| e.file_name().to_string_lossy().starts_with("mmg_"))
+        .unwrap();
+    let model = std::fs::read_to_string(case.path().join("model.toml")).unwrap();
+    assert!(model.contains("kind = \"mmg\""));
+}
