@@ -20,7 +20,7 @@ use shipid_sim::{
 use crate::error::{PipelineError, bad_input};
 
 /// The model kinds a model file may declare in `kind` (an augmented file has `base` instead).
-pub const MODEL_KINDS: [&str; 3] = ["abkowitz", GP_KIND, crate::mmg::MMG_KIND];
+pub const MODEL_KINDS: [&str; 3] = ["abkowitz", GP_KIND, crate::mmg::file::MMG_KIND];
 
 /// How deep augmented files may wrap each other; deeper is surely a mistake (a loop is caught anyway).
 const MAX_BASE_DEPTH: usize = 8;
@@ -153,7 +153,7 @@ fn load_parts(
         return Ok((base, effects));
     }
     check_kind(path, table.as_ref())?;
-    if let Some(mmg) = crate::mmg::load_mmg_model_if_kind(path, &text)? {
+    if let Some(mmg) = crate::mmg::file::load_mmg_model_if_kind(path, &text)? {
         return Ok((Box::new(mmg), Vec::new()));
     }
     if let Some(gp) = load_gp_model(path, &text)? {
