@@ -213,14 +213,26 @@ pub fn generate_manoeuvres(
         entries.push(entry_for(&file, &m));
         recordings.push(rec);
     }
+    let reference = shipid_sim::MmgParameters::kvlcc2();
     let dataset = DatasetFile {
         name: "KVLCC2 model, deep water: MMG reference simulation".into(),
         origin: Origin::Midship,
         rudder_sign: 1,
         ship,
         added_mass: Some(kvlcc2_added_mass()),
-        propeller: None,
-        rudder: None,
+        // The reference's propeller and rudder (Y&Y 2015 Tables 1 and 5): what an `mmg` fit needs.
+        propeller: Some(shipid_io::PropellerTable {
+            diameter_m: reference.propeller_diameter_m,
+            x_m: reference.x_p * ship.lpp,
+            k_t: Some(reference.k_t.to_vec()),
+            open_water: None,
+            rate_rps: None,
+        }),
+        rudder: Some(shipid_io::RudderData {
+            area_m2: reference.rudder_area_m2,
+            span_m: reference.rudder_span_m,
+            x_m: reference.x_r * ship.lpp,
+        }),
         recordings: entries,
     };
     Ok(Generated {
