@@ -227,6 +227,7 @@ impl CheckedStudy {
         check_training(path, &raw.training.recordings, known)?;
         let windows = training_windows(path, &raw.training, &dataset)?;
         let estimators = check_estimators(path, &raw.estimators)?;
+        check_mmg_estimators(path, &raw.sets, &estimators)?;
         let tests = test_recordings(path, &raw.test.recordings, known)?;
         let data_fnv1a = data_fingerprint(path, &dataset_path, &dataset)?;
         Ok(CheckedStudy {
@@ -399,6 +400,34 @@ fn check_sets(path: &Path, sets: &[String], polynomial: bool) -> Result<(), Inpu
         // Read now: a broken set file is the study's input error, not a failed fit in every case.
         if let Err(e) = shipid_pipeline::fit::load_set(&file.display().to_string()) {
             return Err(InputError::key(path, format!("sets[{i}]"), e.to_string()));
+        }
+    }
+    Ok(())
+}
+
+/// The grid crosses every set with every estimator: with `mmg` among the sets, an estimator the
+/// mmg family has not (it takes bounded-lsq or ridge, whose λ is its prior weight) would fail in every
+/// one of its cases, so it is refused here, naming the estimator.
+fn check_mmg_estimators(
+    path: &Path,
+    sets: &[String],
+    estimators: &[CheckedEstimator],
+) -> Result<(), InputError> {
+    if !sets.iter().any(|s| s == shipid_pipeline::mmg::SET_NAME) {
+        return Ok(());
+    }
+    for (i, e) in estimators.iter().enumerate() {
+        if e.spec.name == GP {
+            continue;
+        }
+        if let Err(err) = shipid_pipeline::mmg::MmgEstimator::parse(&e.spec.name) {
+            return Err(InputError::key(
+                path,
+                format!("estimator[{i}].name"),
+                format!(
+                    "{err} (the grid crosses it with sets = [\"mmg\"]; put the mmg cases in a study of their own)"
+                ),
+            ));
         }
     }
     Ok(())
