@@ -76,18 +76,7 @@ fn mmg_from_the_hsva_zigzags_predicts_the_35_degree_turn_of_docs_mmg() {
     };
     let dir = tempfile::tempdir().unwrap();
     let dataset = import_hsva(&source, &dir.path().join("hsva"));
-    // The SIMMAN KVLCC2 at L = 7 m: Yasukawa & Yoshimura 2015 Table 1's propeller and rudder, HSVA's
-    // open-water points.
-    let text = std::fs::read_to_string(&dataset).unwrap();
-    let at = text.find("[[recording]]").unwrap();
-    let tables = format!(
-        "[propeller]\ndiameter_m = 0.216\nx_m = -3.36\nopen_water = {:?}\n\n[rudder]\narea_m2 = 0.0539\nspan_m = 0.345\nx_m = -3.5\n\n",
-        source
-            .join("open_water_characteristics_kvlcc2.csv")
-            .to_str()
-            .unwrap()
-    );
-    std::fs::write(&dataset, format!("{}{tables}{}", &text[..at], &text[at..])).unwrap();
+    // The import mapping carries the propeller (HSVA's D, its open-water points) and the rudder.
     let model = dir.path().join("mmg.toml");
     let model = model.to_str().unwrap();
     let fit = shipid(&[
