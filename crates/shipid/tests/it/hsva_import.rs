@@ -45,4 +45,39 @@ fn hsva_overshoots_match_the_source_listing() {
         "first rudder to starboard is positive, got max {max}"
     );
     assert!(rec.n.is_some(), "propeller rate imported");
+    check_propeller_matches_the_measured_thrust(&ds, &dir);
+}
+
+/// The mapping's propeller (D, open-water curve) must explain the thrust HSVA measured on the approach
+/// (column 11, not imported) with a plausible wake fraction: with the 0.216 m of Y&Y 2015's model the
+/// wake would come out near 0.09, with HSVA's 0.204 m near Y&Y's w_P0 = 0.40.
+fn check_propeller_matches_the_measured_thrust(ds: &shipid_io::Dataset, source: &std::path::Path) {
+    let p = ds.propeller.as_ref().expect("[propeller] imported");
+    let rudder = ds.rudder.as_ref().expect("[rudder] imported");
+    assert_eq!((p.diameter_m, rudder.area_m2), (0.204, 0.0539));
+    let raw = std::fs::read(source.join("HSVA_CPMC_KVLCC2_Z_10_10_P.dat")).unwrap();
+    let first: Vec<f64> = String::from_utf8_lossy(&raw)
+        .lines()
+        .nth(4)
+        .unwrap()
+        .split_whitespace()
+        .map(|c| c.parse().unwrap())
+        .collect();
+    let (u_m_s, n_rps, thrust_n) = (first[4].hypot(first[5]), first[9], first[10]);
+    let k_t = thrust_n / (1000.0 * n_rps * n_rps * p.diameter_m.powi(4));
+    // K_T falls with J on the curve: bisect for the J that gives the measured K_T.
+    let (mut lo, mut hi) = (0.0, 0.9);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if p.k_t_at(mid) > k_t {
+            lo = mid
+        } else {
+            hi = mid
+        }
+    }
+    let wake = 1.0 - lo * n_rps * p.diameter_m / u_m_s;
+    assert!(
+        (0.3..0.45).contains(&wake),
+        "wake fraction {wake} from K_T {k_t}"
+    );
 }
