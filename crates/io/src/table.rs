@@ -8,7 +8,7 @@ use std::path::Path;
 use crate::error::{InputError, number};
 use crate::types::{Accelerations, Recording};
 use crate::units::Quantity;
-use crate::write::fmt_sig;
+use crate::units::fmt_sig;
 
 /// Fewest samples a recording may have: shorter records cannot hold a manoeuvre, and the acceleration
 /// estimator needs a few points on each side of a sample.

@@ -192,3 +192,18 @@ impl Quantity {
         )
     }
 }
+
+/// A number with 9 significant digits in its shortest form: exact enough for every channel (relative
+/// 1e-9) and keeps committed data small.
+pub fn fmt_sig(x: f64) -> String {
+    if x == 0.0 {
+        return "0".into();
+    }
+    let rounded: f64 = format!("{x:.8e}").parse().unwrap_or(x);
+    // Plain notation reads best in the usual range; far outside it the exponent form is shorter.
+    if (1e-4..1e9).contains(&rounded.abs()) {
+        format!("{rounded}")
+    } else {
+        format!("{rounded:e}")
+    }
+}

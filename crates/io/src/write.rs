@@ -8,6 +8,7 @@ use std::path::{Component, Path, PathBuf};
 
 use crate::dataset::DatasetFile;
 use crate::types::Recording;
+pub use crate::units::fmt_sig;
 
 /// Write `contents` to `path` so that readers see either the old file or the whole new one.
 pub fn write_atomic(path: &Path, contents: &[u8]) -> std::io::Result<()> {
@@ -31,21 +32,6 @@ pub fn write_atomic(path: &Path, contents: &[u8]) -> std::io::Result<()> {
         f.sync_all()?;
     }
     std::fs::rename(&tmp, path)
-}
-
-/// A number with 9 significant digits in its shortest form: exact enough for every channel (relative
-/// 1e-9) and keeps committed data small.
-pub fn fmt_sig(x: f64) -> String {
-    if x == 0.0 {
-        return "0".into();
-    }
-    let rounded: f64 = format!("{x:.8e}").parse().unwrap_or(x);
-    // Plain notation reads best in the usual range; far outside it the exponent form is shorter.
-    if (1e-4..1e9).contains(&rounded.abs()) {
-        format!("{rounded}")
-    } else {
-        format!("{rounded:e}")
-    }
 }
 
 /// The CSV text of a recording, with `comments` as `#` lines before the header.
