@@ -347,7 +347,9 @@ fn cross_validate(
     rate_hz: f64,
 ) -> Result<(f64, Vec<CvScore>, Vec<f64>), PipelineError> {
     let groups = problem.samples.iter().map(|s| s.group).max().unwrap_or(0) + 1;
-    let folds: Vec<Vec<usize>> = if groups > 1 {
+    let folds: Vec<(Vec<usize>, Vec<usize>)> = if groups >= EXTRAPOLATION_MIN_RECORDINGS {
+        extrapolation_folds(problem, all, groups)
+    } else if groups > 1 {
         // Whole recordings are held out; more than CV_BLOCKS recordings share folds round-robin.
         (0..groups.min(CV_BLOCKS))
             .map(|f| {
@@ -356,11 +358,17 @@ fn cross_validate(
                     .filter(|&i| problem.samples[i].group % CV_BLOCKS == f)
                     .collect()
             })
+            .map(|held| complement_fold(all, held))
             .collect()
     } else {
         let n = all.len();
         (0..CV_BLOCKS)
-            .map(|b| all[b * n / CV_BLOCKS..(b + 1) * n / CV_BLOCKS].to_vec())
+            .map(|b| {
+                complement_fold(
+                    all,
+                    all[b * n / CV_BLOCKS..(b + 1) * n / CV_BLOCKS].to_vec(),
+                )
+            })
             .collect()
     };
     let mut start = problem.prior_phi();
@@ -370,13 +378,8 @@ fn cross_validate(
         let (phi, _, _) = problem.solve(&start, all, lambda)?;
         let held_out: Vec<f64> = folds
             .par_iter()
-            .map(|held| {
-                let train: Vec<usize> = all
-                    .iter()
-                    .copied()
-                    .filter(|i| held.binary_search(i).is_err())
-                    .collect();
-                let (phi_k, beta_k, _) = problem.solve(&phi, &train, lambda)?;
+            .map(|(train, held)| {
+                let (phi_k, beta_k, _) = problem.solve(&phi, train, lambda)?;
                 match criterion {
                     CvCriterion::EquationError => problem.data_cost(&phi_k, &beta_k, held),
                     CvCriterion::Replay => {
@@ -398,6 +401,59 @@ fn cross_validate(
     }
     let (lambda, _, phi) = best.ok_or_else(|| failed("mmg: empty cross-validation grid"))?;
     Ok((lambda, scores, phi))
+}
+
+/// From this many training recordings on, the cross-validation holds out the largest-amplitude ones
+/// (see [`extrapolation_folds`]); with fewer there is nothing smaller to train on.
+pub const EXTRAPOLATION_MIN_RECORDINGS: usize = 3;
+
+/// (training, held-out) sample indices: the held-out ones and everything else.
+fn complement_fold(all: &[usize], held: Vec<usize>) -> (Vec<usize>, Vec<usize>) {
+    let train = all
+        .iter()
+        .copied()
+        .filter(|i| held.binary_search(i).is_err())
+        .collect();
+    (train, held)
+}
+
+/// Folds that test extrapolation in amplitude: recordings ranked by their largest non-dimensional
+/// yaw rate |r| L / U; fold k holds out the k-th largest (k < [`CV_BLOCKS`], at least one recording
+/// left to train on) and trains on the recordings ranked below it only. A prediction outside the
+/// training range (a turning circle from zig-zags, a large zig-zag from small ones) is what the prior
+/// weight has to serve; holding out recordings at random rewards in-range interpolation, where the
+/// weakest prior always wins.
+fn extrapolation_folds(
+    problem: &Problem,
+    all: &[usize],
+    groups: usize,
+) -> Vec<(Vec<usize>, Vec<usize>)> {
+    let l = problem.ship.lpp;
+    let mut amplitude = vec![0.0_f64; groups];
+    for s in &problem.samples {
+        let speed = s.state.u.hypot(s.state.v);
+        if speed > 0.0 {
+            let r_prime = (s.state.r * l / speed).abs();
+            amplitude[s.group] = amplitude[s.group].max(r_prime);
+        }
+    }
+    let mut ranked: Vec<usize> = (0..groups).collect();
+    // Descending; ties by recording order so the folds never depend on sort stability.
+    ranked.sort_by(|&a, &b| amplitude[b].total_cmp(&amplitude[a]).then(a.cmp(&b)));
+    (0..CV_BLOCKS.min(groups - 1))
+        .map(|k| {
+            let below = &ranked[k + 1..];
+            let in_group = |g: usize| {
+                all.iter()
+                    .copied()
+                    .filter(move |&i| problem.samples[i].group == g)
+            };
+            let held: Vec<usize> = in_group(ranked[k]).collect();
+            let mut train: Vec<usize> = below.iter().flat_map(|&g| in_group(g)).collect();
+            train.sort_unstable();
+            (train, held)
+        })
+        .collect()
 }
 
 /// Segment-replay horizon of the replay criterion ÷ (L/U0): the output-error refinement's and the
