@@ -448,3 +448,42 @@ fn only_an_mmg_kind_is_read_as_mmg() {
             .is_none()
     );
 }
+
+/// A hull prior on the default data's KVLCC2 (L 7.0, B 1.27, d 0.46, ∇ 3.27 m³: C_b 0.7996, L/B
+/// 5.512): its centre (worked by hand from the published formula), its sd, and the start of its
+/// source.
+fn check_hull_prior(name: &str, expected: (f64, f64), source_starts: &str) {
+    let ds = default_data();
+    let specs = priors(
+        &ds.ship,
+        &MmgGeometry::kvlcc2_model_scale(),
+        &ds.added_mass.unwrap(),
+    );
+    let s = specs.iter().find(|s| s.name == name).unwrap();
+    assert!(
+        (s.prior - expected.0).abs() < 5e-5 && (s.prior_sd - expected.1).abs() < 5e-5,
+        "{name}: prior {} sd {}, expected {expected:?}",
+        s.prior,
+        s.prior_sd
+    );
+    assert!(s.source.starts_with(source_starts), "{name}: {}", s.source);
+}
+
+#[test]
+fn nonlinear_hull_priors_come_from_the_yoshimura_masumoto_regression() {
+    let ym = "Yoshimura & Masumoto 2012";
+    // sd: the larger of |centre| and the weak prior's population spread (0.1, 1, 2, 0.5, 0.2, 0.3,
+    // 0.1, 0.05 for these terms).
+    check_hull_prior("x_vv", (-0.0132, 0.1), ym);
+    check_hull_prior("x_vvvv", (0.1309, 1.0), ym);
+    check_hull_prior("y_vvv", (-0.5397, 2.0), ym);
+    check_hull_prior("y_vrr", (-0.3971, 0.5), ym);
+    check_hull_prior("n_vvv", (-0.1083, 0.2), ym);
+    check_hull_prior("n_vvr", (-0.5351, 0.5351), ym);
+    check_hull_prior("n_vrr", (-0.1808, 0.1808), ym);
+    check_hull_prior("n_rrr", (-0.0197, 0.05), ym);
+    // Bare constants of the regression (no dependence on the particulars) stay weak.
+    check_hull_prior("y_vvr", (0.0, 0.5), ym);
+    check_hull_prior("y_rrr", (0.0, 0.1), ym);
+    check_hull_prior("x_vr", (0.0, 0.2), "no empirical estimate");
+}
