@@ -26,6 +26,7 @@ use shipid_sim::{AbkowitzDynamics, Dynamics, GpDynamics, SimStatus};
 use shipid_tables::Table;
 
 use shipid_pipeline::fit::{WindowSpec, training_samples};
+use shipid_pipeline::mmg::load_mmg_model_if_kind;
 use shipid_pipeline::model_file::load_gp_model;
 use shipid_pipeline::validate::replay;
 use shipid_study::{Case, Study};
@@ -72,6 +73,8 @@ struct CaseData<'a> {
     model: Option<AbkowitzModel>,
     /// A sparse-GP case's model (tracks only).
     gp: Option<GpDynamics>,
+    /// An mmg case's model (tracks only).
+    mmg: Option<shipid_sim::MmgModel>,
 }
 
 /// Legend of a case: set, estimator (refined or not, with its fixed hyper-parameter), window, and the
@@ -131,11 +134,19 @@ fn load_cases<'a>(study: &'a Study, out: &Path) -> Vec<CaseData<'a>> {
             let gp = text
                 .as_deref()
                 .and_then(|t| load_gp_model(&path, t).ok().flatten());
+            let mmg = text
+                .as_deref()
+                .and_then(|t| load_mmg_model_if_kind(&path, t).ok().flatten());
             let model = text
-                .filter(|_| gp.is_none())
+                .filter(|_| gp.is_none() && mmg.is_none())
                 .and_then(|t| toml::from_str::<ModelFile>(&t).ok())
                 .and_then(|f| f.to_model().ok());
-            CaseData { case, model, gp }
+            CaseData {
+                case,
+                model,
+                gp,
+                mmg,
+            }
         })
         .collect()
 }
@@ -284,10 +295,11 @@ fn predictions(study: &Study, cases: &[CaseData], r: &DatasetRecording) -> Vec<P
         .enumerate()
         .filter_map(|(i, c)| {
             let polynomial = c.model.clone().map(AbkowitzDynamics);
-            let model: &dyn Dynamics = match (&polynomial, &c.gp) {
-                (Some(m), _) => m,
-                (None, Some(g)) => g,
-                (None, None) => return None,
+            let model: &dyn Dynamics = match (&polynomial, &c.gp, &c.mmg) {
+                (Some(m), _, _) => m,
+                (None, Some(g), _) => g,
+                (None, None, Some(m)) => m,
+                (None, None, None) => return None,
             };
             let sim = closed_loop(model, r, ship).unwrap_or_else(|| replay(model, &r.recording));
             let s = sim.recording;

@@ -140,3 +140,23 @@ fn a_diverged_prediction_is_drawn_and_labelled() {
     svg(&figures.join("coefficients_reduced32.svg"));
     svg(&figures.join("vif_reduced32.svg"));
 }
+
+/// Regression: the track and heading figures drew polynomial and sparse-GP cases only, so an mmg
+/// case of a study was silently missing from them.
+#[test]
+fn an_mmg_case_is_drawn_beside_the_polynomial() {
+    let dir = tempfile::tempdir().unwrap();
+    let study = load_study(
+        &common::root()
+            .join(FIXTURES)
+            .join("mmg_beside_reduced32.toml"),
+    )
+    .unwrap();
+    run_and_write(&study, dir.path(), 2, false, false).unwrap();
+    for figure in ["trajectories_zz10_10_ps.svg", "heading_zz10_10_ps.svg"] {
+        let text = svg(&dir.path().join("figures").join(figure));
+        for label in ["reduced32 bounded-lsq", "mmg bounded-lsq"] {
+            assert!(text.contains(label), "{figure} lacks the case {label}");
+        }
+    }
+}
