@@ -82,6 +82,11 @@ pub fn validation(model: &dyn Dynamics, model_spec: &str, ds: &Dataset, as_json:
             println!(
                 "outside: share of the recording's states outside the sparse GP's identification range (no sparse point d_gen-similar, paper 001's test that every training state passes; there its mean reverts towards its constant)"
             );
+        } else {
+            // Said, not left as a bare "-": a user would otherwise read it as "nothing outside".
+            println!(
+                "outside: not available for this model (the mmg family and the reference carry no identification range; a polynomial's needs its training data, see the warnings above)"
+            );
         }
     }
     if any_failed {
