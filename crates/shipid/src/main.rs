@@ -204,6 +204,10 @@ enum Command {
         dataset: PathBuf,
         #[arg(long)]
         json: bool,
+        /// Check every recorded metric against its band at this level (e.g. 0.9) over the model's
+        /// bootstrap replicates (`fit --bootstrap N`).
+        #[arg(long, value_name = "LEVEL", allow_negative_numbers = true)]
+        bands: Option<f64>,
     },
     /// Simulate a standard manoeuvre (or replay recordings) with a model.
     Simulate {
@@ -478,7 +482,8 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             model,
             dataset,
             json,
-        } => shipid::validate_cmd::run(&model, &dataset, json),
+            bands,
+        } => shipid::validate_cmd::run(&model, &dataset, json, bands),
         Command::Diagnose {
             model,
             dataset,

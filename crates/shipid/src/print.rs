@@ -10,6 +10,70 @@ use crate::Outcome;
 /// Validates `model` on every recording of `ds` and prints the table (or the JSON with `as_json`);
 /// `SomeFailed` when a simulation diverged.
 pub fn validation(model: &dyn Dynamics, model_spec: &str, ds: &Dataset, as_json: bool) -> Outcome {
+    validation_with_bands(model, model_spec, ds, as_json, None)
+}
+
+/// The bands `validate --bands LEVEL` checks the recorded metrics against.
+pub struct BandCheck<'a> {
+    pub level: f64,
+    pub replicates: &'a [Box<dyn Dynamics + Send + Sync>],
+}
+
+/// Each recorded metric against its band: `(recording, metric, recorded, band or why none, inside)`.
+type BandRow = (
+    String,
+    &'static str,
+    f64,
+    Result<(f64, f64), String>,
+    Option<bool>,
+);
+
+/// The band rows of every recording with a standard manoeuvre.
+fn band_rows(model: &dyn Dynamics, ds: &Dataset, check: &BandCheck) -> (Vec<BandRow>, usize) {
+    let mut rows = Vec::new();
+    let mut diverged = 0;
+    for r in &ds.recordings {
+        if matches!(r.manoeuvre, shipid_io::Manoeuvre::Free) {
+            continue;
+        }
+        let Ok(bands) = shipid_pipeline::bands::manoeuvre_bands(
+            model,
+            check.replicates,
+            &r.manoeuvre,
+            &ds.ship,
+            check.level,
+            None,
+        ) else {
+            continue;
+        };
+        diverged += bands.diverged;
+        let recorded = shipid_sim::metrics(&r.recording, &r.manoeuvre, &ds.ship);
+        for (b, (_, value)) in bands.metrics.iter().zip(recorded.entries()) {
+            let Some(value) = value else { continue };
+            let band = b
+                .band
+                .as_ref()
+                .map(|x| (x.lo, x.hi))
+                .map_err(|e| e.to_string());
+            let inside = band
+                .as_ref()
+                .ok()
+                .map(|(lo, hi)| *lo <= value && value <= *hi);
+            rows.push((r.file.clone(), b.metric, value, band, inside));
+        }
+    }
+    (rows, diverged)
+}
+
+/// [`validation`], and with `bands` each recorded metric checked against its band over the model's
+/// bootstrap replicates.
+pub fn validation_with_bands(
+    model: &dyn Dynamics,
+    model_spec: &str,
+    ds: &Dataset,
+    as_json: bool,
+    bands: Option<BandCheck>,
+) -> Outcome {
     let (rows, source) = validate_dataset(model, model_spec, ds);
     let dataset = &ds.path;
     let any_failed = rows.iter().any(|r| r.validation.diverged());
@@ -34,6 +98,41 @@ pub fn validation(model: &dyn Dynamics, model_spec: &str, ds: &Dataset, as_json:
         && let Value::Object(o) = &mut value
     {
         o.insert("warnings".into(), json!(warnings));
+    }
+    let band_check = bands.as_ref().map(|b| (b, band_rows(model, ds, b)));
+    if let (Some((check, (band_rows, diverged))), Value::Object(o)) = (&band_check, &mut value) {
+        let mut per: Map<String, Value> = Map::new();
+        for (file, metric, recorded, band, inside) in band_rows {
+            let entry = per
+                .entry(file.clone())
+                .or_insert_with(|| Value::Object(Map::new()));
+            if let Value::Object(m) = entry {
+                let mut cell = Map::new();
+                cell.insert("recorded".into(), json!(recorded));
+                match band {
+                    Ok((lo, hi)) => {
+                        cell.insert("band".into(), json!([lo, hi]));
+                    }
+                    Err(why) => {
+                        cell.insert("no_band".into(), json!(why));
+                    }
+                }
+                if let Some(inside) = inside {
+                    cell.insert("inside".into(), json!(inside));
+                }
+                m.insert((*metric).into(), Value::Object(cell));
+            }
+        }
+        o.insert(
+            "bands".into(),
+            json!({
+                "level": check.level,
+                "replicates": check.replicates.len(),
+                "diverged_replicate_runs": diverged,
+                "what": "coefficient uncertainty of the fit (moving-block bootstrap), given the model's structure; not the structure's own error (docs/uncertainty.md)",
+                "recordings": per,
+            }),
+        );
     }
     if as_json {
         println!(
@@ -88,6 +187,36 @@ pub fn validation(model: &dyn Dynamics, model_spec: &str, ds: &Dataset, as_json:
                 "outside: not available for this model (the mmg family and the reference carry no identification range; a polynomial's needs its training data, see the warnings above)"
             );
         }
+    }
+    if !as_json && let Some((check, (band_rows, diverged))) = &band_check {
+        println!(
+            "\nbands: {:.0} % over {} bootstrap replicates ({} replicate runs diverged); coefficient uncertainty given the model's structure, not the structure's own error (docs/uncertainty.md)",
+            check.level * 100.0,
+            check.replicates.len(),
+            diverged
+        );
+        println!(
+            "{:<16} {:<18} {:>10} {:>22} {:>7}",
+            "recording", "metric", "recorded", "band", "inside"
+        );
+        for (file, metric, recorded, band, inside) in band_rows {
+            let band = match band {
+                Ok((lo, hi)) => format!("[{lo:.4}, {hi:.4}]"),
+                Err(_) => "no band".into(),
+            };
+            let inside = match inside {
+                Some(true) => "yes",
+                Some(false) => "no",
+                None => "-",
+            };
+            println!("{file:<16} {metric:<18} {recorded:>10.4} {band:>22} {inside:>7}");
+        }
+        let checked = band_rows.iter().filter(|r| r.4.is_some()).count();
+        let inside = band_rows.iter().filter(|r| r.4 == Some(true)).count();
+        println!(
+            "inside: {inside} of {checked} recorded metrics lie in their {:.0} % band",
+            check.level * 100.0
+        );
     }
     if any_failed {
         Outcome::SomeFailed

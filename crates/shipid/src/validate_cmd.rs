@@ -1,4 +1,4 @@
-//! `shipid validate MODEL.toml DATASET.toml [--json]`.
+//! `shipid validate MODEL.toml DATASET.toml [--json] [--bands LEVEL]`.
 
 use std::path::Path;
 
@@ -8,8 +8,24 @@ use shipid_pipeline::range::{TrainingSource, training_source};
 
 use crate::{CliError, Outcome};
 
-pub fn run(model_spec: &str, dataset: &Path, as_json: bool) -> Result<Outcome, CliError> {
+pub fn run(
+    model_spec: &str,
+    dataset: &Path,
+    as_json: bool,
+    bands: Option<f64>,
+) -> Result<Outcome, CliError> {
+    if let Some(level) = bands
+        && !(level > 0.0 && level < 1.0)
+    {
+        return Err(crate::bad_input(format!(
+            "--bands must be a level strictly between 0 and 1 (e.g. 0.9), got {level}"
+        )));
+    }
     let model = load_model(model_spec)?;
+    // Before the validation: a model without replicates is refused at once.
+    let replicates = bands
+        .map(|_| shipid_pipeline::bands::replicate_models(model_spec))
+        .transpose()?;
     let ds = Dataset::load(dataset)?;
     // Validation still runs: its errors are what the user asked for; the warnings say what they
     // cannot mean.
@@ -23,11 +39,14 @@ pub fn run(model_spec: &str, dataset: &Path, as_json: bool) -> Result<Outcome, C
     if model.own_range().is_none() {
         warn_about_training(model_spec);
     }
-    Ok(crate::print::validation(
+    Ok(crate::print::validation_with_bands(
         model.as_ref(),
         model_spec,
         &ds,
         as_json,
+        bands
+            .zip(replicates.as_deref())
+            .map(|(level, replicates)| crate::print::BandCheck { level, replicates }),
     ))
 }
 
