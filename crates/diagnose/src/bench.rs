@@ -19,10 +19,9 @@
 //! This module holds the grid, the per-case diagnosis and the scoring; `cargo xtask bench-diagnose`
 //! builds the base model, runs the cases in parallel and writes the tables.
 
-use std::path::PathBuf;
 use std::time::Instant;
 
-use shipid_io::{Dataset, DatasetRecording};
+use shipid_io::Dataset;
 use shipid_pipeline::generate::{Generated, default_manoeuvres, fnv1a, generate_with};
 use shipid_sim::Effect;
 use shipid_sim::effects::{Asymmetry, Current, RudderLag, ShallowWater, Wind};
@@ -148,27 +147,7 @@ pub fn cases(seeds: u64, controls: u64) -> Vec<BenchCase> {
 
 /// A generated data set as a loaded [`Dataset`] (in memory).
 pub fn to_dataset(g: Generated, name: &str) -> Dataset {
-    let recordings = g
-        .dataset
-        .recordings
-        .iter()
-        .zip(default_manoeuvres())
-        .zip(g.recordings)
-        .map(|((e, m), recording)| DatasetRecording {
-            file: e.file.clone(),
-            manoeuvre: m,
-            recording,
-        })
-        .collect();
-    Dataset {
-        path: PathBuf::from(name),
-        name: g.dataset.name.clone(),
-        ship: g.dataset.ship,
-        added_mass: g.dataset.added_mass,
-        propeller: None,
-        rudder: None,
-        recordings,
-    }
+    g.in_memory(&default_manoeuvres(), name)
 }
 
 /// The concealed parameter that should be recovered, and the recovered one from the report's effects.

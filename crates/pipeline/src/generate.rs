@@ -135,6 +135,35 @@ pub struct Generated {
     pub recordings: Vec<Recording>,
 }
 
+impl Generated {
+    /// The generated data as a loaded data set in memory, named `name`, whose recordings are the
+    /// `manoeuvres` it was generated from (same order). Harnesses use it without writing files; the
+    /// propeller and rudder tables are left out (nothing in memory reads them).
+    pub fn in_memory(self, manoeuvres: &[Manoeuvre], name: &str) -> shipid_io::Dataset {
+        let recordings = self
+            .dataset
+            .recordings
+            .iter()
+            .zip(manoeuvres)
+            .zip(self.recordings)
+            .map(|((e, &manoeuvre), recording)| shipid_io::DatasetRecording {
+                file: e.file.clone(),
+                manoeuvre,
+                recording,
+            })
+            .collect();
+        shipid_io::Dataset {
+            path: std::path::PathBuf::from(name),
+            name: self.dataset.name,
+            ship: self.dataset.ship,
+            added_mass: self.dataset.added_mass,
+            propeller: None,
+            rudder: None,
+            recordings,
+        }
+    }
+}
+
 /// Parse `--effect` arguments (`current:speed=0.05,from=120`, …).
 pub fn parse_effects(args: &[String]) -> Result<Vec<Effect>, PipelineError> {
     args.iter()

@@ -9,17 +9,17 @@
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use anyhow::{Context, Result};
 use serde_json::json;
 use shipid_estimators::Solver;
-use shipid_io::{Dataset, DatasetRecording, Manoeuvre};
+use shipid_io::Manoeuvre;
 use shipid_model::CoefficientSet;
 use shipid_pipeline::bands::manoeuvre_bands;
 use shipid_pipeline::bootstrap::bootstrap_abkowitz;
 use shipid_pipeline::fit::{EstimatorSpec, WindowSpec, fit_dataset};
-use shipid_pipeline::generate::{Generated, default_manoeuvres, generate_manoeuvres};
+use shipid_pipeline::generate::{default_manoeuvres, generate_manoeuvres};
 use shipid_pipeline::spec::parse_manoeuvre;
 use shipid_sim::AbkowitzDynamics;
 use shipid_sim::metrics::metrics;
@@ -51,29 +51,6 @@ fn manoeuvres() -> Vec<Manoeuvre> {
     ms
 }
 
-fn in_memory(g: Generated, ms: &[Manoeuvre], name: &str) -> Dataset {
-    Dataset {
-        path: PathBuf::from(name),
-        name: g.dataset.name.clone(),
-        ship: g.dataset.ship,
-        added_mass: g.dataset.added_mass,
-        propeller: None,
-        rudder: None,
-        recordings: g
-            .dataset
-            .recordings
-            .iter()
-            .zip(ms)
-            .zip(g.recordings)
-            .map(|((e, &manoeuvre), recording)| DatasetRecording {
-                file: e.file.clone(),
-                manoeuvre,
-                recording,
-            })
-            .collect(),
-    }
-}
-
 pub fn run(
     out: &Path,
     seeds: u64,
@@ -82,7 +59,7 @@ pub fn run(
     structures: &[String],
 ) -> Result<()> {
     let ms = manoeuvres();
-    let truth_data = in_memory(generate_manoeuvres(None, &[], &ms)?, &ms, "truth");
+    let truth_data = generate_manoeuvres(None, &[], &ms)?.in_memory(&ms, "truth");
     let ship = truth_data.ship;
     let truth: Vec<_> = truth_data
         .recordings
@@ -95,11 +72,8 @@ pub fn run(
     let mut undefined = 0usize;
     let mut rows = Vec::new();
     for seed in 1..=seeds {
-        let noisy = in_memory(
-            generate_manoeuvres(Some(seed), &[], &ms)?,
-            &ms,
-            &format!("noise seed {seed}"),
-        );
+        let noisy = generate_manoeuvres(Some(seed), &[], &ms)?
+            .in_memory(&ms, &format!("noise seed {seed}"));
         for (s, (set_name, files)) in TRAINING_SETS.iter().enumerate() {
             let recordings: Vec<String> = files.iter().map(|f| f.to_string()).collect();
             let spec = EstimatorSpec {
