@@ -74,7 +74,8 @@ fn one() -> i64 {
 }
 
 /// The `[propeller]` table as written: the open-water curve either as the quadratic's coefficients
-/// (`k_t`) or as a CSV of points (`open_water`), exactly one of them.
+/// (`k_t`) or as a CSV of points (`open_water`), at most one of them (neither: the documented default
+/// curve, `types::DEFAULT_K_T`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PropellerTable {
@@ -406,11 +407,8 @@ fn check_propeller(path: &Path, p: &PropellerTable, lpp: f64) -> Result<(), Inpu
         positive(path, "propeller.rate_rps", n)?;
     }
     match (&p.k_t, &p.open_water) {
-        (None, None) => Err(InputError::key(
-            path,
-            "propeller",
-            "needs the open-water curve: either `k_t = [k0, k1, k2]` or `open_water = \"file.csv\"`",
-        )),
+        // Neither: the documented default curve (`types::DEFAULT_K_T`), said wherever it is used.
+        (None, None) => Ok(()),
         (Some(_), Some(_)) => Err(InputError::key(
             path,
             "propeller",
@@ -490,19 +488,16 @@ fn propeller_data(
             }
             (k, Some(curve))
         }
-        (None, None) => {
-            return Err(InputError::key(
-                path,
-                "propeller",
-                "needs the open-water curve: either `k_t` or `open_water`",
-            ));
-        }
+        (None, None) => (crate::types::DEFAULT_K_T, None),
     };
+    let k_t_default = (p.k_t.is_none() && p.open_water.is_none())
+        .then(|| crate::types::DEFAULT_K_T_SOURCE.to_string());
     Ok(PropellerData {
         diameter_m: p.diameter_m,
         x_m: p.x_m,
         k_t,
         open_water,
+        k_t_default,
         rate_rps: p.rate_rps,
     })
 }

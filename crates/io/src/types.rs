@@ -156,10 +156,23 @@ pub struct PropellerData {
     /// The open-water points the quadratic was fitted to, when the data set gives a table.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub open_water: Option<OpenWaterCurve>,
+    /// Where `k_t` comes from when the data set gives no curve: the documented default
+    /// ([`DEFAULT_K_T_SOURCE`]); absent when the data set gives `k_t` or `open_water`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub k_t_default: Option<String>,
     /// Constant propeller rate n [1/s] for recordings without an `n` column.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rate_rps: Option<f64>,
 }
+
+/// K_T(J) coefficients used when a `[propeller]` table gives neither `k_t` nor `open_water`: the KVLCC2
+/// model propeller of Yasukawa & Yoshimura (2015), Table 5, a four-bladed fixed-pitch propeller of
+/// P/D 0.72 typical of full-form merchant ships. A ship with another propeller should give its own
+/// curve; every command that uses the default says so.
+pub const DEFAULT_K_T: [f64; 3] = [0.2931, -0.2753, -0.1385];
+
+/// The source of [`DEFAULT_K_T`] as model files and warnings state it.
+pub const DEFAULT_K_T_SOURCE: &str = "default open-water curve: KVLCC2 model propeller, Yasukawa & Yoshimura (2015) Table 5 (the data set gives no k_t or open_water)";
 
 impl PropellerData {
     /// K_T at advance ratio J from the quadratic (outside the open-water range it is an extrapolation:

@@ -251,7 +251,15 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     }
     let opts = MmgFitOptions::from_spec(&a.estimator, &a.recordings, a.window)?;
     let ds = Dataset::load(a.dataset)?;
-    let warnings = training_warnings(&ds, &a.recordings, a.validate);
+    let mut warnings = training_warnings(&ds, &a.recordings, a.validate);
+    if let Some(source) = ds.propeller.as_ref().and_then(|p| p.k_t_default.as_ref()) {
+        let w = format!(
+            "{}: [propeller] {source}; the thrust, and with it the rudder inflow, assumes that curve",
+            a.dataset.display()
+        );
+        eprintln!("warning: {w}");
+        warnings.push(w);
+    }
     let (fit, mut file) = fit_mmg_model_file(&ds, &opts, a.estimator.refine)?;
     shipid_pipeline::model_file::anchor_training(&mut file.training, a.out);
     let text = write_mmg_model_file(&file)?;
