@@ -71,16 +71,9 @@ impl Columns {
         let t = &self.values[&Quantity::T];
         for i in 1..rows {
             if t[i] <= t[i - 1] {
-                let (col, name) = self
-                    .column_of
-                    .get(&Quantity::T)
-                    .cloned()
-                    .unwrap_or((1, "t".into()));
-                return Err(InputError::cell(
+                return Err(self.time_cell(
                     path,
-                    self.lines[i],
-                    col,
-                    &name,
+                    i,
                     format!(
                         "time is not strictly increasing ({} s after {} s)",
                         t[i],
@@ -186,16 +179,9 @@ impl Columns {
         for i in 1..t.len() {
             let step = t[i] - t[i - 1];
             if step < MIN_STEP_S {
-                let (col, name) = self
-                    .column_of
-                    .get(&Quantity::T)
-                    .cloned()
-                    .unwrap_or((1, "t".into()));
-                return Err(InputError::cell(
+                return Err(self.time_cell(
                     path,
-                    self.lines[i],
-                    col,
-                    &name,
+                    i,
                     format!(
                         "a time step of {} s after {} s is shorter than {MIN_STEP_S} s: no ship recording samples that fast (a wrong unit?), and derivatives over it would overflow",
                         number(step),
@@ -204,16 +190,9 @@ impl Columns {
                 ));
             }
             if step > GAP_FACTOR * median {
-                let (col, name) = self
-                    .column_of
-                    .get(&Quantity::T)
-                    .cloned()
-                    .unwrap_or((1, "t".into()));
-                return Err(InputError::cell(
+                return Err(self.time_cell(
                     path,
-                    self.lines[i],
-                    col,
-                    &name,
+                    i,
                     format!(
                         "gap in time: {} s after {} s (line {}), a step of {} s, more than {GAP_FACTOR} × the median step {} s",
                         number(t[i]),
@@ -226,6 +205,16 @@ impl Columns {
             }
         }
         Ok(())
+    }
+
+    /// An error at row `i`'s time cell, in the column the time was read from.
+    fn time_cell(&self, path: &Path, i: usize, message: String) -> InputError {
+        let (col, name) = self
+            .column_of
+            .get(&Quantity::T)
+            .cloned()
+            .unwrap_or((1, "t".into()));
+        InputError::cell(path, self.lines[i], col, &name, message)
     }
 
     fn header_line(&self) -> usize {
