@@ -6,7 +6,7 @@
 
 use rayon::prelude::*;
 use serde::Serialize;
-use shipid_io::{InputError, Manoeuvre, Ship};
+use shipid_io::{DatasetRecording, InputError, Manoeuvre, Ship};
 use shipid_model::{AbkowitzModel, ModelFile};
 use shipid_sim::metrics::metrics;
 use shipid_sim::{AbkowitzDynamics, Dynamics, Effect, SimStatus, WithEffects};
@@ -14,6 +14,7 @@ use shipid_uncertainty::{Band, UncertaintyError, percentile_band};
 
 use crate::error::{PipelineError, bad_input};
 use crate::simulate::{SimGrid, simulate_manoeuvre, simulate_on_grid};
+use crate::validate::closed_loop;
 
 pub use shipid_uncertainty::band::MIN_FINITE_REPLICATES;
 
@@ -71,19 +72,37 @@ pub struct ManoeuvreBands {
 /// Largest number of track samples kept per band (enough for a figure; bounds memory for long runs).
 const TRACK_SAMPLES: usize = 400;
 
-/// Simulate `point` and every model of `replicates` through `m` (on `grid`, or the standard step and
-/// duration); the `level` bands of the metrics and of the track.
+/// How every model of a band is run: the same way as the point prediction the band goes with.
+#[derive(Clone, Copy)]
+pub enum BandRun<'a> {
+    /// The standard manoeuvre from a steady approach at U0, standard step and duration (`simulate`).
+    Standard,
+    /// The standard manoeuvre on a given step and duration (`simulate --dt/--duration`).
+    Grid(&'a SimGrid),
+    /// The recording's own manoeuvre from its recorded initial state and first execute, for its
+    /// recorded length, as `validate` re-simulates it ([`closed_loop`]).
+    Recording(&'a DatasetRecording),
+}
+
+/// Simulate `point` and every model of `replicates` through `m`, each as `how` says; the `level`
+/// bands of the metrics and of the track.
 pub fn manoeuvre_bands(
     point: &dyn Dynamics,
     replicates: &[Box<dyn Dynamics + Send + Sync>],
     m: &Manoeuvre,
     ship: &Ship,
     level: f64,
-    grid: Option<&SimGrid>,
+    how: BandRun,
 ) -> Result<ManoeuvreBands, PipelineError> {
-    let run = |model: &dyn Dynamics| match grid {
-        Some(g) => simulate_on_grid(model, m, g),
-        None => simulate_manoeuvre(model, m, None, None),
+    let run = |model: &dyn Dynamics| match how {
+        BandRun::Standard => simulate_manoeuvre(model, m, None, None),
+        BandRun::Grid(g) => simulate_on_grid(model, m, g),
+        BandRun::Recording(r) => closed_loop(model, r, ship).ok_or_else(|| {
+            bad_input(format!(
+                "{}: no standard manoeuvre to re-simulate for a band",
+                r.file
+            ))
+        }),
     };
     let point_run = run(point)?;
     let point_metrics = metrics(&point_run.recording, m, ship);

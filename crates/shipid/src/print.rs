@@ -42,7 +42,9 @@ fn band_rows(model: &dyn Dynamics, ds: &Dataset, check: &BandCheck) -> (Vec<Band
             &r.manoeuvre,
             &ds.ship,
             check.level,
-            None,
+            // The band goes with validate's own prediction: the recording's manoeuvre re-simulated
+            // from its recorded initial state, not a standard approach at U0.
+            shipid_pipeline::bands::BandRun::Recording(r),
         ) else {
             continue;
         };

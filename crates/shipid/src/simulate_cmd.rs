@@ -5,7 +5,7 @@ use std::path::Path;
 use serde_json::{Map, Value, json};
 use shipid_io::Manoeuvre;
 use shipid_io::write::{recording_csv, write_atomic};
-use shipid_pipeline::bands::{ManoeuvreBands, manoeuvre_bands, replicate_models};
+use shipid_pipeline::bands::{BandRun, ManoeuvreBands, manoeuvre_bands, replicate_models};
 use shipid_pipeline::model_file::load_model;
 use shipid_pipeline::simulate::{MAX_STORED_SAMPLES, SimRequest, sim_grid, simulate_on_grid};
 use shipid_pipeline::spec::parse_manoeuvre;
@@ -136,7 +136,7 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
             &m,
             model.ship(),
             level,
-            Some(&grid),
+            BandRun::Grid(&grid),
         )?;
         add_bands(&mut value, &bands, a.json);
     }

@@ -16,7 +16,7 @@ use serde_json::json;
 use shipid_estimators::Solver;
 use shipid_io::Manoeuvre;
 use shipid_model::CoefficientSet;
-use shipid_pipeline::bands::manoeuvre_bands;
+use shipid_pipeline::bands::{BandRun, manoeuvre_bands};
 use shipid_pipeline::bootstrap::bootstrap_abkowitz;
 use shipid_pipeline::fit::{EstimatorSpec, WindowSpec, fit_dataset};
 use shipid_pipeline::generate::{default_manoeuvres, generate_manoeuvres};
@@ -113,7 +113,14 @@ pub fn run(
             }
             let point = point.context("no structure")?;
             for (r, (file, true_metrics)) in truth_data.recordings.iter().zip(&truth) {
-                let bands = manoeuvre_bands(&point, &models, &r.manoeuvre, &ship, level, None)?;
+                let bands = manoeuvre_bands(
+                    &point,
+                    &models,
+                    &r.manoeuvre,
+                    &ship,
+                    level,
+                    BandRun::Standard,
+                )?;
                 let place = if files.contains(&file.as_str()) {
                     "trained"
                 } else {

@@ -5,7 +5,7 @@ use std::path::Path;
 use shipid_estimators::Solver;
 use shipid_io::Dataset;
 use shipid_model::CoefficientSet;
-use shipid_pipeline::bands::manoeuvre_bands;
+use shipid_pipeline::bands::{BandRun, manoeuvre_bands};
 use shipid_pipeline::bootstrap::{Bootstrap, bootstrap_abkowitz};
 use shipid_pipeline::fit::{EstimatorSpec, FitOutput, WindowSpec, fit_dataset};
 use shipid_pipeline::spec::parse_manoeuvre;
@@ -125,7 +125,7 @@ fn turning_circle_bands_count_every_replicate() {
         &m,
         &ds.ship,
         0.9,
-        None,
+        BandRun::Standard,
     )
     .unwrap();
     assert_eq!(bands.replicates, 40);
