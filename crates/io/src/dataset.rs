@@ -11,7 +11,9 @@ use serde::{Deserialize, Serialize};
 use crate::error::{InputError, number};
 use crate::open_water::read_open_water;
 use crate::recording::read_recording;
-use crate::types::{AddedMass, Manoeuvre, PropellerData, Recording, RudderData, Ship, Side};
+use crate::types::{
+    AddedMass, Manoeuvre, PropellerData, Recording, RudderData, Ship, Side, Windage,
+};
 
 /// The point that velocities and positions of a data set refer to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -65,6 +67,8 @@ pub struct DatasetFile {
     pub propeller: Option<PropellerTable>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rudder: Option<RudderData>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub windage: Option<Windage>,
     #[serde(rename = "recording", default)]
     pub recordings: Vec<RecordingEntry>,
 }
@@ -116,6 +120,8 @@ pub struct Dataset {
     pub propeller: Option<PropellerData>,
     /// The rudder, when the data set gives a `[rudder]` table.
     pub rudder: Option<RudderData>,
+    /// The ship above water for the recorded wind, when the data set gives a `[windage]` table.
+    pub windage: Option<Windage>,
     pub recordings: Vec<DatasetRecording>,
 }
 
@@ -196,6 +202,7 @@ impl Dataset {
             added_mass,
             propeller,
             rudder: file.rudder,
+            windage: file.windage,
             recordings,
         })
     }
@@ -256,6 +263,9 @@ pub fn parse_dataset(path: &Path, text: &str) -> Result<DatasetFile, InputError>
     }
     if let Some(r) = &file.rudder {
         check_rudder(path, r, s.lpp)?;
+    }
+    if let Some(w) = &file.windage {
+        check_windage(path, w, s.lpp)?;
     }
     for (i, entry) in file.recordings.iter().enumerate() {
         manoeuvre_of(path, i, entry)?;
@@ -457,6 +467,51 @@ fn check_rudder(path: &Path, r: &RudderData, lpp: f64) -> Result<(), InputError>
     positive(path, "rudder.area_m2", r.area_m2)?;
     positive(path, "rudder.span_m", r.span_m)?;
     position(path, "rudder.x_m", r.x_m, lpp)
+}
+
+fn check_windage(path: &Path, w: &Windage, lpp: f64) -> Result<(), InputError> {
+    positive(path, "windage.frontal_area_m2", w.frontal_area_m2)?;
+    positive(path, "windage.lateral_area_m2", w.lateral_area_m2)?;
+    position(
+        path,
+        "windage.lateral_centre_x_m",
+        w.lateral_centre_x_m,
+        lpp,
+    )?;
+    // Air between a high-altitude lake and a cold, dense sea-level day, with room to spare.
+    if !(0.5..=2.0).contains(&w.air_density_kg_m3) {
+        return Err(InputError::key(
+            path,
+            "windage.air_density_kg_m3",
+            format!(
+                "must lie between 0.5 and 2.0 kg/m³ (sea level: 1.225), not {}",
+                number(w.air_density_kg_m3)
+            ),
+        ));
+    }
+    for (key, value) in [
+        ("windage.length_overall_m", w.length_overall_m),
+        ("windage.lateral_centre_height_m", w.lateral_centre_height_m),
+        ("windage.height_m", w.height_m),
+    ] {
+        if let Some(v) = value {
+            positive(path, key, v)?;
+        }
+    }
+    if let Some(a) = w.superstructure_lateral_area_m2
+        && !(a.is_finite() && a >= 0.0 && a <= w.lateral_area_m2)
+    {
+        return Err(InputError::key(
+            path,
+            "windage.superstructure_lateral_area_m2",
+            format!(
+                "must lie between 0 and windage.lateral_area_m2 = {} m², not {}",
+                w.lateral_area_m2,
+                number(a)
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// A checked `[propeller]` table → [`PropellerData`], reading the open-water CSV beside the data set.

@@ -28,7 +28,7 @@ use serde::Deserialize;
 use crate::dataset::{DatasetFile, Kind, Origin, PropellerTable, RecordingEntry};
 use crate::error::InputError;
 use crate::table::{Columns, parse_cell, with_comma_hint};
-use crate::types::{AddedMass, Recording, RudderData, Ship, Side};
+use crate::types::{AddedMass, Recording, RudderData, Ship, Side, Windage};
 use crate::units::Quantity;
 
 #[derive(Debug, Clone, Deserialize)]
@@ -99,6 +99,9 @@ pub struct DatasetHeader {
     pub propeller: Option<PropellerTable>,
     #[serde(default)]
     pub rudder: Option<RudderData>,
+    /// The `[windage]` table to write (for recordings with wind columns).
+    #[serde(default)]
+    pub windage: Option<Windage>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -344,6 +347,7 @@ impl Mapping {
                 p
             }),
             rudder: self.dataset.rudder,
+            windage: self.dataset.windage.clone(),
             recordings: recordings.to_vec(),
         }
     }

@@ -6,7 +6,7 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use crate::error::{InputError, number};
-use crate::types::{Accelerations, Recording};
+use crate::types::{Accelerations, FlowSeries, Recording};
 use crate::units::Quantity;
 use crate::units::fmt_sig;
 
@@ -83,6 +83,8 @@ impl Columns {
             }
         }
         self.check_gaps(path)?;
+        let wind = self.flow(path, Quantity::WindSpeed, Quantity::WindFrom)?;
+        let current = self.flow(path, Quantity::CurrentSpeed, Quantity::CurrentFrom)?;
         let mut take = |q: Quantity| self.values.remove(&q);
         let mut psi = take(Quantity::Psi).unwrap_or_default();
         unwrap_angle(&mut psi);
@@ -109,7 +111,62 @@ impl Columns {
             delta: take(Quantity::Delta).unwrap_or_default(),
             n: take(Quantity::N),
             accelerations,
+            wind,
+            current,
         })
+    }
+
+    /// A recorded flow (wind or current) from its speed and direction columns: both or neither, the
+    /// speed never negative (a direction cannot be told from a negative speed's sign convention).
+    fn flow(
+        &mut self,
+        path: &Path,
+        speed: Quantity,
+        from: Quantity,
+    ) -> Result<Option<FlowSeries>, InputError> {
+        let (s, f) = (self.values.remove(&speed), self.values.remove(&from));
+        let lone = match (&s, &f) {
+            (Some(_), Some(_)) | (None, None) => None,
+            (Some(_), None) => Some((speed, from)),
+            (None, Some(_)) => Some((from, speed)),
+        };
+        if let Some((present, missing)) = lone {
+            return Err(InputError::line(
+                path,
+                self.header_line(),
+                format!(
+                    "column `{}` needs the column `{}` too (a recorded {} is its speed and the direction it comes from, docs/data-format.md)",
+                    present.name(),
+                    missing.name(),
+                    if speed == Quantity::WindSpeed {
+                        "wind"
+                    } else {
+                        "current"
+                    }
+                ),
+            ));
+        }
+        let (Some(speed_m_s), Some(from_rad)) = (s, f) else {
+            return Ok(None);
+        };
+        if let Some(i) = speed_m_s.iter().position(|&v| v < 0.0) {
+            let (col, header) = self.column_of[&speed].clone();
+            return Err(InputError::cell(
+                path,
+                self.lines[i],
+                col,
+                &header,
+                format!(
+                    "negative {} speed {} m/s: give the speed (≥ 0) and the direction it comes from",
+                    speed.name().trim_end_matches("_speed"),
+                    speed_m_s[i]
+                ),
+            ));
+        }
+        Ok(Some(FlowSeries {
+            speed_m_s,
+            from_rad,
+        }))
     }
 
     /// Every value after unit conversion must be finite and within its quantity's bound

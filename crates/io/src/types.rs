@@ -31,6 +31,37 @@ pub struct Recording {
     pub n: Option<Vec<f64>>,
     /// Recorded accelerations of midship, when the source has them.
     pub accelerations: Option<Accelerations>,
+    /// Recorded true wind, when the recording has `wind_speed` and `wind_from` columns.
+    pub wind: Option<FlowSeries>,
+    /// Recorded current, when the recording has `current_speed` and `current_from` columns.
+    pub current: Option<FlowSeries>,
+}
+
+/// A recorded uniform flow (true wind, or current) per sample: its speed and the earth-fixed direction
+/// it comes from, clockwise from north (0: from north, flowing south; 90°: from east). Both vectors are
+/// as long as the recording.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct FlowSeries {
+    /// Speed [m/s], ≥ 0.
+    pub speed_m_s: Vec<f64>,
+    /// Direction it comes from [rad], earth-fixed, clockwise from north.
+    pub from_rad: Vec<f64>,
+}
+
+impl FlowSeries {
+    /// The flow's velocity [north, east] [m/s] at sample `i` (it moves away from where it comes from).
+    pub fn velocity_earth(&self, i: usize) -> [f64; 2] {
+        let (s, c) = self.from_rad[i].sin_cos();
+        [-self.speed_m_s[i] * c, -self.speed_m_s[i] * s]
+    }
+
+    /// The samples `range` of the series.
+    pub fn slice(&self, range: std::ops::Range<usize>) -> FlowSeries {
+        FlowSeries {
+            speed_m_s: self.speed_m_s[range.clone()].to_vec(),
+            from_rad: self.from_rad[range].to_vec(),
+        }
+    }
 }
 
 /// Accelerations in body axes of the midship point.
@@ -78,6 +109,8 @@ impl Recording {
                 v_dot: s(&a.v_dot),
                 r_dot: s(&a.r_dot),
             }),
+            wind: self.wind.as_ref().map(|w| w.slice(range.clone())),
+            current: self.current.as_ref().map(|c| c.slice(range.clone())),
         }
     }
 }
@@ -163,6 +196,77 @@ pub struct PropellerData {
     /// Constant propeller rate n [1/s] for recordings without an `n` column.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rate_rps: Option<f64>,
+}
+
+/// The wind-coefficient model that turns a data set's windage areas into aerodynamic force
+/// coefficients (`docs/data-format.md`, `[windage]`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum WindModel {
+    /// Fossen (2011, *Handbook of Marine Craft Hydrodynamics and Motion Control*, §8.1): C_X = −c_x cos γ,
+    /// C_Y = c_y sin γ, C_N = c_n sin 2γ with mid-range merchant-ship constants; needs only the areas.
+    #[default]
+    Fossen,
+    /// Isherwood (1973), "Wind resistance of merchant ships", RINA Trans. 115: regression on the
+    /// areas, lengths and lateral centre.
+    Isherwood1973,
+    /// Fujiwara, Ueno & Ikeda (2005), "Cruising performance of a large passenger ship in heavy sea",
+    /// ISOPE: regression on the areas, heights and lateral centre.
+    Fujiwara2005,
+}
+
+impl WindModel {
+    /// The name as written in a data set.
+    pub fn name(self) -> &'static str {
+        match self {
+            WindModel::Fossen => "fossen",
+            WindModel::Isherwood1973 => "isherwood1973",
+            WindModel::Fujiwara2005 => "fujiwara2005",
+        }
+    }
+}
+
+/// Density of air [kg/m³] at sea level, 15 °C (ISA), the default of `[windage] air_density_kg_m3`.
+pub const DEFAULT_AIR_DENSITY_KG_M3: f64 = 1.225;
+
+fn default_air_density() -> f64 {
+    DEFAULT_AIR_DENSITY_KG_M3
+}
+
+/// The ship above water as the wind sees it (`[windage]` of a data set, `docs/data-format.md`), at the
+/// scale of the recordings.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Windage {
+    /// Frontal projected area above water A_F [m²].
+    pub frontal_area_m2: f64,
+    /// Lateral projected area above water A_L [m²].
+    pub lateral_area_m2: f64,
+    /// Longitudinal position of the lateral area's centroid [m], positive forward of midship.
+    #[serde(default)]
+    pub lateral_centre_x_m: f64,
+    /// The wind-coefficient model.
+    #[serde(default)]
+    pub model: WindModel,
+    /// Air density ρ_a [kg/m³].
+    #[serde(default = "default_air_density")]
+    pub air_density_kg_m3: f64,
+    /// Length overall [m] (Isherwood 1973); default: the length between perpendiculars.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub length_overall_m: Option<f64>,
+    /// Lateral projected area of the superstructure above the deck [m²] (Isherwood 1973 A_SS,
+    /// Fujiwara 2005 A_OD); default 0 (a bare hull above water).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub superstructure_lateral_area_m2: Option<f64>,
+    /// Height of the lateral area's centroid above the waterline [m] (Fujiwara 2005 H_C).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lateral_centre_height_m: Option<f64>,
+    /// Height of the highest point of the ship above the waterline [m] (Fujiwara 2005 H_BR).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub height_m: Option<f64>,
+    /// Where these values come from (drawings, an estimate, …): model files repeat it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
 }
 
 /// K_T(J) coefficients used when a `[propeller]` table gives neither `k_t` nor `open_water`: the KVLCC2

@@ -74,6 +74,15 @@ pub enum Quantity {
     UDot,
     VDot,
     RDot,
+    /// True wind speed [m/s] (optional column `wind_speed`).
+    WindSpeed,
+    /// Direction the true wind comes from [rad], earth-fixed, clockwise from north (`wind_from`).
+    WindFrom,
+    /// Current speed [m/s] (optional column `current_speed`).
+    CurrentSpeed,
+    /// Direction the current comes from [rad], earth-fixed, clockwise from north (`current_from`;
+    /// note: the direction it comes FROM, like the wind, not the oceanographic "sets towards").
+    CurrentFrom,
     /// Earth-fixed velocity north [m/s]; only in import mappings (converted to body u, v).
     X0Dot,
     /// Earth-fixed velocity east [m/s]; only in import mappings.
@@ -82,7 +91,7 @@ pub enum Quantity {
 
 impl Quantity {
     /// Columns of a recording file (`docs/data-format.md`), in the order the project writes them.
-    pub const RECORDING: [Quantity; 12] = [
+    pub const RECORDING: [Quantity; 16] = [
         Quantity::T,
         Quantity::X0,
         Quantity::Y0,
@@ -95,6 +104,10 @@ impl Quantity {
         Quantity::UDot,
         Quantity::VDot,
         Quantity::RDot,
+        Quantity::WindSpeed,
+        Quantity::WindFrom,
+        Quantity::CurrentSpeed,
+        Quantity::CurrentFrom,
     ];
 
     pub fn name(self) -> &'static str {
@@ -111,6 +124,10 @@ impl Quantity {
             Quantity::UDot => "u_dot",
             Quantity::VDot => "v_dot",
             Quantity::RDot => "r_dot",
+            Quantity::WindSpeed => "wind_speed",
+            Quantity::WindFrom => "wind_from",
+            Quantity::CurrentSpeed => "current_speed",
+            Quantity::CurrentFrom => "current_from",
             Quantity::X0Dot => "x0_dot",
             Quantity::Y0Dot => "y0_dot",
         }
@@ -127,8 +144,15 @@ impl Quantity {
         match self {
             Quantity::T => Dimension::Time,
             Quantity::X0 | Quantity::Y0 => Dimension::Length,
-            Quantity::Psi | Quantity::Delta => Dimension::Angle,
-            Quantity::U | Quantity::V | Quantity::X0Dot | Quantity::Y0Dot => Dimension::Velocity,
+            Quantity::Psi | Quantity::Delta | Quantity::WindFrom | Quantity::CurrentFrom => {
+                Dimension::Angle
+            }
+            Quantity::U
+            | Quantity::V
+            | Quantity::X0Dot
+            | Quantity::Y0Dot
+            | Quantity::WindSpeed
+            | Quantity::CurrentSpeed => Dimension::Velocity,
             Quantity::R => Dimension::AngularRate,
             Quantity::N => Dimension::Frequency,
             Quantity::UDot | Quantity::VDot => Dimension::Acceleration,
@@ -165,6 +189,11 @@ impl Quantity {
             Quantity::N => 1e4,
             Quantity::UDot | Quantity::VDot => 1e4,
             Quantity::RDot => 1e4,
+            // Beyond any storm at full scale (the strongest gusts measured are near 110 m/s).
+            Quantity::WindSpeed => 200.0,
+            // Beyond any ocean current (the fastest tidal races run near 8 m/s).
+            Quantity::CurrentSpeed => 50.0,
+            Quantity::WindFrom | Quantity::CurrentFrom => 1e5,
         }
     }
 

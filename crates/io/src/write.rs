@@ -49,6 +49,12 @@ pub fn recording_csv(rec: &Recording, comments: &[String]) -> String {
     if rec.accelerations.is_some() {
         header.extend(["u_dot", "v_dot", "r_dot"]);
     }
+    if rec.wind.is_some() {
+        header.extend(["wind_speed", "wind_from"]);
+    }
+    if rec.current.is_some() {
+        header.extend(["current_speed", "current_from"]);
+    }
     out.push_str(&header.join(","));
     out.push('\n');
     for i in 0..rec.len() {
@@ -67,6 +73,9 @@ pub fn recording_csv(rec: &Recording, comments: &[String]) -> String {
         }
         if let Some(a) = &rec.accelerations {
             row.extend([a.u_dot[i], a.v_dot[i], a.r_dot[i]]);
+        }
+        for flow in [&rec.wind, &rec.current].into_iter().flatten() {
+            row.extend([flow.speed_m_s[i], flow.from_rad[i]]);
         }
         let cells: Vec<String> = row.into_iter().map(fmt_sig).collect();
         out.push_str(&cells.join(","));

@@ -159,6 +159,7 @@ impl Generated {
             added_mass: self.dataset.added_mass,
             propeller: None,
             rudder: None,
+            windage: self.dataset.windage,
             recordings,
         }
     }
@@ -262,6 +263,7 @@ pub fn generate_manoeuvres(
             span_m: reference.rudder_span_m,
             x_m: reference.x_r * ship.lpp,
         }),
+        windage: None,
         recordings: entries,
     };
     Ok(Generated {

@@ -120,6 +120,20 @@ pub trait Dynamics {
     /// (positive turns the ship to starboard). An `Err` ends a simulation as diverged.
     fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError>;
 
+    /// [`Dynamics::accelerations`] at simulation time `t_s` [s]: what a simulation calls at every RK4
+    /// stage. Only models with a time-varying known input (a recorded wind or current:
+    /// [`crate::environment::WithEnvironment`]) differ from the time-free accelerations; wrappers pass
+    /// the time on to the model they wrap.
+    fn accelerations_at(
+        &self,
+        t_s: f64,
+        state: &State,
+        delta_rad: f64,
+    ) -> Result<[f64; 3], DynamicsError> {
+        let _ = t_s;
+        self.accelerations(state, delta_rad)
+    }
+
     /// The ship the model describes.
     fn ship(&self) -> &Ship;
 
@@ -190,6 +204,14 @@ impl<T: Dynamics + ?Sized> Dynamics for &T {
     fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
         (**self).accelerations(state, delta_rad)
     }
+    fn accelerations_at(
+        &self,
+        t_s: f64,
+        state: &State,
+        delta_rad: f64,
+    ) -> Result<[f64; 3], DynamicsError> {
+        (**self).accelerations_at(t_s, state, delta_rad)
+    }
     fn own_range(&self) -> Option<&dyn OwnRange> {
         (**self).own_range()
     }
@@ -216,6 +238,14 @@ impl<T: Dynamics + ?Sized> Dynamics for &T {
 impl<T: Dynamics + ?Sized> Dynamics for Box<T> {
     fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
         (**self).accelerations(state, delta_rad)
+    }
+    fn accelerations_at(
+        &self,
+        t_s: f64,
+        state: &State,
+        delta_rad: f64,
+    ) -> Result<[f64; 3], DynamicsError> {
+        (**self).accelerations_at(t_s, state, delta_rad)
     }
     fn own_range(&self) -> Option<&dyn OwnRange> {
         (**self).own_range()

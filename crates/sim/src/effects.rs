@@ -648,8 +648,17 @@ impl<D: Dynamics> WithEffects<D> {
 
 impl<D: Dynamics> Dynamics for WithEffects<D> {
     fn accelerations(&self, s: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
+        self.accelerations_at(0.0, s, delta_rad)
+    }
+
+    fn accelerations_at(
+        &self,
+        t_s: f64,
+        s: &State,
+        delta_rad: f64,
+    ) -> Result<[f64; 3], DynamicsError> {
         let water = self.through_water(s);
-        let mut acc = self.inner.accelerations(&water, delta_rad)?;
+        let mut acc = self.inner.accelerations_at(t_s, &water, delta_rad)?;
         let ship = self.inner.ship();
         let mut force = self.constant_force;
         if let Some(wind) = &self.wind {

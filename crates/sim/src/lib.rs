@@ -41,6 +41,7 @@ pub mod abkowitz;
 pub mod control;
 pub mod dynamics;
 pub mod effects;
+pub mod environment;
 pub mod gp;
 pub mod metrics;
 pub mod mmg;
@@ -54,6 +55,9 @@ pub use dynamics::{
     Dynamics, DynamicsError, LinearHullDerivatives, MassMatrix, OwnRange, RudderFilter, State,
 };
 pub use effects::{Effect, EffectError, EffectParseError, WithEffects, simulate_with_effects};
+pub use environment::{
+    Aerodynamics, EnvironmentError, KnownEnvironment, WithEnvironment, assumed_windage,
+};
 pub use gp::{
     GP_INPUTS, GP_KIND, GP_OUTPUTS, GpDynamics, GpModelError, GpModelFile, GpOutputFile,
     SparsificationInfo,

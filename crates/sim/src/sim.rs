@@ -238,8 +238,10 @@ impl Samples {
     }
 }
 
-fn derivative(model: &dyn Dynamics, s: &State, delta: f64) -> Result<[f64; 6], String> {
-    let a = model.accelerations(s, delta).map_err(|e| e.to_string())?;
+fn derivative(model: &dyn Dynamics, t_s: f64, s: &State, delta: f64) -> Result<[f64; 6], String> {
+    let a = model
+        .accelerations_at(t_s, s, delta)
+        .map_err(|e| e.to_string())?;
     if !a.iter().all(|x| x.is_finite()) {
         return Err(format!("model returned non-finite accelerations {a:?}"));
     }
@@ -348,7 +350,7 @@ pub fn simulate_filtered(
             break;
         }
         let y = state.to_array();
-        let k1 = match derivative(model, &state, effective[0]) {
+        let k1 = match derivative(model, t, &state, effective[0]) {
             Ok(k1) => k1,
             Err(reason) => {
                 status = diverged(t, reason);
@@ -362,9 +364,9 @@ pub fn simulate_filtered(
             break;
         }
         let stages = (|| {
-            let k2 = derivative(model, &axpy(&y, 0.5 * dt, &k1), effective[1])?;
-            let k3 = derivative(model, &axpy(&y, 0.5 * dt, &k2), effective[1])?;
-            let k4 = derivative(model, &axpy(&y, dt, &k3), effective[2])?;
+            let k2 = derivative(model, t + 0.5 * dt, &axpy(&y, 0.5 * dt, &k1), effective[1])?;
+            let k3 = derivative(model, t + 0.5 * dt, &axpy(&y, 0.5 * dt, &k2), effective[1])?;
+            let k4 = derivative(model, t + dt, &axpy(&y, dt, &k3), effective[2])?;
             Ok::<_, String>((k2, k3, k4))
         })();
         let (k2, k3, k4) = match stages {

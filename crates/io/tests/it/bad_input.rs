@@ -111,7 +111,7 @@ fn csv_only_comments_has_no_header() {
 fn toml_unknown_key_is_named_with_its_position() {
     check(
         "unknown_key.toml",
-        ":2:1: key `colour`: unknown field `colour`, expected one of `name`, `origin`, `rudder_sign`, `ship`, `added_mass`, `propeller`, `rudder`, `recording`",
+        ":2:1: key `colour`: unknown field `colour`, expected one of `name`, `origin`, `rudder_sign`, `ship`, `added_mass`, `propeller`, `rudder`, `windage`, `recording`",
     );
 }
 
@@ -171,4 +171,36 @@ fn toml_syntax_error() {
 #[test]
 fn missing_data_set_file() {
     check("no_such_dataset.toml", ": file not found");
+}
+
+#[test]
+fn csv_wind_speed_without_its_direction_is_refused() {
+    check(
+        "wind_speed_without_direction.csv",
+        ":1: column `wind_speed` needs the column `wind_from` too (a recorded wind is its speed and the direction it comes from, docs/data-format.md)",
+    );
+}
+
+#[test]
+fn csv_negative_wind_speed_names_the_cell() {
+    check(
+        "negative_wind_speed.csv",
+        ":9:9: column `wind_speed`: negative wind speed -1 m/s: give the speed (≥ 0) and the direction it comes from",
+    );
+}
+
+#[test]
+fn toml_windage_without_lateral_area() {
+    check(
+        "windage_without_lateral_area.toml",
+        ":14:1: key `lateral_area_m2`: missing field `lateral_area_m2`",
+    );
+}
+
+#[test]
+fn toml_windage_air_density_of_water() {
+    check(
+        "windage_air_density_of_water.toml",
+        ": key `windage.air_density_kg_m3`: must lie between 0.5 and 2.0 kg/m³ (sea level: 1.225), not 1000",
+    );
 }

@@ -235,3 +235,33 @@ fn a_propeller_without_a_curve_takes_the_default_and_names_it() {
     let given = Dataset::load(Path::new("tests/fixtures/propeller/open_water_table.toml")).unwrap();
     assert_eq!(given.propeller.unwrap().k_t_default, None);
 }
+
+/// A recording with wind and current columns (knots and degrees) reads into SI, and writes back
+/// (metres per second and radians) to the same values.
+#[test]
+fn recorded_wind_and_current_read_in_si_and_round_trip() {
+    use shipid_io::recording::parse_recording;
+    use shipid_io::write::recording_csv;
+    let mut text = String::from("t,x0,y0,psi,u,v,r,delta,wind_speed[kn],wind_from[deg],current_speed,current_from[deg]\n");
+    for i in 0..25 {
+        text.push_str(&format!("{},0,0,0,1,0,0,0,10,270,0.1,45\n", i as f64 * 0.1));
+    }
+    let rec = parse_recording(std::path::Path::new("w.csv"), &text).unwrap();
+    let wind = rec.wind.as_ref().unwrap();
+    assert!((wind.speed_m_s[3] - 10.0 * 1852.0 / 3600.0).abs() < 1e-12);
+    assert!((wind.from_rad[3] - 270f64.to_radians()).abs() < 1e-12);
+    // From the west: the air moves east.
+    let [n, e] = wind.velocity_earth(0);
+    assert!(n.abs() < 1e-12 && (e - wind.speed_m_s[0]).abs() < 1e-12);
+    let current = rec.current.as_ref().unwrap();
+    assert_eq!(current.speed_m_s[0], 0.1);
+    let back = parse_recording(std::path::Path::new("w.csv"), &recording_csv(&rec, &[])).unwrap();
+    for (a, b) in [(&rec.wind, &back.wind), (&rec.current, &back.current)] {
+        let (a, b) = (a.as_ref().unwrap(), b.as_ref().unwrap());
+        for i in 0..rec.len() {
+            assert!((a.speed_m_s[i] - b.speed_m_s[i]).abs() <= 1e-9 * a.speed_m_s[i]);
+            assert!((a.from_rad[i] - b.from_rad[i]).abs() <= 1e-9 * a.from_rad[i].abs());
+        }
+    }
+    assert_eq!(rec.slice(2..5).wind.unwrap().speed_m_s.len(), 3);
+}

@@ -58,6 +58,8 @@ proptest! {
             delta: (0..n).map(|i| f(i, 6) * 0.5).collect(),
             n: None,
             accelerations: None,
+            wind: None,
+            current: None,
         };
         let back = parse_recording(Path::new("rt.csv"), &recording_csv(&rec, &["round trip".into()])).unwrap();
         let cols = |r: &Recording| [r.t.clone(), r.x0.clone(), r.y0.clone(), r.psi.clone(), r.u.clone(), r.v.clone(), r.r.clone(), r.delta.clone()];

@@ -1,0 +1,472 @@
+//! The environment a recording carries as a known input: its recorded true wind and current
+//! (`docs/data-format.md`, columns `wind_speed`, `wind_from`, `current_speed`, `current_from`) and the
+//! ship's windage (`[windage]` of the data set).
+//!
+//! - [`Aerodynamics`] turns a windage table into the aerodynamic force on the ship for a relative wind.
+//! - [`KnownEnvironment`] is one recording's wind and current as functions of time (linear between
+//!   samples, held beyond the ends), with the force and the water-relative state they imply.
+//! - [`WithEnvironment`] wraps any [`Dynamics`] so that a simulation or replay of that recording feels
+//!   its wind and current at every RK4 stage ([`Dynamics::accelerations_at`]).
+//!
+//! Conventions: both flows are given by their speed and the earth-fixed direction they come FROM,
+//! clockwise from north. Times of a [`KnownEnvironment`] count from the recording's first sample, as a
+//! replay's simulation time does.
+
+use shipid_io::{AddedMass, Recording, Ship, WindModel, Windage};
+use thiserror::Error;
+
+use crate::dynamics::{
+    Dynamics, DynamicsError, LinearHullDerivatives, MassMatrix, RudderFilter, State,
+};
+
+/// Why a recording's environment cannot be used as a known input.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum EnvironmentError {
+    /// The recording has wind columns but no windage was given to turn them into forces.
+    #[error(
+        "the recording has a recorded wind (`wind_speed`, `wind_from`) but the data set has no [windage] table to turn it into forces (give frontal_area_m2 and lateral_area_m2, docs/data-format.md)"
+    )]
+    NoWindage,
+    /// The wind-coefficient model cannot be used with the windage given.
+    #[error("windage model `{model}`: {reason}")]
+    Windage { model: &'static str, reason: String },
+    /// A recorded series is not as long as the recording's time.
+    #[error("recorded {what} has {got} samples for {want} times")]
+    Length {
+        what: &'static str,
+        got: usize,
+        want: usize,
+    },
+}
+
+/// Aerodynamic force model of a ship above water: the wind-coefficient model of its windage table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Aerodynamics {
+    windage: Windage,
+    /// Reference length of the yaw moment [m] (length overall; L_pp when not given).
+    length_m: f64,
+}
+
+/// Fossen's mid-range merchant-ship constants [c_x, c_y, c_n] (Fossen 2011, §8.1: c_x 0.50–0.90,
+/// c_y 0.70–0.95, c_n 0.05–0.20).
+pub const FOSSEN_COEFFICIENTS: [f64; 3] = [0.70, 0.825, 0.125];
+
+impl Aerodynamics {
+    /// The force model of `windage` for `ship`, checked against what its wind model needs.
+    pub fn new(windage: &Windage, ship: &Ship) -> Result<Aerodynamics, EnvironmentError> {
+        match windage.model {
+            WindModel::Fossen => {}
+            m @ (WindModel::Isherwood1973 | WindModel::Fujiwara2005) => {
+                return Err(EnvironmentError::Windage {
+                    model: m.name(),
+                    reason: "not available in this build; use model = \"fossen\"".into(),
+                });
+            }
+        }
+        Ok(Aerodynamics {
+            length_m: windage.length_overall_m.unwrap_or(ship.lpp),
+            windage: windage.clone(),
+        })
+    }
+
+    /// The windage this model was built from.
+    pub fn windage(&self) -> &Windage {
+        &self.windage
+    }
+
+    /// Force coefficients [C_X, C_Y, C_N] for the relative wind coming from `gamma_rad` (0 from ahead,
+    /// +90° from starboard), with X = q A_F C_X, Y = q A_L C_Y, N = q A_L L C_N about midship (N before
+    /// the lateral centre's lever, which [`Aerodynamics::force`] adds).
+    pub fn coefficients(&self, gamma_rad: f64) -> [f64; 3] {
+        match self.windage.model {
+            WindModel::Fossen | WindModel::Isherwood1973 | WindModel::Fujiwara2005 => {
+                let [cx, cy, cn] = FOSSEN_COEFFICIENTS;
+                [
+                    -cx * gamma_rad.cos(),
+                    -cy * gamma_rad.sin(),
+                    -cn * (2.0 * gamma_rad).sin(),
+                ]
+            }
+        }
+    }
+
+    /// Aerodynamic [X, Y, N] [N, N, N m] about midship for the air velocity relative to the ship in
+    /// body axes `[u_a, v_a]` [m/s] (the velocity of the air past the ship: a head wind has u_a < 0).
+    pub fn force(&self, relative_air_body: [f64; 2]) -> [f64; 3] {
+        let [ua, va] = relative_air_body;
+        let q = 0.5 * self.windage.air_density_kg_m3 * (ua * ua + va * va);
+        if q == 0.0 {
+            return [0.0; 3];
+        }
+        // The direction the relative wind comes from: opposite to the air's velocity past the ship.
+        let gamma = (-va).atan2(-ua);
+        let [cx, cy, cn] = self.coefficients(gamma);
+        let y = q * self.windage.lateral_area_m2 * cy;
+        [
+            q * self.windage.frontal_area_m2 * cx,
+            y,
+            q * self.windage.lateral_area_m2 * self.length_m * cn
+                + self.windage.lateral_centre_x_m * y,
+        ]
+    }
+}
+
+/// The windage assumed when a recording has a wind but its data set no `[windage]` table: the hull
+/// above water of a loaded tanker (freeboard 0.44 × draft, as KVLCC2: depth 30.0 m, draft 20.8 m), no
+/// superstructure, Fossen's coefficients. Every command that uses it says so.
+pub fn assumed_windage(ship: &Ship) -> Windage {
+    let freeboard_m = (30.0 - 20.8) / 20.8 * ship.draft;
+    Windage {
+        frontal_area_m2: ship.beam * freeboard_m,
+        lateral_area_m2: ship.lpp * freeboard_m,
+        lateral_centre_x_m: 0.0,
+        model: WindModel::Fossen,
+        air_density_kg_m3: shipid_io::DEFAULT_AIR_DENSITY_KG_M3,
+        length_overall_m: None,
+        superstructure_lateral_area_m2: None,
+        lateral_centre_height_m: None,
+        height_m: None,
+        source: Some(ASSUMED_WINDAGE_SOURCE.into()),
+    }
+}
+
+/// How [`assumed_windage`] is named in model files and warnings.
+pub const ASSUMED_WINDAGE_SOURCE: &str = "assumed: hull above water of a loaded tanker (freeboard 0.44 × draft, no superstructure), Fossen (2011) coefficients; the data set gives no [windage]";
+
+/// A recording's wind and current as known inputs (see the module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct KnownEnvironment {
+    /// Times [s] from the recording's first sample.
+    t_s: Vec<f64>,
+    /// Wind velocity [north, east] [m/s] per sample, with the force model.
+    wind: Option<(Vec<[f64; 2]>, Aerodynamics)>,
+    /// Current velocity [north, east] [m/s] per sample.
+    current: Option<Vec<[f64; 2]>>,
+}
+
+impl KnownEnvironment {
+    /// The environment `rec` records, `None` when it records neither wind nor current. A recorded wind
+    /// needs `windage` ([`EnvironmentError::NoWindage`] otherwise: the caller decides whether to assume
+    /// [`assumed_windage`] and say so).
+    pub fn of_recording(
+        rec: &Recording,
+        windage: Option<&Windage>,
+        ship: &Ship,
+    ) -> Result<Option<KnownEnvironment>, EnvironmentError> {
+        if rec.wind.is_none() && rec.current.is_none() {
+            return Ok(None);
+        }
+        let n = rec.len();
+        let velocities = |what: &'static str, f: &shipid_io::FlowSeries| {
+            if f.speed_m_s.len() != n || f.from_rad.len() != n {
+                return Err(EnvironmentError::Length {
+                    what,
+                    got: f.speed_m_s.len().min(f.from_rad.len()),
+                    want: n,
+                });
+            }
+            Ok((0..n).map(|i| f.velocity_earth(i)).collect::<Vec<_>>())
+        };
+        let wind = match &rec.wind {
+            Some(w) => {
+                let windage = windage.ok_or(EnvironmentError::NoWindage)?;
+                Some((velocities("wind", w)?, Aerodynamics::new(windage, ship)?))
+            }
+            None => None,
+        };
+        let current = rec
+            .current
+            .as_ref()
+            .map(|c| velocities("current", c))
+            .transpose()?;
+        let t0 = rec.t.first().copied().unwrap_or(0.0);
+        Ok(Some(KnownEnvironment {
+            t_s: rec.t.iter().map(|t| t - t0).collect(),
+            wind,
+            current,
+        }))
+    }
+
+    /// The same environment with its time origin moved to `t0_s` [s] from the recording's start (a
+    /// replay of a segment that starts there).
+    pub fn starting_at(&self, t0_s: f64) -> KnownEnvironment {
+        KnownEnvironment {
+            t_s: self.t_s.iter().map(|t| t - t0_s).collect(),
+            ..self.clone()
+        }
+    }
+
+    /// Whether a wind is recorded.
+    pub fn has_wind(&self) -> bool {
+        self.wind.is_some()
+    }
+
+    /// Whether a current is recorded.
+    pub fn has_current(&self) -> bool {
+        self.current.is_some()
+    }
+
+    /// The force model of the recorded wind.
+    pub fn aerodynamics(&self) -> Option<&Aerodynamics> {
+        self.wind.as_ref().map(|(_, a)| a)
+    }
+
+    /// Index and weight of the sample interval that holds `t_s` (held at the ends).
+    fn locate(&self, t_s: f64) -> (usize, f64) {
+        let n = self.t_s.len();
+        if n < 2 || t_s <= self.t_s[0] {
+            return (0, 0.0);
+        }
+        if t_s >= self.t_s[n - 1] {
+            return (n - 2, 1.0);
+        }
+        let k = self.t_s.partition_point(|&t| t <= t_s) - 1;
+        let w = (t_s - self.t_s[k]) / (self.t_s[k + 1] - self.t_s[k]);
+        (k, w)
+    }
+
+    fn interpolate(&self, series: &[[f64; 2]], t_s: f64) -> [f64; 2] {
+        if series.len() < 2 {
+            return series.first().copied().unwrap_or([0.0; 2]);
+        }
+        let (k, w) = self.locate(t_s);
+        let (a, b) = (series[k], series[k + 1]);
+        [a[0] + w * (b[0] - a[0]), a[1] + w * (b[1] - a[1])]
+    }
+
+    /// Wind velocity [north, east] [m/s] at `t_s` (velocities, not speed and direction, are
+    /// interpolated, so a wind veering through north does not spin the long way round).
+    pub fn wind_at(&self, t_s: f64) -> Option<[f64; 2]> {
+        self.wind.as_ref().map(|(w, _)| self.interpolate(w, t_s))
+    }
+
+    /// Current velocity [north, east] [m/s] at `t_s` (zero when none is recorded).
+    pub fn current_at(&self, t_s: f64) -> [f64; 2] {
+        match &self.current {
+            Some(c) => self.interpolate(c, t_s),
+            None => [0.0; 2],
+        }
+    }
+
+    /// Rate of change of the current velocity [north, east] [m/s²] at `t_s`: the slope of the
+    /// interval that holds it (zero beyond the ends).
+    pub fn current_rate_at(&self, t_s: f64) -> [f64; 2] {
+        let Some(c) = &self.current else {
+            return [0.0; 2];
+        };
+        let n = self.t_s.len();
+        if n < 2 || t_s < self.t_s[0] || t_s > self.t_s[n - 1] {
+            return [0.0; 2];
+        }
+        let (k, _) = self.locate(t_s);
+        let dt = self.t_s[k + 1] - self.t_s[k];
+        [(c[k + 1][0] - c[k][0]) / dt, (c[k + 1][1] - c[k][1]) / dt]
+    }
+
+    /// Aerodynamic [X, Y, N] [N, N, N m] about midship at `t_s` on a ship in over-ground state `s`.
+    pub fn wind_force(&self, t_s: f64, s: &State) -> [f64; 3] {
+        let Some((_, aero)) = &self.wind else {
+            return [0.0; 3];
+        };
+        let [wn, we] = self.interpolate(&self.wind.as_ref().expect("checked above").0, t_s);
+        let (sp, cp) = s.psi.sin_cos();
+        aero.force([wn * cp + we * sp - s.u, -wn * sp + we * cp - s.v])
+    }
+
+    /// Current velocity in body axes [u_c, v_c] [m/s] at `t_s` and heading `psi_rad`.
+    pub fn current_body(&self, t_s: f64, psi_rad: f64) -> [f64; 2] {
+        let [n, e] = self.current_at(t_s);
+        let (s, c) = psi_rad.sin_cos();
+        [n * c + e * s, -n * s + e * c]
+    }
+
+    /// The state relative to the water at `t_s` of the over-ground state `s`.
+    pub fn through_water(&self, t_s: f64, s: &State) -> State {
+        let [uc, vc] = self.current_body(t_s, s.psi);
+        State {
+            u: s.u - uc,
+            v: s.v - vc,
+            ..*s
+        }
+    }
+
+    /// The over-ground state at `t_s` of a ship moving through the water with `through_water`.
+    pub fn over_ground(&self, t_s: f64, through_water: &State) -> State {
+        let [uc, vc] = self.current_body(t_s, through_water.psi);
+        State {
+            u: through_water.u + uc,
+            v: through_water.v + vc,
+            ..*through_water
+        }
+    }
+
+    /// Body-axis over-ground accelerations minus water-relative ones at `t_s` in over-ground state
+    /// `s`: the rotation of the current in body axes (r v_c, −r u_c) plus its own change in time. The
+    /// current is taken as uniform; the pressure gradient that accelerates a changing current would also
+    /// push the hull, which is left out (recorded currents change slowly against the ship's motions).
+    pub fn current_transport(&self, t_s: f64, s: &State) -> [f64; 2] {
+        if self.current.is_none() {
+            return [0.0; 2];
+        }
+        let [uc, vc] = self.current_body(t_s, s.psi);
+        let [dn, de] = self.current_rate_at(t_s);
+        let (sp, cp) = s.psi.sin_cos();
+        [s.r * vc + dn * cp + de * sp, -s.r * uc - dn * sp + de * cp]
+    }
+}
+
+/// A model that feels a recording's wind and current (see the module docs). Its state is over
+/// ground; time is the recording's, from its first sample.
+#[derive(Debug, Clone)]
+pub struct WithEnvironment<D> {
+    inner: D,
+    environment: KnownEnvironment,
+    mass: MassMatrix,
+}
+
+impl<D: Dynamics> WithEnvironment<D> {
+    /// `inner` in `environment`.
+    pub fn new(inner: D, environment: KnownEnvironment) -> WithEnvironment<D> {
+        let mass = MassMatrix::new(inner.ship(), inner.added_mass());
+        WithEnvironment {
+            inner,
+            environment,
+            mass,
+        }
+    }
+
+    /// The wrapped model.
+    pub fn inner(&self) -> &D {
+        &self.inner
+    }
+
+    /// The environment.
+    pub fn environment(&self) -> &KnownEnvironment {
+        &self.environment
+    }
+}
+
+impl<D: Dynamics> Dynamics for WithEnvironment<D> {
+    fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
+        self.accelerations_at(0.0, state, delta_rad)
+    }
+
+    fn accelerations_at(
+        &self,
+        t_s: f64,
+        s: &State,
+        delta_rad: f64,
+    ) -> Result<[f64; 3], DynamicsError> {
+        let env = &self.environment;
+        let water = env.through_water(t_s, s);
+        let mut acc = self.inner.accelerations_at(t_s, &water, delta_rad)?;
+        if env.has_wind() {
+            let f = env.wind_force(t_s, s);
+            let da = self
+                .mass
+                .solve(f)
+                .ok_or_else(|| DynamicsError::OutOfDomain("singular mass matrix".into()))?;
+            (0..3).for_each(|i| acc[i] += da[i]);
+        }
+        let [tu, tv] = env.current_transport(t_s, s);
+        acc[0] += tu;
+        acc[1] += tv;
+        Ok(acc)
+    }
+
+    fn ship(&self) -> &Ship {
+        self.inner.ship()
+    }
+
+    fn added_mass(&self) -> &AddedMass {
+        self.inner.added_mass()
+    }
+
+    fn propeller_rate_hz(&self) -> Option<f64> {
+        self.inner.propeller_rate_hz()
+    }
+
+    fn linear_hull_derivatives(&self) -> Option<LinearHullDerivatives> {
+        self.inner.linear_hull_derivatives()
+    }
+
+    fn model_rudder_filter(&self) -> Option<Box<dyn RudderFilter>> {
+        self.inner.model_rudder_filter()
+    }
+
+    fn over_ground(&self, through_water: &State) -> State {
+        self.inner
+            .over_ground(&self.environment.over_ground(0.0, through_water))
+    }
+
+    fn own_range(&self) -> Option<&dyn crate::dynamics::OwnRange> {
+        self.inner.own_range()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ship() -> Ship {
+        crate::mmg::kvlcc2_ship()
+    }
+
+    fn recording(wind: Option<(f64, f64)>, current: Option<(f64, f64)>) -> Recording {
+        let n = 11;
+        let flow = |(speed, from_deg): (f64, f64)| shipid_io::FlowSeries {
+            speed_m_s: vec![speed; n],
+            from_rad: vec![f64::to_radians(from_deg); n],
+        };
+        Recording {
+            t: (0..n).map(|i| 5.0 + i as f64).collect(),
+            psi: vec![0.0; n],
+            wind: wind.map(flow),
+            current: current.map(flow),
+            ..Recording::default()
+        }
+    }
+
+    /// A head wind pushes the ship back, a wind from starboard pushes it to port; both with the
+    /// windage areas' dynamic pressure.
+    #[test]
+    fn a_head_wind_pushes_back_and_a_beam_wind_pushes_to_lee() {
+        let s = ship();
+        let w = assumed_windage(&s);
+        let head = KnownEnvironment::of_recording(&recording(Some((3.0, 0.0)), None), Some(&w), &s)
+            .unwrap()
+            .unwrap();
+        let still = State::approach(0.0);
+        let f = head.wind_force(0.0, &still);
+        let q = 0.5 * 1.225 * 9.0;
+        assert!((f[0] + q * w.frontal_area_m2 * 0.70).abs() < 1e-12, "{f:?}");
+        assert!(f[1].abs() < 1e-12 && f[2].abs() < 1e-12, "{f:?}");
+        let beam =
+            KnownEnvironment::of_recording(&recording(Some((3.0, 90.0)), None), Some(&w), &s)
+                .unwrap()
+                .unwrap();
+        let f = beam.wind_force(0.0, &still);
+        assert!((f[1] + q * w.lateral_area_m2 * 0.825).abs() < 1e-9, "{f:?}");
+    }
+
+    /// Regression guard: a recorded wind without windage is refused, not silently ignored.
+    #[test]
+    fn a_wind_without_windage_is_refused() {
+        let e = KnownEnvironment::of_recording(&recording(Some((3.0, 0.0)), None), None, &ship());
+        assert_eq!(e, Err(EnvironmentError::NoWindage));
+    }
+
+    /// A current from the north moves a ship heading north backwards over ground by its speed; times
+    /// count from the recording's first sample.
+    #[test]
+    fn a_current_from_ahead_slows_the_ship_over_ground() {
+        let env = KnownEnvironment::of_recording(&recording(None, Some((0.2, 0.0))), None, &ship())
+            .unwrap()
+            .unwrap();
+        let water = State::approach(1.0);
+        let ground = env.over_ground(3.0, &water);
+        assert!((ground.u - 0.8).abs() < 1e-12 && ground.v.abs() < 1e-12);
+        assert_eq!(env.through_water(3.0, &ground), water);
+        assert_eq!(env.current_rate_at(3.0), [0.0, 0.0]);
+    }
+}
