@@ -242,7 +242,9 @@ fn a_propeller_without_a_curve_takes_the_default_and_names_it() {
 fn recorded_wind_and_current_read_in_si_and_round_trip() {
     use shipid_io::recording::parse_recording;
     use shipid_io::write::recording_csv;
-    let mut text = String::from("t,x0,y0,psi,u,v,r,delta,wind_speed[kn],wind_from[deg],current_speed,current_from[deg]\n");
+    let mut text = String::from(
+        "t,x0,y0,psi,u,v,r,delta,wind_speed[kn],wind_from[deg],current_speed,current_from[deg]\n",
+    );
     for i in 0..25 {
         text.push_str(&format!("{},0,0,0,1,0,0,0,10,270,0.1,45\n", i as f64 * 0.1));
     }
