@@ -376,7 +376,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             if estimator == shipid_pipeline::fit::GP {
                 if bootstrap.is_some() {
                     return Err(shipid::bad_input(
-                        "--bootstrap applies to polynomial fits; the sparse GP's uncertainty is its posterior variance (bands for it are not available yet)",
+                        "--bootstrap applies to polynomial and mmg fits; the sparse GP's uncertainty is its posterior, which `simulate --bands` and `validate --bands` draw from without --bootstrap",
                     ));
                 }
                 return shipid::fit_cmd::run_gp(
