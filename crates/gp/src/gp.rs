@@ -140,7 +140,7 @@ fn inverse_sq_scales(h: &Hyper) -> Vec<f64> {
 }
 
 /// K (with jitter, without noise) for the points.
-fn kernel_matrix(x: &Points, h: &Hyper) -> Mat<f64> {
+pub(crate) fn kernel_matrix(x: &Points, h: &Hyper) -> Mat<f64> {
     let n = x.len();
     let inv = inverse_sq_scales(h);
     let sf2 = h.signal_std * h.signal_std;
@@ -417,6 +417,10 @@ impl Gp {
     pub fn points(&self) -> &Points {
         &self.x
     }
+    /// Lower Cholesky factor of K_y = K + σ_n² I.
+    pub(crate) fn cholesky(&self) -> &Mat<f64> {
+        &self.l
+    }
     pub fn targets(&self) -> &[f64] {
         &self.y
     }
@@ -434,18 +438,24 @@ impl Gp {
     /// Predictive mean at `x` (length = dims; extra values are ignored, missing ones read as 0 — the
     /// caller passes a point of the GP's dimension).
     pub fn predict_mean(&self, x: &[f64]) -> f64 {
+        self.mean + self.kernel_sum(x, &self.weights)
+    }
+
+    /// Σ_i weights_i exp(−½ Σ_d (x_d − x_i,d)² / ℓ_d²) over the training points: the mean with
+    /// `weights` = σ_f² α, a posterior draw with its own weights.
+    pub(crate) fn kernel_sum(&self, x: &[f64], weights: &[f64]) -> f64 {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("fma") {
             if std::arch::is_x86_feature_detected!("avx512f") {
                 // SAFETY: the CPU has AVX-512F and FMA (checked just above).
-                return unsafe { self.predict_mean_avx512(x) };
+                return unsafe { self.kernel_sum_avx512(x, weights) };
             }
             if std::arch::is_x86_feature_detected!("avx2") {
                 // SAFETY: the CPU has AVX2 and FMA (checked just above).
-                return unsafe { self.predict_mean_avx2(x) };
+                return unsafe { self.kernel_sum_avx2(x, weights) };
             }
         }
-        self.predict_mean_portable::<false>(x)
+        self.kernel_sum_portable::<false>(x, weights)
     }
 
     // The same loop compiled for 4- or 8-wide vectors instead of the baseline's 2, with fused
@@ -454,25 +464,25 @@ impl Gp {
     // baseline's in the last bit.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
-    fn predict_mean_avx2(&self, x: &[f64]) -> f64 {
-        self.predict_mean_portable::<true>(x)
+    fn kernel_sum_avx2(&self, x: &[f64], weights: &[f64]) -> f64 {
+        self.kernel_sum_portable::<true>(x, weights)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f,avx2,fma")]
-    fn predict_mean_avx512(&self, x: &[f64]) -> f64 {
-        self.predict_mean_portable::<true>(x)
+    fn kernel_sum_avx512(&self, x: &[f64], weights: &[f64]) -> f64 {
+        self.kernel_sum_portable::<true>(x, weights)
     }
 
     #[inline(always)]
-    fn predict_mean_portable<const FMA: bool>(&self, x: &[f64]) -> f64 {
+    fn kernel_sum_portable<const FMA: bool>(&self, x: &[f64], weights: &[f64]) -> f64 {
         // In blocks: squared scaled distances (vectorisable over points), then their exponentials.
         const BLOCK: usize = 64;
         let dims = self.dims();
         let q: Vec<f64> = (0..dims)
             .map(|d| x.get(d).copied().unwrap_or(0.0) / self.hyper.length_scales[d])
             .collect();
-        let n = self.weights.len();
+        let n = weights.len().min(self.x.len());
         let mut buf = [0.0f64; BLOCK];
         let mut s = 0.0;
         let mut start = 0;
@@ -491,7 +501,7 @@ impl Gp {
                 *v = kernel_exp_with::<FMA>(*v);
             }
             // Four partial sums, so that the dot product is not one serial chain of additions.
-            let w = &self.weights[start..start + len];
+            let w = &weights[start..start + len];
             let mut part = [0.0f64; 4];
             let mut chunks_b = b.chunks_exact(4);
             let mut chunks_w = w.chunks_exact(4);
@@ -506,7 +516,7 @@ impl Gp {
             s += (part[0] + part[1]) + (part[2] + part[3]);
             start += len;
         }
-        self.mean + s
+        s
     }
 
     /// Predictive mean and variance of the latent function (add σ_n² for a noisy observation) at every

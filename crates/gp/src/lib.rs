@@ -5,6 +5,7 @@
 //! - [`gp`]: GP regression with the squared-exponential ARD kernel; hyper-parameters by maximising the log
 //!   marginal likelihood with analytic gradients; Cholesky-based prediction with variance (faer).
 //! - [`lbfgs`]: the quasi-Newton minimiser used for the hyper-parameters.
+//! - [`draw`]: functions drawn from the posterior, consistent over a trajectory (for bands).
 //!
 //! ```
 //! use shipid_gp::{Gp, Points, Similarity, TrainOptions, sparsify};
@@ -19,12 +20,14 @@
 //! # Ok::<(), shipid_gp::GpError>(())
 //! ```
 
+pub mod draw;
 pub mod error;
 pub mod gp;
 pub mod lbfgs;
 pub mod points;
 pub mod sparsify;
 
+pub use draw::{PosteriorDraw, PosteriorSampler};
 pub use error::GpError;
 pub use gp::{Gp, Hyper, JITTER, TrainOptions, Training, log_marginal_likelihood};
 pub use lbfgs::{LbfgsOptions, Minimum, Termination, minimize};

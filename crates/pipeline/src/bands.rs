@@ -4,15 +4,21 @@
 //! interval over the replicates whose run defines it. A replicate run that diverges is counted (its
 //! metrics are undefined), never dropped silently. No I/O.
 
+use std::sync::Arc;
+
 use rayon::prelude::*;
 use serde::Serialize;
+use shipid_gp::{PosteriorDraw, PosteriorSampler};
 use shipid_io::{DatasetRecording, InputError, Manoeuvre, Ship};
 use shipid_model::{AbkowitzModel, ModelFile};
+use shipid_sim::gp::{GP_KIND, GpDynamics, GpModelFile};
 use shipid_sim::metrics::metrics;
 use shipid_sim::{AbkowitzDynamics, Dynamics, Effect, SimStatus, WithEffects};
-use shipid_uncertainty::{Band, UncertaintyError, percentile_band};
+use shipid_uncertainty::{Band, SplitMix64, UncertaintyError, percentile_band};
 
+use crate::bootstrap::replicate_rng;
 use crate::error::{PipelineError, bad_input};
+use crate::mmg::file::{MMG_KIND, MmgModelFile};
 use crate::simulate::{SimGrid, simulate_manoeuvre, simulate_on_grid};
 use crate::validate::closed_loop;
 
@@ -190,31 +196,43 @@ fn track_band(
     }
 }
 
-/// The bootstrap replicates of the model file `spec` as simulation models, each with the file's
-/// effects; bad input when the file holds no `[bootstrap]` table (a model without replicates has no
-/// band, and saying so beats a band of zero width).
+/// The replicated models of the model file `spec` as simulation models: the bootstrap replicates of a
+/// polynomial (each with the file's effects) or mmg file, the posterior draws of a sparse GP. Bad input
+/// when the file holds no replicates (a model without them has no band, and saying so beats a band
+/// of zero width).
 pub fn replicate_models(spec: &str) -> Result<Vec<Box<dyn Dynamics + Send + Sync>>, PipelineError> {
     let path = std::path::Path::new(spec);
     if !path.is_file() {
         return Err(bad_input(format!(
             "{spec}: --bands needs a model file with bootstrap replicates (`shipid fit … --bootstrap \
-             N`); `{spec}` is not one"
+             N`) or a sparse-GP model file; `{spec}` is not one"
         )));
     }
     let text = std::fs::read_to_string(path).map_err(|e| InputError::read(path, &e))?;
     let kind = toml::from_str::<toml::Table>(&text)
         .ok()
         .and_then(|t| t.get("kind").and_then(|k| k.as_str()).map(String::from));
-    if kind.as_deref() != Some("abkowitz") {
-        return Err(bad_input(format!(
-            "{spec}: --bands needs the bootstrap replicates of a polynomial model file (`shipid fit \
-             … --bootstrap N`); this model is {}: bands for other families are not available yet",
+    match kind.as_deref() {
+        Some("abkowitz") => abkowitz_replicates(path, &text),
+        Some(MMG_KIND) => mmg_replicates(path, &text),
+        Some(GP_KIND) => gp_posterior_draws(path, &text),
+        _ => Err(bad_input(format!(
+            "{spec}: --bands needs the replicates of a polynomial or mmg model file (`shipid fit … \
+             --bootstrap N`) or a sparse-GP model file; this model is {}: bands for it are not \
+             available",
             kind.map_or("not a fitted model file".into(), |k| format!(
                 "of kind `{k}`"
             ))
-        )));
+        ))),
     }
-    let file: ModelFile = toml::from_str(&text).map_err(|e| InputError::toml(path, &text, &e))?;
+}
+
+fn abkowitz_replicates(
+    path: &std::path::Path,
+    text: &str,
+) -> Result<Vec<Box<dyn Dynamics + Send + Sync>>, PipelineError> {
+    let spec = path.display();
+    let file: ModelFile = toml::from_str(text).map_err(|e| InputError::toml(path, text, &e))?;
     let Some(record) = &file.bootstrap else {
         return Err(InputError::key(
             path,
@@ -249,4 +267,111 @@ pub fn replicate_models(spec: &str) -> Result<Vec<Box<dyn Dynamics + Send + Sync
         }
     }
     Ok(models)
+}
+
+fn mmg_replicates(
+    path: &std::path::Path,
+    text: &str,
+) -> Result<Vec<Box<dyn Dynamics + Send + Sync>>, PipelineError> {
+    let file: MmgModelFile = toml::from_str(text).map_err(|e| InputError::toml(path, text, &e))?;
+    file.to_model(path)?;
+    Ok(file
+        .replicate_models(path)?
+        .into_iter()
+        .map(|m| Box::new(m) as Box<dyn Dynamics + Send + Sync>)
+        .collect())
+}
+
+/// Posterior functions drawn per sparse-GP band, and the seed of their draws: the posterior is in the
+/// model file, so its bands need no replicates stored; a fixed seed makes them reproducible.
+pub const GP_DRAWS: usize = 200;
+pub const GP_DRAW_SEED: u64 = 1;
+
+/// The three accelerations of one posterior draw of a sparse-GP model.
+struct GpDrawDynamics {
+    ship: Ship,
+    added_mass: shipid_io::AddedMass,
+    /// u̇, v̇, ṙ.
+    draws: [PosteriorDraw; 3],
+}
+
+impl Dynamics for GpDrawDynamics {
+    fn accelerations(
+        &self,
+        s: &shipid_sim::State,
+        delta_rad: f64,
+    ) -> Result<[f64; 3], shipid_sim::DynamicsError> {
+        let x = [s.u, s.v, s.r, delta_rad];
+        if x.iter().any(|v| !v.is_finite()) {
+            return Err(shipid_sim::DynamicsError::OutOfDomain(format!(
+                "non-finite state {x:?}"
+            )));
+        }
+        Ok(std::array::from_fn(|k| self.draws[k].value(&x)))
+    }
+
+    fn ship(&self) -> &Ship {
+        &self.ship
+    }
+
+    fn added_mass(&self) -> &shipid_io::AddedMass {
+        &self.added_mass
+    }
+}
+
+/// Standard normal numbers from SplitMix64 (Box–Muller), so that draws do not depend on a library
+/// generator's stream.
+fn normals(rng: &mut SplitMix64) -> impl FnMut() -> f64 + '_ {
+    let mut spare: Option<f64> = None;
+    move || {
+        if let Some(z) = spare.take() {
+            return z;
+        }
+        // Uniforms in (0, 1]: the logarithm stays finite.
+        let mut uniform = || ((rng.next_u64() >> 11) as f64 + 1.0) / (1u64 << 53) as f64;
+        let (u1, u2) = (uniform(), uniform());
+        let radius = (-2.0 * u1.ln()).sqrt();
+        let angle = 2.0 * std::f64::consts::PI * u2;
+        spare = Some(radius * angle.sin());
+        radius * angle.cos()
+    }
+}
+
+/// [`GP_DRAWS`] functions drawn from the posterior of `model`'s three GPs (`shipid_gp::draw`), each
+/// as a simulation model; draw k is seeded from ([`GP_DRAW_SEED`], k), so it does not depend on the
+/// number of threads.
+pub fn gp_draws(
+    model: &GpDynamics,
+    draws: usize,
+    seed: u64,
+) -> Result<Vec<Box<dyn Dynamics + Send + Sync>>, shipid_gp::GpError> {
+    let samplers = model
+        .gps
+        .iter()
+        .map(|gp| PosteriorSampler::new(Arc::new(gp.clone())))
+        .collect::<Result<Vec<_>, _>>()?;
+    (0..draws)
+        .into_par_iter()
+        .map(|k| {
+            let mut rng = replicate_rng(seed, k);
+            let mut normal = normals(&mut rng);
+            let [a, b, c] = [0, 1, 2].map(|i| samplers[i].draw(&mut normal));
+            Ok(Box::new(GpDrawDynamics {
+                ship: model.ship,
+                added_mass: model.added_mass,
+                draws: [a?, b?, c?],
+            }) as Box<dyn Dynamics + Send + Sync>)
+        })
+        .collect()
+}
+
+fn gp_posterior_draws(
+    path: &std::path::Path,
+    text: &str,
+) -> Result<Vec<Box<dyn Dynamics + Send + Sync>>, PipelineError> {
+    let file: GpModelFile = toml::from_str(text).map_err(|e| InputError::toml(path, text, &e))?;
+    let model =
+        GpDynamics::from_file(&file).map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
+    gp_draws(&model, GP_DRAWS, GP_DRAW_SEED)
+        .map_err(|e| crate::error::failed(format!("{}: posterior draws: {e}", path.display())))
 }

@@ -1,4 +1,4 @@
-//! Parameter uncertainty of a polynomial (Abkowitz) fit by a moving-block bootstrap.
+//! Parameter uncertainty of a polynomial (Abkowitz) or mmg fit by a moving-block bootstrap.
 //!
 //! Each replicate redraws the training rows in blocks (within each recording, see
 //! `shipid_uncertainty::resample`) and refits every DOF with the estimator *as resolved by the
@@ -8,7 +8,9 @@
 //! decorrelation lags of the equation-error residuals over the DOFs and recordings, so that the most
 //! slowly varying residual decides. A refined model (output error) is not refitted per replicate: its
 //! replicates are the refined coefficients shifted by each replicate's departure from the
-//! equation-error fit (the spread the data allow, centred on the model the user has). No I/O.
+//! equation-error fit (the spread the data allow, centred on the model the user has). The mmg family
+//! ([`bootstrap_mmg`]) is bootstrapped the same way over its equation-error samples, each replicate
+//! re-identified by the family's variable projection with the resolved prior weight. No I/O.
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -21,6 +23,10 @@ use shipid_sim::{AbkowitzDynamics, Dynamics};
 use shipid_uncertainty::{BlockLength, SplitMix64, block_length, replicate_rows, spread};
 
 use crate::error::{PipelineError, bad_input};
+use crate::mmg::file::MmgBootstrapRecord;
+use crate::mmg::identify::{EqSample, Problem};
+use crate::mmg::priors::{NONLINEAR_NAMES, ParamSpec, Role};
+use crate::mmg::{MmgEstimator, MmgFit, MmgFitOptions, training_samples};
 
 /// The bootstrap in words, as the model file states it.
 pub const METHOD: &str = "moving-block bootstrap of the training rows (blocks within each recording), \
@@ -77,17 +83,7 @@ impl Bootstrap {
             method: METHOD.into(),
             seed: self.seed,
             block_rows: self.block.rows,
-            block_reason: match self.block.decorrelation_lag {
-                Some(lag) => format!(
-                    "the equation-error residuals decorrelate after {lag} rows (autocorrelation \
-                     inside ±2/√n); floor n^(1/3) = {}, cap n/4 = {} rows",
-                    self.block.floor_rows, self.block.cap_rows
-                ),
-                None => format!(
-                    "the equation-error residuals stay correlated up to n/4 = {} rows: the cap",
-                    self.block.cap_rows
-                ),
-            },
+            block_reason: block_reason(&self.block),
             rejected: self.rejected,
             standard_error,
             correlation,
@@ -108,12 +104,54 @@ impl Bootstrap {
     }
 }
 
-/// The contiguous row range of every recording (group) of the samples, in order.
-fn group_ranges(samples: &Samples) -> Vec<std::ops::Range<usize>> {
+/// Why the block has its length, as the model file states it.
+fn block_reason(block: &BlockLength) -> String {
+    match block.decorrelation_lag {
+        Some(lag) => format!(
+            "the equation-error residuals decorrelate after {lag} rows (autocorrelation inside \
+             ±2/√n); floor n^(1/3) = {}, cap n/4 = {} rows",
+            block.floor_rows, block.cap_rows
+        ),
+        None => format!(
+            "the equation-error residuals stay correlated up to n/4 = {} rows: the cap",
+            block.cap_rows
+        ),
+    }
+}
+
+/// The generator of replicate `k`, seeded from (seed, k): the draws do not depend on the number of
+/// threads or the order replicates finish in.
+pub fn replicate_rng(seed: u64, k: usize) -> SplitMix64 {
+    SplitMix64::new(seed ^ (k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15))
+}
+
+/// The block of the longest decorrelation lag over the residual series (one per DOF and recording).
+fn longest_block<'a>(series: impl Iterator<Item = &'a [f64]>) -> Option<BlockLength> {
+    let mut block: Option<BlockLength> = None;
+    for s in series {
+        let b = block_length(s);
+        if block.is_none_or(|old| b.rows > old.rows) {
+            block = Some(b);
+        }
+    }
+    block
+}
+
+fn check_replicates(replicates: usize) -> Result<(), PipelineError> {
+    if !(2..=MAX_REPLICATES).contains(&replicates) {
+        return Err(bad_input(format!(
+            "--bootstrap must be between 2 and {MAX_REPLICATES} replicates, got {replicates}"
+        )));
+    }
+    Ok(())
+}
+
+/// The contiguous row range of every recording (group) of the rows, in order.
+fn group_ranges(group: &[usize]) -> Vec<std::ops::Range<usize>> {
     let mut ranges: Vec<std::ops::Range<usize>> = Vec::new();
-    for (i, g) in samples.group.iter().enumerate() {
+    for (i, g) in group.iter().enumerate() {
         match ranges.last_mut() {
-            Some(r) if samples.group[r.start] == *g => r.end = i + 1,
+            Some(r) if group[r.start] == *g => r.end = i + 1,
             _ => ranges.push(i..i + 1),
         }
     }
@@ -141,11 +179,7 @@ pub fn bootstrap_abkowitz(
     replicates: usize,
     seed: u64,
 ) -> Result<Bootstrap, PipelineError> {
-    if !(2..=MAX_REPLICATES).contains(&replicates) {
-        return Err(bad_input(format!(
-            "--bootstrap must be between 2 and {MAX_REPLICATES} replicates, got {replicates}"
-        )));
-    }
+    check_replicates(replicates)?;
     let added = ds
         .added_mass
         .ok_or_else(|| bad_input(format!("{}: no [added_mass] table", ds.path.display())))?;
@@ -165,26 +199,27 @@ pub fn bootstrap_abkowitz(
             }
         })
         .collect();
-    let groups = group_ranges(samples);
+    let groups = group_ranges(&samples.group);
     // The longest decorrelation lag over DOFs and recordings decides the block.
-    let mut block: Option<BlockLength> = None;
-    for (d, dof) in designs.iter().zip(Dof::ALL) {
-        let pred = predict(d.phi.as_ref(), &model.coefficients[dof.index()]).unwrap_or_default();
-        let resid: Vec<f64> = pred.iter().zip(&d.y).map(|(p, y)| y - p).collect();
-        for g in &groups {
-            let b = block_length(&resid[g.clone()]);
-            if block.is_none_or(|old| b.rows > old.rows) {
-                block = Some(b);
-            }
-        }
-    }
-    let block = block.ok_or_else(|| bad_input("no training rows to bootstrap"))?;
+    let residuals: Vec<Vec<f64>> = designs
+        .iter()
+        .zip(Dof::ALL)
+        .map(|(d, dof)| {
+            let pred =
+                predict(d.phi.as_ref(), &model.coefficients[dof.index()]).unwrap_or_default();
+            pred.iter().zip(&d.y).map(|(p, y)| y - p).collect()
+        })
+        .collect();
+    let block = longest_block(
+        residuals
+            .iter()
+            .flat_map(|r| groups.iter().map(move |g| &r[g.clone()])),
+    )
+    .ok_or_else(|| bad_input("no training rows to bootstrap"))?;
     let fits: Vec<Option<[Vec<f64>; 3]>> = (0..replicates)
         .into_par_iter()
         .map(|k| {
-            // One generator per replicate, seeded from (seed, k): the draws do not depend on the
-            // number of threads or the order replicates finish in.
-            let mut rng = SplitMix64::new(seed ^ (k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+            let mut rng = replicate_rng(seed, k);
             let rows = replicate_rows(&groups, block.rows, &mut rng).ok()?;
             let mut out: [Vec<f64>; 3] = Default::default();
             for (i, d) in designs.iter().enumerate() {
@@ -252,4 +287,169 @@ pub fn bootstrap_fit(
         replicates,
         seed,
     )
+}
+
+/// The mmg bootstrap in words, as the model file states it.
+pub const MMG_METHOD: &str = "moving-block bootstrap of the equation-error samples (blocks within each \
+recording), every replicate re-identified by the same variable projection with the estimator and the \
+prior weight λ the fit resolved (held fixed), started from the fit; the replicates are the file's \
+parameters shifted by each replicate's departure from the equation-error estimate, kept inside the \
+parameters' bounds";
+
+/// The replicated parameters of an mmg fit.
+#[derive(Debug, Clone, Serialize)]
+pub struct MmgBootstrap {
+    /// Parameter names in the order of every replicate (the model file's `[[parameter]]` order).
+    pub names: Vec<String>,
+    /// Replicates in draw order.
+    pub replicates: Vec<Vec<f64>>,
+    pub block: BlockLength,
+    pub seed: u64,
+    /// Replicates whose re-identification failed (kept out of `replicates`).
+    pub rejected: usize,
+}
+
+impl MmgBootstrap {
+    /// The model file's `[bootstrap]` table.
+    pub fn record(&self) -> MmgBootstrapRecord {
+        let spread = spread(&self.replicates).ok();
+        MmgBootstrapRecord {
+            method: MMG_METHOD.into(),
+            seed: self.seed,
+            block_rows: self.block.rows,
+            block_reason: block_reason(&self.block),
+            rejected: self.rejected,
+            standard_error: spread
+                .as_ref()
+                .map(|s| {
+                    self.names
+                        .iter()
+                        .cloned()
+                        .zip(s.std_error.clone())
+                        .collect()
+                })
+                .unwrap_or_default(),
+            order: self.names.clone(),
+            correlation: spread.map(|s| s.correlation).unwrap_or_default(),
+            replicates: self
+                .names
+                .iter()
+                .enumerate()
+                .map(|(j, n)| (n.clone(), self.replicates.iter().map(|r| r[j]).collect()))
+                .collect(),
+        }
+    }
+}
+
+/// θ (every parameter, in the order of `specs`) of the outer parameters φ and the hull derivatives
+/// β; a parameter of neither keeps its prior.
+fn mmg_theta(specs: &[ParamSpec], phi: &[f64], beta: &[Vec<f64>; 3]) -> Vec<f64> {
+    specs
+        .iter()
+        .map(|s| match s.role {
+            Role::Hull { dof, column } => beta[dof][column],
+            Role::Nonlinear => NONLINEAR_NAMES
+                .iter()
+                .position(|n| *n == s.name)
+                .map_or(s.prior, |k| phi[k]),
+        })
+        .collect()
+}
+
+/// Bootstrap `replicates` re-identifications of the mmg fit `fit` (the model the file holds, refined
+/// or not) on the training samples of `opts` in `ds`, with the fit's estimator, priors and prior
+/// weight λ held fixed.
+///
+/// Each replicate starts from the equation-error estimate φ̂ (a local identification: the bootstrap
+/// measures how the data move the estimate the user got, not which other minima exist). The
+/// equation-error estimate the departures are measured from is one solve on all samples from the
+/// file's φ: the fit itself when unrefined, the equation-error optimum nearest the refined model
+/// otherwise.
+pub fn bootstrap_mmg(
+    ds: &Dataset,
+    fit: &MmgFit,
+    opts: &MmgFitOptions,
+    replicates: usize,
+    seed: u64,
+) -> Result<MmgBootstrap, PipelineError> {
+    check_replicates(replicates)?;
+    let added = ds
+        .added_mass
+        .ok_or_else(|| bad_input(format!("{}: no [added_mass] table", ds.path.display())))?;
+    let mut opts = opts.clone();
+    if opts.propeller_rate_hz.is_none() {
+        opts.propeller_rate_hz = ds.propeller.as_ref().and_then(|p| p.rate_rps);
+    }
+    let samples = training_samples(ds, &opts)?.samples;
+    let specs: Vec<ParamSpec> = fit.estimate.params.iter().map(|p| p.spec.clone()).collect();
+    let centre: Vec<f64> = fit.estimate.params.iter().map(|p| p.value).collect();
+    let value_of = |name: &str| {
+        specs
+            .iter()
+            .position(|s| s.name == name)
+            .map_or(f64::NAN, |k| centre[k])
+    };
+    let start: Vec<f64> = NONLINEAR_NAMES.iter().map(|n| value_of(n)).collect();
+    let problem = Problem::new(
+        ds.ship,
+        added,
+        fit.geometry,
+        samples,
+        specs,
+        fit.estimator == MmgEstimator::BoundedLsq,
+    )?;
+    let all: Vec<usize> = (0..problem.samples.len()).collect();
+    let (phi_hat, beta_hat, _) = problem.solve(&start, &all, fit.lambda)?;
+    let theta_hat = mmg_theta(&problem.specs, &phi_hat, &beta_hat);
+    // Residuals of the equation error (prime forces per DOF) for the block length.
+    let model = problem.model_of(&phi_hat, &beta_hat, fit.propeller_rate_hz)?;
+    let q_of =
+        |s: &EqSample| 0.5 * ds.ship.rho * ds.ship.lpp * ds.ship.draft * s.state.speed().powi(2);
+    let residuals: Vec<Vec<f64>> = (0..3)
+        .map(|d| {
+            problem
+                .samples
+                .iter()
+                .map(|s| {
+                    let lever = if d == 2 { ds.ship.lpp } else { 1.0 };
+                    model
+                        .forces_at_rate(&s.state, s.delta_rad, s.n_hz)
+                        .map_or(f64::NAN, |f| {
+                            (s.needed[d] - f.total()[d]) / (q_of(s) * lever)
+                        })
+                })
+                .collect()
+        })
+        .collect();
+    let group: Vec<usize> = problem.samples.iter().map(|s| s.group).collect();
+    let groups = group_ranges(&group);
+    let block = longest_block(
+        residuals
+            .iter()
+            .flat_map(|r| groups.iter().map(move |g| &r[g.clone()])),
+    )
+    .ok_or_else(|| bad_input("no training samples to bootstrap"))?;
+    let fits: Vec<Option<Vec<f64>>> = (0..replicates)
+        .into_par_iter()
+        .map(|k| {
+            let rows = replicate_rows(&groups, block.rows, &mut replicate_rng(seed, k)).ok()?;
+            let (phi, beta, _) = problem.solve(&phi_hat, &rows, fit.lambda).ok()?;
+            let theta = mmg_theta(&problem.specs, &phi, &beta);
+            let shifted: Vec<f64> = problem
+                .specs
+                .iter()
+                .zip(theta.iter().zip(&theta_hat).zip(&centre))
+                .map(|(s, ((t, t_hat), c))| (c + (t - t_hat)).clamp(s.lower, s.upper))
+                .collect();
+            shifted.iter().all(|v| v.is_finite()).then_some(shifted)
+        })
+        .collect();
+    let rejected = fits.iter().filter(|f| f.is_none()).count();
+    Ok(MmgBootstrap {
+        names: problem.specs.iter().map(|s| s.name.to_string()).collect(),
+        replicates: fits.into_iter().flatten().collect(),
+        block,
+        seed,
+        rejected,
+    })
 }

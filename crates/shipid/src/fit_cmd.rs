@@ -194,23 +194,12 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     let mut file = out.file.clone();
     if let Some((n, seed)) = a.bootstrap {
         let boot = bootstrap_fit(&ds, &out, &a.estimator, a.solver, n, seed)?;
-        eprintln!(
-            "bootstrap: {} replicates kept ({} rejected), blocks of {} rows ({}); standard errors and correlations in the model file's [bootstrap]",
+        report_bootstrap(
             boot.replicates.len(),
             boot.rejected,
-            boot.block.rows,
-            boot.block
-                .decorrelation_lag
-                .map_or("residuals correlated up to the cap".into(), |l| format!(
-                    "residuals decorrelate after {l} rows"
-                ))
-        );
-        if boot.replicates.len() < shipid_pipeline::bands::MIN_FINITE_REPLICATES {
-            return Err(crate::failed_msg(format!(
-                "only {} of {n} bootstrap replicates could be refitted: too few for a band",
-                boot.replicates.len()
-            )));
-        }
+            (boot.block.rows, boot.block.decorrelation_lag),
+            n,
+        )?;
         file.bootstrap = Some(boot.record(&out.model));
     }
     shipid_pipeline::model_file::anchor_training(&mut file.training, a.out);
@@ -240,15 +229,32 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     Ok(outcome)
 }
 
+/// The bootstrap's line on stderr; a failure when too few replicates are left for a band.
+fn report_bootstrap(
+    kept: usize,
+    rejected: usize,
+    (block_rows, decorrelation_lag): (usize, Option<usize>),
+    asked: usize,
+) -> Result<(), CliError> {
+    eprintln!(
+        "bootstrap: {kept} replicates kept ({rejected} rejected), blocks of {} rows ({}); standard errors and correlations in the model file's [bootstrap]",
+        block_rows,
+        decorrelation_lag.map_or("residuals correlated up to the cap".into(), |l| format!(
+            "residuals decorrelate after {l} rows"
+        ))
+    );
+    if kept < shipid_pipeline::bands::MIN_FINITE_REPLICATES {
+        return Err(crate::failed_msg(format!(
+            "only {kept} of {asked} bootstrap replicates could be refitted: too few for a band"
+        )));
+    }
+    Ok(())
+}
+
 /// `shipid fit DATASET --set mmg --estimator bounded-lsq|ridge [--lambda λ | --tune] [--refine]`: the
 /// MMG family (docs/mmg.md); its model file gives every parameter with its prior and standard error.
 fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     use shipid_pipeline::mmg::{MmgFitOptions, fit_mmg_model_file, write_mmg_model_file};
-    if a.bootstrap.is_some() {
-        return Err(crate::bad_input(
-            "--bootstrap applies to polynomial fits; the mmg model file gives each parameter's standard error",
-        ));
-    }
     let opts = MmgFitOptions::from_spec(&a.estimator, &a.recordings, a.window)?;
     let ds = Dataset::load(a.dataset)?;
     let mut warnings = training_warnings(&ds, &a.recordings, a.validate);
@@ -261,6 +267,16 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
         warnings.push(w);
     }
     let (fit, mut file) = fit_mmg_model_file(&ds, &opts, a.estimator.refine)?;
+    if let Some((n, seed)) = a.bootstrap {
+        let boot = shipid_pipeline::bootstrap::bootstrap_mmg(&ds, &fit, &opts, n, seed)?;
+        report_bootstrap(
+            boot.replicates.len(),
+            boot.rejected,
+            (boot.block.rows, boot.block.decorrelation_lag),
+            n,
+        )?;
+        file.bootstrap = Some(boot.record());
+    }
     shipid_pipeline::model_file::anchor_training(&mut file.training, a.out);
     let text = write_mmg_model_file(&file)?;
     write_atomic(a.out, text.as_bytes()).map_err(|e| crate::write_failed(a.out, e))?;

@@ -3,6 +3,7 @@
 //! ship, added masses, propeller and rudder data; the training windows and the estimator. (The file
 //! of a fit is built in the parent module: this one, read by `model_file`, imports no fit.)
 
+use std::collections::BTreeMap;
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
@@ -102,6 +103,91 @@ pub struct MmgModelFile {
     pub training: Vec<TrainingWindow>,
     #[serde(rename = "parameter")]
     pub parameters: Vec<ParamEntry>,
+    /// Block-bootstrap replicates of the parameters (`shipid fit --set mmg --bootstrap N`), from
+    /// which `simulate --bands` and `validate --bands` draw their bands.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bootstrap: Option<MmgBootstrapRecord>,
+}
+
+/// `[bootstrap]` of an mmg model file: the parameter uncertainty by a moving-block bootstrap.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MmgBootstrapRecord {
+    /// How the replicates were drawn and re-identified, in words.
+    pub method: String,
+    /// Seed of the replicate draws (SplitMix64 per replicate).
+    pub seed: u64,
+    /// Samples per block, and why that length.
+    pub block_rows: usize,
+    pub block_reason: String,
+    /// Replicates whose re-identification failed (not stored).
+    pub rejected: usize,
+    /// Bootstrap standard error per parameter (the units of its `value`).
+    pub standard_error: BTreeMap<String, f64>,
+    /// Parameter names in the order of the rows and columns of `correlation`.
+    pub order: Vec<String>,
+    pub correlation: Vec<Vec<f64>>,
+    /// Replicate values per parameter; entry k of every list belongs to replicate k.
+    pub replicates: BTreeMap<String, Vec<f64>>,
+}
+
+impl MmgBootstrapRecord {
+    /// The replicates as values in the order of `parameters`, checked: every parameter has as many
+    /// finite replicates as the others, within its bounds, and no unknown name is given. A fault is
+    /// (key under `[bootstrap]`, message).
+    pub fn parameter_vectors(
+        &self,
+        parameters: &[ParamEntry],
+    ) -> Result<Vec<Vec<f64>>, (String, String)> {
+        if let Some(extra) = self
+            .replicates
+            .keys()
+            .find(|k| !parameters.iter().any(|p| &p.name == *k))
+        {
+            return Err((
+                format!("bootstrap.replicates.{extra}"),
+                "is not a parameter of the model".into(),
+            ));
+        }
+        let mut count: Option<(usize, &str)> = None;
+        let mut columns = Vec::with_capacity(parameters.len());
+        for p in parameters {
+            let key = format!("bootstrap.replicates.{}", p.name);
+            let values = self.replicates.get(&p.name).ok_or_else(|| {
+                (
+                    key.clone(),
+                    "missing: no replicates of this parameter".into(),
+                )
+            })?;
+            match count {
+                None => count = Some((values.len(), &p.name)),
+                Some((n, first)) if n != values.len() => {
+                    return Err((
+                        key,
+                        format!("has {} replicates, {first} has {n}", values.len()),
+                    ));
+                }
+                Some(_) => {}
+            }
+            if let Some(v) = values
+                .iter()
+                .find(|v| !(v.is_finite() && (p.lower..=p.upper).contains(*v)))
+            {
+                return Err((
+                    key,
+                    format!(
+                        "replicate value {v} is not a finite number within the bounds [{}, {}]",
+                        p.lower, p.upper
+                    ),
+                ));
+            }
+            columns.push(values);
+        }
+        let n = count.map_or(0, |(n, _)| n);
+        Ok((0..n)
+            .map(|k| columns.iter().map(|c| c[k]).collect())
+            .collect())
+    }
 }
 
 impl MmgModelFile {
@@ -274,6 +360,42 @@ impl MmgModelFile {
         let params = assemble(&self.ship, &self.added_mass, &geometry, &get);
         MmgModel::at_rate(self.ship, params, self.propeller.rate_rps)
             .map_err(|e| bad_input(format!("{}: {e}", path.display())))
+    }
+}
+
+impl MmgModelFile {
+    /// The models of the `[bootstrap]` replicates (the file's point model must load: check it with
+    /// [`MmgModelFile::to_model`] first); a fault names the file and the key.
+    pub fn replicate_models(&self, path: &Path) -> Result<Vec<MmgModel>, PipelineError> {
+        let record = self.bootstrap.as_ref().ok_or_else(|| {
+            bad_input(format!(
+                "{}: key `bootstrap`: missing: --bands needs replicates; refit with `shipid fit … \
+                 --set mmg --bootstrap 200`",
+                path.display()
+            ))
+        })?;
+        let vectors = record
+            .parameter_vectors(&self.parameters)
+            .map_err(|(key, msg)| bad_input(format!("{}: key `{key}`: {msg}", path.display())))?;
+        let geometry = self.geometry();
+        vectors
+            .iter()
+            .map(|values| {
+                let get = |name: &str| {
+                    self.parameters
+                        .iter()
+                        .position(|p| p.name == name)
+                        .map_or(f64::NAN, |k| values[k])
+                };
+                let params = assemble(&self.ship, &self.added_mass, &geometry, &get);
+                MmgModel::at_rate(self.ship, params, self.propeller.rate_rps).map_err(|e| {
+                    bad_input(format!(
+                        "{}: key `bootstrap.replicates`: {e}",
+                        path.display()
+                    ))
+                })
+            })
+            .collect()
     }
 }
 

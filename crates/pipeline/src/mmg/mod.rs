@@ -671,6 +671,7 @@ pub fn model_file(fit: &MmgFit, added: AddedMass) -> MmgModelFile {
                 determined_by_data: p.determined_by_data,
             })
             .collect(),
+        bootstrap: None,
     }
 }
 
