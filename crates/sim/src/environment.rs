@@ -9,8 +9,11 @@
 //!   its wind and current at every RK4 stage ([`Dynamics::accelerations_at`]).
 //!
 //! Conventions: both flows are given by their speed and the earth-fixed direction they come FROM,
-//! clockwise from north. Times of a [`KnownEnvironment`] count from the recording's first sample, as a
-//! replay's simulation time does.
+//! clockwise from north. The `*_at(t_s, …)` methods take *simulation* time: seconds from the
+//! environment's origin, the recording time where a simulation or replay starts (the first sample,
+//! or the one [`KnownEnvironment::replay_from`] names). The recording-level helpers
+//! ([`KnownEnvironment::water_relative`], [`KnownEnvironment::wind_accelerations`]) take recording
+//! times.
 
 use shipid_io::{AddedMass, Recording, Ship, WindModel, Windage};
 use thiserror::Error;
@@ -136,8 +139,10 @@ pub const ASSUMED_WINDAGE_SOURCE: &str = "assumed: hull above water of a loaded 
 /// A recording's wind and current as known inputs (see the module docs).
 #[derive(Debug, Clone, PartialEq)]
 pub struct KnownEnvironment {
-    /// Times [s] from the recording's first sample.
+    /// Recording times [s] of the samples.
     t_s: Vec<f64>,
+    /// Recording time [s] at simulation time 0.
+    origin_s: f64,
     /// Wind velocity [north, east] [m/s] per sample, with the force model.
     wind: Option<(Vec<[f64; 2]>, Aerodynamics)>,
     /// Current velocity [north, east] [m/s] per sample.
@@ -179,21 +184,26 @@ impl KnownEnvironment {
             .as_ref()
             .map(|c| velocities("current", c))
             .transpose()?;
-        let t0 = rec.t.first().copied().unwrap_or(0.0);
         Ok(Some(KnownEnvironment {
-            t_s: rec.t.iter().map(|t| t - t0).collect(),
+            t_s: rec.t.clone(),
+            origin_s: rec.t.first().copied().unwrap_or(0.0),
             wind,
             current,
         }))
     }
 
-    /// The same environment with its time origin moved to `t0_s` [s] from the recording's start (a
-    /// replay of a segment that starts there).
-    pub fn starting_at(&self, t0_s: f64) -> KnownEnvironment {
+    /// The same environment for a simulation that starts at recording time `t_start_s` [s] (a replay
+    /// of a segment or window that starts there).
+    pub fn replay_from(&self, t_start_s: f64) -> KnownEnvironment {
         KnownEnvironment {
-            t_s: self.t_s.iter().map(|t| t - t0_s).collect(),
+            origin_s: t_start_s,
             ..self.clone()
         }
+    }
+
+    /// The recording time [s] at simulation time 0.
+    pub fn origin_s(&self) -> f64 {
+        self.origin_s
     }
 
     /// Whether a wind is recorded.
@@ -211,8 +221,9 @@ impl KnownEnvironment {
         self.wind.as_ref().map(|(_, a)| a)
     }
 
-    /// Index and weight of the sample interval that holds `t_s` (held at the ends).
+    /// Index and weight of the sample interval that holds simulation time `t_s` (held at the ends).
     fn locate(&self, t_s: f64) -> (usize, f64) {
+        let t_s = t_s + self.origin_s;
         let n = self.t_s.len();
         if n < 2 || t_s <= self.t_s[0] {
             return (0, 0.0);
@@ -255,7 +266,8 @@ impl KnownEnvironment {
             return [0.0; 2];
         };
         let n = self.t_s.len();
-        if n < 2 || t_s < self.t_s[0] || t_s > self.t_s[n - 1] {
+        let t_rec = t_s + self.origin_s;
+        if n < 2 || t_rec < self.t_s[0] || t_rec > self.t_s[n - 1] {
             return [0.0; 2];
         }
         let (k, _) = self.locate(t_s);
@@ -312,6 +324,40 @@ impl KnownEnvironment {
         let [dn, de] = self.current_rate_at(t_s);
         let (sp, cp) = s.psi.sin_cos();
         [s.r * vc + dn * cp + de * sp, -s.r * uc - dn * sp + de * cp]
+    }
+}
+
+impl KnownEnvironment {
+    /// `rec` (a recording, or a window of it, with recording times inside this environment's) with
+    /// its velocities relative to the water: what the hydrodynamics of an identified model see.
+    /// Positions, heading and yaw rate are kept; recorded accelerations, which are over ground, are
+    /// dropped (differentiating the water-relative velocities gives the water-relative accelerations,
+    /// current transport included).
+    pub fn water_relative(&self, rec: &Recording) -> Recording {
+        let mut out = rec.clone();
+        if self.current.is_none() {
+            return out;
+        }
+        for i in 0..rec.len() {
+            let s = State::of_recording(rec, i);
+            let w = self.through_water(rec.t[i] - self.origin_s, &s);
+            out.u[i] = w.u;
+            out.v[i] = w.v;
+        }
+        out.accelerations = None;
+        out
+    }
+
+    /// Per sample of `rec` (recording times), the accelerations [u̇, v̇, ṙ] the recorded wind gives the
+    /// ship through `mass`: what an identification subtracts from the recorded accelerations before it
+    /// fits the hydrodynamics. Zero without a recorded wind; `None` when the mass matrix is singular.
+    pub fn wind_accelerations(&self, rec: &Recording, mass: &MassMatrix) -> Option<Vec<[f64; 3]>> {
+        (0..rec.len())
+            .map(|i| {
+                let s = State::of_recording(rec, i);
+                mass.solve(self.wind_force(rec.t[i] - self.origin_s, &s))
+            })
+            .collect()
     }
 }
 
@@ -468,5 +514,75 @@ mod tests {
         assert!((ground.u - 0.8).abs() < 1e-12 && ground.v.abs() < 1e-12);
         assert_eq!(env.through_water(3.0, &ground), water);
         assert_eq!(env.current_rate_at(3.0), [0.0, 0.0]);
+    }
+
+    /// A simulation in a recorded head wind that rises halfway loses speed against the calm run only
+    /// after the rise: the wind is felt at the simulation time that matches the recording's.
+    #[test]
+    fn a_recorded_wind_is_felt_when_the_recording_has_it() {
+        let model = crate::mmg::MmgModel::kvlcc2();
+        let ship = *model.ship();
+        let n = 201;
+        let rec = Recording {
+            t: (0..n).map(|i| 100.0 + i as f64 * 0.5).collect(),
+            psi: vec![0.0; n],
+            wind: Some(shipid_io::FlowSeries {
+                speed_m_s: (0..n).map(|i| if i < 100 { 0.0 } else { 6.0 }).collect(),
+                from_rad: vec![0.0; n],
+            }),
+            ..Recording::default()
+        };
+        let env = KnownEnvironment::of_recording(&rec, Some(&assumed_windage(&ship)), &ship)
+            .unwrap()
+            .unwrap();
+        let windy = WithEnvironment::new(&model, env.clone());
+        let run = |m: &dyn Dynamics| {
+            let mut straight =
+                crate::control::Replay::new(vec![0.0, 100.0], vec![0.0, 0.0]).unwrap();
+            crate::sim::simulate(
+                m,
+                &mut straight,
+                State::approach(ship.u0),
+                &crate::sim::SimOptions::new(100.0).with_step(0.05, 0.5),
+            )
+            .unwrap()
+            .recording
+        };
+        let (calm, wind) = (run(&model), run(&windy));
+        // Before the rise only the ship's own motion through still air acts: a drag of a fraction
+        // of a newton on a ship of 3 t.
+        let before = calm.u[90] - wind.u[90];
+        assert!((0.0..1e-4).contains(&before), "before the rise: {before}");
+        assert!(
+            wind.u[200] < calm.u[200] - 1e-3,
+            "{} vs {}",
+            wind.u[200],
+            calm.u[200]
+        );
+        // Replayed from the rise, the wind acts from the start.
+        let late = WithEnvironment::new(&model, env.replay_from(150.0));
+        assert!(run(&late).u[20] < calm.u[20] - 1e-4);
+    }
+
+    /// Water-relative velocities remove the recorded current; without a current nothing changes.
+    #[test]
+    fn water_relative_velocities_remove_the_current() {
+        let mut rec = recording(None, Some((0.2, 90.0)));
+        rec.u = vec![1.0; rec.len()];
+        rec.v = vec![0.0; rec.len()];
+        rec.r = vec![0.0; rec.len()];
+        rec.x0 = vec![0.0; rec.len()];
+        rec.y0 = vec![0.0; rec.len()];
+        let env = KnownEnvironment::of_recording(&rec, None, &ship())
+            .unwrap()
+            .unwrap();
+        let water = env.water_relative(&rec);
+        // From the east the current sets the ship to port: over ground v = −0.2 + v_water.
+        assert!((water.v[4] - 0.2).abs() < 1e-12 && (water.u[4] - 1.0).abs() < 1e-12);
+        let calm = recording(None, None);
+        assert_eq!(
+            KnownEnvironment::of_recording(&calm, None, &ship()),
+            Ok(None)
+        );
     }
 }
