@@ -549,15 +549,13 @@ mod tests {
             .recording
         };
         let (calm, wind) = (run(&model), run(&windy));
-        // Before the rise only the ship's own motion through still air acts: a drag of a fraction
-        // of a newton on a ship of 3 t.
+        // Before the rise only the ship's own motion through still air acts (0.15 N on a ship of
+        // 3 t); after it the head wind's drag is some 40 times that.
         let before = calm.u[90] - wind.u[90];
-        assert!((0.0..1e-4).contains(&before), "before the rise: {before}");
+        let after = calm.u[200] - wind.u[200];
         assert!(
-            wind.u[200] < calm.u[200] - 1e-3,
-            "{} vs {}",
-            wind.u[200],
-            calm.u[200]
+            before > 0.0 && after > 10.0 * before,
+            "before {before}, after {after}"
         );
         // Replayed from the rise, the wind acts from the start.
         let late = WithEnvironment::new(&model, env.replay_from(150.0));
