@@ -15,6 +15,7 @@
 
 pub mod bands;
 pub mod bootstrap;
+pub mod calibration;
 pub mod error;
 pub mod fit;
 pub mod fit_gp;

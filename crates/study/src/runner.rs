@@ -6,6 +6,7 @@
 //! its result, never a crash. Results are collected in the study's case order, so the output does not
 //! depend on the number of threads (except the measured fit times).
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
@@ -117,6 +118,27 @@ pub struct TestRow {
     /// every training state's); absent in results written before it existed.
     #[serde(default)]
     pub outside_identification_range: Option<f64>,
+    /// Each metric's band over the case's bootstrap replicates and whether the recorded value lies
+    /// inside (studies with `bands`; empty otherwise, and then left out of `result.json`, so studies
+    /// without bands keep their files and references).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub bands: BTreeMap<String, MetricBandRow>,
+}
+
+/// One metric's band in a study ([`TestRow::bands`]): the band and whether the recorded value lies
+/// inside, or why there is no band.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case", tag = "outcome")]
+pub enum MetricBandRow {
+    /// Lower and upper bound (units of the metric as in the summary), and whether the recorded
+    /// value lies inside (None: the recording does not define the metric).
+    Band {
+        lo: f64,
+        hi: f64,
+        inside: Option<bool>,
+    },
+    /// Too few replicate runs define the metric (diverged, or the manoeuvre never reached it).
+    NoBand { reason: String },
 }
 
 /// What one case produced.
@@ -229,6 +251,9 @@ struct StoredConfig<'a> {
     set_fnv1a: Option<String>,
     tests: &'a [String],
     case: &'a Case,
+    /// Left out without bands, so the stored configurations of earlier runs still match.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    bands: Option<crate::study::StudyBands>,
 }
 
 /// The text of a case's `config.toml`.
@@ -251,6 +276,7 @@ fn stored_config(study: &Study, case: &Case) -> std::io::Result<String> {
         set_fnv1a,
         tests: &study.tests,
         case,
+        bands: study.bands,
     })
     .map_err(std::io::Error::other)
 }
@@ -342,7 +368,11 @@ pub fn run_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
             .as_ref()
             .map(|g| outside_fraction(g, rec, &scale, 0..rec.len()))
     };
-    let tests = test_rows(study, &model, &outside);
+    let mut tests = test_rows(study, &model, &outside);
+    let band_failure = study
+        .bands
+        .as_ref()
+        .and_then(|b| add_bands(study, b, &out, case, solver, &mut tests).err());
     let mut coefficients = Vec::new();
     let mut vif = Vec::new();
     for d in &out.dofs {
@@ -368,7 +398,7 @@ pub fn run_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
     let result = CaseResult {
         case_id: case.id.clone(),
         status: worst,
-        message: None,
+        message: band_failure,
         fit_time_s: Some(out.fit_time_s),
         samples: out.training.len(),
         dofs: out
@@ -442,9 +472,68 @@ fn test_rows(
                 relative_error,
                 mrae,
                 outside_identification_range: outside(&r.recording),
+                bands: BTreeMap::new(),
             }
         })
         .collect()
+}
+
+/// The bands of every test of a polynomial case (studies with `bands`): the fit's block-bootstrap
+/// replicates, each re-simulated through the test's manoeuvre as the point prediction is (from the
+/// recording's initial state, [`BandRun::Recording`]). A bootstrap that cannot be made leaves the
+/// rows without bands and says why in the case's message; the point results stand.
+fn add_bands(
+    study: &Study,
+    bands: &crate::study::StudyBands,
+    out: &shipid_pipeline::fit::FitOutput,
+    case: &Case,
+    solver: Solver,
+    tests: &mut [TestRow],
+) -> Result<(), String> {
+    use shipid_pipeline::bands::{BandRun, manoeuvre_bands};
+    let boot = shipid_pipeline::bootstrap::bootstrap_fit(
+        &study.dataset,
+        out,
+        &case.estimator,
+        solver,
+        bands.replicates,
+        bands.seed,
+    )
+    .map_err(|e| format!("no bands: {e}"))?;
+    let replicates = boot.models(&out.model);
+    let point = AbkowitzDynamics(out.model.clone());
+    for row in tests.iter_mut() {
+        let Some(r) = study.dataset.recording(&row.test) else {
+            continue;
+        };
+        if row.status == TestStatus::ReplayOnly {
+            continue;
+        }
+        let b = manoeuvre_bands(
+            &point,
+            &replicates,
+            &r.manoeuvre,
+            &study.dataset.ship,
+            bands.level,
+            BandRun::Recording(r),
+        )
+        .map_err(|e| format!("no bands for {}: {e}", row.test))?;
+        let recorded = row.recorded.entries();
+        for (m, (_, value)) in b.metrics.iter().zip(recorded) {
+            let entry = match &m.band {
+                Ok(band) => MetricBandRow::Band {
+                    lo: band.lo,
+                    hi: band.hi,
+                    inside: value.map(|v| band.contains(v)),
+                },
+                Err(e) => MetricBandRow::NoBand {
+                    reason: e.to_string(),
+                },
+            };
+            row.bands.insert(m.metric.to_string(), entry);
+        }
+    }
+    Ok(())
 }
 
 /// A sparse-GP case (paper 001): fit, then validate on every test recording. Its `dofs` are the three

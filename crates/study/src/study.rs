@@ -24,6 +24,11 @@
 //! [check]                                       # tolerances of `shipid check`, per summary column
 //! mrae = { abs = 1e-6 }
 //! ```
+//!
+//! Two top-level keys give every polynomial case's test metrics a band (docs/uncertainty.md):
+//! `bootstrap = 200` block-bootstrap replicates of each case's fit, and `bands = 0.9` the nominal
+//! level of the percentile band over their re-simulations. They go together; the sparse GP and the
+//! mmg family have no replicates in a study yet, so a study that crosses them with bands is refused.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -141,6 +146,23 @@ pub struct RawStudy {
     pub test: RawTest,
     #[serde(default)]
     pub check: BTreeMap<String, Tolerance>,
+    /// Nominal level of every test metric's band (needs `bootstrap`).
+    #[serde(default)]
+    pub bands: Option<f64>,
+    /// Block-bootstrap replicates per case for the bands (needs `bands`).
+    #[serde(default)]
+    pub bootstrap: Option<i64>,
+}
+
+/// What the bands of a study are made of: `replicates` block-bootstrap refits of each case, and the
+/// nominal `level` of the percentile band over their re-simulations.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct StudyBands {
+    pub level: f64,
+    pub replicates: usize,
+    /// Seed of the replicate draws (`shipid fit --bootstrap-seed`'s default), so a rerun of the
+    /// study gives the same bands.
+    pub seed: u64,
 }
 
 /// One grid point.
@@ -170,6 +192,8 @@ pub struct Study {
     pub cases: Vec<Case>,
     pub tests: Vec<String>,
     pub check: BTreeMap<String, Tolerance>,
+    /// Bands of the test metrics, when the study asks for them.
+    pub bands: Option<StudyBands>,
 }
 
 /// Read, check and expand a study file.
@@ -203,6 +227,7 @@ pub struct CheckedStudy {
     pub estimators: Vec<CheckedEstimator>,
     pub tests: Vec<String>,
     pub check: BTreeMap<String, Tolerance>,
+    pub bands: Option<StudyBands>,
 }
 
 /// One point of the estimator axis.
@@ -229,6 +254,7 @@ impl CheckedStudy {
         let estimators = check_estimators(path, &raw.estimators)?;
         check_mmg_estimators(path, &raw.sets, &estimators)?;
         let tests = test_recordings(path, &raw.test.recordings, known)?;
+        let bands = check_bands(path, raw.bands, raw.bootstrap, &raw.sets, &raw.estimators)?;
         let data_fnv1a = data_fingerprint(path, &dataset_path, &dataset)?;
         Ok(CheckedStudy {
             path: path.to_path_buf(),
@@ -243,6 +269,7 @@ impl CheckedStudy {
             estimators,
             tests,
             check: raw.check,
+            bands,
         })
     }
 
@@ -308,8 +335,86 @@ impl CheckedStudy {
             cases,
             tests: self.tests,
             check: self.check,
+            bands: self.bands,
         }
     }
+}
+
+/// `bands` and `bootstrap` go together: a level without replicates has nothing to take percentiles
+/// of, and replicates without a level would cost their refits for no column. Only the polynomial
+/// cases have replicates in a study: a GP or mmg case among them would leave its rows without bands
+/// while the table promises them, so such a study is refused.
+fn check_bands(
+    path: &Path,
+    level: Option<f64>,
+    replicates: Option<i64>,
+    sets: &[String],
+    estimators: &[RawEstimator],
+) -> Result<Option<StudyBands>, InputError> {
+    let max = shipid_pipeline::bootstrap::MAX_REPLICATES;
+    let (level, replicates) = match (level, replicates) {
+        (None, None) => return Ok(None),
+        (Some(_), None) => {
+            return Err(InputError::key(
+                path,
+                "bootstrap",
+                "missing: bands need replicates to take percentiles of (e.g. bootstrap = 200)",
+            ));
+        }
+        (None, Some(_)) => {
+            return Err(InputError::key(
+                path,
+                "bands",
+                "missing: bootstrap replicates are only used for bands (e.g. bands = 0.9)",
+            ));
+        }
+        (Some(l), Some(n)) => (l, n),
+    };
+    if !(level > 0.0 && level < 1.0) {
+        return Err(InputError::key(
+            path,
+            "bands",
+            format!("{level} is not a level strictly between 0 and 1 (e.g. 0.9 for a 90 % band)"),
+        ));
+    }
+    let replicates = usize::try_from(replicates)
+        .ok()
+        .filter(|n| (2..=max).contains(n))
+        .ok_or_else(|| {
+            InputError::key(
+                path,
+                "bootstrap",
+                format!("{replicates} replicates: give between 2 and {max}"),
+            )
+        })?;
+    if let Some(i) = estimators.iter().position(|e| e.name == GP) {
+        return Err(InputError::key(
+            path,
+            "bands",
+            format!(
+                "estimator[{i}] is {GP}, whose cases have no bootstrap replicates in a study: put \
+                 them in a study without bands"
+            ),
+        ));
+    }
+    if let Some(i) = sets
+        .iter()
+        .position(|s| s == shipid_pipeline::mmg::SET_NAME)
+    {
+        return Err(InputError::key(
+            path,
+            "bands",
+            format!(
+                "sets[{i}] is `mmg`, whose cases have no bootstrap replicates in a study: put them \
+                 in a study without bands"
+            ),
+        ));
+    }
+    Ok(Some(StudyBands {
+        level,
+        replicates,
+        seed: 1,
+    }))
 }
 
 /// The name becomes the default results directory (`results/NAME`): one plain word.

@@ -203,7 +203,42 @@ pub fn summary_table(study: &Study, results: &[CaseResult]) -> Table {
         );
     }
     t.push_num("mrae", num(&|x| x.mrae));
+    if study.bands.is_some() {
+        band_columns(&mut t, &rows);
+    }
     t
+}
+
+/// `<metric>_lo`, `<metric>_hi` and `<metric>_inside` ("yes", "no"; empty where the metric has no
+/// band or no recorded value) for every metric, after the point columns. Only studies with bands get
+/// them, so the summaries (and `shipid check` references) of the others keep their columns.
+fn band_columns(t: &mut Table, rows: &[(&Case, &CaseResult, Option<&crate::runner::TestRow>)]) {
+    use crate::runner::MetricBandRow;
+    for key in METRIC_KEYS {
+        let band = |i: usize| match rows[i].2.and_then(|x| x.bands.get(key)) {
+            Some(MetricBandRow::Band { lo, hi, inside }) => Some((*lo, *hi, *inside)),
+            _ => None,
+        };
+        let n = rows.len();
+        t.push_num(
+            &format!("{key}_lo"),
+            (0..n).map(|i| band(i).map(|b| b.0)).collect(),
+        );
+        t.push_num(
+            &format!("{key}_hi"),
+            (0..n).map(|i| band(i).map(|b| b.1)).collect(),
+        );
+        t.push_text(
+            &format!("{key}_inside"),
+            (0..n)
+                .map(|i| match band(i).and_then(|b| b.2) {
+                    Some(true) => "yes".into(),
+                    Some(false) => "no".into(),
+                    None => String::new(),
+                })
+                .collect(),
+        );
+    }
 }
 
 /// Long format: case, DOF, term, value.

@@ -1,11 +1,17 @@
-//! Measured coverage of the bootstrap bands of a polynomial fit (`cargo xtask coverage`).
+//! Measured coverage of the bands of a polynomial fit (`cargo xtask coverage`).
 //!
 //! For several noise seeds, the default manoeuvres plus two that no training set contains are
-//! generated with the MMG reference and tank-like measurement noise; reduced32 is fitted (ridge, λ by
-//! blocked cross-validation) on training sets from one zig-zag to three manoeuvres; `--replicates`
-//! block-bootstrap replicates give each manoeuvre's metric bands; the truth is the metric of the
-//! noise-free reference run. Coverage is counted per training set, for manoeuvres in the training set
-//! and held out, with a 95 % Wilson interval, and written as markdown and JSON to `--out`.
+//! generated with the MMG reference and tank-like measurement noise; the structures of `--structures`
+//! are fitted (ridge, λ by blocked cross-validation) on training sets from one zig-zag to three
+//! manoeuvres and `--replicates` block-bootstrap replicates are pooled over them
+//! (`shipid_pipeline::calibration::fit_ensemble`; the first structure gives the point prediction).
+//! The truth is the metric of the noise-free reference run. Each band is counted twice: as the
+//! percentiles of the pooled replicates (`raw`), and widened by the calibration of
+//! `shipid_pipeline::calibration` (`calibrated`: leave-one-recording-out inflation per metric family
+//! from the training recordings alone, and the reach outside the identification range). Coverage is
+//! counted per training set for manoeuvres in the training set, held-out ones inside the range and
+//! held-out ones outside it, and per metric family, with a 95 % Wilson interval, and written as
+//! markdown and JSON to `--out`.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -13,20 +19,20 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use serde_json::json;
-use shipid_estimators::Solver;
 use shipid_io::Manoeuvre;
 use shipid_model::CoefficientSet;
-use shipid_pipeline::bands::{BandRun, manoeuvre_bands};
-use shipid_pipeline::bootstrap::bootstrap_abkowitz;
-use shipid_pipeline::fit::{EstimatorSpec, WindowSpec, fit_dataset};
+use shipid_pipeline::bands::BandRun;
+use shipid_pipeline::calibration::{
+    MetricFamily, ensemble_bands, fit_ensemble, leave_one_recording_out, widen,
+};
+use shipid_pipeline::fit::EstimatorSpec;
 use shipid_pipeline::generate::{default_manoeuvres, generate_manoeuvres};
 use shipid_pipeline::spec::parse_manoeuvre;
-use shipid_sim::AbkowitzDynamics;
 use shipid_sim::metrics::metrics;
 use shipid_uncertainty::Coverage;
 
 /// Training sets, by recording file (as `generate` names them).
-const TRAINING_SETS: [(&str, &[&str]); 3] = [
+pub(crate) const TRAINING_SETS: [(&str, &[&str]); 3] = [
     ("ZZ35 port", &["zz35_35_ps.csv"]),
     (
         "ZZ35 port + starboard",
@@ -41,7 +47,18 @@ const TRAINING_SETS: [(&str, &[&str]); 3] = [
 /// Manoeuvres no training set contains, besides the default six.
 const EXTRA_MANOEUVRES: [&str; 2] = ["zigzag:15/15:starboard", "turning:20:port"];
 
-fn manoeuvres() -> Vec<Manoeuvre> {
+/// A held-out prediction whose reach is below this is counted as inside the identification range
+/// (its mean leverage ratio is below 1.1² ≈ 1.2).
+const INSIDE_REACH: f64 = 1.1;
+
+/// Where a prediction lies relative to its training data.
+const PLACES: [&str; 3] = [
+    "trained",
+    "held out, inside range",
+    "held out, outside range",
+];
+
+pub(crate) fn manoeuvres() -> Vec<Manoeuvre> {
     let mut ms = default_manoeuvres();
     ms.extend(
         EXTRA_MANOEUVRES
@@ -66,65 +83,40 @@ pub fn run(
         .iter()
         .map(|r| (r.file.clone(), metrics(&r.recording, &r.manoeuvre, &ship)))
         .collect();
-    // (training set, "trained" | "held out") → coverage; and per metric.
-    let mut by_set: BTreeMap<(usize, &str), Coverage> = BTreeMap::new();
-    let mut by_metric: BTreeMap<(&str, &str), Coverage> = BTreeMap::new();
+    let sets: Vec<CoefficientSet> = structures
+        .iter()
+        .map(|n| CoefficientSet::builtin(n).with_context(|| format!("set {n}")))
+        .collect::<Result<_>>()?;
+    let spec = EstimatorSpec {
+        tune: true,
+        ..EstimatorSpec::named("ridge")
+    };
+    // (training set, place, raw | calibrated) → coverage; and per metric family.
+    let mut by_set: BTreeMap<(usize, &str, &str), Coverage> = BTreeMap::new();
+    let mut by_family: BTreeMap<(MetricFamily, &str, &str), Coverage> = BTreeMap::new();
     let mut undefined = 0usize;
     let mut rows = Vec::new();
+    let mut calibrations = Vec::new();
     for seed in 1..=seeds {
         let noisy = generate_manoeuvres(Some(seed), &[], &ms)?
             .in_memory(&ms, &format!("noise seed {seed}"));
         for (s, (set_name, files)) in TRAINING_SETS.iter().enumerate() {
             let recordings: Vec<String> = files.iter().map(|f| f.to_string()).collect();
-            let spec = EstimatorSpec {
-                tune: true,
-                ..EstimatorSpec::named("ridge")
-            };
-            // The point model is the first structure's; the replicates are pooled over all
-            // structures (equal shares), so the band carries the spread between structures too.
-            let mut point = None;
-            let mut models = Vec::new();
-            let mut block_rows = Vec::new();
-            for name in structures {
-                let fit = fit_dataset(
-                    &noisy,
-                    CoefficientSet::builtin(name).with_context(|| format!("set {name}"))?,
-                    &spec,
-                    &recordings,
-                    WindowSpec::Whole,
-                    Solver::Fast,
-                )
-                .with_context(|| format!("seed {seed}, {set_name}, {name}"))?;
-                let estimators = [0, 1, 2].map(|i| fit.dofs[i].fit.estimator);
-                let boot = bootstrap_abkowitz(
-                    &noisy,
-                    &fit.model,
-                    &fit.model.coefficients,
-                    &fit.training,
-                    &estimators,
-                    false,
-                    Solver::Fast,
-                    (replicates / structures.len()).max(2),
-                    seed,
-                )?;
-                models.extend(boot.models(&fit.model));
-                block_rows.push(boot.block.rows);
-                point.get_or_insert(AbkowitzDynamics(fit.model.clone()));
-            }
-            let point = point.context("no structure")?;
+            let context = || format!("seed {seed}, {set_name}");
+            let ensemble = fit_ensemble(&noisy, &sets, &spec, &recordings, replicates, seed)
+                .with_context(context)?;
+            let calibration =
+                leave_one_recording_out(&noisy, &sets, &spec, &recordings, replicates, seed, level)
+                    .with_context(context)?;
             for (r, (file, true_metrics)) in truth_data.recordings.iter().zip(&truth) {
-                let bands = manoeuvre_bands(
-                    &point,
-                    &models,
-                    &r.manoeuvre,
-                    &ship,
-                    level,
-                    BandRun::Standard,
-                )?;
+                let (bands, reach) =
+                    ensemble_bands(&ensemble, &r.manoeuvre, &ship, level, BandRun::Standard)?;
                 let place = if files.contains(&file.as_str()) {
-                    "trained"
+                    PLACES[0]
+                } else if reach < INSIDE_REACH {
+                    PLACES[1]
                 } else {
-                    "held out"
+                    PLACES[2]
                 };
                 for (b, (_, t)) in bands.metrics.iter().zip(true_metrics.entries()) {
                     let Some(t) = t else { continue };
@@ -132,32 +124,53 @@ pub fn run(
                         undefined += 1;
                         continue;
                     };
-                    let inside = band.contains(t);
-                    by_set
-                        .entry((s, place))
-                        .or_insert(Coverage::new(level))
-                        .add(inside);
-                    by_metric
-                        .entry((b.metric, place))
-                        .or_insert(Coverage::new(level))
-                        .add(inside);
+                    let Some(family) = MetricFamily::of(b.metric) else {
+                        continue;
+                    };
+                    let calibrated = widen(band, calibration.factor(b.metric), reach);
+                    for (kind, inside) in [
+                        ("raw", band.contains(t)),
+                        ("calibrated", calibrated.contains(t)),
+                    ] {
+                        by_set
+                            .entry((s, place, kind))
+                            .or_insert(Coverage::new(level))
+                            .add(inside);
+                        by_family
+                            .entry((family, place, kind))
+                            .or_insert(Coverage::new(level))
+                            .add(inside);
+                    }
                     rows.push(json!({
                         "seed": seed, "training": set_name, "manoeuvre": file, "place": place,
                         "metric": b.metric, "truth": t, "point": b.point, "lo": band.lo, "hi": band.hi,
-                        "inside": inside, "block_rows": block_rows,
+                        "inside": band.contains(t), "reach": reach,
+                        "factor": calibration.factor(b.metric),
+                        "calibrated_lo": calibrated.lo, "calibrated_hi": calibrated.hi,
+                        "calibrated_inside": calibrated.contains(t),
+                        "block_rows": ensemble.block_rows,
                     }));
                 }
             }
             eprintln!(
-                "seed {seed}/{seeds}, {set_name}: blocks {block_rows:?} rows, {} replicate models",
-                models.len()
+                "seed {seed}/{seeds}, {set_name}: blocks {:?} rows, {} replicate models, factors {}",
+                ensemble.block_rows,
+                ensemble.replicates.len(),
+                MetricFamily::ALL
+                    .iter()
+                    .map(|f| format!("{} {:.2}", f.as_str(), calibration.factors[f].factor()))
+                    .collect::<Vec<_>>()
+                    .join(", ")
             );
+            calibrations
+                .push(json!({"seed": seed, "training": set_name, "calibration": calibration}));
         }
     }
-    let cell = |c: &Coverage| {
+    let cell = |c: Option<&Coverage>| {
+        let Some(c) = c else { return "–".to_string() };
         let (lo, hi) = c.wilson_95().unwrap_or((f64::NAN, f64::NAN));
         format!(
-            "{:.0} % ({}/{}; 95 % CI {:.0}–{:.0} %)",
+            "{:.0} % ({}/{}; {:.0}–{:.0})",
             100.0 * c.measured().unwrap_or(f64::NAN),
             c.inside,
             c.total,
@@ -169,33 +182,39 @@ pub fn run(
     writeln!(
         md,
         "Nominal {:.0} % bands, {} ridge (λ tuned), {replicates} block-bootstrap replicates pooled \
-         over the structures, seeds 1–{seeds}; truth: the noise-free MMG reference.\n",
+         over the structures, seeds 1–{seeds}; truth: the noise-free MMG reference. Each cell: \
+         measured coverage (inside/total; 95 % Wilson interval in %). raw: the pooled percentiles; \
+         calibrated: widened by the leave-one-recording-out factor and the reach.\n",
         100.0 * level,
         structures.join(" + ")
     )?;
-    writeln!(
-        md,
-        "| training set | trained manoeuvres | held-out manoeuvres |\n|---|---|---|"
-    )?;
+    let header = |md: &mut String, first: &str| -> std::fmt::Result {
+        write!(md, "| {first} | band |")?;
+        for p in PLACES {
+            write!(md, " {p} |")?;
+        }
+        writeln!(md, "\n|---|---|---|---|---|")
+    };
+    header(&mut md, "training set")?;
     for (s, (name, _)) in TRAINING_SETS.iter().enumerate() {
-        let get = |p| by_set.get(&(s, p)).map(cell).unwrap_or_else(|| "–".into());
-        writeln!(md, "| {name} | {} | {} |", get("trained"), get("held out"))?;
+        for kind in ["raw", "calibrated"] {
+            write!(md, "| {name} | {kind} |")?;
+            for p in PLACES {
+                write!(md, " {} |", cell(by_set.get(&(s, p, kind))))?;
+            }
+            writeln!(md)?;
+        }
     }
-    writeln!(md, "\n| metric | trained | held out |\n|---|---|---|")?;
-    let metric_names: Vec<&str> = by_metric
-        .keys()
-        .map(|(m, _)| *m)
-        .collect::<std::collections::BTreeSet<_>>()
-        .into_iter()
-        .collect();
-    for m in metric_names {
-        let get = |p| {
-            by_metric
-                .get(&(m, p))
-                .map(cell)
-                .unwrap_or_else(|| "–".into())
-        };
-        writeln!(md, "| {m} | {} | {} |", get("trained"), get("held out"))?;
+    writeln!(md)?;
+    header(&mut md, "metric family")?;
+    for f in MetricFamily::ALL {
+        for kind in ["raw", "calibrated"] {
+            write!(md, "| {} | {kind} |", f.as_str())?;
+            for p in PLACES {
+                write!(md, " {} |", cell(by_family.get(&(f, p, kind))))?;
+            }
+            writeln!(md)?;
+        }
     }
     writeln!(
         md,
@@ -205,8 +224,11 @@ pub fn run(
     let md_path = out.join("coverage.md");
     std::fs::write(&md_path, &md).with_context(|| format!("writing {}", md_path.display()))?;
     let json_path = out.join("coverage.json");
-    std::fs::write(&json_path, serde_json::to_string_pretty(&rows)?)
-        .with_context(|| format!("writing {}", json_path.display()))?;
+    std::fs::write(
+        &json_path,
+        serde_json::to_string_pretty(&json!({"rows": rows, "calibrations": calibrations}))?,
+    )
+    .with_context(|| format!("writing {}", json_path.display()))?;
     print!("{md}");
     eprintln!("wrote {} and {}", md_path.display(), json_path.display());
     Ok(())

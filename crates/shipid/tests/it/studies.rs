@@ -456,6 +456,7 @@ fn fabricated_results(study: &shipid_study::Study) -> Vec<shipid_study::CaseResu
                         relative_error: Default::default(),
                         mrae: Some(k as f64 / 1000.0),
                         outside_identification_range: None,
+                        bands: Default::default(),
                     }
                 })
                 .collect(),

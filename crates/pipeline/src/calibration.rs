@@ -1,0 +1,343 @@
+//! Bands that carry the error of the model's structure, not only the noise of its data.
+//!
+//! A block bootstrap of one structure resamples the training data: it says how far the data leave
+//! that structure's coefficients undetermined, and nothing about a manoeuvre the data never showed,
+//! where the structure's own error dominates (docs/uncertainty.md measured 8–50 % coverage of nominal
+//! 90 % bands). Three steps add that error, each from the training data alone:
+//!
+//! 1. **Several structures** ([`fit_ensemble`]): every coefficient set named is fitted to the same
+//!    windows with the same estimator and bootstrapped; their replicates are pooled in equal shares,
+//!    and the first set gives the point prediction. Where the structures disagree, the band widens.
+//! 2. **Reach** ([`reach`]): how far a prediction runs outside the identification range of its
+//!    training data. A regression's prediction variance at a state grows with that state's leverage
+//!    h(x); averaged over the run, the half-width is scaled by √(mean of max(1, h/h_max)), 1 inside
+//!    the range.
+//! 3. **Held-out inflation** ([`leave_one_recording_out`]): each training recording in turn is left
+//!    out, the ensemble refitted on the others, and its recorded metrics compared with their bands:
+//!    the error in units of the band's half-width and reach, `z = |value − centre| / (half-width ·
+//!    reach)`. The inflation factor of a metric family is the `level` quantile of its z (at least 1:
+//!    a few held-out values must not narrow a band below what the replicates give). A family with
+//!    fewer than [`MIN_HELD_OUT`] values takes the factor of all families together; with one training
+//!    recording there is nothing to hold out and the band is not inflated ([`FamilyFactor::TooFew`]).
+//!
+//! The widened band is centre ± factor · reach · half-width. No I/O.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+use shipid_estimators::Solver;
+use shipid_io::{Dataset, Manoeuvre, PrimeScale, Recording, Ship};
+use shipid_model::design::primed_state;
+use shipid_model::{AbkowitzModel, CoefficientSet, IdentificationRange};
+use shipid_sim::metrics::metrics;
+use shipid_sim::{AbkowitzDynamics, Dynamics};
+use shipid_uncertainty::Band;
+
+use crate::bands::{BandRun, ManoeuvreBands, manoeuvre_bands};
+use crate::bootstrap::bootstrap_fit;
+use crate::error::{PipelineError, bad_input, failed};
+use crate::fit::{EstimatorSpec, WindowSpec, fit_dataset};
+use crate::simulate::{simulate_manoeuvre, simulate_on_grid};
+use crate::validate::closed_loop;
+
+/// Fewest held-out values of a family for a factor of its own (below, the families' pooled one).
+pub const MIN_HELD_OUT: usize = 3;
+
+/// Metrics whose errors behave alike: the same unit and the same part of the manoeuvre.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MetricFamily {
+    /// Zig-zag overshoot angles [deg].
+    Overshoot,
+    /// Zig-zag times (t_a, t_check) [× U0/L].
+    ZigzagTime,
+    /// Turning-circle lengths (advance, transfer, tactical and steady diameter) [÷ L].
+    TurningLength,
+}
+
+impl MetricFamily {
+    /// The family of a metric key as `Metrics::entries` names it.
+    pub fn of(metric: &str) -> Option<MetricFamily> {
+        match metric {
+            "overshoot_1" | "overshoot_2" => Some(MetricFamily::Overshoot),
+            "t_a" | "t_check" => Some(MetricFamily::ZigzagTime),
+            "advance" | "transfer" | "tactical_diameter" | "steady_diameter" => {
+                Some(MetricFamily::TurningLength)
+            }
+            _ => None,
+        }
+    }
+
+    pub const ALL: [MetricFamily; 3] = [
+        MetricFamily::Overshoot,
+        MetricFamily::ZigzagTime,
+        MetricFamily::TurningLength,
+    ];
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            MetricFamily::Overshoot => "overshoot",
+            MetricFamily::ZigzagTime => "zigzag-time",
+            MetricFamily::TurningLength => "turning-length",
+        }
+    }
+}
+
+/// The inflation factor of one family, or why it has none.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case", tag = "outcome")]
+pub enum FamilyFactor {
+    /// From `held_out` values of this family.
+    Own { factor: f64, held_out: usize },
+    /// Too few of its own: the factor of all families' `held_out` values together.
+    Pooled { factor: f64, held_out: usize },
+    /// Too few held-out values at all (one training recording): no inflation.
+    TooFew { held_out: usize },
+}
+
+impl FamilyFactor {
+    /// The factor to apply (1 when there is none).
+    pub fn factor(self) -> f64 {
+        match self {
+            FamilyFactor::Own { factor, .. } | FamilyFactor::Pooled { factor, .. } => factor,
+            FamilyFactor::TooFew { .. } => 1.0,
+        }
+    }
+}
+
+/// Inflation factors per family at one nominal level.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Calibration {
+    pub level: f64,
+    /// Training recordings left out in turn (0 with a single one).
+    pub folds: usize,
+    pub factors: BTreeMap<MetricFamily, FamilyFactor>,
+    /// The held-out errors the factors come from, in fold order.
+    pub held_out: Vec<HeldOut>,
+}
+
+/// One held-out metric's error in units of its band ([`standardised_error`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct HeldOut {
+    pub family: MetricFamily,
+    /// |value − centre| / (half-width · reach).
+    pub z: f64,
+    /// The reach of the held-out prediction ([`reach`]).
+    pub reach: f64,
+}
+
+impl Calibration {
+    /// The factor of `metric`'s family (1 for a metric of no family).
+    pub fn factor(&self, metric: &str) -> f64 {
+        MetricFamily::of(metric)
+            .and_then(|f| self.factors.get(&f))
+            .map_or(1.0, |f| f.factor())
+    }
+}
+
+/// Quantile `q` of sorted values (Hyndman & Fan type 7, as the bands).
+fn quantile(sorted: &[f64], q: f64) -> f64 {
+    let h = (sorted.len() - 1) as f64 * q;
+    let (lo, hi) = (h.floor() as usize, h.ceil() as usize);
+    sorted[lo] + (h - lo as f64) * (sorted[hi] - sorted[lo])
+}
+
+fn factor_of(mut z: Vec<f64>, level: f64) -> f64 {
+    z.sort_by(f64::total_cmp);
+    quantile(&z, level).max(1.0)
+}
+
+/// The factors of held-out standardised errors `z` at `level`; `folds` recordings held out.
+pub fn calibrate(z: &[HeldOut], level: f64, folds: usize) -> Calibration {
+    let finite: Vec<HeldOut> = z.iter().copied().filter(|h| h.z.is_finite()).collect();
+    let all: Vec<f64> = finite.iter().map(|h| h.z).collect();
+    let factors = MetricFamily::ALL
+        .iter()
+        .map(|&fam| {
+            let own: Vec<f64> = finite
+                .iter()
+                .filter(|h| h.family == fam)
+                .map(|h| h.z)
+                .collect();
+            let factor = if own.len() >= MIN_HELD_OUT {
+                FamilyFactor::Own {
+                    held_out: own.len(),
+                    factor: factor_of(own, level),
+                }
+            } else if all.len() >= MIN_HELD_OUT {
+                FamilyFactor::Pooled {
+                    held_out: all.len(),
+                    factor: factor_of(all.clone(), level),
+                }
+            } else {
+                FamilyFactor::TooFew {
+                    held_out: all.len(),
+                }
+            };
+            (fam, factor)
+        })
+        .collect();
+    Calibration {
+        level,
+        folds,
+        factors,
+        held_out: finite,
+    }
+}
+
+/// `|value − centre| / (half-width · reach)` of a band; None for a band of no width.
+pub fn standardised_error(band: &Band, value: f64, reach: f64) -> Option<f64> {
+    let half = 0.5 * (band.hi - band.lo) * reach;
+    (half > 0.0 && value.is_finite()).then(|| (value - 0.5 * (band.lo + band.hi)).abs() / half)
+}
+
+/// The band widened about its centre by `factor · reach`.
+pub fn widen(band: &Band, factor: f64, reach: f64) -> Band {
+    let (centre, half) = (0.5 * (band.lo + band.hi), 0.5 * (band.hi - band.lo));
+    let k = factor * reach;
+    Band {
+        lo: centre - k * half,
+        hi: centre + k * half,
+        ..*band
+    }
+}
+
+/// √(mean over the run's samples of max(1, h/h_max)): 1 for a run inside the identification range,
+/// growing with how far and how long it leaves it. 1 for an empty run.
+pub fn reach(range: &IdentificationRange, rec: &Recording, ship: &Ship) -> f64 {
+    let scale = PrimeScale::of(ship);
+    let (mut sum, mut n) = (0.0, 0usize);
+    for i in 0..rec.len() {
+        let [du, v, r, d] = primed_state(rec, &scale, i);
+        let ratio = range.leverage_ratio(du, v, r, d);
+        if ratio.is_finite() {
+            sum += ratio.max(1.0);
+            n += 1;
+        }
+    }
+    if n == 0 { 1.0 } else { (sum / n as f64).sqrt() }
+}
+
+/// The point model of the first structure, its identification range, and the replicates of every
+/// structure pooled.
+pub struct Ensemble {
+    pub point: AbkowitzModel,
+    pub range: Option<IdentificationRange>,
+    pub replicates: Vec<Box<dyn Dynamics + Send + Sync>>,
+    /// Block length [rows] of each structure's bootstrap, in the order of the sets.
+    pub block_rows: Vec<usize>,
+}
+
+/// Fit every set of `sets` to the whole `recordings` of `ds` with `spec` and bootstrap each with
+/// `replicates / sets.len()` replicates (at least 2) of seed `seed`.
+pub fn fit_ensemble(
+    ds: &Dataset,
+    sets: &[CoefficientSet],
+    spec: &EstimatorSpec,
+    recordings: &[String],
+    replicates: usize,
+    seed: u64,
+) -> Result<Ensemble, PipelineError> {
+    let mut point = None;
+    let mut models = Vec::new();
+    let mut block_rows = Vec::new();
+    let share = (replicates / sets.len().max(1)).max(2);
+    for set in sets {
+        let out = fit_dataset(
+            ds,
+            set.clone(),
+            spec,
+            recordings,
+            WindowSpec::Whole,
+            Solver::Fast,
+        )?;
+        if let Some(none) = out.no_information() {
+            return Err(failed(format!("{}: {none}", set.name)));
+        }
+        let boot = bootstrap_fit(ds, &out, spec, Solver::Fast, share, seed)?;
+        models.extend(boot.models(&out.model));
+        block_rows.push(boot.block.rows);
+        if point.is_none() {
+            let range = IdentificationRange::from_samples(&out.model.set, &out.training).ok();
+            point = Some((out.model, range));
+        }
+    }
+    let (point, range) = point.ok_or_else(|| bad_input("no coefficient set for the ensemble"))?;
+    Ok(Ensemble {
+        point,
+        range,
+        replicates: models,
+        block_rows,
+    })
+}
+
+/// The ensemble's bands of manoeuvre `m` run as `how` says, and the reach of its point run.
+pub fn ensemble_bands(
+    e: &Ensemble,
+    m: &Manoeuvre,
+    ship: &Ship,
+    level: f64,
+    how: BandRun,
+) -> Result<(ManoeuvreBands, f64), PipelineError> {
+    let point = AbkowitzDynamics(e.point.clone());
+    let bands = manoeuvre_bands(&point, &e.replicates, m, ship, level, how)?;
+    let run = match how {
+        BandRun::Standard => simulate_manoeuvre(&point, m, None, None).ok(),
+        BandRun::Grid(g) => simulate_on_grid(&point, m, g).ok(),
+        BandRun::Recording(r) => closed_loop(&point, r, ship),
+    };
+    let reach = match (&e.range, run) {
+        (Some(range), Some(run)) => reach(range, &run.recording, ship),
+        _ => 1.0,
+    };
+    Ok((bands, reach))
+}
+
+/// Leave each of `recordings` out in turn, fit the ensemble on the rest, and calibrate on the
+/// standardised errors of the left-out recording's metrics ([`calibrate`]).
+pub fn leave_one_recording_out(
+    ds: &Dataset,
+    sets: &[CoefficientSet],
+    spec: &EstimatorSpec,
+    recordings: &[String],
+    replicates: usize,
+    seed: u64,
+    level: f64,
+) -> Result<Calibration, PipelineError> {
+    if recordings.len() < 2 {
+        return Ok(calibrate(&[], level, 0));
+    }
+    let mut z = Vec::new();
+    for (i, left) in recordings.iter().enumerate() {
+        let rest: Vec<String> = recordings
+            .iter()
+            .enumerate()
+            .filter(|&(j, _)| j != i)
+            .map(|(_, r)| r.clone())
+            .collect();
+        let r = ds
+            .recording(left)
+            .ok_or_else(|| bad_input(format!("no recording `{left}` in the data set")))?;
+        if matches!(r.manoeuvre, Manoeuvre::Free) {
+            continue;
+        }
+        let e = fit_ensemble(ds, sets, spec, &rest, replicates, seed)?;
+        let (bands, reach) =
+            ensemble_bands(&e, &r.manoeuvre, &ds.ship, level, BandRun::Recording(r))?;
+        let recorded = metrics(&r.recording, &r.manoeuvre, &ds.ship);
+        for (b, (_, value)) in bands.metrics.iter().zip(recorded.entries()) {
+            let (Ok(band), Some(value), Some(fam)) = (&b.band, value, MetricFamily::of(b.metric))
+            else {
+                continue;
+            };
+            if let Some(v) = standardised_error(band, value, reach) {
+                z.push(HeldOut {
+                    family: fam,
+                    z: v,
+                    reach,
+                });
+            }
+        }
+    }
+    Ok(calibrate(&z, level, recordings.len()))
+}
