@@ -27,6 +27,7 @@ use shipid_sim::{
 };
 
 use crate::error::InverseError;
+use crate::physical::Unphysical;
 
 /// Number of motion indexes.
 pub const N_INDEXES: usize = 9;
@@ -209,6 +210,8 @@ pub enum IndexFailure {
         manoeuvre: &'static str,
         what: &'static str,
     },
+    /// The ship fails a physical check (rejected before simulating).
+    Unphysical(Unphysical),
 }
 
 impl IndexFailure {
@@ -218,6 +221,7 @@ impl IndexFailure {
             IndexFailure::NoModel => "no MMG model".into(),
             IndexFailure::Diverged { manoeuvre, .. } => format!("{manoeuvre} diverged"),
             IndexFailure::Missing { manoeuvre, what } => format!("{manoeuvre}: {what} not reached"),
+            IndexFailure::Unphysical(u) => u.kind(),
         }
     }
 }
@@ -232,6 +236,7 @@ impl std::fmt::Display for IndexFailure {
             IndexFailure::Missing { manoeuvre, what } => {
                 write!(f, "{manoeuvre}: {what} not reached")
             }
+            IndexFailure::Unphysical(u) => write!(f, "unphysical: {u}"),
         }
     }
 }

@@ -11,6 +11,7 @@ use crate::indexes::{
     simulate_manoeuvres,
 };
 use crate::modes::VariationModes;
+use crate::physical::PhysicalChecks;
 use crate::pipeline::{
     HeldOut, InverseModel, Refined, SimulationDatabase, clip_weights, nearest, refine,
 };
@@ -111,12 +112,16 @@ pub fn resimulate(
     target: &TargetShip,
     modes: &VariationModes,
     settings: &SimSettings,
+    checks: &PhysicalChecks,
     x: &[f64],
 ) -> Result<Resimulated, String> {
     let c = modes.generate(x).map_err(|e| e.to_string())?;
     let mdl = target
         .model(&c)
         .ok_or("no MMG model (no self-propulsion point)")?;
+    checks
+        .check(&mdl)
+        .map_err(|u| format!("unphysical ship: {u}"))?;
     let manoeuvres = simulate_manoeuvres(&mdl, settings).map_err(|e| e.to_string())?;
     let indexes = indexes_of(&manoeuvres, &target.ship()).map_err(|e| e.to_string())?;
     Ok(Resimulated {
@@ -135,6 +140,7 @@ pub fn invert_motion(
     db: &SimulationDatabase,
     model: &InverseModel,
     settings: &SimSettings,
+    checks: &PhysicalChecks,
     name: &str,
     given: MotionIndexes,
     refine_evals: usize,
@@ -142,7 +148,7 @@ pub fn invert_motion(
     let network_weights = model.predict(&given);
     let (weights, clipped) = clip_weights(modes, &network_weights);
     let (near, nearest_distance) = nearest(db, model, &given);
-    let network = resimulate(target, modes, settings, &weights);
+    let network = resimulate(target, modes, settings, checks, &weights);
     let refined = if refine_evals == 0 {
         RefineOutcome::NotAsked
     } else {
@@ -154,10 +160,11 @@ pub fn invert_motion(
             &given,
             &starts,
             settings,
+            checks,
             refine_evals,
         )
         .and_then(|r| {
-            resimulate(target, modes, settings, &r.weights)
+            resimulate(target, modes, settings, checks, &r.weights)
                 .ok()
                 .map(|s| (r, Box::new(s.manoeuvres)))
         })

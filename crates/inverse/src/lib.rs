@@ -10,6 +10,8 @@
 //!   Schoenherr friction with a form factor, added masses from Zhou et al. when not given).
 //! - [`indexes`]: the nine motion indexes from ±35° turns and ±20/20 zig-zags (reusing `shipid-sim`).
 //! - [`mlp`]: the inverse network (two hidden layers of 30, tanh, Adam, early stopping).
+//! - [`physical`]: physical checks on generated and identified ships (parameter bounds, stable
+//!   straight running); rejected samples are counted.
 //! - [`pipeline`]: simulation database (rayon), training with a 70/15/15 split, held-out check.
 //! - [`inversion`]: a target's motions inverted (network, clipping, re-simulation, nearest database
 //!   ship, refinement) and the tables that report them.
@@ -23,7 +25,9 @@ pub mod indexes;
 pub mod inversion;
 pub mod mlp;
 pub mod modes;
+pub mod physical;
 pub mod pipeline;
+pub mod run;
 pub mod target;
 
 pub use error::InverseError;

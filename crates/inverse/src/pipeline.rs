@@ -12,6 +12,7 @@ use crate::error::InverseError;
 use crate::indexes::{IndexFailure, MotionIndexes, N_INDEXES, SimSettings, motion_indexes};
 use crate::mlp::{Mlp, TrainOptions, TrainReport};
 use crate::modes::VariationModes;
+use crate::physical::PhysicalChecks;
 use crate::target::TargetShip;
 
 /// Mode weights are drawn uniformly within ± this many standard deviations (paper 003 §2.2).
@@ -57,15 +58,18 @@ pub fn sample_weights(
         .collect()
 }
 
-/// Indexes of the target with the coefficients of weights `x`.
+/// Indexes of the target with the coefficients of weights `x`; a ship that fails `checks` is
+/// [`IndexFailure::Unphysical`] before any simulation.
 pub fn simulate_weights(
     target: &TargetShip,
     modes: &VariationModes,
     x: &[f64],
     settings: &SimSettings,
+    checks: &PhysicalChecks,
 ) -> Result<MotionIndexes, IndexFailure> {
     let c: Coefficients = modes.generate(x).map_err(|_| IndexFailure::NoModel)?;
     let model = target.model(&c).ok_or(IndexFailure::NoModel)?;
+    checks.check(&model).map_err(IndexFailure::Unphysical)?;
     motion_indexes(&model, settings)
 }
 
@@ -76,13 +80,14 @@ pub fn build_database(
     modes: &VariationModes,
     weights: &[Vec<f64>],
     settings: &SimSettings,
+    checks: &PhysicalChecks,
     tick: &(dyn Fn() + Sync),
 ) -> Result<SimulationDatabase, InverseError> {
     target.validate()?;
     let results: Vec<Result<MotionIndexes, IndexFailure>> = weights
         .par_iter()
         .map(|x| {
-            let r = simulate_weights(target, modes, x, settings);
+            let r = simulate_weights(target, modes, x, settings, checks);
             tick();
             r
         })
@@ -270,6 +275,7 @@ pub fn held_out(
     db: &SimulationDatabase,
     model: &InverseModel,
     settings: &SimSettings,
+    checks: &PhysicalChecks,
     max_resim: usize,
 ) -> HeldOut {
     let test: Vec<&Sample> = model.split.test.iter().map(|&i| &db.samples[i]).collect();
@@ -288,7 +294,7 @@ pub fn held_out(
     let m = test.len().min(max_resim);
     let resim: Vec<Option<MotionIndexes>> = (0..m)
         .into_par_iter()
-        .map(|i| simulate_weights(target, modes, &preds[i], settings).ok())
+        .map(|i| simulate_weights(target, modes, &preds[i], settings, checks).ok())
         .collect();
     let mut sum = [0.0; N_INDEXES];
     let mut ok = 0usize;
@@ -373,6 +379,7 @@ pub fn mismatch(model: &InverseModel, q: &MotionIndexes, given: &MotionIndexes) 
 /// network's clipped prediction and the nearest database ship) with `max_evals` simulations each. It
 /// turns the network's answer into one that is consistent with the simulator; the best result over the
 /// starts is returned, `None` when no start simulates.
+#[allow(clippy::too_many_arguments)]
 pub fn refine(
     target: &TargetShip,
     modes: &VariationModes,
@@ -380,6 +387,7 @@ pub fn refine(
     given: &MotionIndexes,
     starts: &[Vec<f64>],
     settings: &SimSettings,
+    checks: &PhysicalChecks,
     max_evals: usize,
 ) -> Option<Refined> {
     let k = starts.first()?.len();
@@ -396,7 +404,7 @@ pub fn refine(
     let mut eval = |z: &[f64], best: &mut Option<Refined>| -> f64 {
         evaluations += 1;
         let x = to_x(z);
-        match simulate_weights(target, modes, &x, settings) {
+        match simulate_weights(target, modes, &x, settings, checks) {
             Ok(q) => {
                 let j = mismatch(model, &q, given);
                 if best.as_ref().is_none_or(|b| j < b.objective) {

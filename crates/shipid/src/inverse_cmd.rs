@@ -9,24 +9,41 @@
 //! per target `<target>/indexes.csv` (given vs obtained), `<target>/summary.md` (tables), `<target>/motions.svg`
 //! (Fig. 6/7: red = simulated with the predicted hydrodynamics, black dashed = given indexes).
 
+use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
 use shipid_figures::inverse::{MotionFigure, motions_figure, write_modes};
 use shipid_inverse::database::{PAPER003_SHIPS_TOML, ShipsFile};
-use shipid_inverse::indexes::SimSettings;
+use shipid_inverse::indexes::{INDEX_KEYS, MotionIndexes, SimSettings};
 use shipid_inverse::inversion::{
     InputFault, MotionInversion, RefineOutcome, check_inputs, header_markdown, indexes_csv,
-    invert_motion, motions_markdown,
+    motions_markdown,
 };
-use shipid_inverse::mlp::TrainOptions;
 use shipid_inverse::modes::VariationModes;
+use shipid_inverse::physical::{Bound, MODEL_FILE_NAMES, PhysicalChecks, model_file_values};
 use shipid_inverse::pipeline::{
-    InverseModel, MIN_SAMPLES, SimulationDatabase, build_database, held_out, sample_weights,
+    MIN_SAMPLES, SimulationDatabase, WEIGHT_RANGE_STD, build_database, sample_weights,
+};
+use shipid_inverse::run::{
+    Ensemble, INTERIOR_MARGIN_SIGMA, MEMBER_MISMATCH_FACTOR, RunOptions, Spread, TargetRun,
+    inside_box, member_parameters, run_target,
 };
 use shipid_inverse::target::{TargetShip, TargetsFile};
 use shipid_io::write::write_atomic;
+use shipid_pipeline::mmg::file::{
+    MMG_KIND, MmgBootstrapRecord, MmgEstimatorEntry, MmgModelFile, ParamEntry, PropellerEntry,
+    RudderEntry, write_mmg_model_file,
+};
+use shipid_pipeline::mmg::geometry::MmgGeometry;
+use shipid_pipeline::mmg::identify::DETERMINED_SHARE;
+use shipid_pipeline::mmg::priors::priors;
+use shipid_pipeline::simulate::simulate_manoeuvre;
+use shipid_pipeline::spec::parse_manoeuvre;
+use shipid_sim::{Dynamics, MmgModel, SimStatus, metrics};
+
+use serde_json::{Map, Value, json};
 
 use crate::{CliError, Outcome, bad_input, failed};
 
@@ -120,7 +137,8 @@ pub fn build(
     let weights = sample_weights(modes, n_modes, samples, seed);
     let bar = progress(samples, "ships simulated (4 manoeuvres each)");
     let start = Instant::now();
-    let db = build_database(target, modes, &weights, settings, &|| bar.inc(1))
+    let checks = physical_checks(target);
+    let db = build_database(target, modes, &weights, settings, &checks, &|| bar.inc(1))
         .map_err(|e| bad_input(e.to_string()))?;
     let secs = start.elapsed().as_secs_f64();
     bar.finish_and_clear();
@@ -142,6 +160,260 @@ fn dropped_summary(db: &SimulationDatabase) -> String {
 /// Largest `--samples` run without `--allow-large`.
 pub const MAX_SAMPLES: usize = 100_000;
 
+/// Largest number of modes the search grows to: with twelve the paper's targets lie inside the box
+/// (issue 28), and each further step costs a database.
+pub const MAX_MODES: usize = 12;
+/// Modes added per step of the search.
+pub const MODE_STEP: usize = 2;
+/// Networks of the ensemble that gives the model's band.
+pub const NETWORKS: usize = 5;
+
+/// Bounds of the mmg family (`shipid_pipeline::mmg::priors`) for the target's ship, so that every
+/// ship the inverse accepts can be written as an `mmg` model file; and stable straight running.
+fn physical_checks(target: &TargetShip) -> PhysicalChecks {
+    let (ship, added, geometry) = target_geometry(target);
+    PhysicalChecks {
+        bounds: priors(&ship, &geometry, &added)
+            .into_iter()
+            .map(|p| Bound {
+                name: p.name.to_string(),
+                lower: p.lower,
+                upper: p.upper,
+            })
+            .collect(),
+        stable_straight_run: true,
+    }
+}
+
+fn target_geometry(target: &TargetShip) -> (shipid_io::Ship, shipid_io::AddedMass, MmgGeometry) {
+    let ship = target.ship();
+    let p = target.mmg_parameters(&shipid_inverse::database::Coefficients(
+        [0.0; shipid_inverse::database::N_COEF],
+    ));
+    let h = 0.5 * ship.rho * ship.lpp * ship.lpp * ship.draft;
+    let added = shipid_io::AddedMass {
+        X_udot: -p.m_x * h,
+        Y_vdot: -p.m_y * h,
+        Y_rdot: 0.0,
+        N_vdot: 0.0,
+        N_rdot: -p.j_z * h * ship.lpp * ship.lpp,
+    };
+    let geometry = MmgGeometry {
+        propeller_diameter_m: p.propeller_diameter_m,
+        propeller_x_m: p.x_p * ship.lpp,
+        k_t: p.k_t,
+        rudder_area_m2: p.rudder_area_m2,
+        rudder_span_m: p.rudder_span_m,
+        rudder_x_m: p.x_r * ship.lpp,
+    };
+    (ship, added, geometry)
+}
+
+/// Where each model-file parameter of an inverted ship comes from.
+fn source_of(name: &str, target: &TargetShip, n_modes: usize, refined: bool) -> (bool, String) {
+    let found = format!(
+        "inverse network, {n_modes} modes{}",
+        if refined { ", refined" } else { "" }
+    );
+    match name {
+        "r0" => (
+            false,
+            "target particulars: Schoenherr friction × Watanabe form factor on Denny–Mumford's wetted surface".into(),
+        ),
+        "t_p" => (false, "targets file: t_p".into()),
+        "f_alpha" if target.f_alpha.is_some() => (false, "targets file: f_alpha".into()),
+        "f_alpha" => (false, "Fujii's formula from the targets file's rudder span and area".into()),
+        "w_p0" | "c1" | "c2_pos" | "c2_neg" => {
+            (false, "fixed: Yasukawa & Yoshimura 2015 KVLCC2".into())
+        }
+        _ => (true, found),
+    }
+}
+
+/// Mode weights, ensemble and the model built from them, for one motion.
+struct Delivered {
+    /// The weights the model file holds: the best ensemble member, else the network's refined or
+    /// clipped answer.
+    weights: Vec<f64>,
+    refined: bool,
+    model: Option<MmgModel>,
+    members: Option<(Vec<Vec<f64>>, Spread)>,
+    dropped: usize,
+}
+
+fn deliver(
+    target: &TargetShip,
+    modes: &VariationModes,
+    m: &MotionInversion,
+    e: Option<&Ensemble>,
+) -> Delivered {
+    let (weights, refined) = match (e.and_then(|e| e.members.first()), &m.refined) {
+        (Some(best), _) => (best.weights.clone(), true),
+        (None, RefineOutcome::Done { refined, .. }) => (refined.weights.clone(), true),
+        _ => (m.weights.clone(), false),
+    };
+    let model = modes.generate(&weights).ok().and_then(|c| target.model(&c));
+    Delivered {
+        weights,
+        refined,
+        model,
+        members: e.and_then(|e| member_parameters(target, modes, e)),
+        dropped: e.map_or(0, |e| e.dropped),
+    }
+}
+
+fn model_file(
+    target: &TargetShip,
+    modes: &VariationModes,
+    run: &TargetRun,
+    motion: &MotionInversion,
+    d: &Delivered,
+    model: &MmgModel,
+    seed: u64,
+) -> MmgModelFile {
+    let (ship, added, geometry) = target_geometry(target);
+    let n_modes = run.choice.modes;
+    let specs = priors(&ship, &geometry, &added);
+    let values = model_file_values(model.parameters());
+    let centre = model_file_values(
+        &target.mmg_parameters(&modes.generate(&vec![0.0; n_modes]).unwrap_or(modes.mean)),
+    );
+    let se = |k: usize| d.members.as_ref().map_or(0.0, |(_, s)| s.std_error[k]);
+    let parameters = MODEL_FILE_NAMES
+        .iter()
+        .enumerate()
+        .map(|(k, name)| {
+            let (found, source) = source_of(name, target, n_modes, d.refined);
+            let (lower, upper) = specs
+                .iter()
+                .find(|p| p.name == *name)
+                .map_or((f64::NEG_INFINITY, f64::INFINITY), |p| (p.lower, p.upper));
+            ParamEntry {
+                name: name.to_string(),
+                value: values[k],
+                lower,
+                upper,
+                // The inverse has no prior term: a found parameter's centre is the database's mean
+                // ship (all weights 0), around which the generator draws, with no weight.
+                prior: if found { centre[k] } else { values[k] },
+                prior_sd: if found { f64::INFINITY } else { 0.0 },
+                prior_source: source,
+                standard_error: if found { se(k) } else { 0.0 },
+                data_share: if found { 1.0 } else { 0.0 },
+                determined_by_data: found,
+            }
+        })
+        .collect();
+    let bootstrap = d.members.as_ref().map(|(vectors, spread)| MmgBootstrapRecord {
+        method: format!(
+            "not a bootstrap: an ensemble of {NETWORKS} inverse networks (seeds {seed}…{}) trained on one \
+             simulated database, each refined by re-simulation from its own answer; {} kept (mismatch \
+             within {MEMBER_MISMATCH_FACTOR} × the best), the best is the point model",
+            seed + NETWORKS as u64 - 1,
+            vectors.len()
+        ),
+        seed,
+        block_rows: 0,
+        block_reason: "no blocks: members differ by the network's seed, not by resampled data".into(),
+        rejected: d.dropped,
+        standard_error: MODEL_FILE_NAMES
+            .iter()
+            .zip(&spread.std_error)
+            .map(|(n, s)| (n.to_string(), *s))
+            .collect(),
+        order: MODEL_FILE_NAMES.iter().map(|n| n.to_string()).collect(),
+        correlation: spread.correlation.clone(),
+        replicates: MODEL_FILE_NAMES
+            .iter()
+            .enumerate()
+            .map(|(k, n)| (n.to_string(), vectors.iter().map(|v| v[k]).collect()))
+            .collect(),
+    });
+    MmgModelFile {
+        shipid_version: env!("CARGO_PKG_VERSION").into(),
+        kind: MMG_KIND.into(),
+        ship,
+        added_mass: added,
+        propeller: PropellerEntry {
+            diameter_m: geometry.propeller_diameter_m,
+            x_m: geometry.propeller_x_m,
+            k_t: geometry.k_t,
+            rate_rps: model.propeller_rate(),
+        },
+        rudder: RudderEntry {
+            area_m2: geometry.rudder_area_m2,
+            span_m: geometry.rudder_span_m,
+            x_m: geometry.rudder_x_m,
+        },
+        estimator: MmgEstimatorEntry {
+            name: "inverse-network".into(),
+            method: format!(
+                "paper 003 inverse identification of target `{}`, motion `{}` from its nine motion \
+                 indexes: SVD variation modes of the 20-ship database, mode weights by an MLP trained \
+                 on {} simulated ships{}; modes: {}. No equation error: residual_rms is not defined \
+                 (nan). Parameters without `inverse network` in their source are fixed.",
+                target.name,
+                motion.name,
+                run.db.samples.len(),
+                if d.refined {
+                    ", refined by re-simulation (Nelder–Mead on the standardised index mismatch)"
+                } else {
+                    ""
+                },
+                run.choice.reason
+            ),
+            prior_weight: 0.0,
+            tuned: false,
+            determined_share: DETERMINED_SHARE,
+            samples: run.db.samples.len(),
+            residual_rms: [f64::NAN; 3],
+            cv: Vec::new(),
+            refinement: None,
+        },
+        training: Vec::new(),
+        parameters,
+        bootstrap,
+    }
+}
+
+/// The 10/10 zig-zag and the 20° turning circle of a model, as `shipid simulate` runs them.
+fn standard_metrics(model: &MmgModel) -> Value {
+    let mut o = Map::new();
+    for (key, spec) in [
+        ("zigzag_10_10_starboard", "zigzag:10/10:starboard"),
+        ("turning_20_starboard", "turning:20:starboard"),
+    ] {
+        let v = parse_manoeuvre(spec)
+            .ok()
+            .and_then(|m| {
+                let out = simulate_manoeuvre(model, &m, None, None).ok()?;
+                Some(match out.status {
+                    SimStatus::Ok => json!(metrics(&out.recording, &m, model.ship())),
+                    SimStatus::Diverged { t_s, reason } => {
+                        json!({"status": "diverged", "t_s": t_s, "reason": reason})
+                    }
+                })
+            })
+            .unwrap_or(Value::Null);
+        o.insert(key.into(), v);
+    }
+    Value::Object(o)
+}
+
+fn weights_csv_rows(csv: &mut String, motion: &str, what: &str, x: &[f64], modes: &VariationModes) {
+    let inside = inside_box(modes, x);
+    for (i, v) in x.iter().enumerate() {
+        let s = modes.weight_std[i];
+        let _ = writeln!(
+            csv,
+            "{motion},{what},{},{v},{s},{},{}",
+            i + 1,
+            v / s,
+            inside[i]
+        );
+    }
+}
+
 /// `shipid inverse`.
 pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
     faer::set_global_parallelism(faer::Par::Seq);
@@ -161,65 +433,196 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
     }
     let (modes, targets) = load(a.ships, a.targets)?;
     let n95 = modes.modes_for(0.95);
-    let n_modes = a.modes.unwrap_or(n95);
-    if n_modes == 0 || n_modes > modes.singular_values.len() {
+    if let Some(n) = a.modes
+        && (n == 0 || n > modes.singular_values.len())
+    {
         return Err(bad_input(format!(
-            "--modes {n_modes}: the database has {} modes",
+            "--modes {n}: the database has {} modes",
             modes.singular_values.len()
         )));
     }
+    let max_modes = MAX_MODES.clamp(n95, modes.singular_values.len());
     std::fs::create_dir_all(a.out).map_err(|e| crate::write_failed(a.out, e))?;
     write_modes(a.out, &modes).map_err(failed)?;
     println!(
-        "SVD of {} ships: mode 1 carries {:.1} %, {} modes reach 95 % ({:.1} %); using {} modes",
+        "SVD of {} ships: mode 1 carries {:.1} %, {} modes reach 95 % ({:.1} %); {}",
         modes.ship_ids.len(),
         100.0 * modes.contribution[0],
         n95,
         100.0 * modes.cumulative()[n95 - 1],
-        n_modes
+        match a.modes {
+            Some(n) => format!("using {n} modes (--modes)"),
+            None => format!(
+                "modes grown from {n95} by {MODE_STEP} up to {max_modes} until every refined weight is inside the trained box"
+            ),
+        }
     );
     let settings = SimSettings::default();
     let mut outcome = Outcome::Ok;
+    let mut summary_targets = Vec::new();
     for target in &targets {
-        let (db, secs) = build(target, &modes, n_modes, a.samples, a.seed, &settings)?;
-        println!(
-            "\n## {}\nsimulation database: {} ships requested, {} usable, {} dropped ({}) in {:.1} s",
-            target.name,
-            db.requested,
-            db.samples.len(),
-            db.dropped.len(),
-            dropped_summary(&db),
-            secs
-        );
-        let opts = TrainOptions {
-            seed: a.seed,
-            ..TrainOptions::default()
-        };
-        let model = InverseModel::train(&db, &opts).map_err(|e| failed(anyhow::anyhow!(e)))?;
-        let held = held_out(target, &modes, &db, &model, &settings, a.max_resim);
-        let motions: Vec<MotionInversion> = target
+        let given: Vec<(String, MotionIndexes)> = target
             .motion
             .iter()
             .map(|m| {
-                let given = m.indexes().map_err(|e| bad_input(e.to_string()))?;
-                Ok(invert_motion(
-                    target,
-                    &modes,
-                    &db,
-                    &model,
-                    &settings,
-                    &m.name,
-                    given,
-                    a.refine_evals,
+                Ok((
+                    m.name.clone(),
+                    m.indexes().map_err(|e| bad_input(e.to_string()))?,
                 ))
             })
             .collect::<Result<_, CliError>>()?;
+        let opts = RunOptions {
+            samples: a.samples,
+            seed: a.seed,
+            fixed_modes: a.modes,
+            start_modes: n95,
+            mode_step: MODE_STEP,
+            max_modes,
+            networks: NETWORKS,
+            refine_evals: a.refine_evals,
+            max_resim: a.max_resim,
+            settings,
+            checks: physical_checks(target),
+        };
+        let attempts_max = if a.modes.is_some() {
+            1
+        } else {
+            (max_modes - n95).div_ceil(MODE_STEP) + 1
+        };
+        let bar = progress(
+            a.samples * attempts_max,
+            "ships simulated (4 manoeuvres each)",
+        );
+        let run = run_target(target, &modes, &given, &opts, &|| bar.inc(1))
+            .map_err(|e| failed(anyhow::anyhow!(e)))?;
+        bar.finish_and_clear();
+        let db = &run.db;
+        let n_modes = run.choice.modes;
+        println!(
+            "\n## {}\nmodes: {}\nsimulation database: {} ships requested, {} usable, {} dropped ({}) in {:.1} s",
+            target.name,
+            run.choice.reason,
+            db.requested,
+            db.samples.len(),
+            db.dropped.len(),
+            dropped_summary(db),
+            run.build_time_s
+        );
+        let motions = &run.motions;
         if motions.iter().any(MotionInversion::failed) {
             outcome = Outcome::SomeFailed;
         }
-        let md = header_markdown(target, n_modes, &db, secs, &model, &held)
-            + &motions_markdown(&motions, &modes, &db);
-        let csv = indexes_csv(&motions);
+        let dir = a.out.join(slug(&target.name));
+        std::fs::create_dir_all(&dir).map_err(|e| crate::write_failed(&dir, e))?;
+        let mut weights_csv =
+            String::from("motion,weights,mode,weight,sigma,weight_over_sigma,inside_box\n");
+        let mut motion_json = Vec::new();
+        let mut model_lines = String::new();
+        for (i, m) in motions.iter().enumerate() {
+            let e = run.ensembles.get(i);
+            let d = deliver(target, &modes, m, e);
+            weights_csv_rows(
+                &mut weights_csv,
+                &m.name,
+                "network",
+                &m.network_weights,
+                &modes,
+            );
+            if let RefineOutcome::Done { refined, .. } = &m.refined {
+                weights_csv_rows(
+                    &mut weights_csv,
+                    &m.name,
+                    "refined",
+                    &refined.weights,
+                    &modes,
+                );
+            }
+            for (k, member) in e.map_or(&[][..], |e| &e.members[..]).iter().enumerate() {
+                weights_csv_rows(
+                    &mut weights_csv,
+                    &m.name,
+                    &format!("member {}", k + 1),
+                    &member.weights,
+                    &modes,
+                );
+            }
+            let file_name = if motions.len() == 1 {
+                "model.toml".to_string()
+            } else {
+                format!("model_{}.toml", slug(&m.name))
+            };
+            let inside = inside_box(&modes, &d.weights);
+            let mut mj = json!({
+                "name": m.name,
+                "given_indexes": m.given.0,
+                "network_weights": m.network_weights,
+                "network_clipped": m.clipped,
+                "weights": d.weights,
+                "weights_refined": d.refined,
+                "weight_sigma": &modes.weight_std[..d.weights.len()],
+                "inside_box": inside,
+                "all_inside_box": inside.iter().all(|b| *b),
+                "ensemble_members": d.members.as_ref().map_or(0, |(v, _)| v.len()),
+                "ensemble_dropped": d.dropped,
+            });
+            match &d.model {
+                Some(model) => {
+                    let file = model_file(target, &modes, &run, m, &d, model, a.seed);
+                    let text =
+                        write_mmg_model_file(&file).map_err(|e| failed(anyhow::anyhow!(e)))?;
+                    let path = dir.join(&file_name);
+                    write_atomic(&path, text.as_bytes())
+                        .map_err(|e| crate::write_failed(&path, e))?;
+                    let resim = shipid_inverse::inversion::resimulate(
+                        target,
+                        &modes,
+                        &settings,
+                        &opts.checks,
+                        &d.weights,
+                    );
+                    mj["model_file"] = json!(file_name);
+                    mj["model_indexes"] = resim.map_or(Value::Null, |r| json!(r.indexes.0));
+                    mj["model_metrics"] = standard_metrics(model);
+                    let _ = writeln!(
+                        model_lines,
+                        "model of {} ({}): {}; weights inside the trained box: {}",
+                        m.name,
+                        path.display(),
+                        fmt_metrics(&mj["model_metrics"]),
+                        if inside.iter().all(|b| *b) {
+                            "all".to_string()
+                        } else {
+                            format!(
+                                "not modes {}",
+                                inside
+                                    .iter()
+                                    .enumerate()
+                                    .filter(|(_, b)| !**b)
+                                    .map(|(k, _)| (k + 1).to_string())
+                                    .collect::<Vec<_>>()
+                                    .join(", ")
+                            )
+                        }
+                    );
+                }
+                None => {
+                    outcome = Outcome::SomeFailed;
+                    mj["model_file"] = Value::Null;
+                    let _ = writeln!(
+                        model_lines,
+                        "model of {}: none (its weights give no MMG model)",
+                        m.name
+                    );
+                }
+            }
+            motion_json.push(mj);
+        }
+        let md = header_markdown(target, n_modes, db, run.build_time_s, &run.model, &run.held)
+            + &format!("Modes: {}.\n\n", run.choice.reason)
+            + &motions_markdown(motions, &modes, db)
+            + "\n"
+            + &model_lines;
+        let csv = indexes_csv(motions);
         let figures: Vec<MotionFigure> = motions
             .iter()
             .map(|m| MotionFigure {
@@ -233,11 +636,10 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
             })
             .collect();
         print!("{md}");
-        let dir = a.out.join(slug(&target.name));
-        std::fs::create_dir_all(&dir).map_err(|e| crate::write_failed(&dir, e))?;
         for (name, text) in [
             ("indexes.csv", csv.as_bytes()),
             ("summary.md", md.as_bytes()),
+            ("weights.csv", weights_csv.as_bytes()),
         ] {
             let path = dir.join(name);
             write_atomic(&path, text).map_err(|e| crate::write_failed(&path, e))?;
@@ -246,9 +648,65 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
         if let Err(e) = motions_figure(&fig, target, &figures) {
             eprintln!("warning: figure {} not drawn: {e:#}", fig.display());
         }
+        let mut dropped: std::collections::BTreeMap<String, usize> = Default::default();
+        for (_, f) in &db.dropped {
+            *dropped.entry(f.kind()).or_default() += 1;
+        }
+        summary_targets.push(json!({
+            "name": target.name,
+            "folder": slug(&target.name),
+            "modes": n_modes,
+            "box_sigma": WEIGHT_RANGE_STD,
+            "interior_margin_sigma": INTERIOR_MARGIN_SIGMA,
+            "mode_choice": {
+                "reason": run.choice.reason,
+                "capped": run.choice.capped,
+                "attempts": run.choice.attempts.iter().map(|t| json!({
+                    "modes": t.modes,
+                    "usable": t.usable,
+                    "requested": t.requested,
+                    "on_edge": t.on_edge.iter().map(|(n, m)| json!({"motion": n, "modes": m})).collect::<Vec<_>>(),
+                    "refinement_failed": t.failed,
+                })).collect::<Vec<_>>(),
+            },
+            "database": {
+                "requested": db.requested,
+                "usable": db.samples.len(),
+                "dropped": dropped,
+            },
+            "motions": motion_json,
+        }));
         println!("wrote {}", dir.display());
     }
+    let summary = json!({
+        "shipid_version": env!("CARGO_PKG_VERSION"),
+        "index_keys": INDEX_KEYS,
+        "modes_for_95_percent": n95,
+        "seed": a.seed,
+        "samples": a.samples,
+        "networks": NETWORKS,
+        "targets": summary_targets,
+    });
+    let path = a.out.join("summary.json");
+    let text = serde_json::to_string_pretty(&summary).map_err(|e| failed(anyhow::anyhow!(e)))?;
+    write_atomic(&path, text.as_bytes()).map_err(|e| crate::write_failed(&path, e))?;
+    println!("wrote {}", path.display());
     Ok(outcome)
+}
+
+fn fmt_metrics(v: &Value) -> String {
+    let get = |m: &str, k: &str| {
+        v[m][k]
+            .as_f64()
+            .map_or("-".to_string(), |x| format!("{x:.2}"))
+    };
+    format!(
+        "10/10 zig-zag overshoots {}° / {}°, 20° turn advance {} L, tactical diameter {} L",
+        get("zigzag_10_10_starboard", "overshoot_1"),
+        get("zigzag_10_10_starboard", "overshoot_2"),
+        get("turning_20_starboard", "advance"),
+        get("turning_20_starboard", "tactical_diameter"),
+    )
 }
 
 fn slug(s: &str) -> String {

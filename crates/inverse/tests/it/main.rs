@@ -2,3 +2,4 @@
 //! topic).
 
 mod paper003;
+mod physical;

@@ -9,6 +9,7 @@ use shipid_inverse::indexes::{
 use shipid_inverse::inversion::{InputFault, check_inputs};
 use shipid_inverse::mlp::TrainOptions;
 use shipid_inverse::modes::VariationModes;
+use shipid_inverse::physical::PhysicalChecks;
 use shipid_inverse::pipeline::{InverseModel, build_database, held_out, sample_weights};
 use shipid_inverse::target::{TargetShip, TargetsFile, resistance_prime, zhou_added_mass};
 use shipid_sim::{Dynamics, MmgModel, MmgParameters};
@@ -228,7 +229,15 @@ fn inverse_round_trip_on_a_small_seeded_database() {
     let modes = VariationModes::new(&ships().ship).expect("SVD");
     let weights = sample_weights(&modes, 6, 400, 11);
     let settings = SimSettings::default();
-    let db = build_database(&target, &modes, &weights, &settings, &|| {}).expect("valid target");
+    let db = build_database(
+        &target,
+        &modes,
+        &weights,
+        &settings,
+        &PhysicalChecks::default(),
+        &|| {},
+    )
+    .expect("valid target");
     assert_eq!(db.samples.len() + db.dropped.len(), 400);
     assert!(db.samples.len() > 250, "{} usable", db.samples.len());
     let model = InverseModel::train(
@@ -239,7 +248,15 @@ fn inverse_round_trip_on_a_small_seeded_database() {
         },
     )
     .expect("enough samples");
-    let h = held_out(&target, &modes, &db, &model, &settings, 40);
+    let h = held_out(
+        &target,
+        &modes,
+        &db,
+        &model,
+        &settings,
+        &PhysicalChecks::default(),
+        40,
+    );
     // Predicting the mean gives √3 σ ≈ 1.7 σ per mode; the network must be far better on the
     // dominant modes, and the re-simulated indexes of unseen ships must come back within a few %.
     assert!(h.weight_rmse_sigma[0] < 0.5, "{:?}", h.weight_rmse_sigma);
@@ -267,8 +284,15 @@ fn a_sample_far_outside_the_database_is_dropped_not_a_panic() {
         modes.weight_std[..6].iter().map(|s| 40.0 * s).collect(),
         vec![0.0; 6],
     ];
-    let db = build_database(&target, &modes, &wild, &SimSettings::default(), &|| {})
-        .expect("valid target");
+    let db = build_database(
+        &target,
+        &modes,
+        &wild,
+        &SimSettings::default(),
+        &PhysicalChecks::default(),
+        &|| {},
+    )
+    .expect("valid target");
     assert_eq!(db.samples.len(), 1, "the mean ship simulates");
     assert_eq!(db.dropped.len(), 1);
     assert_eq!(db.dropped[0].0, 0);
