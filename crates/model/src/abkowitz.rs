@@ -309,6 +309,33 @@ pub struct ModelFile {
     /// `simulate --bands` and `validate` draw their bands.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bootstrap: Option<BootstrapRecord>,
+    /// The recorded wind and current removed from the training recordings before identification
+    /// (absent when they were calm).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub environment: Option<EnvironmentRecord>,
+}
+
+/// What a model file records of the environment its training recordings carried (`[environment]`,
+/// written by every family): the recorded wind and current were known inputs, removed before the
+/// hydrodynamics were identified, so the model is a calm-water model and every simulation of a
+/// recording adds that recording's own wind and current back.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EnvironmentRecord {
+    /// True: the recorded environment was subtracted before identification.
+    pub removed: bool,
+    /// Training recordings with a recorded wind.
+    #[serde(default)]
+    pub wind_recordings: Vec<String>,
+    /// Training recordings with a recorded current.
+    #[serde(default)]
+    pub current_recordings: Vec<String>,
+    /// True when the data set gave no `[windage]` and the windage below was assumed.
+    #[serde(default)]
+    pub windage_assumed: bool,
+    /// The windage the recorded wind's force was computed with (absent without a recorded wind).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub windage: Option<shipid_io::Windage>,
 }
 
 /// The coefficient uncertainty of a fit by a moving-block bootstrap, as stored in its model file.
@@ -435,6 +462,7 @@ impl ModelFile {
             coefficients,
             effects: Vec::new(),
             bootstrap: None,
+            environment: None,
         }
     }
 

@@ -16,8 +16,8 @@ pub mod envelope;
 pub mod set;
 
 pub use abkowitz::{
-    AbkowitzModel, AugmentedModelFile, BootstrapRecord, EffectEntry, EstimatorInfo, ModelError,
-    ModelFile, Refinement, TrainingWindow,
+    AbkowitzModel, AugmentedModelFile, BootstrapRecord, EffectEntry, EnvironmentRecord,
+    EstimatorInfo, ModelError, ModelFile, Refinement, TrainingWindow,
 };
 pub use design::{Design, PrimeInertia, Samples, design};
 pub use envelope::{IdentificationRange, RangeError};

@@ -16,6 +16,7 @@
 pub mod bands;
 pub mod bootstrap;
 pub mod calibration;
+pub mod environment;
 pub mod error;
 pub mod fit;
 pub mod fit_gp;

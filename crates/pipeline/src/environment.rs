@@ -1,0 +1,267 @@
+//! A recording's recorded wind and current as known inputs of the pipeline (issue 27): which windage
+//! turns a recorded wind into forces, the recording as the hydrodynamics see it (velocities through
+//! the water, accelerations without the wind's), the wrapper every replay and validation puts around a
+//! model, and the words a command says about them.
+//!
+//! Identification subtracts what is known (the recorded current's kinematics and the recorded wind's
+//! force through the family's own mass matrix) before it fits; every later simulation of a recording
+//! adds it back through [`shipid_sim::WithEnvironment`], so a model identified on windy runs is the
+//! calm-water model and replays its windy runs with their wind.
+
+use serde::{Deserialize, Serialize};
+use shipid_io::deriv::accelerations_or_estimate;
+use shipid_io::{Accelerations, AddedMass, Dataset, DatasetRecording, Recording, Ship, Windage};
+use shipid_sim::environment::{ASSUMED_WINDAGE_SOURCE, assumed_windage};
+use shipid_sim::{Dynamics, KnownEnvironment, MassMatrix};
+
+use crate::error::{PipelineError, bad_input};
+
+/// Where the windage that turns a recorded wind into forces comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum WindageSource {
+    /// The data set's `[windage]` table.
+    Dataset,
+    /// The `[environment.windage]` the model file was identified with.
+    ModelFile,
+    /// Neither gives one: [`assumed_windage`] (every command that uses it says so).
+    Assumed,
+}
+
+impl WindageSource {
+    /// Words for warnings and reports.
+    pub fn words(self) -> &'static str {
+        match self {
+            WindageSource::Dataset => "the data set's [windage]",
+            WindageSource::ModelFile => "the windage the model was identified with",
+            WindageSource::Assumed => "an assumed windage",
+        }
+    }
+}
+
+/// A windage and where it comes from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChosenWindage {
+    pub windage: Windage,
+    pub source: WindageSource,
+}
+
+impl ChosenWindage {
+    /// The first windage given, in order of preference, else the assumed one for `ship`.
+    pub fn first_of(
+        candidates: &[(Option<&Windage>, WindageSource)],
+        ship: &Ship,
+    ) -> ChosenWindage {
+        candidates
+            .iter()
+            .find_map(|(w, source)| {
+                w.map(|w| ChosenWindage {
+                    windage: w.clone(),
+                    source: *source,
+                })
+            })
+            .unwrap_or_else(|| ChosenWindage {
+                windage: assumed_windage(ship),
+                source: WindageSource::Assumed,
+            })
+    }
+
+    /// The windage of a data set's recordings: its own `[windage]`, else assumed.
+    pub fn of_dataset(ds: &Dataset) -> ChosenWindage {
+        ChosenWindage::first_of(&[(ds.windage.as_ref(), WindageSource::Dataset)], &ds.ship)
+    }
+
+    /// Whether it is assumed.
+    pub fn is_assumed(&self) -> bool {
+        self.source == WindageSource::Assumed
+    }
+
+    /// One line naming the windage: areas, model and source.
+    pub fn describe(&self) -> String {
+        let w = &self.windage;
+        format!(
+            "{} (frontal {} m², lateral {} m², lateral centre {} m, model {}, air {} kg/m³{})",
+            self.source.words(),
+            w.frontal_area_m2,
+            w.lateral_area_m2,
+            w.lateral_centre_x_m,
+            w.model.name(),
+            w.air_density_kg_m3,
+            match (&w.source, self.source) {
+                (_, WindageSource::Assumed) => format!("; {ASSUMED_WINDAGE_SOURCE}"),
+                (Some(s), _) => format!("; {s}"),
+                (None, _) => String::new(),
+            }
+        )
+    }
+}
+
+/// A recording's known environment with `chosen` as the windage of a recorded wind; `None` for a calm
+/// recording (neither wind nor current recorded). `file` names the recording in errors.
+pub fn environment_with(
+    rec: &Recording,
+    chosen: &ChosenWindage,
+    ship: &Ship,
+    file: &str,
+) -> Result<Option<KnownEnvironment>, PipelineError> {
+    KnownEnvironment::of_recording(rec, Some(&chosen.windage), ship)
+        .map_err(|e| bad_input(format!("{file}: {e}")))
+}
+
+/// The known environment of `rec`, a recording of `ds`, with the data set's windage (else the assumed
+/// one), and the warning to give when a recorded wind had to be turned into forces with an assumed
+/// windage. `None` for a calm recording.
+pub fn recording_environment(
+    ds: &Dataset,
+    rec: &Recording,
+) -> Result<(Option<KnownEnvironment>, Option<String>), PipelineError> {
+    let chosen = ChosenWindage::of_dataset(ds);
+    let env = environment_with(rec, &chosen, &ds.ship, &ds.path.display().to_string())?;
+    let warning = env
+        .as_ref()
+        .is_some_and(|e| e.has_wind() && chosen.is_assumed())
+        .then(|| assumed_windage_warning(ds));
+    Ok((env, warning))
+}
+
+/// The warning for a data set with recorded wind and no `[windage]`.
+pub fn assumed_windage_warning(ds: &Dataset) -> String {
+    format!(
+        "{}: recordings carry a recorded wind but the data set has no [windage] table; the wind's force uses an assumed windage ({ASSUMED_WINDAGE_SOURCE}); give [windage] (docs/data-format.md) for the ship's own",
+        ds.path.display()
+    )
+}
+
+/// A recording as the hydrodynamics of an identified model see it.
+#[derive(Debug, Clone)]
+pub struct HydrodynamicRecording {
+    /// The recording with its velocities through the water (the recorded one when no current).
+    pub recording: Recording,
+    /// Its accelerations (recorded, or estimated from the water-relative velocities) minus the
+    /// recorded wind's M⁻¹ F_wind.
+    pub accelerations: Accelerations,
+    /// Whether the accelerations were estimated (not recorded).
+    pub estimated: bool,
+    /// Whether a recorded wind or current was removed.
+    pub environment_removed: bool,
+}
+
+/// `r` (a recording of `ds`) with its recorded environment removed: velocities through the water and
+/// accelerations without the wind's, through the mass matrix of `ds.ship` with `added` (the one the
+/// family identifies with, so that its simulations add back exactly what was taken away). A calm
+/// recording comes back as it is, with the accelerations every fit used before.
+pub fn hydrodynamic_recording(
+    ds: &Dataset,
+    r: &DatasetRecording,
+    added: &AddedMass,
+) -> Result<HydrodynamicRecording, PipelineError> {
+    let (env, _) = recording_environment(ds, &r.recording)?;
+    let Some(env) = env else {
+        let (accelerations, estimated) = accelerations_or_estimate(&r.recording, &ds.ship);
+        return Ok(HydrodynamicRecording {
+            recording: r.recording.clone(),
+            accelerations,
+            estimated,
+            environment_removed: false,
+        });
+    };
+    let water = env.water_relative(&r.recording);
+    let (mut accelerations, estimated) = accelerations_or_estimate(&water, &ds.ship);
+    if env.has_wind() {
+        let mass = MassMatrix::new(&ds.ship, added);
+        // Over-ground states: the air's velocity past the ship is the wind's minus the ship's over ground.
+        let wind = env.wind_accelerations(&r.recording, &mass).ok_or_else(|| {
+            bad_input(format!(
+                "{}: the mass matrix of the ship with its [added_mass] is singular: the recorded wind in `{}` cannot be turned into accelerations",
+                ds.path.display(),
+                r.file
+            ))
+        })?;
+        for (i, a) in wind.iter().enumerate() {
+            accelerations.u_dot[i] -= a[0];
+            accelerations.v_dot[i] -= a[1];
+            accelerations.r_dot[i] -= a[2];
+        }
+    }
+    Ok(HydrodynamicRecording {
+        recording: water,
+        accelerations,
+        estimated,
+        environment_removed: true,
+    })
+}
+
+/// `model` feeling `env` when there is one (a replay or validation of a recording with a recorded
+/// environment), else `model` itself.
+pub fn with_environment<'a>(
+    model: &'a dyn Dynamics,
+    env: Option<KnownEnvironment>,
+) -> Box<dyn Dynamics + 'a> {
+    match env {
+        Some(env) => Box::new(shipid_sim::WithEnvironment::new(model, env)),
+        None => Box::new(model),
+    }
+}
+
+/// What a model file records of the environment it was identified in (`[environment]`).
+pub use shipid_model::EnvironmentRecord;
+
+/// The `[environment]` record of a fit on the chosen recordings of `ds`: which recordings carried a
+/// wind or a current that was removed, and with which windage. `None` when every one was calm.
+pub fn environment_record(ds: &Dataset, chosen: &[&DatasetRecording]) -> Option<EnvironmentRecord> {
+    let wind: Vec<String> = chosen
+        .iter()
+        .filter(|r| r.recording.wind.is_some())
+        .map(|r| r.file.clone())
+        .collect();
+    let current: Vec<String> = chosen
+        .iter()
+        .filter(|r| r.recording.current.is_some())
+        .map(|r| r.file.clone())
+        .collect();
+    if wind.is_empty() && current.is_empty() {
+        return None;
+    }
+    let chosen_windage = ChosenWindage::of_dataset(ds);
+    Some(EnvironmentRecord {
+        removed: true,
+        windage_assumed: !wind.is_empty() && chosen_windage.is_assumed(),
+        windage: (!wind.is_empty()).then_some(chosen_windage.windage),
+        wind_recordings: wind,
+        current_recordings: current,
+    })
+}
+
+/// Words on what a fit or validation does with the recorded environment of `recordings` (of `ds`):
+/// per recording with a wind or current, that it is taken as a known input and with which windage.
+/// Empty when every recording is calm.
+pub fn environment_notes<'a>(
+    ds: &Dataset,
+    recordings: impl IntoIterator<Item = &'a DatasetRecording>,
+    chosen: &ChosenWindage,
+    what: &str,
+) -> Vec<String> {
+    let mut notes = Vec::new();
+    for r in recordings {
+        let (wind, current) = (r.recording.wind.is_some(), r.recording.current.is_some());
+        if !wind && !current {
+            continue;
+        }
+        let flows = match (wind, current) {
+            (true, true) => "a recorded wind and current",
+            (true, false) => "a recorded wind",
+            _ => "a recorded current",
+        };
+        let windage = if wind {
+            format!(", the wind's force with {}", chosen.describe())
+        } else {
+            String::new()
+        };
+        notes.push(format!(
+            "{}: `{}` carries {flows}; {what} takes it as a known input{windage}",
+            ds.path.display(),
+            r.file
+        ));
+    }
+    notes
+}
