@@ -9,7 +9,10 @@
 //!   a mark where the signs of a term disagree across cases;
 //! - `vif_<set>.svg` (Fig. 14/15): VIF per term (log scale);
 //! - `forces_<case>_<test>.svg` (Fig. 12/19): per-term force contributions φ_k β_k over time per DOF,
-//!   for the case with the smallest mean MRAE over its tests and its first training recording.
+//!   for the case with the smallest mean MRAE over its tests and its first training recording;
+//! - `bands_<test>.svg` (studies with `bands`): one panel per metric of the test, each case's band as
+//!   a shaded interval with its point prediction, and the recorded value as a line across, so a
+//!   case whose band misses the record stands out (its interval drawn in red).
 //!
 //! A diverged prediction is drawn up to its divergence time, marked with an × and labelled
 //! "diverged" in the legend, never dropped. A figure that cannot be drawn is a warning, not a failure.
@@ -220,6 +223,20 @@ pub fn write_figures(study: &Study, out: &Path) -> FigureReport {
             dir.join(format!("heading_{}.svg", slug(test))),
             &|p: &Path| heading(p, rec, &sims).map(|_| true),
         );
+    }
+    if study.bands.is_some() {
+        match Table::read_csv(&out.join("summary.csv")) {
+            Ok(summary) => {
+                for test in &study.tests {
+                    attempt(
+                        r,
+                        dir.join(format!("bands_{}.svg", slug(test))),
+                        &|p: &Path| metric_bands(p, study, &summary, test),
+                    );
+                }
+            }
+            Err(e) => r.warnings.push(format!("summary.csv: {e}")),
+        }
     }
     match Table::read_csv(&out.join("coefficients.csv")) {
         Ok(t) => {
@@ -861,6 +878,170 @@ fn bars(path: &Path, set: &str, rows: &[LongRow], kind: BarKind) -> Result<()> {
     draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
     root.present()?;
     Ok(())
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Metric bands.
+
+/// One case's band of one metric: (lo, hi), the point prediction, and whether the record is inside.
+struct CaseBand {
+    lo: f64,
+    hi: f64,
+    predicted: Option<f64>,
+    inside: Option<bool>,
+}
+
+/// The unit of a metric as the summary gives it.
+fn metric_unit(metric: &str) -> &'static str {
+    match metric {
+        "overshoot_1" | "overshoot_2" => "[deg]",
+        "t_a" | "t_check" => "[× U0/L]",
+        _ => "[÷ L]",
+    }
+}
+
+/// The bands of a test's metrics for every case (summary rows of that test, in case order):
+/// `Ok(false)` when no metric of the test has a band (a replay-only recording).
+fn metric_bands(path: &Path, study: &Study, summary: &Table, test: &str) -> Result<bool> {
+    let Some(tests) = summary.column("test") else {
+        return Err(fig_err!("summary.csv has no `test` column"));
+    };
+    let rows: Vec<usize> = (0..summary.rows())
+        .filter(|&i| tests.cell(i) == test)
+        .collect();
+    let num = |col: &str, i: usize| {
+        summary
+            .column(col)
+            .and_then(|c| c.cell(i).parse::<f64>().ok())
+    };
+    let case_of = |i: usize| {
+        summary
+            .column("case")
+            .map(|c| c.cell(i))
+            .unwrap_or_default()
+    };
+    // (metric, recorded, per row band)
+    let mut panels: Vec<(&str, Option<f64>, Vec<Option<CaseBand>>)> = Vec::new();
+    for key in shipid_study::tables::METRIC_KEYS {
+        let bands: Vec<Option<CaseBand>> = rows
+            .iter()
+            .map(|&i| {
+                Some(CaseBand {
+                    lo: num(&format!("{key}_lo"), i)?,
+                    hi: num(&format!("{key}_hi"), i)?,
+                    predicted: num(&format!("{key}_predicted"), i),
+                    inside: summary.column(&format!("{key}_inside")).and_then(|c| {
+                        match c.cell(i).as_str() {
+                            "yes" => Some(true),
+                            "no" => Some(false),
+                            _ => None,
+                        }
+                    }),
+                })
+            })
+            .collect();
+        if bands.iter().any(Option::is_some) {
+            let recorded = rows
+                .iter()
+                .find_map(|&i| num(&format!("{key}_recorded"), i));
+            panels.push((key, recorded, bands));
+        }
+    }
+    if panels.is_empty() {
+        return Ok(false);
+    }
+    let level = study.bands.map_or(0.9, |b| b.level);
+    let n = rows.len();
+    let labels: Vec<String> = rows
+        .iter()
+        .map(|&i| {
+            let id = case_of(i);
+            study
+                .cases
+                .iter()
+                .find(|c| c.id == id)
+                .map_or(id, |c| case_label(study, c))
+        })
+        .collect();
+    let panel_height = 260u32;
+    let legend_height = 40 + 18 * n as u32;
+    let height = 50 + panel_height * panels.len() as u32 + legend_height;
+    let width = (420 + 70 * n as u32).clamp(800, 1800);
+    let root = SVGBackend::new(path, (width, height)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let (title_area, rest) = root.split_vertically(50);
+    title_area.draw(&Text::new(
+        format!(
+            "{test}: {:.0} % bootstrap band of each metric by case",
+            100.0 * level
+        ),
+        (15, 15),
+        (FONT, 18),
+    ))?;
+    let (plots, legend) = rest.split_vertically(panel_height * panels.len() as u32);
+    let areas = plots.split_evenly((panels.len(), 1));
+    for (area, (metric, recorded, bands)) in areas.iter().zip(&panels) {
+        let values = bands
+            .iter()
+            .flatten()
+            .flat_map(|b| [Some(b.lo), Some(b.hi), b.predicted])
+            .chain(std::iter::once(*recorded))
+            .flatten();
+        let (y_lo, y_hi) = range_of(values, 0.1);
+        let mut chart = ChartBuilder::on(area)
+            .margin(10)
+            .x_label_area_size(30)
+            .y_label_area_size(70)
+            .build_cartesian_2d(-0.5..(n as f64 - 0.5), y_lo..y_hi)?;
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .x_labels(n.max(1))
+            .x_label_formatter(&|x| format!("case {}", x.round() as i64 + 1))
+            .y_desc(format!("{metric} {}", metric_unit(metric)))
+            .axis_desc_style((FONT, 15))
+            .draw()?;
+        for (k, b) in bands.iter().enumerate() {
+            let Some(b) = b else { continue };
+            let x = k as f64;
+            let c = if b.inside == Some(false) {
+                RGBColor(214, 39, 40)
+            } else {
+                RGBColor(31, 119, 180)
+            };
+            chart.draw_series(std::iter::once(Rectangle::new(
+                [(x - 0.25, b.lo), (x + 0.25, b.hi)],
+                c.mix(0.3).filled(),
+            )))?;
+            chart.draw_series(std::iter::once(Rectangle::new(
+                [(x - 0.25, b.lo), (x + 0.25, b.hi)],
+                c.stroke_width(1),
+            )))?;
+            if let Some(p) = b.predicted {
+                chart.draw_series(std::iter::once(Circle::new((x, p), 4, c.filled())))?;
+            }
+        }
+        if let Some(v) = recorded {
+            chart.draw_series(LineSeries::new(
+                vec![(-0.5, *v), (n as f64 - 0.5, *v)],
+                BLACK.stroke_width(2),
+            ))?;
+        }
+    }
+    legend.draw(&Text::new(
+        "black line: recorded value; dot: point prediction; shaded: band (blue: record inside, red: outside)",
+        (20, 8),
+        (FONT, 14),
+    ))?;
+    for (k, label) in labels.iter().enumerate() {
+        legend.draw(&Text::new(
+            format!("case {}: {label}", k + 1),
+            (20, 30 + 18 * k as i32),
+            (FONT, 14),
+        ))?;
+    }
+    root.present()?;
+    Ok(true)
 }
 
 // ---------------------------------------------------------------------------------------------------

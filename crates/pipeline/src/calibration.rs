@@ -129,9 +129,12 @@ pub struct HeldOut {
 impl Calibration {
     /// The factor of `metric`'s family (1 for a metric of no family).
     pub fn factor(&self, metric: &str) -> f64 {
-        MetricFamily::of(metric)
-            .and_then(|f| self.factors.get(&f))
-            .map_or(1.0, |f| f.factor())
+        MetricFamily::of(metric).map_or(1.0, |f| self.factor_of(f))
+    }
+
+    /// The factor of a family (1 when it has none).
+    pub fn factor_of(&self, family: MetricFamily) -> f64 {
+        self.factors.get(&family).map_or(1.0, |f| f.factor())
     }
 }
 

@@ -481,37 +481,46 @@ fn median(xs: &mut [f64]) -> Option<f64> {
     })
 }
 
-/// Columns of the manoeuvre metrics (recorded, predicted, relative error), shown apart.
+/// Columns of the manoeuvre metrics (recorded, predicted, relative error, and a study's bands:
+/// lower and upper bound, record inside), shown apart.
 fn is_metric(name: &str) -> bool {
-    name.ends_with("_recorded") || name.ends_with("_predicted") || name.ends_with("_rel_error")
+    BAND_SUFFIXES
+        .iter()
+        .chain(&POINT_SUFFIXES)
+        .any(|suf| name.ends_with(suf))
 }
 
+const POINT_SUFFIXES: [&str; 3] = ["_recorded", "_predicted", "_rel_error"];
+/// Written only by studies with `bands`.
+const BAND_SUFFIXES: [&str; 3] = ["_lo", "_hi", "_inside"];
+
 /// The manoeuvre metrics of a case's tests, one row per test and metric with a value: recorded,
-/// predicted, relative error (columns `<metric>_recorded`, `_predicted`, `_rel_error`).
+/// predicted, relative error (columns `<metric>_recorded`, `_predicted`, `_rel_error`), and in a
+/// study with bands the band `[lo, hi]` and whether the record lies inside (`_lo`, `_hi`, `_inside`).
 fn metric_table(b: &mut String, csv: &Csv, rows: &[usize], metric_cols: &[usize]) {
     let mut metrics: Vec<&str> = Vec::new();
+    let mut banded = false;
     for &j in metric_cols {
         let h = csv.headers[j].as_str();
-        let m = h
-            .strip_suffix("_recorded")
-            .or_else(|| h.strip_suffix("_predicted"))
-            .or_else(|| h.strip_suffix("_rel_error"))
+        let m = POINT_SUFFIXES
+            .iter()
+            .chain(&BAND_SUFFIXES)
+            .find_map(|suf| h.strip_suffix(suf))
             .unwrap_or(h);
+        banded |= BAND_SUFFIXES.iter().any(|suf| h.ends_with(suf));
         if !metrics.contains(&m) {
             metrics.push(m);
         }
     }
     let test = csv.col("test");
+    let value = |i: usize, m: &str, suf: &str| {
+        csv.col(&format!("{m}{suf}"))
+            .map_or("", |j| csv.rows[i][j].as_str())
+    };
     let mut body = String::new();
     for &i in rows {
         for m in &metrics {
-            let v: Vec<&str> = ["_recorded", "_predicted", "_rel_error"]
-                .iter()
-                .map(|suf| {
-                    csv.col(&format!("{m}{suf}"))
-                        .map_or("", |j| csv.rows[i][j].as_str())
-                })
-                .collect();
+            let v: Vec<&str> = POINT_SUFFIXES.iter().map(|suf| value(i, m, suf)).collect();
             if v.iter().all(|x| x.trim().is_empty()) {
                 continue;
             }
@@ -524,6 +533,16 @@ fn metric_table(b: &mut String, csv: &Csv, rows: &[usize], metric_cols: &[usize]
             for x in v {
                 body.push_str(&cell(x));
             }
+            if banded {
+                let bound = |suf| value(i, m, suf).parse::<f64>().ok();
+                match (bound("_lo"), bound("_hi")) {
+                    (Some(lo), Some(hi)) => {
+                        let _ = write!(body, "<td class=\"n\">[{lo:.4}, {hi:.4}]</td>");
+                    }
+                    _ => body.push_str("<td></td>"),
+                }
+                let _ = write!(body, "<td>{}</td>", esc(value(i, m, "_inside")));
+            }
             body.push_str("</tr>");
         }
     }
@@ -532,8 +551,12 @@ fn metric_table(b: &mut String, csv: &Csv, rows: &[usize], metric_cols: &[usize]
     }
     b.push_str(
         "<h3>Manoeuvre metrics</h3><div class=\"tablewrap fit\"><table class=\"metrics narrow\"><thead><tr>\
-         <th>test</th><th>metric</th><th>recorded</th><th>predicted</th><th>rel. error</th></tr></thead><tbody>",
+         <th>test</th><th>metric</th><th>recorded</th><th>predicted</th><th>rel. error</th>",
     );
+    if banded {
+        b.push_str("<th>band</th><th>recorded inside</th>");
+    }
+    b.push_str("</tr></thead><tbody>");
     b.push_str(&body);
     b.push_str("</tbody></table></div>");
 }

@@ -50,8 +50,21 @@ pub const CASE_COLUMNS: [&str; 13] = [
 /// A markdown pivot of a summary table. `None`: [`DEFAULT_PIVOT`] with the case columns it needs
 /// added to its rows, so every case × test has its own cell. A given pivot is used as written and
 /// refused when it would put two cases in one cell (the error names them).
+///
+/// A value `<metric>_band` (a study with bands) shows each cell as `[lo, hi]` and whether the
+/// recorded value lies inside: one column made of `<metric>_lo`, `_hi` and `_inside`.
 pub fn summary_pivot(summary: &Table, pivot: Option<&str>) -> Result<String, TableError> {
     let mut p: Pivot = pivot.unwrap_or(DEFAULT_PIVOT).parse()?;
+    let with_band;
+    let summary = match band_cells(summary, &p.value) {
+        Some(column) => {
+            let mut t = summary.clone();
+            t.push_text(&p.value, column);
+            with_band = t;
+            &with_band
+        }
+        None => summary,
+    };
     if pivot.is_none() {
         p.rows = separated_rows(summary, &p)?;
     }
@@ -63,6 +76,35 @@ pub fn summary_pivot(summary: &Table, pivot: Option<&str>) -> Result<String, Tab
             format!("{x:.4}")
         }
     })
+}
+
+/// The cells of a `<metric>_band` value, when the summary has that metric's band columns and no
+/// column of that name: `[lo, hi] inside`, `[lo, hi] outside`, `[lo, hi]` without a recorded value,
+/// or empty without a band.
+fn band_cells(summary: &Table, value: &str) -> Option<Vec<String>> {
+    let metric = value.strip_suffix("_band")?;
+    if summary.column(value).is_some() {
+        return None;
+    }
+    let lo = summary.column(&format!("{metric}_lo"))?;
+    let hi = summary.column(&format!("{metric}_hi"))?;
+    let inside = summary.column(&format!("{metric}_inside"))?;
+    let number = |c: &shipid_tables::Column, i: usize| c.cell(i).parse::<f64>().ok();
+    Some(
+        (0..summary.rows())
+            .map(|i| match (number(lo, i), number(hi, i)) {
+                (Some(l), Some(h)) => {
+                    let side = match inside.cell(i).as_str() {
+                        "yes" => " inside",
+                        "no" => " outside",
+                        _ => "",
+                    };
+                    format!("[{l:.4}, {h:.4}]{side}")
+                }
+                _ => String::new(),
+            })
+            .collect(),
+    )
 }
 
 /// `pivot`'s rows with the case columns added that tell its cases apart: the set and the estimator

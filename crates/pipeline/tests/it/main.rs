@@ -1,5 +1,6 @@
 //! Integration tests of the pipeline crate: one test binary, one module per concern.
 
 mod bands;
+mod calibration;
 mod mmg;
 mod refine;

@@ -132,3 +132,196 @@ recordings = "all"
         "key `estimator[2].name`: unknown estimator `neural-net` (lsq, bounded-lsq, ridge, lasso, svr, sparse-gp)"
     );
 }
+
+const ONE_CASE: &str = r#"
+name = "with_bands"
+sets = ["reduced32"]
+[training]
+recordings = [["zz35_35_ps.csv"]]
+[[estimator]]
+name = "lsq"
+[test]
+recordings = ["zz20_20_ps.csv", "tc35_sb.csv"]
+"#;
+
+/// One concern: what the `bands` and `bootstrap` keys become (or the first fault they give).
+fn check_bands(keys: &str, expected: Result<Option<(f64, usize)>, &str>) {
+    let (_dir, path) = study_file(&format!("{keys}\n{ONE_CASE}"));
+    let got = load_study(&path)
+        .map(|s| s.bands.map(|b| (b.level, b.replicates)))
+        .map_err(|e| {
+            e.to_string()
+                .split_once(": ")
+                .map(|(_, rest)| rest.to_string())
+                .unwrap()
+        });
+    match expected {
+        Ok(v) => assert_eq!(got.ok(), Some(v), "keys {keys:?}"),
+        Err(msg) => assert_eq!(got.err().as_deref(), Some(msg), "keys {keys:?}"),
+    }
+}
+
+#[test]
+fn bands_and_bootstrap_go_together_and_are_checked() {
+    check_bands("", Ok(None));
+    check_bands("bands = 0.9\nbootstrap = 200", Ok(Some((0.9, 200))));
+    check_bands(
+        "bands = 0.9",
+        Err(
+            "key `bootstrap`: missing: bands need replicates to take percentiles of (e.g. bootstrap = 200)",
+        ),
+    );
+    check_bands(
+        "bootstrap = 200",
+        Err(
+            "key `bands`: missing: bootstrap replicates are only used for bands (e.g. bands = 0.9)",
+        ),
+    );
+    check_bands(
+        "bands = 0.0\nbootstrap = 200",
+        Err("key `bands`: 0 is not a level strictly between 0 and 1 (e.g. 0.9 for a 90 % band)"),
+    );
+    check_bands(
+        "bands = nan\nbootstrap = 200",
+        Err("key `bands`: NaN is not a level strictly between 0 and 1 (e.g. 0.9 for a 90 % band)"),
+    );
+    check_bands(
+        "bands = 0.9\nbootstrap = 10001",
+        Err("key `bootstrap`: 10001 replicates: give between 2 and 10000"),
+    );
+    check_bands(
+        "bands = 0.9\nbootstrap = -1",
+        Err("key `bootstrap`: -1 replicates: give between 2 and 10000"),
+    );
+}
+
+/// A result of `study`'s one case whose ZZ20 test has an overshoot band that misses the record and
+/// one that holds it.
+fn banded_results(study: &shipid_study::Study) -> Vec<shipid_study::CaseResult> {
+    use shipid_study::runner::{MetricBandRow, TestRow, TestStatus};
+    let row = |test: &str, bands: Vec<(&str, MetricBandRow)>| TestRow {
+        test: test.into(),
+        kind: "zigzag".into(),
+        status: TestStatus::Ok,
+        diverged_at_s: None,
+        replay_status: TestStatus::Ok,
+        position_rmse_over_l: 0.0,
+        heading_rmse_deg: 0.0,
+        u_rmse_m_s: 0.0,
+        v_rmse_m_s: 0.0,
+        r_rmse_deg_s: 0.0,
+        recorded: Default::default(),
+        predicted: None,
+        relative_error: Default::default(),
+        mrae: Some(0.1),
+        outside_identification_range: None,
+        bands: bands.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
+    };
+    study
+        .cases
+        .iter()
+        .map(|c| shipid_study::CaseResult {
+            case_id: c.id.clone(),
+            status: shipid_study::CaseStatus::Ok,
+            message: None,
+            fit_time_s: Some(0.0),
+            samples: 1,
+            dofs: vec![],
+            coefficients: vec![],
+            vif: vec![],
+            tests: vec![
+                row(
+                    "zz20_20_ps.csv",
+                    vec![
+                        (
+                            "overshoot_1",
+                            MetricBandRow::Band {
+                                lo: 2.5,
+                                hi: 11.25,
+                                inside: Some(false),
+                            },
+                        ),
+                        (
+                            "overshoot_2",
+                            MetricBandRow::Band {
+                                lo: 3.5,
+                                hi: 14.0,
+                                inside: Some(true),
+                            },
+                        ),
+                    ],
+                ),
+                row(
+                    "tc35_sb.csv",
+                    vec![(
+                        "advance",
+                        MetricBandRow::NoBand {
+                            reason: "11 finite replicate values of 20".into(),
+                        },
+                    )],
+                ),
+            ],
+        })
+        .collect()
+}
+
+#[test]
+fn a_study_with_bands_has_lo_hi_inside_columns_and_one_without_has_none() {
+    use shipid_study::tables::{summary_pivot, summary_table};
+    let (_dir, path) = study_file(&format!("bands = 0.9\nbootstrap = 20\n{ONE_CASE}"));
+    let study = load_study(&path).unwrap();
+    let t = summary_table(&study, &banded_results(&study));
+    let text = |name: &str| -> Vec<String> {
+        let c = t.column(name).unwrap_or_else(|| panic!("no column {name}"));
+        (0..t.rows()).map(|i| c.cell(i)).collect()
+    };
+    assert_eq!(text("overshoot_1_lo"), ["2.5", ""]);
+    assert_eq!(text("overshoot_1_hi"), ["11.25", ""]);
+    assert_eq!(text("overshoot_1_inside"), ["no", ""]);
+    assert_eq!(text("overshoot_2_inside"), ["yes", ""]);
+    // No band: no bounds and no verdict, not a zero-width band.
+    assert_eq!(text("advance_lo"), ["", ""]);
+    assert_eq!(text("advance_inside"), ["", ""]);
+
+    let md = summary_pivot(&t, Some("window,test,overshoot_1_band")).unwrap();
+    assert!(
+        md.contains("| whole | [2.5000, 11.2500] outside |  |"),
+        "{md}"
+    );
+    let md = summary_pivot(&t, Some("window,test,overshoot_2_inside")).unwrap();
+    assert!(md.contains("| whole | yes |  |"), "{md}");
+
+    // The same study without the keys: the summary's columns are those of every earlier run.
+    let (_dir2, plain) = study_file(ONE_CASE);
+    let plain = load_study(&plain).unwrap();
+    let t = summary_table(&plain, &banded_results(&plain));
+    assert!(
+        t.columns
+            .iter()
+            .all(|(n, _)| !n.ends_with("_lo") && !n.ends_with("_hi") && !n.ends_with("_inside"))
+    );
+}
+
+#[test]
+fn a_band_pivot_that_would_merge_two_cases_is_refused_naming_them() {
+    use shipid_study::tables::{summary_pivot, summary_table};
+    let two_sets = ONE_CASE.replace(
+        r#"sets = ["reduced32"]"#,
+        r#"sets = ["reduced32", "full68"]"#,
+    );
+    let (_dir, path) = study_file(&format!("bands = 0.9\nbootstrap = 20\n{two_sets}"));
+    let study = load_study(&path).unwrap();
+    let t = summary_table(&study, &banded_results(&study));
+    let err = summary_pivot(&t, Some("window,test,overshoot_1_band"))
+        .unwrap_err()
+        .to_string();
+    for c in &study.cases {
+        assert!(err.contains(&c.id), "{err} names {}", c.id);
+    }
+    // The default pivot separates them by set.
+    let md = summary_pivot(&t, None).unwrap();
+    assert!(
+        md.contains("| reduced32 / whole |") && md.contains("| full68 / whole |"),
+        "{md}"
+    );
+}
