@@ -487,3 +487,92 @@ fn nonlinear_hull_priors_come_from_the_yoshimura_masumoto_regression() {
     check_hull_prior("y_rrr", (0.0, 0.1), ym);
     check_hull_prior("x_vr", (0.0, 0.2), "no empirical estimate");
 }
+
+/// A hull term's physical bounds on the default data's KVLCC2.
+fn check_hull_bounds(name: &str, expected: (f64, f64)) {
+    let ds = default_data();
+    let specs = priors(
+        &ds.ship,
+        &MmgGeometry::kvlcc2_model_scale(),
+        &ds.added_mass.unwrap(),
+    );
+    let s = specs.iter().find(|s| s.name == name).unwrap();
+    assert_eq!((s.lower, s.upper), expected, "{name}");
+    assert!(
+        s.prior >= s.lower && s.prior <= s.upper,
+        "{name}: prior {} outside its bounds",
+        s.prior
+    );
+}
+
+#[test]
+fn cubic_damping_terms_keep_the_sign_of_the_cross_flow_drag() {
+    let inf = f64::INFINITY;
+    for name in ["y_vvv", "y_vrr", "n_vvv", "n_vvr", "n_rrr"] {
+        check_hull_bounds(name, (-inf, 0.0));
+    }
+    // Fore-and-aft asymmetry terms: the sources disagree on their sign.
+    for name in ["y_vvr", "y_rrr", "n_vrr"] {
+        check_hull_bounds(name, (-inf, inf));
+    }
+}
+
+/// Cubic-form coefficients [v, r, vvv, vvr, vrr, rrr] of the cross-flow drag (C_D = 1) of a hull of
+/// uniform draft, −∫ w|w| dξ (sway force) and −∫ ξ w|w| dξ (yaw moment) with w = v' + ξ r', fitted by
+/// least squares on a grid over |v'| ≤ 0.4, |r'| ≤ 1.
+fn cross_flow_projection() -> [[f64; 6]; 2] {
+    let basis = |v: f64, r: f64| [v, r, v * v * v, v * v * r, v * r * r, r * r * r];
+    let mut out = [[0.0; 6]; 2];
+    for (dof, coefficients) in out.iter_mut().enumerate() {
+        let mut normal = vec![vec![0.0; 6]; 6];
+        let mut rhs = vec![0.0; 6];
+        for i in 0..25 {
+            for j in 0..25 {
+                let v = 0.4 * (i as f64 / 12.0 - 1.0);
+                let r = j as f64 / 12.0 - 1.0;
+                let force: f64 = (0..200)
+                    .map(|k| {
+                        let xi = -0.5 + (k as f64 + 0.5) / 200.0;
+                        let w = v + xi * r;
+                        -w * w.abs() * if dof == 0 { 1.0 } else { xi } / 200.0
+                    })
+                    .sum();
+                let phi = basis(v, r);
+                for a in 0..6 {
+                    rhs[a] += phi[a] * force;
+                    for b in 0..6 {
+                        normal[a][b] += phi[a] * phi[b];
+                    }
+                }
+            }
+        }
+        let solved = shipid_pipeline::lm::solve_small(&normal, &rhs).unwrap();
+        coefficients.copy_from_slice(&solved);
+    }
+    out
+}
+
+#[test]
+fn the_cross_flow_drag_signs_the_bounded_cubic_terms() {
+    let [y, n] = cross_flow_projection();
+    // The values quoted where the bounds are set (crates/pipeline/src/mmg/priors.rs).
+    for (name, got, expected) in [
+        ("y_vvv", y[2], -1.22),
+        ("y_vrr", y[4], -0.26),
+        ("n_vvr", n[3], -0.27),
+        ("n_rrr", n[5], -0.010),
+    ] {
+        assert!(
+            got < 0.0 && (got - expected).abs() < 0.01,
+            "{name}: {got}, expected {expected}"
+        );
+    }
+    for (name, got) in [
+        ("n_vvv", n[2]),
+        ("y_vvr", y[3]),
+        ("y_rrr", y[5]),
+        ("n_vrr", n[4]),
+    ] {
+        assert!(got.abs() < 1e-9, "{name}: {got}, expected 0");
+    }
+}
