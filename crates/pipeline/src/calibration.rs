@@ -12,13 +12,16 @@
 //!    training data. A regression's prediction variance at a state grows with that state's leverage
 //!    h(x); averaged over the run, the half-width is scaled by √(mean of max(1, h/h_max)), 1 inside
 //!    the range.
-//! 3. **Held-out inflation** ([`leave_one_recording_out`]): each training recording in turn is left
-//!    out, the ensemble refitted on the others, and its recorded metrics compared with their bands:
-//!    the error in units of the band's half-width and reach, `z = |value − centre| / (half-width ·
-//!    reach)`. The inflation factor of a metric family is the `level` quantile of its z (at least 1:
-//!    a few held-out values must not narrow a band below what the replicates give). A family with
-//!    fewer than [`MIN_HELD_OUT`] values takes the factor of all families together; with one training
-//!    recording there is nothing to hold out and the band is not inflated ([`FamilyFactor::TooFew`]).
+//! 3. **Inflation from the training recordings** ([`calibrate_ensemble`]): every training recording
+//!    is re-simulated from its recorded start by the ensemble fitted to all of them (in sample), and
+//!    — when there are two or more — by the ensemble refitted without it (held out). Each recorded
+//!    metric's error is counted in units of its band's half-width and reach, `z = |value − centre| /
+//!    (half-width · reach)`. The inflation factor of a metric family is the `level` quantile of its z
+//!    (at least 1: a few small errors must not narrow a band below what the replicates give). A
+//!    family with fewer than [`MIN_ERRORS`] values takes the factor of all families together; with
+//!    none at all the band is not inflated ([`FamilyFactor::TooFew`]). In-sample errors say what the
+//!    bands miss even where the data are (equation-error bias from noisy states, the structure's
+//!    misfit); held-out ones what they miss on a manoeuvre the fit did not see.
 //!
 //! The widened band is centre ± factor · reach · half-width. No I/O.
 
@@ -40,8 +43,8 @@ use crate::fit::{EstimatorSpec, WindowSpec, fit_dataset};
 use crate::simulate::{simulate_manoeuvre, simulate_on_grid};
 use crate::validate::closed_loop;
 
-/// Fewest held-out values of a family for a factor of its own (below, the families' pooled one).
-pub const MIN_HELD_OUT: usize = 3;
+/// Fewest errors of a family for a factor of its own (below, the families' pooled one).
+pub const MIN_ERRORS: usize = 3;
 
 /// Metrics whose errors behave alike: the same unit and the same part of the manoeuvre.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
@@ -87,12 +90,12 @@ impl MetricFamily {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case", tag = "outcome")]
 pub enum FamilyFactor {
-    /// From `held_out` values of this family.
-    Own { factor: f64, held_out: usize },
-    /// Too few of its own: the factor of all families' `held_out` values together.
-    Pooled { factor: f64, held_out: usize },
-    /// Too few held-out values at all (one training recording): no inflation.
-    TooFew { held_out: usize },
+    /// From `errors` values of this family.
+    Own { factor: f64, errors: usize },
+    /// Too few of its own: the factor of all families' `errors` values together.
+    Pooled { factor: f64, errors: usize },
+    /// Too few errors at all: no inflation.
+    TooFew { errors: usize },
 }
 
 impl FamilyFactor {
@@ -112,14 +115,16 @@ pub struct Calibration {
     /// Training recordings left out in turn (0 with a single one).
     pub folds: usize,
     pub factors: BTreeMap<MetricFamily, FamilyFactor>,
-    /// The held-out errors the factors come from, in fold order.
-    pub held_out: Vec<HeldOut>,
+    /// The errors the factors come from: in sample, then held out in fold order.
+    pub errors: Vec<BandError>,
 }
 
-/// One held-out metric's error in units of its band ([`standardised_error`]).
+/// One metric's error in units of its band ([`standardised_error`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct HeldOut {
+pub struct BandError {
     pub family: MetricFamily,
+    /// Whether the recording was left out of the fit (false: predicted by the ensemble fitted to it).
+    pub held_out: bool,
     /// |value − centre| / (half-width · reach).
     pub z: f64,
     /// The reach of the held-out prediction ([`reach`]).
@@ -150,9 +155,9 @@ fn factor_of(mut z: Vec<f64>, level: f64) -> f64 {
     quantile(&z, level).max(1.0)
 }
 
-/// The factors of held-out standardised errors `z` at `level`; `folds` recordings held out.
-pub fn calibrate(z: &[HeldOut], level: f64, folds: usize) -> Calibration {
-    let finite: Vec<HeldOut> = z.iter().copied().filter(|h| h.z.is_finite()).collect();
+/// The factors of standardised errors `z` at `level`; `folds` recordings held out.
+pub fn calibrate(z: &[BandError], level: f64, folds: usize) -> Calibration {
+    let finite: Vec<BandError> = z.iter().copied().filter(|h| h.z.is_finite()).collect();
     let all: Vec<f64> = finite.iter().map(|h| h.z).collect();
     let factors = MetricFamily::ALL
         .iter()
@@ -162,20 +167,18 @@ pub fn calibrate(z: &[HeldOut], level: f64, folds: usize) -> Calibration {
                 .filter(|h| h.family == fam)
                 .map(|h| h.z)
                 .collect();
-            let factor = if own.len() >= MIN_HELD_OUT {
+            let factor = if own.len() >= MIN_ERRORS {
                 FamilyFactor::Own {
-                    held_out: own.len(),
+                    errors: own.len(),
                     factor: factor_of(own, level),
                 }
-            } else if all.len() >= MIN_HELD_OUT {
+            } else if all.len() >= MIN_ERRORS {
                 FamilyFactor::Pooled {
-                    held_out: all.len(),
+                    errors: all.len(),
                     factor: factor_of(all.clone(), level),
                 }
             } else {
-                FamilyFactor::TooFew {
-                    held_out: all.len(),
-                }
+                FamilyFactor::TooFew { errors: all.len() }
             };
             (fam, factor)
         })
@@ -184,7 +187,7 @@ pub fn calibrate(z: &[HeldOut], level: f64, folds: usize) -> Calibration {
         level,
         folds,
         factors,
-        held_out: finite,
+        errors: finite,
     }
 }
 
@@ -296,9 +299,85 @@ pub fn ensemble_bands(
     Ok((bands, reach))
 }
 
-/// Leave each of `recordings` out in turn, fit the ensemble on the rest, and calibrate on the
-/// standardised errors of the left-out recording's metrics ([`calibrate`]).
-pub fn leave_one_recording_out(
+/// The errors of the ensemble `e` on `recordings` (its own training recordings, or a held-out one),
+/// each re-simulated from its recorded start: what the bands miss even where the data are. With a
+/// single training recording these are the only errors to calibrate on.
+pub fn in_sample_errors(
+    e: &Ensemble,
+    ds: &Dataset,
+    recordings: &[String],
+    level: f64,
+) -> Result<Vec<BandError>, PipelineError> {
+    let mut z = Vec::new();
+    for name in recordings {
+        let r = ds
+            .recording(name)
+            .ok_or_else(|| bad_input(format!("no recording `{name}` in the data set")))?;
+        if matches!(r.manoeuvre, Manoeuvre::Free) {
+            continue;
+        }
+        let (bands, reach) =
+            ensemble_bands(e, &r.manoeuvre, &ds.ship, level, BandRun::Recording(r))?;
+        let recorded = metrics(&r.recording, &r.manoeuvre, &ds.ship);
+        for (b, (_, value)) in bands.metrics.iter().zip(recorded.entries()) {
+            let (Ok(band), Some(value), Some(family)) =
+                (&b.band, value, MetricFamily::of(b.metric))
+            else {
+                continue;
+            };
+            if let Some(v) = standardised_error(band, value, reach) {
+                z.push(BandError {
+                    family,
+                    held_out: false,
+                    z: v,
+                    reach,
+                });
+            }
+        }
+    }
+    Ok(z)
+}
+
+/// Leave each of `recordings` out in turn, fit the ensemble of `sets` on the rest, and give the
+/// errors of the left-out recording's metrics (none with a single recording).
+pub fn held_out_errors(
+    ds: &Dataset,
+    sets: &[CoefficientSet],
+    spec: &EstimatorSpec,
+    recordings: &[String],
+    replicates: usize,
+    seed: u64,
+    level: f64,
+) -> Result<Vec<BandError>, PipelineError> {
+    let mut z = Vec::new();
+    if recordings.len() < 2 {
+        return Ok(z);
+    }
+    for (i, left) in recordings.iter().enumerate() {
+        let rest: Vec<String> = recordings
+            .iter()
+            .enumerate()
+            .filter(|&(j, _)| j != i)
+            .map(|(_, r)| r.clone())
+            .collect();
+        let e = fit_ensemble(ds, sets, spec, &rest, replicates, seed)?;
+        z.extend(
+            in_sample_errors(&e, ds, std::slice::from_ref(left), level)?
+                .into_iter()
+                .map(|b| BandError {
+                    held_out: true,
+                    ..b
+                }),
+        );
+    }
+    Ok(z)
+}
+
+/// The calibration of the ensemble `e`, fitted with `sets` and `spec` to `recordings` of `ds`: the
+/// factors of its errors on its own recordings and of the held-out errors ([`calibrate`]).
+#[allow(clippy::too_many_arguments)]
+pub fn calibrate_ensemble(
+    e: &Ensemble,
     ds: &Dataset,
     sets: &[CoefficientSet],
     spec: &EstimatorSpec,
@@ -307,40 +386,14 @@ pub fn leave_one_recording_out(
     seed: u64,
     level: f64,
 ) -> Result<Calibration, PipelineError> {
-    if recordings.len() < 2 {
-        return Ok(calibrate(&[], level, 0));
-    }
-    let mut z = Vec::new();
-    for (i, left) in recordings.iter().enumerate() {
-        let rest: Vec<String> = recordings
-            .iter()
-            .enumerate()
-            .filter(|&(j, _)| j != i)
-            .map(|(_, r)| r.clone())
-            .collect();
-        let r = ds
-            .recording(left)
-            .ok_or_else(|| bad_input(format!("no recording `{left}` in the data set")))?;
-        if matches!(r.manoeuvre, Manoeuvre::Free) {
-            continue;
-        }
-        let e = fit_ensemble(ds, sets, spec, &rest, replicates, seed)?;
-        let (bands, reach) =
-            ensemble_bands(&e, &r.manoeuvre, &ds.ship, level, BandRun::Recording(r))?;
-        let recorded = metrics(&r.recording, &r.manoeuvre, &ds.ship);
-        for (b, (_, value)) in bands.metrics.iter().zip(recorded.entries()) {
-            let (Ok(band), Some(value), Some(fam)) = (&b.band, value, MetricFamily::of(b.metric))
-            else {
-                continue;
-            };
-            if let Some(v) = standardised_error(band, value, reach) {
-                z.push(HeldOut {
-                    family: fam,
-                    z: v,
-                    reach,
-                });
-            }
-        }
-    }
-    Ok(calibrate(&z, level, recordings.len()))
+    let mut z = in_sample_errors(e, ds, recordings, level)?;
+    z.extend(held_out_errors(
+        ds, sets, spec, recordings, replicates, seed, level,
+    )?);
+    let folds = if recordings.len() < 2 {
+        0
+    } else {
+        recordings.len()
+    };
+    Ok(calibrate(&z, level, folds))
 }

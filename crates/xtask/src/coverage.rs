@@ -23,7 +23,7 @@ use shipid_io::Manoeuvre;
 use shipid_model::CoefficientSet;
 use shipid_pipeline::bands::BandRun;
 use shipid_pipeline::calibration::{
-    MetricFamily, ensemble_bands, fit_ensemble, leave_one_recording_out, widen,
+    MetricFamily, calibrate_ensemble, ensemble_bands, fit_ensemble, widen,
 };
 use shipid_pipeline::fit::EstimatorSpec;
 use shipid_pipeline::generate::{default_manoeuvres, generate_manoeuvres};
@@ -105,9 +105,17 @@ pub fn run(
             let context = || format!("seed {seed}, {set_name}");
             let ensemble = fit_ensemble(&noisy, &sets, &spec, &recordings, replicates, seed)
                 .with_context(context)?;
-            let calibration =
-                leave_one_recording_out(&noisy, &sets, &spec, &recordings, replicates, seed, level)
-                    .with_context(context)?;
+            let calibration = calibrate_ensemble(
+                &ensemble,
+                &noisy,
+                &sets,
+                &spec,
+                &recordings,
+                replicates,
+                seed,
+                level,
+            )
+            .with_context(context)?;
             for (r, (file, true_metrics)) in truth_data.recordings.iter().zip(&truth) {
                 let (bands, reach) =
                     ensemble_bands(&ensemble, &r.manoeuvre, &ship, level, BandRun::Standard)?;
@@ -184,7 +192,8 @@ pub fn run(
         "Nominal {:.0} % bands, {} ridge (λ tuned), {replicates} block-bootstrap replicates pooled \
          over the structures, seeds 1–{seeds}; truth: the noise-free MMG reference. Each cell: \
          measured coverage (inside/total; 95 % Wilson interval in %). raw: the pooled percentiles; \
-         calibrated: widened by the leave-one-recording-out factor and the reach.\n",
+         calibrated: widened by the factor of the training recordings' errors (in sample and \
+         left out) and the reach.\n",
         100.0 * level,
         structures.join(" + ")
     )?;
