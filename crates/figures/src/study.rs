@@ -891,6 +891,9 @@ struct CaseBand {
     inside: Option<bool>,
 }
 
+/// One metric of a test: its key, the recorded value, and each case's band (None: no band).
+type BandPanel = (&'static str, Option<f64>, Vec<Option<CaseBand>>);
+
 /// The unit of a metric as the summary gives it.
 fn metric_unit(metric: &str) -> &'static str {
     match metric {
@@ -920,8 +923,7 @@ fn metric_bands(path: &Path, study: &Study, summary: &Table, test: &str) -> Resu
             .map(|c| c.cell(i))
             .unwrap_or_default()
     };
-    // (metric, recorded, per row band)
-    let mut panels: Vec<(&str, Option<f64>, Vec<Option<CaseBand>>)> = Vec::new();
+    let mut panels: Vec<BandPanel> = Vec::new();
     for key in shipid_study::tables::METRIC_KEYS {
         let bands: Vec<Option<CaseBand>> = rows
             .iter()
