@@ -233,3 +233,26 @@ fn a_case_whose_fit_failed_has_its_row_and_no_tests() {
     );
     assert!(html.contains("singular &lt;design&gt;"));
 }
+
+#[test]
+fn a_study_with_bands_shows_each_metrics_band_and_whether_the_record_is_inside() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(
+        dir.path().join("summary.csv"),
+        "case,set,case_status,fit_time_s,test,status,position_rmse_over_l,\
+         overshoot_1_recorded,overshoot_1_predicted,overshoot_1_rel_error,\
+         overshoot_1_lo,overshoot_1_hi,overshoot_1_inside\n\
+         c1,reduced32,ok,0.5,zz20_20_ps.csv,ok,0.25,13.5,10.75,-0.2,2.5,11.25,no\n",
+    )
+    .unwrap();
+    let html = study_page(dir.path(), &RunMeta::default()).unwrap();
+    assert!(
+        html.contains("<th>band</th><th>recorded inside</th>"),
+        "{html}"
+    );
+    assert!(html.contains("[2.5000, 11.2500]</td><td>no</td>"));
+    // The band columns are shown in the metric table, not again among the test's other columns.
+    assert!(!html.contains(">overshoot_1_lo<"));
+    // A study without bands keeps its metric table as it was.
+    assert!(!page().contains("<th>band</th>"));
+}
