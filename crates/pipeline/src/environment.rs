@@ -265,3 +265,73 @@ pub fn environment_notes<'a>(
     }
     notes
 }
+
+/// How deep `base = …` chains of augmented model files are followed for their `[environment]`.
+const MAX_BASE_DEPTH: usize = 8;
+
+/// The `[environment]` a model file records (an augmented file's base's, when it has none of its
+/// own); `None` for `mmg:…`, a file without one, or one that cannot be read (the loader names that
+/// fault).
+pub fn model_environment(spec: &str) -> Option<EnvironmentRecord> {
+    let mut path = std::path::PathBuf::from(spec);
+    for _ in 0..MAX_BASE_DEPTH {
+        if spec.starts_with("mmg:") || !path.is_file() {
+            return None;
+        }
+        let table = toml::from_str::<toml::Table>(&std::fs::read_to_string(&path).ok()?).ok()?;
+        if let Some(env) = table.get("environment") {
+            return env.clone().try_into().ok();
+        }
+        // Relative to the file that names it, as the loader resolves it.
+        let base = table.get("base")?.as_str()?;
+        path = match path.parent() {
+            Some(dir) if !dir.as_os_str().is_empty() => dir.join(base),
+            _ => std::path::PathBuf::from(base),
+        };
+    }
+    None
+}
+
+/// `[environment]` as TOML text, to append to a model file whose own format has no such table (the
+/// mmg and sparse-GP files); the loaders read it apart ([`model_environment`]) and give the rest to
+/// the format's reader ([`without_environment_table`]).
+pub fn environment_table_text(record: &EnvironmentRecord) -> Result<String, PipelineError> {
+    let mut table = toml::Table::new();
+    table.insert(
+        "environment".into(),
+        toml::Value::try_from(record).map_err(crate::error::failed)?,
+    );
+    let text = toml::to_string(&table).map_err(crate::error::failed)?;
+    Ok(format!(
+        "\n# The recorded wind and current removed from the training recordings before identification (issue 27).\n{text}"
+    ))
+}
+
+/// `text` with its `[environment]` table (and sub-tables) blanked line by line, so that a reader of a
+/// format without it sees the rest with every line where it was (its error messages name the right
+/// line).
+pub fn without_environment_table(text: &str) -> String {
+    let header = |line: &str| {
+        let l = line.trim();
+        let name = l
+            .strip_prefix("[[")
+            .and_then(|x| x.strip_suffix("]]"))
+            .or_else(|| l.strip_prefix('[').and_then(|x| x.strip_suffix(']')));
+        name.map(|n| n.trim().to_string())
+    };
+    let mut inside = false;
+    let mut out = String::with_capacity(text.len());
+    for line in text.split_inclusive('\n') {
+        if let Some(name) = header(line) {
+            inside = name == "environment" || name.starts_with("environment.");
+        }
+        if inside {
+            if line.ends_with('\n') {
+                out.push('\n');
+            }
+        } else {
+            out.push_str(line);
+        }
+    }
+    out
+}

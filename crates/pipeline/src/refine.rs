@@ -26,20 +26,21 @@
 //! other recordings to show.
 
 use rayon::prelude::*;
-use shipid_io::{Recording, deriv::accelerations_or_estimate};
+use shipid_io::{Recording, Windage, deriv::accelerations_or_estimate};
 use shipid_model::{AbkowitzModel, Refinement};
-use shipid_sim::AbkowitzDynamics;
-use shipid_sim::dynamics::{FiniteDifferences, Parametric, State};
+use shipid_sim::dynamics::{FiniteDifferences, MassMatrix, Parametric, State};
+use shipid_sim::environment::assumed_windage;
+use shipid_sim::{AbkowitzDynamics, KnownEnvironment};
 
 use crate::lm::{LmPoint, Normal, lm_step_normal};
 use crate::replay::{
-    SegmentSensitivities, differentiator_margin, replay_segment, replay_segment_sensitivities,
-    segments,
+    SegmentSensitivities, differentiator_margin, replay_segment_in,
+    replay_segment_sensitivities_in, segments,
 };
 use crate::validate::interp;
 
 /// Tunables of the refinement.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct RefineOptions {
     /// Segment length ÷ (L/U0); the same horizon as the diagnosis scores models with.
     pub horizon_l_over_u0: f64,
@@ -49,6 +50,19 @@ pub struct RefineOptions {
     pub max_samples_per_recording: usize,
     /// Stop when an iteration lowers the cost by less than this fraction.
     pub tolerance: f64,
+    /// Windage of the recordings' recorded wind (the data set's `[windage]`); `None`: assumed
+    /// ([`assumed_windage`]). Recordings without a recorded wind do not use it.
+    pub windage: Option<Windage>,
+}
+
+impl RefineOptions {
+    /// The defaults with the windage of `ds` (its `[windage]`, else assumed).
+    pub fn for_dataset(ds: &shipid_io::Dataset) -> RefineOptions {
+        RefineOptions {
+            windage: ds.windage.clone(),
+            ..RefineOptions::default()
+        }
+    }
 }
 
 impl Default for RefineOptions {
@@ -58,6 +72,7 @@ impl Default for RefineOptions {
             max_iterations: 25,
             max_samples_per_recording: 400,
             tolerance: 1e-4,
+            windage: None,
         }
     }
 }
@@ -66,6 +81,8 @@ impl Default for RefineOptions {
 #[derive(Debug, Clone, PartialEq)]
 pub enum RefineError {
     NoSegments,
+    /// A recording's recorded wind or current cannot be used.
+    Environment(String),
 }
 
 impl std::fmt::Display for RefineError {
@@ -77,6 +94,7 @@ impl std::fmt::Display for RefineError {
                     "no training recording is long enough for a replay segment"
                 )
             }
+            RefineError::Environment(why) => write!(f, "recorded environment: {why}"),
         }
     }
 }
@@ -125,6 +143,10 @@ struct Problem<'a, P> {
     w_oe: f64,
     w_ee: [f64; 3],
     recordings: &'a [Recording],
+    /// Each recording's known wind and current (`None`: calm), felt by its replays.
+    environments: Vec<Option<KnownEnvironment>>,
+    /// The recordings with velocities through the water: the states of the equation errors.
+    hydrodynamic: Vec<Recording>,
     segments: Vec<Segment>,
     stride: Vec<usize>,
     lpp: f64,
@@ -149,8 +171,10 @@ impl<P: Parametric> Problem<'_, P> {
         (seg.a..seg.b).filter(move |i| (i - a) % stride == 0)
     }
 
+    /// The state through the water at sample `i` of recording `k` (what the model's hydrodynamics
+    /// see).
     fn state(&self, k: usize, i: usize) -> State {
-        State::of_recording(&self.recordings[k], i)
+        State::of_recording(&self.hydrodynamic[k], i)
     }
 
     /// Equation-error residuals [m/s², m/s², rad/s²] (unweighted) at the thinned samples.
@@ -198,7 +222,8 @@ impl<P: Parametric> Problem<'_, P> {
             .par_iter()
             .map(|seg| {
                 let rec = &self.recordings[seg.recording];
-                let sim = model.map(|m| replay_segment(m, rec, seg.a, seg.b).0);
+                let env = self.environments[seg.recording].as_ref();
+                let sim = model.map(|m| replay_segment_in(m, env, rec, seg.a, seg.b).0);
                 let t0 = rec.t[seg.a];
                 let mut out = Vec::new();
                 for i in self.compared(seg) {
@@ -272,7 +297,8 @@ impl<P: Parametric> Problem<'_, P> {
         let n = self.free.len();
         let lpp = self.lpp;
         let rec = &self.recordings[seg.recording];
-        let sens = replay_segment_sensitivities(model, rec, seg.a, seg.b, &self.free);
+        let env = self.environments[seg.recording].as_ref();
+        let sens = replay_segment_sensitivities_in(model, env, rec, seg.a, seg.b, &self.free);
         let t0 = rec.t[seg.a];
         let scale = [1.0 / lpp, 1.0 / lpp, 1.0];
         let mut rows = Vec::new();
@@ -398,13 +424,30 @@ fn problem<'a, P: Parametric>(
     if segments.is_empty() {
         return Err(RefineError::NoSegments);
     }
+    let windage = opts
+        .windage
+        .clone()
+        .unwrap_or_else(|| assumed_windage(&ship));
+    let environments = recordings
+        .iter()
+        .map(|rec| KnownEnvironment::of_recording(rec, Some(&windage), &ship))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| RefineError::Environment(e.to_string()))?;
+    let hydrodynamic: Vec<Recording> = recordings
+        .iter()
+        .zip(&environments)
+        .map(|(rec, env)| match env {
+            Some(env) => env.water_relative(rec),
+            None => rec.clone(),
+        })
+        .collect();
     // One thinning per recording for the compared replay samples, the equation errors and the units.
     let stride: Vec<usize> = recordings
         .iter()
         .map(|r| r.len().div_ceil(opts.max_samples_per_recording).max(1))
         .collect();
     let mut states = Vec::new();
-    for (rec, &step) in recordings.iter().zip(&stride) {
+    for (rec, &step) in hydrodynamic.iter().zip(&stride) {
         for i in (0..rec.len()).step_by(step) {
             states.push((State::of_recording(rec, i), rec.delta[i]));
         }
@@ -416,12 +459,30 @@ fn problem<'a, P: Parametric>(
         .filter_map(|(j, unit)| Some((j, unit?)))
         .collect();
     let mut ee = Vec::new();
-    for (k, rec) in recordings.iter().enumerate() {
+    let mass = MassMatrix::new(&ship, start.added_mass());
+    for (k, rec) in hydrodynamic.iter().enumerate() {
         let (acc, _) = accelerations_or_estimate(rec, &ship);
+        // The recorded wind's accelerations are known: the model's equation error is against the
+        // rest (as the fit that gave the start identified it).
+        let wind = match &environments[k] {
+            Some(env) if env.has_wind() => env
+                .wind_accelerations(&recordings[k], &mass)
+                .ok_or_else(|| RefineError::Environment("singular mass matrix".into()))?,
+            _ => Vec::new(),
+        };
         let n = rec.len();
         let margin = differentiator_margin(n);
         for i in (margin..n.saturating_sub(margin)).step_by(stride[k]) {
-            ee.push((k, i, [acc.u_dot[i], acc.v_dot[i], acc.r_dot[i]]));
+            let w = wind.get(i).copied().unwrap_or([0.0; 3]);
+            ee.push((
+                k,
+                i,
+                [
+                    acc.u_dot[i] - w[0],
+                    acc.v_dot[i] - w[1],
+                    acc.r_dot[i] - w[2],
+                ],
+            ));
         }
     }
     let mut problem = Problem {
@@ -431,6 +492,8 @@ fn problem<'a, P: Parametric>(
         w_oe: 1.0,
         w_ee: [0.0; 3],
         recordings,
+        environments,
+        hydrodynamic,
         segments,
         stride,
         lpp: ship.lpp,

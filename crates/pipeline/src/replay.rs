@@ -3,8 +3,11 @@
 //! a model by these). No I/O.
 
 use shipid_io::Recording;
-use shipid_sim::dynamics::{FiniteDifferences, NoFilter, Parametric, RudderFilter};
-use shipid_sim::{DivergenceBounds, Dynamics, Replay, SimOptions, SimStatus, State};
+use shipid_sim::dynamics::{FiniteDifferences, MassMatrix, NoFilter, Parametric, RudderFilter};
+use shipid_sim::{
+    DivergenceBounds, Dynamics, KnownEnvironment, Replay, SimOptions, SimStatus, State,
+    WithEnvironment,
+};
 
 use crate::lm::solve_small;
 use crate::validate::DT_OVER_L_OVER_U0;
@@ -135,6 +138,27 @@ pub fn replay_segment(
     }
 }
 
+/// [`replay_segment`] of a recording with a recorded environment `env` (built from `rec`, see
+/// [`crate::environment`]): the model feels the recording's wind and current from the segment's start
+/// on. `None` is [`replay_segment`] itself.
+pub fn replay_segment_in(
+    model: &dyn Dynamics,
+    env: Option<&KnownEnvironment>,
+    rec: &Recording,
+    a: usize,
+    b: usize,
+) -> (Recording, bool) {
+    match env {
+        Some(env) => replay_segment(
+            &WithEnvironment::new(model, env.replay_from(rec.t[a])),
+            rec,
+            a,
+            b,
+        ),
+        None => replay_segment(model, rec, a, b),
+    }
+}
+
 /// A segment replay with the derivatives of its pose with respect to chosen parameter directions.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct SegmentSensitivities {
@@ -162,6 +186,43 @@ pub fn replay_segment_sensitivities<P: Parametric>(
     b: usize,
     directions: &[(usize, f64)],
 ) -> SegmentSensitivities {
+    replay_segment_sensitivities_in(model, None, rec, a, b, directions)
+}
+
+/// The recorded environment's part of a stage's accelerations at simulation time `t_s` (from the
+/// segment's start) and over-ground state `x`: M⁻¹ F_wind plus the current's transport terms.
+fn environment_acceleration(
+    env: &KnownEnvironment,
+    mass: &MassMatrix,
+    t_s: f64,
+    x: &State,
+) -> Option<[f64; 3]> {
+    let mut acc = if env.has_wind() {
+        mass.solve(env.wind_force(t_s, x))?
+    } else {
+        [0.0; 3]
+    };
+    let [tu, tv] = env.current_transport(t_s, x);
+    acc[0] += tu;
+    acc[1] += tv;
+    Some(acc)
+}
+
+/// [`replay_segment_sensitivities`] of a recording with a recorded environment `env` (built from
+/// `rec`): the replay of [`replay_segment_in`]. The model is evaluated at the state through the water,
+/// so its ∂a/∂(u, v) also moves with ψ (the current turns in body axes); the known wind and transport
+/// accelerations depend on θ not at all and on the state through ∂/∂(u, v, r, ψ) by central
+/// differences. Without `env` the replay is [`replay_segment_sensitivities`]'s, step for step.
+pub fn replay_segment_sensitivities_in<P: Parametric>(
+    model: &P,
+    env: Option<&KnownEnvironment>,
+    rec: &Recording,
+    a: usize,
+    b: usize,
+    directions: &[(usize, f64)],
+) -> SegmentSensitivities {
+    let env = env.map(|e| e.replay_from(rec.t[a]));
+    let mass = MassMatrix::new(model.ship(), model.added_mass());
     let mut out = SegmentSensitivities::default();
     let start = SegmentStart::new(model.ship(), rec, a, b);
     let ship = *model.ship();
@@ -189,44 +250,100 @@ pub fn replay_segment_sensitivities<P: Parametric>(
     let bounds = DivergenceBounds::default();
     let fd = (!model.analytic_sensitivities())
         .then(|| FiniteDifferences::new(model, directions.iter().map(|&(j, _)| j)));
-    // One stage: the derivative at `x` and, in `dk_out`, (∂f/∂x) `s` + ∂f/∂p.
-    let mut stage = |x: &State, delta: f64, s: &[f64], dk_out: &mut [f64]| -> Option<[f64; 6]> {
-        let mut d_state = [[0.0; 3]; 3];
-        let acc = match &fd {
-            Some(fd) => fd.sensitivities(x, delta, &mut d_state, &mut d_theta),
-            None => model.sensitivities(x, delta, &mut d_state, &mut d_theta),
-        }
-        .ok()?;
-        if !acc.iter().all(|v| v.is_finite()) {
-            return None;
-        }
-        let kin = x.kinematics();
-        let (sin, cos) = x.psi.sin_cos();
-        let (su, rest) = s.split_at(n);
-        let (sv, rest) = rest.split_at(n);
-        let (sr, rest) = rest.split_at(n);
-        let (_, rest) = rest.split_at(n);
-        let (_, spsi) = rest.split_at(n);
-        let (dv, rest) = dk_out.split_at_mut(n);
-        let (dvv, rest) = rest.split_at_mut(n);
-        let (dvr, rest) = rest.split_at_mut(n);
-        let (dx0, rest) = rest.split_at_mut(n);
-        let (dy0, dpsi) = rest.split_at_mut(n);
-        let dx_dpsi = -x.u * sin - x.v * cos;
-        let dy_dpsi = x.u * cos - x.v * sin;
-        for j in 0..n {
-            let (index, unit) = directions[j];
-            let b = d_theta.get(index).copied().unwrap_or([0.0; 3]);
-            let (u, v, r, p) = (su[j], sv[j], sr[j], spsi[j]);
-            dv[j] = d_state[0][0] * u + d_state[0][1] * v + d_state[0][2] * r + b[0] * unit;
-            dvv[j] = d_state[1][0] * u + d_state[1][1] * v + d_state[1][2] * r + b[1] * unit;
-            dvr[j] = d_state[2][0] * u + d_state[2][1] * v + d_state[2][2] * r + b[2] * unit;
-            dx0[j] = cos * u - sin * v + dx_dpsi * p;
-            dy0[j] = sin * u + cos * v + dy_dpsi * p;
-            dpsi[j] = r;
-        }
-        Some([acc[0], acc[1], acc[2], kin[0], kin[1], kin[2]])
-    };
+    // Steps of the central differences of the environment's accelerations: u, v, r and ψ.
+    let fd_steps = [
+        1e-6 * ship.u0,
+        1e-6 * ship.u0,
+        1e-6 * ship.u0 / ship.lpp,
+        1e-6,
+    ];
+    // One stage at `t_s`: the derivative at `x` and, in `dk_out`, (∂f/∂x) `s` + ∂f/∂p.
+    let mut stage =
+        |t_s: f64, x: &State, delta: f64, s: &[f64], dk_out: &mut [f64]| -> Option<[f64; 6]> {
+            let mut d_state = [[0.0; 3]; 3];
+            // ∂a/∂ψ: zero in still water and air.
+            let mut d_psi = [0.0; 3];
+            let hydro_state = match &env {
+                Some(e) => e.through_water(t_s, x),
+                None => *x,
+            };
+            let mut acc = match &fd {
+                Some(fd) => fd.sensitivities(&hydro_state, delta, &mut d_state, &mut d_theta),
+                None => model.sensitivities(&hydro_state, delta, &mut d_state, &mut d_theta),
+            }
+            .ok()?;
+            if let Some(e) = &env {
+                // u_w = u − u_c(ψ), v_w = v − v_c(ψ), with ∂u_c/∂ψ = v_c and ∂v_c/∂ψ = −u_c.
+                let [uc, vc] = e.current_body(t_s, x.psi);
+                for d in 0..3 {
+                    d_psi[d] = -d_state[d][0] * vc + d_state[d][1] * uc;
+                }
+                let known = environment_acceleration(e, &mass, t_s, x)?;
+                for (k, h) in fd_steps.iter().enumerate() {
+                    let shifted = |sign: f64| {
+                        let mut y = *x;
+                        match k {
+                            0 => y.u += sign * h,
+                            1 => y.v += sign * h,
+                            2 => y.r += sign * h,
+                            _ => y.psi += sign * h,
+                        }
+                        environment_acceleration(e, &mass, t_s, &y)
+                    };
+                    let (plus, minus) = (shifted(1.0)?, shifted(-1.0)?);
+                    for d in 0..3 {
+                        let g = (plus[d] - minus[d]) / (2.0 * h);
+                        if k < 3 {
+                            d_state[d][k] += g;
+                        } else {
+                            d_psi[d] += g;
+                        }
+                    }
+                }
+                (0..3).for_each(|d| acc[d] += known[d]);
+            }
+            if !acc.iter().all(|v| v.is_finite()) {
+                return None;
+            }
+            let kin = x.kinematics();
+            let (sin, cos) = x.psi.sin_cos();
+            let (su, rest) = s.split_at(n);
+            let (sv, rest) = rest.split_at(n);
+            let (sr, rest) = rest.split_at(n);
+            let (_, rest) = rest.split_at(n);
+            let (_, spsi) = rest.split_at(n);
+            let (dv, rest) = dk_out.split_at_mut(n);
+            let (dvv, rest) = rest.split_at_mut(n);
+            let (dvr, rest) = rest.split_at_mut(n);
+            let (dx0, rest) = rest.split_at_mut(n);
+            let (dy0, dpsi) = rest.split_at_mut(n);
+            let dx_dpsi = -x.u * sin - x.v * cos;
+            let dy_dpsi = x.u * cos - x.v * sin;
+            for j in 0..n {
+                let (index, unit) = directions[j];
+                let b = d_theta.get(index).copied().unwrap_or([0.0; 3]);
+                let (u, v, r, p) = (su[j], sv[j], sr[j], spsi[j]);
+                dv[j] = d_state[0][0] * u
+                    + d_state[0][1] * v
+                    + d_state[0][2] * r
+                    + d_psi[0] * p
+                    + b[0] * unit;
+                dvv[j] = d_state[1][0] * u
+                    + d_state[1][1] * v
+                    + d_state[1][2] * r
+                    + d_psi[1] * p
+                    + b[1] * unit;
+                dvr[j] = d_state[2][0] * u
+                    + d_state[2][1] * v
+                    + d_state[2][2] * r
+                    + d_psi[2] * p
+                    + b[2] * unit;
+                dx0[j] = cos * u - sin * v + dx_dpsi * p;
+                dy0[j] = sin * u + cos * v + dy_dpsi * p;
+                dpsi[j] = r;
+            }
+            Some([acc[0], acc[1], acc[2], kin[0], kin[1], kin[2]])
+        };
     let axpy = |y: &[f64; 6], h: f64, k: &[f64; 6]| {
         State::from_array(std::array::from_fn(|i| y[i] + h * k[i]))
     };
@@ -246,7 +363,7 @@ pub fn replay_segment_sensitivities<P: Parametric>(
         }
         let y = state.to_array();
         let [dk1, dk2, dk3, dk4] = &mut dk;
-        let Some(k1) = stage(&state, effective[0], &sens, dk1) else {
+        let Some(k1) = stage(t, &state, effective[0], &sens, dk1) else {
             return out;
         };
         out.t.push(t);
@@ -261,15 +378,27 @@ pub fn replay_segment_sensitivities<P: Parametric>(
             return out;
         }
         axpy_sens(&mut stage_sens, &sens, 0.5 * dt, dk1);
-        let Some(k2) = stage(&axpy(&y, 0.5 * dt, &k1), effective[1], &stage_sens, dk2) else {
+        let Some(k2) = stage(
+            t + 0.5 * dt,
+            &axpy(&y, 0.5 * dt, &k1),
+            effective[1],
+            &stage_sens,
+            dk2,
+        ) else {
             return out;
         };
         axpy_sens(&mut stage_sens, &sens, 0.5 * dt, dk2);
-        let Some(k3) = stage(&axpy(&y, 0.5 * dt, &k2), effective[1], &stage_sens, dk3) else {
+        let Some(k3) = stage(
+            t + 0.5 * dt,
+            &axpy(&y, 0.5 * dt, &k2),
+            effective[1],
+            &stage_sens,
+            dk3,
+        ) else {
             return out;
         };
         axpy_sens(&mut stage_sens, &sens, dt, dk3);
-        let Some(k4) = stage(&axpy(&y, dt, &k3), effective[2], &stage_sens, dk4) else {
+        let Some(k4) = stage(t + dt, &axpy(&y, dt, &k3), effective[2], &stage_sens, dk4) else {
             return out;
         };
         state = State::from_array(std::array::from_fn(|i| {

@@ -26,7 +26,6 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use shipid_io::deriv::accelerations_or_estimate;
 use shipid_io::{AddedMass, Dataset, Recording};
 use shipid_model::TrainingWindow;
 use shipid_sim::{Dynamics, MmgModel, State};
@@ -184,9 +183,10 @@ pub fn training_samples(ds: &Dataset, opts: &MmgFitOptions) -> Result<TrainingDa
     let mut recordings = Vec::new();
     for (g, r) in chosen.iter().enumerate() {
         let range = window_range(r, ds, opts.window)?;
-        let rec = &r.recording;
-        recordings.push(rec.slice(range.clone()));
-        let (acc, estimated) = accelerations_or_estimate(rec, ship);
+        recordings.push(r.recording.slice(range.clone()));
+        // The recorded wind and current are known inputs: identify from what is left.
+        let hydro = crate::environment::hydrodynamic_recording(ds, r, &added)?;
+        let (rec, acc, estimated) = (&hydro.recording, &hydro.accelerations, hydro.estimated);
         for i in range.clone() {
             let n_hz = match (&rec.n, opts.propeller_rate_hz) {
                 (Some(n), _) => n[i],
@@ -587,7 +587,7 @@ pub fn fit_mmg_model_file(
             &fit,
             added,
             &fit_recordings(&fit, ds),
-            &RefineOptions::default(),
+            &RefineOptions::for_dataset(ds),
         )?;
         refined.fit_time_s += started.elapsed().as_secs_f64();
         (refined, Some(how))
