@@ -1,13 +1,18 @@
-//! Block-bootstrap replicates of a polynomial fit and the manoeuvre bands they give.
+//! Block-bootstrap replicates of a polynomial or mmg fit, posterior draws of a sparse GP, and the
+//! manoeuvre bands they give.
 
 use std::path::Path;
 
 use shipid_estimators::Solver;
 use shipid_io::Dataset;
 use shipid_model::CoefficientSet;
-use shipid_pipeline::bands::{BandRun, manoeuvre_bands};
-use shipid_pipeline::bootstrap::{Bootstrap, bootstrap_abkowitz};
+use shipid_pipeline::bands::{BandRun, gp_draws, manoeuvre_bands};
+use shipid_pipeline::bootstrap::{Bootstrap, bootstrap_abkowitz, bootstrap_mmg};
 use shipid_pipeline::fit::{EstimatorSpec, FitOutput, WindowSpec, fit_dataset};
+use shipid_pipeline::fit_gp::{DEFAULT_SIMILARITY, fit_gp_dataset};
+use shipid_pipeline::mmg::{
+    MmgFit, MmgFitOptions, MmgModelFile, fit_mmg_dataset, model_file, write_mmg_model_file,
+};
 use shipid_pipeline::spec::parse_manoeuvre;
 use shipid_sim::{AbkowitzDynamics, Dynamics};
 
@@ -185,4 +190,135 @@ fn a_damaged_bootstrap_table_names_the_fault() {
     record.replicates.get_mut("X").unwrap().remove(&first);
     let err = record.coefficient_vectors(&out.model.set).unwrap_err();
     assert!(err.to_string().contains(&first), "{err}");
+}
+
+/// The default mmg fit (bounded LSQ, λ = 1e-6) on ZZ35/35 port alone.
+fn zz35_mmg(ds: &Dataset) -> (MmgFit, MmgFitOptions) {
+    let opts = MmgFitOptions {
+        recordings: vec!["zz35_35_ps.csv".into()],
+        ..MmgFitOptions::default()
+    };
+    (fit_mmg_dataset(ds, &opts).expect("mmg fits ZZ35"), opts)
+}
+
+#[test]
+fn mmg_bootstrap_is_reproducible_and_round_trips_through_the_model_file() {
+    let ds = default_data();
+    let (fit, opts) = zz35_mmg(&ds);
+    let a = bootstrap_mmg(&ds, &fit, &opts, 24, 7).unwrap();
+    let b = bootstrap_mmg(&ds, &fit, &opts, 24, 7).unwrap();
+    assert_eq!(a.replicates, b.replicates, "same seed, same replicates");
+    assert_eq!(a.replicates.len() + a.rejected, 24);
+    assert!(a.block.rows > 1, "autocorrelated residuals: {:?}", a.block);
+    // Every parameter the data determine varies over the replicates, and they scatter around the fit.
+    for (j, p) in fit.estimate.params.iter().enumerate() {
+        let values: Vec<f64> = a.replicates.iter().map(|r| r[j]).collect();
+        let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        assert!(
+            values
+                .iter()
+                .all(|v| (p.spec.lower..=p.spec.upper).contains(v)),
+            "{}: a replicate outside the bounds",
+            p.spec.name
+        );
+        if p.determined_by_data && !p.at_bound {
+            assert!(lo < hi, "{} does not vary", p.spec.name);
+            let mean = values.iter().sum::<f64>() / values.len() as f64;
+            assert!(
+                (mean - p.value).abs() <= 3.0 * (hi - lo),
+                "{}: replicates [{lo}, {hi}] far from the fit {}",
+                p.spec.name,
+                p.value
+            );
+        }
+    }
+    let mut file = model_file(&fit, ds.added_mass.unwrap());
+    file.bootstrap = Some(a.record());
+    let text = write_mmg_model_file(&file).unwrap();
+    let read: MmgModelFile = toml::from_str(&text).unwrap();
+    let record = read
+        .bootstrap
+        .clone()
+        .expect("the [bootstrap] table is read back");
+    assert_eq!(
+        record.parameter_vectors(&read.parameters).unwrap(),
+        a.replicates
+    );
+    assert_eq!(record.order.len(), fit.estimate.params.len());
+    assert_eq!(record.correlation.len(), record.order.len());
+    assert_eq!(record.standard_error.len(), record.order.len());
+    let models = read.replicate_models(Path::new("m.toml")).unwrap();
+    assert_eq!(models.len(), a.replicates.len());
+}
+
+#[test]
+fn mmg_bootstrap_follows_a_moved_centre() {
+    // A refined model's replicates are its own parameters shifted by each replicate's departure from
+    // the equation-error estimate: move the file's n_r, and the replicates move with it.
+    let ds = default_data();
+    let (fit, opts) = zz35_mmg(&ds);
+    let k = fit
+        .estimate
+        .params
+        .iter()
+        .position(|p| p.spec.name == "n_r")
+        .unwrap();
+    let at_fit = bootstrap_mmg(&ds, &fit, &opts, 20, 3).unwrap();
+    let mut moved = fit;
+    let shift = 0.1 * moved.estimate.params[k].value;
+    moved.estimate.params[k].value += shift;
+    let shifted = bootstrap_mmg(&ds, &moved, &opts, 20, 3).unwrap();
+    let mean = |b: &shipid_pipeline::bootstrap::MmgBootstrap| {
+        b.replicates.iter().map(|r| r[k]).sum::<f64>() / b.replicates.len() as f64
+    };
+    let moved_by = mean(&shifted) - mean(&at_fit);
+    assert!(
+        (moved_by - shift).abs() < 0.2 * shift.abs(),
+        "the replicates moved by {moved_by}, the centre by {shift}"
+    );
+}
+
+#[test]
+fn sparse_gp_draws_are_reproducible_and_their_band_holds_the_mean_prediction() {
+    let ds = default_data();
+    let (_, model, _) = fit_gp_dataset(
+        &ds,
+        &["zz35_35_ps.csv".into()],
+        WindowSpec::Whole,
+        DEFAULT_SIMILARITY,
+    )
+    .unwrap();
+    let a = gp_draws(&model, 40, 11).unwrap();
+    let b = gp_draws(&model, 40, 11).unwrap();
+    let state = shipid_sim::State {
+        u: 1.1,
+        v: 0.05,
+        r: -0.02,
+        ..Default::default()
+    };
+    let at = |d: &Box<dyn Dynamics + Send + Sync>| d.accelerations(&state, 0.2).unwrap();
+    assert!(
+        a.iter().zip(&b).all(|(x, y)| at(x) == at(y)),
+        "same seed, same draws"
+    );
+    assert!(
+        a.windows(2).any(|w| at(&w[0]) != at(&w[1])),
+        "the draws differ from each other"
+    );
+    let m = parse_manoeuvre("zigzag:10/10:port").unwrap();
+    let bands = manoeuvre_bands(&model, &a, &m, &ds.ship, 0.9, BandRun::Standard).unwrap();
+    assert_eq!(bands.replicates, 40);
+    let overshoot = bands
+        .metrics
+        .iter()
+        .find(|b| b.metric == "overshoot_1")
+        .unwrap();
+    let band = overshoot.band.as_ref().expect("40 draws give a band");
+    let point = overshoot.point.unwrap();
+    assert!(band.lo < band.hi, "the posterior has a spread: {band:?}");
+    assert!(
+        band.lo <= point && point <= band.hi,
+        "mean {point} outside its band {band:?}"
+    );
 }
