@@ -12,7 +12,6 @@ use shipid_estimators::{
     Bounds, Estimator, Family, Fit, Folds, Solver, Tuning, condition_number, default_epsilon_grid,
     default_grid, predict, scaled_condition_number, tune, tune_svr, vif,
 };
-use shipid_io::deriv::accelerations_or_estimate;
 use shipid_io::{Dataset, DatasetRecording, Manoeuvre, PrimeScale, Recording};
 use shipid_model::{
     AbkowitzModel, CoefficientSet, Dof, EstimatorInfo, ModelFile, PrimeInertia, Samples, SetFile,
@@ -421,9 +420,13 @@ pub fn training_samples(
     for (g, r) in chosen.iter().enumerate() {
         let range = window_range(r, ds, window)?;
         // Accelerations are estimated on the whole record, then windowed, so the cut does not add
-        // end effects of the differentiator.
-        let (acc, estimated) = accelerations_or_estimate(&r.recording, &ds.ship);
-        let rec = r.recording.slice(range.clone());
+        // end effects of the differentiator. A recorded wind and current are known inputs: the
+        // polynomial is fitted to what is left (velocities through the water, accelerations without
+        // the wind's), through the mass matrix the model simulates with.
+        let hydro =
+            crate::environment::hydrodynamic_recording(ds, r, &ds.added_mass.unwrap_or_default())?;
+        let (acc, estimated) = (hydro.accelerations, hydro.estimated);
+        let rec = hydro.recording.slice(range.clone());
         let acc = shipid_io::Accelerations {
             u_dot: acc.u_dot[range.clone()].to_vec(),
             v_dot: acc.v_dot[range.clone()].to_vec(),
@@ -582,7 +585,7 @@ pub fn fit_dataset(
             })
             .collect();
         let started = Instant::now();
-        let (refined, how) = refine_output_error(&model, &recs, &RefineOptions::default())
+        let (refined, how) = refine_output_error(&model, &recs, &RefineOptions::for_dataset(ds))
             .map_err(|e| bad_input(format!("--refine: {e}")))?;
         fit_time_s += started.elapsed().as_secs_f64();
         let info = EstimatorInfo {
@@ -593,7 +596,9 @@ pub fn fit_dataset(
     } else {
         (model, info)
     };
-    let file = ModelFile::from_model(&model, info, windows);
+    let mut file = ModelFile::from_model(&model, info, windows);
+    file.environment =
+        crate::environment::environment_record(ds, &chosen_recordings(ds, recordings)?);
     Ok(FitOutput {
         model,
         file,

@@ -11,7 +11,6 @@ use std::time::Instant;
 use serde::Serialize;
 use shipid_gp::{Gp, Points, Similarity, TrainOptions, half_ranges, sparsify};
 use shipid_io::Dataset;
-use shipid_io::deriv::accelerations_or_estimate;
 use shipid_sim::{
     GP_INPUTS, GP_KIND, GP_OUTPUTS, GpDynamics, GpModelFile, GpOutputFile, SparsificationInfo,
 };
@@ -68,9 +67,13 @@ pub fn fit_gp_dataset(
     let mut windows = Vec::new();
     for r in crate::fit::chosen_recordings(ds, recordings)? {
         let range = window_range(r, ds, window)?;
-        // Accelerations on the whole record, then windowed (no end effects of the differentiator at the cut).
-        let (acc, estimated) = accelerations_or_estimate(&r.recording, &ds.ship);
-        let rec = &r.recording;
+        // Accelerations on the whole record, then windowed (no end effects of the differentiator at the cut),
+        // with the recorded wind and current removed (known inputs) through the mass matrix the GP
+        // model simulates with.
+        let hydro =
+            crate::environment::hydrodynamic_recording(ds, r, &ds.added_mass.unwrap_or_default())?;
+        let (acc, estimated) = (&hydro.accelerations, hydro.estimated);
+        let rec = &hydro.recording;
         for i in range.clone() {
             inputs.extend_from_slice(&[rec.u[i], rec.v[i], rec.r[i], rec.delta[i]]);
             targets[0].push(acc.u_dot[i]);

@@ -153,10 +153,13 @@ fn load_parts(
         return Ok((base, effects));
     }
     check_kind(path, table.as_ref())?;
-    if let Some(mmg) = crate::mmg::file::load_mmg_model_if_kind(path, &text)? {
+    // The mmg and sparse-GP formats have no `[environment]` (what a fit in a recorded wind
+    // appends, read apart by `environment::model_environment`); the polynomial's has.
+    let family_text = crate::environment::without_environment_table(&text);
+    if let Some(mmg) = crate::mmg::file::load_mmg_model_if_kind(path, &family_text)? {
         return Ok((Box::new(mmg), Vec::new()));
     }
-    if let Some(gp) = load_gp_model(path, &text)? {
+    if let Some(gp) = load_gp_model(path, &family_text)? {
         return Ok((Box::new(gp), Vec::new()));
     }
     let file: ModelFile = toml::from_str(&text).map_err(|e| InputError::toml(path, &text, &e))?;

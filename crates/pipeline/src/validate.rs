@@ -7,13 +7,20 @@
 //!   re-simulated with its controller, first execute at the recorded time, and its IMO metrics compared
 //!   with the recording's (relative errors, MRAE). Closed loop because a zig-zag's reversals respond to
 //!   the model's own heading; replaying the recorded rudder would not test that.
+//!
+//! A recording with a recorded wind or current is replayed and re-simulated in it
+//! ([`shipid_sim::WithEnvironment`]): the model is of the ship in calm water, the recording's own
+//! environment is a known input ([`crate::environment`]).
 
 use serde::Serialize;
 use shipid_io::{DatasetRecording, Manoeuvre, Recording, Ship};
 use shipid_sim::metrics::first_execute;
 use shipid_sim::{
-    Dynamics, Metrics, Replay, SimOptions, SimOutput, SimStatus, State, controller_for, metrics,
+    Dynamics, KnownEnvironment, Metrics, Replay, SimOptions, SimOutput, SimStatus, State,
+    controller_for, metrics,
 };
+
+use crate::environment::{ChosenWindage, WindageSource, environment_with, with_environment};
 
 /// Root mean square of `x` (0 for no samples).
 pub fn rms(x: &[f64]) -> f64 {
@@ -96,7 +103,19 @@ pub fn interp(t: &[f64], y: &[f64], at: f64) -> f64 {
 }
 
 /// Replay the recorded rudder from the recorded initial state. Times are shifted so the record starts at 0.
+/// In calm water: [`replay_in`] replays a recording in its recorded environment.
 pub fn replay(model: &dyn Dynamics, rec: &Recording) -> SimOutput {
+    replay_in(model, rec, None)
+}
+
+/// [`replay`] with the model in `env`, the recorded environment of `rec` (`None`: calm).
+pub fn replay_in(
+    model: &dyn Dynamics,
+    rec: &Recording,
+    env: Option<KnownEnvironment>,
+) -> SimOutput {
+    let model = with_environment(model, env);
+    let model = model.as_ref();
     let t0 = rec.t[0];
     let t_rel: Vec<f64> = rec.t.iter().map(|t| t - t0).collect();
     let duration = *t_rel.last().unwrap_or(&0.0);
@@ -150,6 +169,18 @@ pub fn replay_errors(sim: &SimOutput, rec: &Recording, ship: &Ship) -> ReplayErr
 /// interpolated on the rudder signal), times from 0 at the record's start. `None` for a free recording.
 /// A simulation that cannot start is a divergence at 0 s with no samples.
 pub fn closed_loop(model: &dyn Dynamics, r: &DatasetRecording, ship: &Ship) -> Option<SimOutput> {
+    closed_loop_in(model, r, ship, None)
+}
+
+/// [`closed_loop`] with the model in `env`, the recorded environment of `r` (`None`: calm).
+pub fn closed_loop_in(
+    model: &dyn Dynamics,
+    r: &DatasetRecording,
+    ship: &Ship,
+    env: Option<KnownEnvironment>,
+) -> Option<SimOutput> {
+    let model = with_environment(model, env);
+    let model = model.as_ref();
     let rec = &r.recording;
     let (rudder, side) = match r.manoeuvre {
         Manoeuvre::ZigZag {
@@ -181,7 +212,17 @@ pub fn compare_manoeuvre(
     r: &DatasetRecording,
     ship: &Ship,
 ) -> Option<MetricComparison> {
-    let sim = closed_loop(model, r, ship)?;
+    compare_manoeuvre_in(model, r, ship, None)
+}
+
+/// [`compare_manoeuvre`] with the model in `env`, the recorded environment of `r` (`None`: calm).
+pub fn compare_manoeuvre_in(
+    model: &dyn Dynamics,
+    r: &DatasetRecording,
+    ship: &Ship,
+    env: Option<KnownEnvironment>,
+) -> Option<MetricComparison> {
+    let sim = closed_loop_in(model, r, ship, env)?;
     let recorded = metrics(&r.recording, &r.manoeuvre, ship);
     let predicted =
         matches!(sim.status, SimStatus::Ok).then(|| metrics(&sim.recording, &r.manoeuvre, ship));
@@ -209,18 +250,83 @@ pub fn compare_manoeuvre(
     })
 }
 
-/// Both comparisons for one recording.
+/// Both comparisons for one recording, in its recorded environment with an assumed windage when it
+/// records a wind (callers that know the data set use [`validate_recording_with`]).
 pub fn validate_recording(
     model: &dyn Dynamics,
     r: &DatasetRecording,
     ship: &Ship,
 ) -> RecordingValidation {
-    let sim = replay(model, &r.recording);
+    validate_recording_with(model, r, ship, &ChosenWindage::first_of(&[], ship))
+}
+
+/// Both comparisons for one recording in its recorded wind and current, the wind's force with
+/// `windage`. A recorded environment that cannot be used (series of the wrong length) makes both
+/// simulations fail at their start with the reason.
+pub fn validate_recording_with(
+    model: &dyn Dynamics,
+    r: &DatasetRecording,
+    ship: &Ship,
+    windage: &ChosenWindage,
+) -> RecordingValidation {
+    let env = match environment_with(&r.recording, windage, ship, &r.file) {
+        Ok(env) => env,
+        Err(e) => {
+            let failed = failed_output(format!("cannot use the recorded environment: {e}"));
+            return RecordingValidation {
+                kind: r.manoeuvre.kind(),
+                replay: replay_errors(&failed, &r.recording, ship),
+                manoeuvre: None,
+            };
+        }
+    };
+    let sim = replay_in(model, &r.recording, env.clone());
     RecordingValidation {
         kind: r.manoeuvre.kind(),
         replay: replay_errors(&sim, &r.recording, ship),
-        manoeuvre: compare_manoeuvre(model, r, ship),
+        manoeuvre: compare_manoeuvre_in(model, r, ship, env),
     }
+}
+
+/// The windage a validation of `model_spec` on `ds` gives a recorded wind: the data set's, else the
+/// one the model file was identified with, else assumed.
+pub fn validation_windage(model_spec: &str, ds: &shipid_io::Dataset) -> ChosenWindage {
+    let record = crate::environment::model_environment(model_spec);
+    let from_model = record.as_ref().and_then(|r| r.windage.as_ref());
+    ChosenWindage::first_of(
+        &[
+            (ds.windage.as_ref(), WindageSource::Dataset),
+            (from_model, WindageSource::ModelFile),
+        ],
+        &ds.ship,
+    )
+}
+
+/// What a validation of `model_spec` on `ds` warns about (stderr and the JSON's `warnings`): a
+/// recording whose propeller rate varies though the model runs at one rate, a recorded wind or current
+/// the validation applies (and with which windage; an assumed one named as such), and a model
+/// identified in a recorded environment applied to recordings without one.
+pub fn validation_warnings(model_spec: &str, ds: &shipid_io::Dataset) -> Vec<String> {
+    let mut warnings: Vec<String> = propeller_rate_variations(&ds.recordings)
+        .iter()
+        .map(ToString::to_string)
+        .collect();
+    let windage = validation_windage(model_spec, ds);
+    let any_wind = ds.recordings.iter().any(|r| r.recording.wind.is_some());
+    if any_wind && windage.is_assumed() {
+        warnings.push(format!(
+            "{}: recordings carry a recorded wind but neither the data set nor the model gives a windage; the validation applies the wind with an assumed windage ({})",
+            ds.path.display(),
+            shipid_sim::environment::ASSUMED_WINDAGE_SOURCE
+        ));
+    }
+    warnings.extend(crate::environment::environment_notes(
+        ds,
+        &ds.recordings,
+        &windage,
+        "the validation",
+    ));
+    warnings
 }
 
 /// Where a validated model's identification range came from, for the explanation of `outside`.
@@ -268,6 +374,7 @@ pub fn validate_dataset(
             .and_then(identification_range)
     };
     let scale = shipid_io::PrimeScale::of(&ds.ship);
+    let windage = validation_windage(model_spec, ds);
     let rows = ds
         .recordings
         .iter()
@@ -284,7 +391,7 @@ pub fn validate_dataset(
             };
             ValidatedRecording {
                 file: r.file.clone(),
-                validation: validate_recording(model, r, &ds.ship),
+                validation: validate_recording_with(model, r, &ds.ship, &windage),
                 outside_identification_range: outside,
             }
         })
