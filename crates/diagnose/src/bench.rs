@@ -82,6 +82,7 @@ pub fn cases(seeds: u64, controls: u64) -> Vec<BenchCase> {
                     from_deg: direction(seed, 20 + k as u64),
                     frontal_area_m2: None,
                     lateral_area_m2: None,
+                    windage: None,
                 })),
                 concealed: Verdict::Wind,
                 magnitude: s,
@@ -152,7 +153,7 @@ pub fn to_dataset(g: Generated, name: &str) -> Dataset {
 
 /// The concealed parameter that should be recovered, and the recovered one from the report's effects.
 fn recovered(case: &BenchCase, effects: &[String]) -> Option<(f64, f64)> {
-    let truth = case.effect?;
+    let truth = case.effect.clone()?;
     let found: Effect = effects
         .iter()
         .filter_map(|e| e.parse::<Effect>().ok())
@@ -174,7 +175,7 @@ fn recovered(case: &BenchCase, effects: &[String]) -> Option<(f64, f64)> {
 }
 
 fn direction_error(case: &BenchCase, effects: &[String]) -> Option<f64> {
-    let truth = match case.effect? {
+    let truth = match case.effect.clone()? {
         Effect::Current(c) => c.from_deg,
         Effect::Wind(w) => w.from_deg,
         _ => return None,
@@ -212,7 +213,7 @@ pub fn run_case(
     case: &BenchCase,
 ) -> Result<BenchRow, String> {
     let started = Instant::now();
-    let effects: Vec<Effect> = case.effect.into_iter().collect();
+    let effects: Vec<Effect> = case.effect.clone().into_iter().collect();
     let data = generate_with(Some(case.seed), &effects).map_err(|e| format!("{}: {e}", case.id))?;
     let ds = to_dataset(data, &case.id);
     let report =

@@ -114,7 +114,7 @@ pub(crate) fn combine(base_effects: &[Effect], extra: &[Effect]) -> Vec<Effect> 
     let mut all: Vec<Effect> = base_effects
         .iter()
         .filter(|e| !extra.iter().any(|x| x.kind() == e.kind()))
-        .copied()
+        .cloned()
         .collect();
     all.extend_from_slice(extra);
     all

@@ -131,6 +131,7 @@ impl Family {
                 from_deg: from_deg(p[0], p[1]),
                 frontal_area_m2: None,
                 lateral_area_m2: None,
+                windage: None,
             }),
             Family::RudderLag => Effect::RudderLag(RudderLag {
                 time_constant_s: p[0].max(0.0) * l_over_u0,

@@ -16,13 +16,14 @@ use std::collections::VecDeque;
 use std::fmt;
 use std::str::FromStr;
 
-use shipid_io::{AddedMass, Ship};
+use shipid_io::{AddedMass, Ship, WindModel, Windage};
 use thiserror::Error;
 
 use crate::control::RudderController;
 use crate::dynamics::{
     Dynamics, DynamicsError, LinearHullDerivatives, MassMatrix, RudderFilter, State,
 };
+use crate::environment::{Aerodynamics, EnvironmentError};
 use crate::sim::{SimError, SimOptions, SimOutput, simulate_filtered};
 
 /// Density of air [kg/m³] (ISA sea level, 15 °C).
@@ -50,62 +51,92 @@ impl Current {
     }
 }
 
-/// Aerodynamic coefficients of [`Wind`]: the simple model of Fossen (2011, §8.1, "wind forces and
-/// moments") C_X = −c_x cos γ, C_Y = −c_y sin γ, C_N = −c_n sin 2γ with γ the angle the relative wind
-/// comes from (0 ahead, +90° from starboard). Fossen gives c_x 0.50–0.90, c_y 0.70–0.95, c_n 0.05–0.20
-/// for merchant ships; these are the middles of those ranges.
-pub const WIND_COEFFICIENTS: [f64; 3] = [0.70, 0.825, 0.125];
+/// Aerodynamic coefficients of [`Wind`] without a windage table: the simple model of Fossen (2011,
+/// §8.1, "wind forces and moments"), the same constants as [`crate::environment::FOSSEN_COEFFICIENTS`].
+pub const WIND_COEFFICIENTS: [f64; 3] = crate::environment::FOSSEN_COEFFICIENTS;
 
 /// Freeboard ÷ draft of loaded KVLCC2: depth 30.0 m, design draft 20.8 m (SIMMAN 2008 KVLCC2 particulars).
 /// Used for the default windage areas of the hull above water (no deckhouse).
 pub const KVLCC2_FREEBOARD_OVER_DRAFT: f64 = (30.0 - 20.8) / 20.8;
 
-/// Steady uniform wind with the forces X = ½ρ_a V² A_F C_X, Y = ½ρ_a V² A_L C_Y, N = ½ρ_a V² A_L L C_N
-/// ([`WIND_COEFFICIENTS`]), V the wind speed relative to the ship's over-ground velocity, acting about
-/// midship. The yaw moment turns the bow away from a wind forward of the beam and towards one abaft it.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Steady uniform wind with the forces of the ship's windage ([`Aerodynamics::force`]): X = ½ρ_a V² A_F
+/// C_X, Y = ½ρ_a V² A_L C_Y, N = ½ρ_a V² A_L L C_N + x_L Y, V the wind speed relative to the ship's
+/// over-ground velocity. Without a windage table: Fossen's coefficients ([`WIND_COEFFICIENTS`]) on the
+/// areas [`Wind::areas_m2`], acting about midship; the yaw moment then turns the bow away from a wind
+/// forward of the beam and towards one abaft it.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Wind {
     /// True wind speed [m/s], ≥ 0 (model scale: full-scale speed ÷ √45.714 for KVLCC2).
     pub speed_m_s: f64,
     /// Direction the wind comes from [deg], earth-fixed, clockwise from north.
     pub from_deg: f64,
-    /// Frontal windage area A_F [m²]; `None`: beam × freeboard with the freeboard of loaded KVLCC2
-    /// ([`KVLCC2_FREEBOARD_OVER_DRAFT`] × draft), 0.26 m² for the KVLCC2 model.
+    /// Frontal windage area A_F [m²]; `None`: the windage's, else beam × freeboard with the freeboard
+    /// of loaded KVLCC2 ([`KVLCC2_FREEBOARD_OVER_DRAFT`] × draft), 0.26 m² for the KVLCC2 model.
     pub frontal_area_m2: Option<f64>,
-    /// Lateral windage area A_L [m²]; `None`: L × freeboard as above, 1.42 m² for the KVLCC2 model.
+    /// Lateral windage area A_L [m²]; `None`: the windage's, else L × freeboard as above, 1.42 m² for
+    /// the KVLCC2 model.
     pub lateral_area_m2: Option<f64>,
+    /// The ship's windage (a data set's `[windage]`: areas, lateral centre, wind-coefficient model,
+    /// air density); `None`: Fossen on the areas above. Not part of the effect's string form: whoever
+    /// builds the effect for a data set sets it (the areas `af`, `al` still override its areas).
+    pub windage: Option<Windage>,
 }
 
 impl Wind {
     /// Windage areas [A_F, A_L] [m²] for `ship`.
     pub fn areas_m2(&self, ship: &Ship) -> [f64; 2] {
         let freeboard = KVLCC2_FREEBOARD_OVER_DRAFT * ship.draft;
+        let (af, al) = match &self.windage {
+            Some(w) => (w.frontal_area_m2, w.lateral_area_m2),
+            None => (ship.beam * freeboard, ship.lpp * freeboard),
+        };
         [
-            self.frontal_area_m2.unwrap_or(ship.beam * freeboard),
-            self.lateral_area_m2.unwrap_or(ship.lpp * freeboard),
+            self.frontal_area_m2.unwrap_or(af),
+            self.lateral_area_m2.unwrap_or(al),
         ]
     }
 
-    /// Aerodynamic [X, Y, N] [N, N, N m] on `ship` in over-ground state `s`.
-    pub fn force(&self, ship: &Ship, s: &State) -> [f64; 3] {
+    /// The windage this wind acts on: [`Wind::windage`] (or Fossen's model at sea-level air density,
+    /// centred at midship) with the areas of [`Wind::areas_m2`].
+    pub fn windage_for(&self, ship: &Ship) -> Windage {
+        let [af, al] = self.areas_m2(ship);
+        let base = self.windage.clone().unwrap_or(Windage {
+            frontal_area_m2: af,
+            lateral_area_m2: al,
+            lateral_centre_x_m: 0.0,
+            model: WindModel::Fossen,
+            air_density_kg_m3: AIR_DENSITY_KG_M3,
+            length_overall_m: None,
+            superstructure_lateral_area_m2: None,
+            lateral_centre_height_m: None,
+            height_m: None,
+            source: None,
+        });
+        Windage {
+            frontal_area_m2: af,
+            lateral_area_m2: al,
+            ..base
+        }
+    }
+
+    /// The force model of this wind on `ship` (refused when the windage lacks what its model needs).
+    pub fn aerodynamics(&self, ship: &Ship) -> Result<Aerodynamics, EnvironmentError> {
+        Aerodynamics::new(&self.windage_for(ship), ship)
+    }
+
+    /// Aerodynamic [X, Y, N] [N, N, N m] on a ship in over-ground state `s`, through `aero` (built once
+    /// by [`Wind::aerodynamics`]).
+    pub fn force_with(&self, aero: &Aerodynamics, s: &State) -> [f64; 3] {
         let (sf, cf) = self.from_deg.to_radians().sin_cos();
         let (wn, we) = (-self.speed_m_s * cf, -self.speed_m_s * sf);
         let (sp, cp) = s.psi.sin_cos();
         // Air velocity relative to the ship, body axes.
-        let ua = wn * cp + we * sp - s.u;
-        let va = -wn * sp + we * cp - s.v;
-        let q = 0.5 * AIR_DENSITY_KG_M3 * (ua * ua + va * va);
-        if q == 0.0 {
-            return [0.0; 3];
-        }
-        let gamma = (-va).atan2(-ua);
-        let [af, al] = self.areas_m2(ship);
-        let [cx, cy, cn] = WIND_COEFFICIENTS;
-        [
-            -q * af * cx * gamma.cos(),
-            -q * al * cy * gamma.sin(),
-            -q * al * ship.lpp * cn * (2.0 * gamma).sin(),
-        ]
+        aero.force([wn * cp + we * sp - s.u, -wn * sp + we * cp - s.v])
+    }
+
+    /// Aerodynamic [X, Y, N] [N, N, N m] on `ship` in over-ground state `s`.
+    pub fn force(&self, ship: &Ship, s: &State) -> Result<[f64; 3], EnvironmentError> {
+        Ok(self.force_with(&self.aerodynamics(ship)?, s))
     }
 }
 
@@ -191,7 +222,7 @@ pub fn clarke_linear_derivatives(ship: &Ship) -> LinearHullDerivatives {
 }
 
 /// One physical effect (its vocabulary word, [`Effect::kind`], in brackets).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Effect {
     /// `current`.
     Current(Current),
@@ -219,6 +250,9 @@ pub enum EffectError {
     /// The same kind of effect was given twice.
     #[error("effect {0} given more than once")]
     Duplicate(&'static str),
+    /// The wind's windage cannot be used with its wind-coefficient model.
+    #[error("wind: {0}")]
+    Windage(#[from] EnvironmentError),
     /// The simulation input is invalid.
     #[error(transparent)]
     Sim(#[from] SimError),
@@ -295,7 +329,7 @@ impl Effect {
     /// Parameters as `(key, value)` with the keys [`Effect::from_str`] reads (for reports; the direction
     /// key is `from_deg` as in the diagnosis file, `from` is accepted when parsing).
     pub fn parameters(&self) -> Vec<(&'static str, f64)> {
-        match *self {
+        match self {
             Effect::Current(c) => vec![("speed", c.speed_m_s), ("from_deg", c.from_deg)],
             Effect::Wind(w) => {
                 let mut p = vec![("speed", w.speed_m_s), ("from_deg", w.from_deg)];
@@ -320,7 +354,7 @@ impl Effect {
     /// Checks the parameters' ranges.
     pub fn validate(&self) -> Result<(), EffectError> {
         let e = self.kind();
-        match *self {
+        match self {
             Effect::Current(c) => {
                 check(
                     e,
@@ -504,6 +538,7 @@ impl FromStr for Effect {
                 from_deg: get(1),
                 frontal_area_m2: values[2],
                 lateral_area_m2: values[3],
+                windage: None,
             }),
             "rudder_lag" => Effect::RudderLag(RudderLag {
                 time_constant_s: get(0),
@@ -543,7 +578,7 @@ impl fmt::Display for Effect {
 pub struct WithEffects<D> {
     inner: D,
     current: Option<[f64; 2]>,
-    wind: Option<Wind>,
+    wind: Option<(Wind, Aerodynamics)>,
     constant_force: [f64; 3],
     /// Shallow-water growth factors [sway (Y'_v, N'_v, m_y), yaw (Y'_r, N'_r, J_z)] and the deep-water
     /// linear derivatives they scale.
@@ -579,10 +614,10 @@ impl<D: Dynamics> WithEffects<D> {
             inner,
         };
         for e in effects {
-            match *e {
+            match e {
                 Effect::Current(c) => w.current = Some(c.velocity_earth()),
-                Effect::Wind(wind) => w.wind = Some(wind),
-                Effect::RudderLag(l) => w.lag = Some(l),
+                Effect::Wind(wind) => w.wind = Some((wind.clone(), wind.aerodynamics(&ship)?)),
+                Effect::RudderLag(l) => w.lag = Some(*l),
                 Effect::Asymmetry(a) => {
                     w.rudder_offset_rad = a.rudder_offset_deg.to_radians();
                     w.constant_force = [0.0, a.y0_n, a.n0_nm];
@@ -661,8 +696,8 @@ impl<D: Dynamics> Dynamics for WithEffects<D> {
         let mut acc = self.inner.accelerations_at(t_s, &water, delta_rad)?;
         let ship = self.inner.ship();
         let mut force = self.constant_force;
-        if let Some(wind) = &self.wind {
-            let fw = wind.force(ship, s);
+        if let Some((wind, aero)) = &self.wind {
+            let fw = wind.force_with(aero, s);
             (0..3).for_each(|i| force[i] += fw[i]);
         }
         if let Some(([f_v, f_r], lin)) = &self.shallow {
@@ -1020,19 +1055,20 @@ mod tests {
             from_deg,
             frontal_area_m2: None,
             lateral_area_m2: None,
+            windage: None,
         };
-        let head = wind(0.0).force(&ship, &at_rest);
+        let head = wind(0.0).force(&ship, &at_rest).unwrap();
         assert!(
             head[0] < 0.0
                 && head[1].abs() < 1e-9 * head[0].abs()
                 && head[2].abs() < 1e-9 * head[0].abs()
         );
-        let from_stbd = wind(90.0).force(&ship, &at_rest);
+        let from_stbd = wind(90.0).force(&ship, &at_rest).unwrap();
         assert!(from_stbd[1] < 0.0 && from_stbd[0].abs() < 1e-9 * from_stbd[1].abs());
-        let from_port = wind(270.0).force(&ship, &at_rest);
+        let from_port = wind(270.0).force(&ship, &at_rest).unwrap();
         assert!((from_port[1] + from_stbd[1]).abs() < 1e-9 * from_stbd[1].abs());
         // Wind from the starboard bow pushes the bow to port.
-        assert!(wind(45.0).force(&ship, &at_rest)[2] < 0.0);
+        assert!(wind(45.0).force(&ship, &at_rest).unwrap()[2] < 0.0);
         // Beam wind on the KVLCC2 model at 5 m/s: ½ · 1.225 · 25 · 1.42 · 0.825 ≈ 18 N.
         assert!(
             (from_stbd[1] + 0.5 * 1.225 * 25.0 * 7.0 * 0.46 * KVLCC2_FREEBOARD_OVER_DRAFT * 0.825)

@@ -182,6 +182,7 @@ fn head_wind_slows_the_ship_and_beam_wind_pushes_it_to_leeward() {
             from_deg,
             frontal_area_m2: None,
             lateral_area_m2: None,
+            windage: None,
         })
     };
     let mut neutral = Replay::new(vec![0.0], vec![0.0]).unwrap();
@@ -225,6 +226,7 @@ fn head_wind_slows_the_ship_and_beam_wind_pushes_it_to_leeward() {
         from_deg: 90.0,
         frontal_area_m2: None,
         lateral_area_m2: None,
+        windage: None,
     });
     let still = run(&m, &[calm_wind], TC35, 100.0).recording;
     let calm = run(&m, &[], TC35, 100.0).recording;
@@ -285,7 +287,7 @@ fn effects_compose_and_reject_duplicates() {
     .collect();
     let out = run(&m, &effects, ZZ20, 100.0);
     assert_eq!(out.status, shipid_sim::SimStatus::Ok);
-    let twice = [effects[0], effects[0]];
+    let twice = [effects[0].clone(), effects[0].clone()];
     assert!(matches!(
         WithEffects::new(&m, &twice),
         Err(EffectError::Duplicate("current"))
