@@ -335,37 +335,3 @@ pub fn without_environment_table(text: &str) -> String {
     }
     out
 }
-
-/// The `[environment]` record of a fit of `ds` on `recordings` (all when empty), as
-/// [`environment_record`].
-pub fn fit_environment_record(
-    ds: &Dataset,
-    recordings: &[String],
-) -> Result<Option<EnvironmentRecord>, PipelineError> {
-    Ok(environment_record(
-        ds,
-        &crate::fit::chosen_recordings(ds, recordings)?,
-    ))
-}
-
-/// What a fit of `ds` on `recordings` (all when empty) says about their recorded environment: the
-/// warning for an assumed windage, then per recording with a wind or current that it is removed and
-/// with which windage. Empty for calm recordings.
-pub fn fit_environment_notes(
-    ds: &Dataset,
-    recordings: &[String],
-) -> Result<Vec<String>, PipelineError> {
-    let chosen = crate::fit::chosen_recordings(ds, recordings)?;
-    let windage = ChosenWindage::of_dataset(ds);
-    let mut notes = Vec::new();
-    if windage.is_assumed() && chosen.iter().any(|r| r.recording.wind.is_some()) {
-        notes.push(assumed_windage_warning(ds));
-    }
-    notes.extend(environment_notes(
-        ds,
-        chosen.iter().copied(),
-        &windage,
-        "the fit removes it before identification and",
-    ));
-    Ok(notes)
-}

@@ -736,4 +736,38 @@ fn hyper_of(e: &Estimator) -> Vec<(&'static str, f64)> {
     }
 }
 
+/// The `[environment]` record of a fit of `ds` on `recordings` (all when empty), as
+/// [`crate::environment::environment_record`].
+pub fn fit_environment_record(
+    ds: &Dataset,
+    recordings: &[String],
+) -> Result<Option<shipid_model::EnvironmentRecord>, PipelineError> {
+    Ok(crate::environment::environment_record(
+        ds,
+        &chosen_recordings(ds, recordings)?,
+    ))
+}
+
+/// What a fit of `ds` on `recordings` (all when empty) says about their recorded environment: the
+/// warning for an assumed windage, then per recording with a wind or current that it is removed and
+/// with which windage. Empty for calm recordings.
+pub fn fit_environment_notes(
+    ds: &Dataset,
+    recordings: &[String],
+) -> Result<Vec<String>, PipelineError> {
+    let chosen = chosen_recordings(ds, recordings)?;
+    let windage = crate::environment::ChosenWindage::of_dataset(ds);
+    let mut notes = Vec::new();
+    if windage.is_assumed() && chosen.iter().any(|r| r.recording.wind.is_some()) {
+        notes.push(crate::environment::assumed_windage_warning(ds));
+    }
+    notes.extend(crate::environment::environment_notes(
+        ds,
+        chosen.iter().copied(),
+        &windage,
+        "the fit removes it before identification and",
+    ));
+    Ok(notes)
+}
+
 pub use crate::validate::rms;

@@ -1,7 +1,11 @@
 //! Standard manoeuvres simulated with a model from a steady approach at U0 (`shipid simulate`).
 
-use shipid_io::Manoeuvre;
-use shipid_sim::{Dynamics, SimOptions, SimOutput, State, controller_for};
+use shipid_io::{FlowSeries, Manoeuvre, Recording};
+use shipid_sim::{
+    Dynamics, KnownEnvironment, SimOptions, SimOutput, State, WithEnvironment, controller_for,
+};
+
+use crate::environment::{ChosenWindage, WindageSource};
 
 use crate::error::{PipelineError, bad_input};
 use crate::generate::{DT_S, SAMPLE_INTERVAL_S, T_EXECUTE_S, standard_duration_s};
@@ -132,4 +136,107 @@ pub fn simulate_on_grid(
         &options,
     )
     .map_err(bad_input)
+}
+
+/// A constant true wind or current for `shipid simulate --wind/--current`: its speed and the
+/// earth-fixed direction it comes from, clockwise from north.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ConstantFlow {
+    pub speed_m_s: f64,
+    pub from_deg: f64,
+}
+
+/// `SPEED_M_S,FROM_DEG` as given to `flag` (`--wind` or `--current`): two finite numbers, the speed not
+/// negative.
+pub fn parse_flow(flag: &str, text: &str) -> Result<ConstantFlow, PipelineError> {
+    let expected = |why: &str| {
+        bad_input(format!(
+            "{flag} {text}: {why}; expected SPEED_M_S,FROM_DEG (speed in m/s, then the direction it comes from in degrees clockwise from north, e.g. {flag} 10,45)"
+        ))
+    };
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    let [speed, from] = parts[..] else {
+        return Err(expected(&format!(
+            "{} value(s) where two are needed",
+            parts.len()
+        )));
+    };
+    let number = |what: &str, s: &str| -> Result<f64, PipelineError> {
+        match s.parse::<f64>() {
+            Ok(x) if x.is_finite() => Ok(x),
+            _ => Err(expected(&format!(
+                "the {what} `{s}` is not a finite number"
+            ))),
+        }
+    };
+    let flow = ConstantFlow {
+        speed_m_s: number("speed", speed)?,
+        from_deg: number("direction", from)?,
+    };
+    if flow.speed_m_s < 0.0 {
+        return Err(expected(&format!(
+            "the speed {} m/s is negative (give the direction it comes from instead)",
+            flow.speed_m_s
+        )));
+    }
+    Ok(flow)
+}
+
+/// The windage a simulation of `model_spec` in a given wind uses: the model file's (the one it was
+/// identified with), else its training data set's `[windage]`, else assumed.
+pub fn simulation_windage(model_spec: &str, ship: &shipid_io::Ship) -> ChosenWindage {
+    let record = crate::environment::model_environment(model_spec);
+    let training = crate::range::training_data(model_spec);
+    ChosenWindage::first_of(
+        &[
+            (
+                record.as_ref().and_then(|r| r.windage.as_ref()),
+                WindageSource::ModelFile,
+            ),
+            (
+                training.as_ref().and_then(|(_, ds, _)| ds.windage.as_ref()),
+                WindageSource::Dataset,
+            ),
+        ],
+        ship,
+    )
+}
+
+/// A constant wind and current as a known environment for a simulation of `duration_s` (`None`
+/// when neither is given); the wind's force with `windage`.
+pub fn constant_environment(
+    wind: Option<ConstantFlow>,
+    current: Option<ConstantFlow>,
+    windage: &ChosenWindage,
+    ship: &shipid_io::Ship,
+    duration_s: f64,
+) -> Result<Option<KnownEnvironment>, PipelineError> {
+    if wind.is_none() && current.is_none() {
+        return Ok(None);
+    }
+    let series = |f: ConstantFlow| FlowSeries {
+        speed_m_s: vec![f.speed_m_s; 2],
+        from_rad: vec![f.from_deg.to_radians(); 2],
+    };
+    let rec = Recording {
+        t: vec![0.0, duration_s.max(1.0)],
+        wind: wind.map(series),
+        current: current.map(series),
+        ..Recording::default()
+    };
+    crate::environment::environment_with(&rec, windage, ship, "--wind/--current")
+}
+
+/// [`simulate_on_grid`] in a known environment (`None`: calm water and air). The approach is steady
+/// at U0 through the water.
+pub fn simulate_on_grid_in(
+    model: &dyn Dynamics,
+    m: &Manoeuvre,
+    grid: &SimGrid,
+    env: Option<KnownEnvironment>,
+) -> Result<SimOutput, PipelineError> {
+    match env {
+        Some(env) => simulate_on_grid(&WithEnvironment::new(model, env), m, grid),
+        None => simulate_on_grid(model, m, grid),
+    }
 }
