@@ -216,8 +216,7 @@ pub fn run_case(
     let effects: Vec<Effect> = case.effect.clone().into_iter().collect();
     let data = generate_with(Some(case.seed), &effects).map_err(|e| format!("{}: {e}", case.id))?;
     let ds = to_dataset(data, &case.id);
-    let report =
-        diagnose(input, &ds, opts).ok_or_else(|| format!("{}: nothing to diagnose", case.id))?;
+    let report = diagnose(input, &ds, opts).map_err(|e| format!("{}: {e}", case.id))?;
     let (truth_param, found_param) =
         recovered(case, &report.effects).map_or((None, None), |(t, f)| (Some(t), Some(f)));
     Ok(BenchRow {

@@ -11,11 +11,15 @@ use serde::Serialize;
 use shipid_io::{
     Accelerations, Dataset, PrimeScale, Recording, Ship, deriv::accelerations_or_estimate,
 };
+use shipid_pipeline::environment::ChosenWindage;
 use shipid_pipeline::range::outside_count;
 use shipid_pipeline::replay::{differentiator_margin, replay_segment, segments};
 use shipid_pipeline::validate::interp;
-use shipid_sim::{Dynamics, Effect, RudderFilter, State, WithEffects};
+use shipid_sim::{
+    Dynamics, Effect, KnownEnvironment, RudderFilter, State, WithEffects, WithEnvironment,
+};
 
+use crate::error::DiagnoseError;
 use crate::input::{BaseRange, DiagnoseInput, DiagnoseOptions};
 
 /// One recording ready for the diagnosis.
@@ -26,14 +30,45 @@ pub struct Prepared {
     pub acc: Accelerations,
     /// Indices of the equation-error samples (thinned).
     pub samples: Vec<usize>,
+    /// The wind and current the recording carries (time origin at its first sample): part of the base,
+    /// so that what the diagnosis finds is an environment the recording does not carry.
+    pub env: Option<KnownEnvironment>,
 }
 
-/// Prepare the recordings of `ds`: accelerations (recorded or differentiated) and the thinned samples.
-pub fn prepare(ds: &Dataset, ship: &Ship, opts: &DiagnoseOptions) -> Vec<Prepared> {
+/// The recorded environment of every recording of `ds` (same order), with `windage` for a recorded
+/// wind.
+pub fn environments(
+    ds: &Dataset,
+    windage: &ChosenWindage,
+) -> Result<Vec<Option<KnownEnvironment>>, DiagnoseError> {
     ds.recordings
         .iter()
-        .filter(|r| r.recording.len() >= 20)
         .map(|r| {
+            KnownEnvironment::of_recording(&r.recording, Some(&windage.windage), &ds.ship).map_err(
+                |e| DiagnoseError::Environment {
+                    recording: r.file.clone(),
+                    reason: e.to_string(),
+                },
+            )
+        })
+        .collect()
+}
+
+/// Prepare the recordings of `ds`: accelerations (recorded or differentiated), the thinned samples and
+/// the recorded environment (a recorded wind through `windage`).
+pub fn prepare(
+    ds: &Dataset,
+    ship: &Ship,
+    opts: &DiagnoseOptions,
+    windage: &ChosenWindage,
+) -> Result<Vec<Prepared>, DiagnoseError> {
+    let envs = environments(ds, windage)?;
+    Ok(ds
+        .recordings
+        .iter()
+        .zip(envs)
+        .filter(|(r, _)| r.recording.len() >= 20)
+        .map(|(r, env)| {
             let (acc, _) = accelerations_or_estimate(&r.recording, ship);
             let n = r.recording.len();
             let margin = differentiator_margin(n);
@@ -45,9 +80,10 @@ pub fn prepare(ds: &Dataset, ship: &Ship, opts: &DiagnoseOptions) -> Vec<Prepare
                 rec: r.recording.clone(),
                 acc,
                 samples,
+                env,
             }
         })
-        .collect()
+        .collect())
 }
 
 /// The acting rudder for the recorded one through `filter`, at the recording's samples.
@@ -70,11 +106,19 @@ pub(crate) fn residuals(model: &dyn Dynamics, p: &Prepared) -> Vec<Option<[f64; 
         Some(mut f) => filtered_rudder(f.as_mut(), &p.rec),
         None => p.rec.delta.clone(),
     };
+    // The recorded wind and current act on the model as they acted on the ship: the residual is what
+    // neither the model nor the recorded environment explains.
+    let in_env = p.env.clone().map(|e| WithEnvironment::new(model, e));
+    let model: &dyn Dynamics = match &in_env {
+        Some(m) => m,
+        None => model,
+    };
+    let t0 = p.rec.t[0];
     p.samples
         .iter()
         .map(|&i| {
             let a = model
-                .accelerations(&State::of_recording(&p.rec, i), delta[i])
+                .accelerations_at(p.rec.t[i] - t0, &State::of_recording(&p.rec, i), delta[i])
                 .ok()?;
             let rec = [p.acc.u_dot[i], p.acc.v_dot[i], p.acc.r_dot[i]];
             let e = [rec[0] - a[0], rec[1] - a[1], rec[2] - a[2]];
@@ -160,12 +204,37 @@ pub const REPLAY_RESOLUTION_OVER_L: f64 = 1e-3;
 /// whole data set.
 pub const POSITION_ERROR_CAP_OVER_L: f64 = 1.0;
 
-/// Segment-replay score of `model` on recording `rec`.
-pub(crate) fn replay_score(model: &dyn Dynamics, rec: &Recording, horizon_s: f64) -> ReplayScore {
+/// A segment replay of `model` from sample `a` to `b` of `rec`, feeling the recorded environment `env`
+/// (built from `rec`) from the segment's start on.
+fn replay_in(
+    model: &dyn Dynamics,
+    env: Option<&KnownEnvironment>,
+    rec: &Recording,
+    a: usize,
+    b: usize,
+) -> (Recording, bool) {
+    match env {
+        Some(env) => replay_segment(
+            &WithEnvironment::new(model, env.replay_from(rec.t[a])),
+            rec,
+            a,
+            b,
+        ),
+        None => replay_segment(model, rec, a, b),
+    }
+}
+
+/// Segment-replay score of `model` on recording `rec` in its recorded environment `env`.
+pub(crate) fn replay_score(
+    model: &dyn Dynamics,
+    env: Option<&KnownEnvironment>,
+    rec: &Recording,
+    horizon_s: f64,
+) -> ReplayScore {
     let mut s = ReplayScore::default();
     let cap = POSITION_ERROR_CAP_OVER_L * model.ship().lpp;
     for (a, b) in segments(rec, horizon_s) {
-        let (sim, ok) = replay_segment(model, rec, a, b);
+        let (sim, ok) = replay_in(model, env, rec, a, b);
         if !ok {
             s.diverged_segments += 1;
         }
@@ -190,12 +259,18 @@ pub(crate) fn replay_score(model: &dyn Dynamics, rec: &Recording, horizon_s: f64
     s
 }
 
-/// Times and north and east positions [m] of each segment replay (for figures).
-pub fn segment_tracks(model: &dyn Dynamics, rec: &Recording, horizon_s: f64) -> Vec<SegmentTrack> {
+/// Times and north and east positions [m] of each segment replay in the recorded environment `env`
+/// (for figures).
+pub fn segment_tracks(
+    model: &dyn Dynamics,
+    env: Option<&KnownEnvironment>,
+    rec: &Recording,
+    horizon_s: f64,
+) -> Vec<SegmentTrack> {
     segments(rec, horizon_s)
         .into_iter()
         .map(|(a, b)| {
-            let (sim, _) = replay_segment(model, rec, a, b);
+            let (sim, _) = replay_in(model, env, rec, a, b);
             SegmentTrack {
                 t_s: sim.t.iter().map(|t| t + rec.t[a]).collect(),
                 x0: sim.x0,
@@ -277,19 +352,20 @@ pub fn normalised_residuals(
     input: &DiagnoseInput,
     ds: &Dataset,
     opts: &DiagnoseOptions,
-) -> Vec<ResidualSeries> {
+) -> Result<Vec<ResidualSeries>, DiagnoseError> {
     let ship = *input.base.ship();
-    let prep = prepare(ds, &ship, opts);
+    let prep = prepare(ds, &ship, opts, &ChosenWindage::of_dataset(ds))?;
     let c = Composite {
         base: input.base,
         effects: input.base_effects.to_vec(),
     };
     let Some(model) = c.model() else {
-        return Vec::new();
+        return Ok(Vec::new());
     };
     let res: Vec<Vec<Option<[f64; 3]>>> = prep.iter().map(|p| residuals(&model, p)).collect();
     let scale = robust_scale(&res);
-    prep.iter()
+    Ok(prep
+        .iter()
         .zip(res)
         .map(|(p, r)| {
             let (t, e): (Vec<f64>, Vec<[f64; 3]>) = p
@@ -303,11 +379,12 @@ pub fn normalised_residuals(
                 .unzip();
             (p.file.clone(), t, e)
         })
-        .collect()
+        .collect())
 }
 
-/// Segment-replay position RMSE ÷ L of a model (with effects) on a data set: the model's own level on
-/// its training data.
+/// Segment-replay position RMSE ÷ L of a model (with effects) on a data set, each recording in its
+/// recorded environment: the model's own level on its training data. NaN when the model with its
+/// effects cannot be built or a recorded environment cannot be used.
 pub fn model_level(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> f64 {
     let ship = *input.base.ship();
     let horizon_s = opts.horizon_l_over_u0 * ship.lpp / ship.u0;
@@ -318,10 +395,14 @@ pub fn model_level(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) 
     let Some(model) = c.model() else {
         return f64::NAN;
     };
+    let Ok(envs) = environments(ds, &ChosenWindage::of_dataset(ds)) else {
+        return f64::NAN;
+    };
     let scores: Vec<ReplayScore> = ds
         .recordings
         .par_iter()
-        .map(|r| replay_score(&model, &r.recording, horizon_s))
+        .zip(envs.par_iter())
+        .map(|(r, env)| replay_score(&model, env.as_ref(), &r.recording, horizon_s))
         .collect();
     pooled(&scores).position_rmse() / ship.lpp
 }
@@ -334,7 +415,7 @@ pub(crate) fn replay_scores<M: Dynamics + Sync>(
     horizon_s: f64,
 ) -> Vec<ReplayScore> {
     idx.par_iter()
-        .map(|&i| replay_score(model, &prep[i].rec, horizon_s))
+        .map(|&i| replay_score(model, prep[i].env.as_ref(), &prep[i].rec, horizon_s))
         .collect()
 }
 
@@ -370,22 +451,30 @@ pub(crate) struct Baseline {
     pub before_l: f64,
     /// Position RMSE ÷ L expected from the recordings' noise alone.
     pub noise_floor: f64,
+    /// The windage of the recorded wind and of the wind family: the data set's, else assumed.
+    pub windage: ChosenWindage,
 }
 
 impl Baseline {
-    /// `None` when no recording is long enough or the model with its own effects cannot be built.
-    pub fn of(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> Option<Baseline> {
+    /// Refused when no recording is long enough, the model with its own effects cannot be built or a
+    /// recorded environment cannot be used.
+    pub fn of(
+        input: &DiagnoseInput,
+        ds: &Dataset,
+        opts: &DiagnoseOptions,
+    ) -> Result<Baseline, DiagnoseError> {
         let ship = *input.base.ship();
         let horizon_s = opts.horizon_l_over_u0 * ship.lpp / ship.u0;
-        let prep = prepare(ds, &ship, opts);
+        let windage = ChosenWindage::of_dataset(ds);
+        let prep = prepare(ds, &ship, opts, &windage)?;
         if prep.is_empty() {
-            return None;
+            return Err(DiagnoseError::NothingToDiagnose);
         }
         let base = Composite {
             base: input.base,
             effects: input.base_effects.to_vec(),
         };
-        let model = base.model()?;
+        let model = base.model().ok_or(DiagnoseError::Model)?;
         let residuals: Vec<Vec<Option<[f64; 3]>>> =
             prep.iter().map(|p| residuals(&model, p)).collect();
         let scale = robust_scale(&residuals);
@@ -393,7 +482,7 @@ impl Baseline {
         let before_each = replay_scores(&model, &prep, &all, horizon_s);
         let before = pooled(&before_each);
         let noise_floor = noise_floor_over_l(&prep, horizon_s, ship.lpp);
-        Some(Baseline {
+        Ok(Baseline {
             ship,
             horizon_s,
             before_l: before.position_rmse() / ship.lpp,
@@ -403,6 +492,7 @@ impl Baseline {
             before_each,
             before,
             noise_floor,
+            windage,
         })
     }
 
@@ -440,7 +530,7 @@ mod tests {
         .recording;
         let horizon_s = DiagnoseOptions::default().horizon_l_over_u0 * ship.lpp / ship.u0;
         assert!(segments(&rec, horizon_s).len() >= 2);
-        let score = replay_score(&model, &rec, horizon_s);
+        let score = replay_score(&model, None, &rec, horizon_s);
         assert_eq!(score.diverged_segments, 0);
         let rmse_over_l = score.position_rmse() / ship.lpp;
         assert!(rmse_over_l < 1e-3, "position RMSE {rmse_over_l} L");

@@ -6,6 +6,7 @@ use std::collections::BTreeMap;
 
 use rayon::prelude::*;
 use shipid_io::Ship;
+use shipid_pipeline::environment::{ChosenWindage, WindageSource};
 use shipid_pipeline::lm::{LmPoint, dot, lm_step, solve_small};
 use shipid_sim::effects::{Asymmetry, Current, RudderLag, ShallowWater, Wind};
 use shipid_sim::{Dynamics, Effect};
@@ -116,8 +117,9 @@ impl Family {
         }
     }
 
-    /// The effect for internal parameters `p` on `ship`.
-    pub fn effect(self, p: &[f64], ship: &Ship) -> Effect {
+    /// The effect for internal parameters `p` on `ship`; a wind acts on `windage` (the data set's, else
+    /// the assumed one, as the recorded wind does).
+    pub fn effect(self, p: &[f64], ship: &Ship, windage: &ChosenWindage) -> Effect {
         let l_over_u0 = ship.lpp / ship.u0;
         let q = 0.5 * ship.rho * ship.lpp * ship.draft * ship.u0 * ship.u0 * 1e-3;
         let from_deg = |n: f64, e: f64| (-e).atan2(-n).to_degrees().rem_euclid(360.0);
@@ -126,13 +128,19 @@ impl Family {
                 speed_m_s: p[0].hypot(p[1]) * ship.u0,
                 from_deg: from_deg(p[0], p[1]),
             }),
-            Family::Wind => Effect::Wind(Wind {
-                speed_m_s: p[0].hypot(p[1]) * ship.u0,
-                from_deg: from_deg(p[0], p[1]),
-                frontal_area_m2: None,
-                lateral_area_m2: None,
-                windage: None,
-            }),
+            Family::Wind => {
+                // The data set's areas go into the effect's text too, so that the augmented model's
+                // wind acts on them (the assumed windage is the effect's own default).
+                let own = windage.source == WindageSource::Dataset;
+                let w = &windage.windage;
+                Effect::Wind(Wind {
+                    speed_m_s: p[0].hypot(p[1]) * ship.u0,
+                    from_deg: from_deg(p[0], p[1]),
+                    frontal_area_m2: own.then_some(w.frontal_area_m2),
+                    lateral_area_m2: own.then_some(w.lateral_area_m2),
+                    windage: Some(w.clone()),
+                })
+            }
             Family::RudderLag => Effect::RudderLag(RudderLag {
                 time_constant_s: p[0].max(0.0) * l_over_u0,
                 delay_s: p[1].max(0.0) * l_over_u0,
@@ -320,6 +328,7 @@ pub(crate) fn fit_families(
     prep: &[Prepared],
     idx: &[usize],
     scale: &[f64; 3],
+    windage: &ChosenWindage,
     starts: Vec<Vec<f64>>,
     refine: usize,
 ) -> (Vec<Effect>, FitResult) {
@@ -331,7 +340,7 @@ pub(crate) fn fit_families(
             .iter()
             .zip(&dims)
             .map(|(f, &d)| {
-                let e = f.effect(&p[at..at + d], &ship);
+                let e = f.effect(&p[at..at + d], &ship, windage);
                 at += d;
                 e
             })
@@ -375,6 +384,7 @@ pub(crate) fn standard_errors(
     effects: &[Effect],
     fit: &FitResult,
     ship: &Ship,
+    windage: &ChosenWindage,
 ) -> BTreeMap<String, f64> {
     let mut out = BTreeMap::new();
     let mut at = 0;
@@ -382,7 +392,7 @@ pub(crate) fn standard_errors(
         let d = f.dim();
         let p = &fit.params[at..at + d];
         let se = &fit.std_err[at..at + d];
-        let base: Vec<(&str, f64)> = f.effect(p, ship).parameters();
+        let base: Vec<(&str, f64)> = f.effect(p, ship, windage).parameters();
         let mut var = vec![0.0; base.len()];
         // A physical parameter that no fitted one moves is fixed by the family (e.g. the offset
         // variant's n0 and y0): it has no standard error, not a zero one.
@@ -391,7 +401,7 @@ pub(crate) fn standard_errors(
             let h = (se[j] * 1e-2).max(1e-9);
             let mut q = p.to_vec();
             q[j] += h;
-            let moved = f.effect(&q, ship).parameters();
+            let moved = f.effect(&q, ship, windage).parameters();
             for (k, ((_, a), (_, b))) in base.iter().zip(&moved).enumerate() {
                 let mut diff = b - a;
                 if base[k].0 == "from_deg" {
@@ -458,8 +468,9 @@ mod tests {
             std_err: vec![0.02],
         };
         let fams = [Family::RudderOffset];
-        let effects = [fams[0].effect(&fit.params, &ship)];
-        let se = standard_errors(&fams, &effects, &fit, &ship);
+        let windage = ChosenWindage::first_of(&[], &ship);
+        let effects = [fams[0].effect(&fit.params, &ship, &windage)];
+        let se = standard_errors(&fams, &effects, &fit, &ship, &windage);
         assert_eq!(se.len(), 1, "{se:?}");
         let (key, value) = se.iter().next().unwrap();
         assert!(key.contains("offset"), "{key}");

@@ -95,6 +95,7 @@ impl<'a> Judge<'a> {
                     &self.baseline.prep,
                     train,
                     &self.baseline.scale,
+                    &self.baseline.windage,
                     start_grid(families, &alone[k]),
                     3,
                 );
@@ -297,6 +298,7 @@ impl<'a> Judge<'a> {
                     &self.baseline.prep,
                     &all,
                     &self.baseline.scale,
+                    &self.baseline.windage,
                     warm,
                     1,
                 )

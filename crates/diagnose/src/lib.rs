@@ -36,9 +36,12 @@
 mod augment;
 pub mod bench;
 mod compare;
+mod environment;
+mod error;
 mod families;
 mod input;
 mod judge;
+pub mod known_wind;
 mod locate;
 mod report;
 mod verdict;
@@ -46,8 +49,13 @@ mod verdict;
 pub use augment::{AugmentedModel, augmented_model};
 pub use compare::{
     POSITION_ERROR_CAP_OVER_L, Prepared, REPLAY_RESOLUTION_OVER_L, ReplayScore, ResidualSeries,
-    SegmentTrack, model_level, normalised_residuals, prepare, segment_tracks,
+    SegmentTrack, environments, model_level, normalised_residuals, prepare, segment_tracks,
 };
+pub use environment::{
+    AgainstRecorded, Concealed, FlowSummary, RecordedEnvironment, RecordedFlow, RevealCheck,
+    RevealedFlow, WindageUse, angle_difference_deg, conceal, reveal,
+};
+pub use error::DiagnoseError;
 pub use families::{Family, depth_for_factor};
 pub use input::{BaseRange, DiagnoseInput, DiagnoseOptions};
 pub use locate::{Located, Regime};

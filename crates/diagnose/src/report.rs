@@ -10,6 +10,10 @@ use shipid_pipeline::validate::propeller_rate_variations;
 use shipid_sim::Effect;
 
 use crate::compare::{Baseline, ReplayScore, outside_counts, pooled};
+use crate::environment::{
+    AgainstRecorded, RecordedEnvironment, RevealCheck, WindageUse, against_recorded,
+};
+use crate::error::DiagnoseError;
 use crate::families::{FitResult, standard_errors};
 use crate::input::{BaseRange, DiagnoseInput, DiagnoseOptions};
 use crate::judge::{Judge, Judged, rival_of};
@@ -97,18 +101,38 @@ pub struct Report {
     pub outside_identification_range: Option<f64>,
     pub explanation: String,
     /// What weakens the diagnosis beyond the explanation: recordings whose propeller rate varies
-    /// although the model runs at one constant rate. Absent when empty.
+    /// although the model runs at one constant rate, a wind turned into forces with an assumed
+    /// windage. Absent when empty.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
+    /// The windage of the recorded wind and of the wind family: the data set's `[windage]`, else an
+    /// assumed one (`source` says which).
+    pub windage: WindageUse,
+    /// The wind and current the recordings carry, taken as known inputs (part of the base model):
+    /// absent when they carry none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub recorded_environment: Option<RecordedEnvironment>,
+    /// A found wind or current against the one the recordings carry (absent when the recordings carry
+    /// none of what was found).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub against_recorded: Vec<AgainstRecorded>,
+    /// `diagnose --reveal`: the verdict against the recorded channels that were concealed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reveal: Option<RevealCheck>,
 }
 
 /// The explanation mentions the identification range when at least this fraction of the recorded
 /// states lies outside it (and the mismatch is real).
 const OUTSIDE_WORTH_SAYING: f64 = 0.05;
 
-/// Diagnose `ds` against the model (see the crate docs); `None` when there is nothing to diagnose (no
-/// recording long enough) or the model with its own effects cannot be built.
-pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> Option<Report> {
+/// Diagnose `ds` against the model (see the crate docs), each recording with its recorded wind and
+/// current as known inputs; refused when there is nothing to diagnose (no recording long enough), the
+/// model with its own effects cannot be built or a recorded environment cannot be used.
+pub fn diagnose(
+    input: &DiagnoseInput,
+    ds: &Dataset,
+    opts: &DiagnoseOptions,
+) -> Result<Report, DiagnoseError> {
     let baseline = Baseline::of(input, ds, opts)?;
     let real_threshold = baseline.real_threshold(input.model_level_over_l, opts);
     let judge = Judge::new(input, &baseline, opts);
@@ -130,7 +154,30 @@ pub fn diagnose(input: &DiagnoseInput, ds: &Dataset, opts: &DiagnoseOptions) -> 
         .iter()
         .map(ToString::to_string)
         .collect();
-    Some(report)
+    let found: Vec<Effect> = report
+        .effects
+        .iter()
+        .filter_map(|e| e.parse().ok())
+        .collect();
+    report.against_recorded = against_recorded(&found, ds);
+    for a in &report.against_recorded {
+        report.explanation = format!("{}; {}", report.explanation, a.sentence());
+    }
+    report.recorded_environment = RecordedEnvironment::of(ds);
+    let wind_used = report
+        .recorded_environment
+        .as_ref()
+        .is_some_and(|e| !e.wind.is_empty())
+        || report.verdict == Verdict::Wind
+        || found.iter().any(|e| matches!(e, Effect::Wind(_)));
+    if baseline.windage.is_assumed() && wind_used {
+        report.warnings.push(format!(
+            "{}: the data set has no [windage] table: the recorded wind and the wind family use an assumed windage ({}); give [windage] (docs/data-format.md) for the ship's own",
+            ds.path.display(),
+            shipid_sim::environment::ASSUMED_WINDAGE_SOURCE
+        ));
+    }
+    Ok(report)
 }
 
 /// What the diagnosis concludes, before the report is laid out.
@@ -167,7 +214,13 @@ fn conclude_effect(
     Conclusion {
         verdict: winner.families[0].verdict(),
         effects: effects.clone(),
-        standard_errors: standard_errors(&winner.families, effects, fit, &baseline.ship),
+        standard_errors: standard_errors(
+            &winner.families,
+            effects,
+            fit,
+            &baseline.ship,
+            &baseline.windage,
+        ),
         after_scores: winner.cross.0.clone(),
         explanation: format!(
             "{} explains {:.0} % of the held-out mismatch (position RMSE {:.4} L → {:.4} L, noise floor {:.4} L){}",
@@ -372,5 +425,9 @@ fn assemble(
         outside_identification_range: outside_all,
         explanation,
         warnings: Vec::new(),
+        windage: WindageUse::of(&baseline.windage),
+        recorded_environment: None,
+        against_recorded: Vec::new(),
+        reveal: None,
     }
 }

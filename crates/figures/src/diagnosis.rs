@@ -12,17 +12,19 @@ use crate::error::Result;
 
 /// Track of a recording with the segment replays of the model before and after the diagnosis, and
 /// below it the replays' position error over time: on a track many ship lengths long a mismatch of a
-/// few hundredths of L is invisible, its size over time is not.
+/// few hundredths of L is invisible, its size over time is not. The replays feel the recording's
+/// recorded wind and current `env`, as the diagnosis's do.
 pub fn track_figure(
     path: &Path,
     name: &str,
     rec: &shipid_io::Recording,
+    env: Option<&shipid_sim::KnownEnvironment>,
     before: &dyn Dynamics,
     after: &dyn Dynamics,
     horizon_s: f64,
 ) -> Result<()> {
-    let b = shipid_diagnose::segment_tracks(before, rec, horizon_s);
-    let a = shipid_diagnose::segment_tracks(after, rec, horizon_s);
+    let b = shipid_diagnose::segment_tracks(before, env, rec, horizon_s);
+    let a = shipid_diagnose::segment_tracks(after, env, rec, horizon_s);
     let l = before.ship().lpp;
     let pts = |s: &SegmentTrack| -> Vec<(f64, f64)> {
         s.x0.iter()

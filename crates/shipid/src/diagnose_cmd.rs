@@ -1,16 +1,18 @@
-//! `shipid diagnose MODEL DATASET [--json REPORT.json] [--plots DIR] [--model-out FILE]`: I/O around
-//! [`crate::diagnose`].
+//! `shipid diagnose MODEL DATASET [--json REPORT.json] [--plots DIR] [--model-out FILE] [--reveal]`:
+//! I/O around [`shipid_diagnose::diagnose`]. Recorded wind and current are known inputs of the base;
+//! `--reveal` conceals them on purpose and checks the verdict against them.
 
 use std::path::Path;
 
 use shipid_diagnose::{
-    AugmentedModel, BaseRange, DiagnoseInput, DiagnoseOptions, Located, Report, augmented_model,
-    diagnose, model_level, normalised_residuals,
+    AugmentedModel, BaseRange, DiagnoseError, DiagnoseInput, DiagnoseOptions, Located, Report,
+    augmented_model, conceal, diagnose, environments, model_level, normalised_residuals, reveal,
 };
 use shipid_figures::diagnosis::{residual_figure, track_figure};
 use shipid_io::Dataset;
 use shipid_io::write::write_atomic;
 use shipid_model::ModelFile;
+use shipid_pipeline::environment::ChosenWindage;
 use shipid_pipeline::model_file::{
     files_hash, load_model_parts, reanchor_training, ship_mismatch, stored_path,
 };
@@ -65,6 +67,11 @@ fn training_for_diagnosis(model_spec: &str) -> Result<Option<TrainingData>, CliE
     }
 }
 
+/// A diagnosis refused by the library: bad input, naming the data set.
+fn refused(dataset: &Path, e: DiagnoseError) -> CliError {
+    bad_input(format!("{}: {e}", dataset.display()))
+}
+
 pub fn run(
     model_spec: &str,
     dataset: &Path,
@@ -72,6 +79,7 @@ pub fn run(
     plots: Option<&Path>,
     model_out: Option<&Path>,
     horizon_l_over_u0: f64,
+    reveal_check: bool,
 ) -> Result<Outcome, CliError> {
     if !(horizon_l_over_u0.is_finite() && horizon_l_over_u0 > 0.5) {
         return Err(bad_input(format!(
@@ -79,7 +87,19 @@ pub fn run(
         )));
     }
     let (base, base_effects) = load_model_parts(model_spec)?;
-    let ds = Dataset::load(dataset)?;
+    let mut ds = Dataset::load(dataset)?;
+    // Checked before any work: a recorded environment that cannot be turned into forces is bad input.
+    environments(&ds, &ChosenWindage::of_dataset(&ds)).map_err(|e| refused(dataset, e))?;
+    let concealed = if reveal_check {
+        Some(conceal(&mut ds).ok_or_else(|| {
+            bad_input(format!(
+                "--reveal: no recording of {} carries a recorded wind or current (columns wind_speed/wind_from or current_speed/current_from) to conceal and compare with",
+                dataset.display()
+            ))
+        })?)
+    } else {
+        None
+    };
     if let Some(m) = ship_mismatch(base.ship(), &ds.ship) {
         return Err(bad_input(format!(
             "{model_spec} on {}: {m}: a diagnosis would blame the difference on a missing effect",
@@ -121,12 +141,15 @@ pub fn run(
     let level = training.as_ref().and_then(|t| own_level(t, &input, &opts));
     input.model_level_over_l = level.as_ref().map(|l| l.0);
     input.identification_range = BaseRange::of(range.as_ref(), base.own_range());
-    let report = diagnose(&input, &ds, &opts).ok_or_else(|| {
-        bad_input(format!(
-            "{}: no recording with at least 20 samples to diagnose",
-            dataset.display()
-        ))
-    })?;
+    let mut report = diagnose(&input, &ds, &opts).map_err(|e| refused(dataset, e))?;
+    if let Some(c) = &concealed {
+        let found: Vec<Effect> = report
+            .effects
+            .iter()
+            .filter_map(|e| e.parse().ok())
+            .collect();
+        report.reveal = Some(reveal(report.verdict, &found, c));
+    }
     for w in &report.warnings {
         eprintln!("warning: {w}");
     }
@@ -173,7 +196,10 @@ pub fn run(
         let before = WithEffects::new(base.as_ref(), &base_effects).map_err(failed)?;
         let after = WithEffects::new(base.as_ref(), &all).map_err(failed)?;
         std::fs::create_dir_all(dir).map_err(|e| crate::write_failed(dir, e))?;
-        let residuals = normalised_residuals(&input, &ds, &opts);
+        let residuals =
+            normalised_residuals(&input, &ds, &opts).map_err(|e| refused(dataset, e))?;
+        let envs =
+            environments(&ds, &ChosenWindage::of_dataset(&ds)).map_err(|e| refused(dataset, e))?;
         for (file, t, e) in &residuals {
             let path = dir.join(format!("{}-residuals.svg", file.trim_end_matches(".csv")));
             let windows: Vec<&Located> = report
@@ -184,12 +210,13 @@ pub fn run(
             residual_figure(&path, file, t, e, &windows)
                 .map_err(|e| failed(anyhow::anyhow!("{}: {e}", path.display())))?;
         }
-        for r in &ds.recordings {
+        for (r, env) in ds.recordings.iter().zip(&envs) {
             let path = dir.join(format!("{}-tracks.svg", r.file.trim_end_matches(".csv")));
             track_figure(
                 &path,
                 &r.file,
                 &r.recording,
+                env.as_ref(),
                 &before,
                 &after,
                 report.horizon_s,
@@ -262,6 +289,32 @@ fn print_summary(r: &Report, model: &str, dataset: &Path, level_from: Option<&st
     }
     for e in &r.effects {
         println!("  effect: {e}");
+    }
+    if let Some(env) = &r.recorded_environment {
+        let names = |f: &[shipid_diagnose::RecordedFlow]| {
+            f.iter()
+                .map(|x| x.recording.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        if !env.wind.is_empty() {
+            println!(
+                "  recorded wind taken as a known input: {} (windage: {})",
+                names(&env.wind),
+                r.windage.description
+            );
+        }
+        if !env.current.is_empty() {
+            println!(
+                "  recorded current taken as a known input: {}",
+                names(&env.current)
+            );
+        }
+    }
+    if let Some(check) = &r.reveal {
+        for line in check.lines() {
+            println!("  {line}");
+        }
     }
     for (k, v) in &r.standard_errors {
         println!("    ± {k} {v:.4}");

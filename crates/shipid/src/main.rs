@@ -196,6 +196,10 @@ enum Command {
         /// Replay segment length ÷ (L/U0).
         #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
         horizon: f64,
+        /// Check mode: conceal the recorded wind and current channels, diagnose, and compare the
+        /// verdict and the found wind or current with them.
+        #[arg(long)]
+        reveal: bool,
     },
     /// Validate a model on a data set: replayed-rudder RMSEs and closed-loop manoeuvre metrics.
     Validate {
@@ -491,6 +495,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             plots,
             model_out,
             horizon,
+            reveal,
         } => shipid::diagnose_cmd::run(
             &model,
             &dataset,
@@ -498,6 +503,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             plots.as_deref(),
             model_out.as_deref(),
             horizon,
+            reveal,
         ),
         Command::Inverse {
             targets,

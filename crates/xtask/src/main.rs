@@ -9,6 +9,7 @@
 //! - `refine-bench`: wall time and results of `shipid fit --refine` (`bench/refine.md`).
 
 mod bench_diagnose;
+mod bench_known_wind;
 mod circles;
 mod coverage;
 mod fit_bench;
@@ -43,6 +44,17 @@ enum Task {
         seeds: u64,
         #[arg(long, default_value_t = 12)]
         controls: u64,
+    },
+    /// Benchmark the diagnosis with a recorded wind as known input (issue 27): bases identified from
+    /// windy training runs with the wind as input, other runs diagnosed with their wind concealed.
+    BenchKnownWind {
+        /// Base families, comma-separated: full74, mmg, sparse-gp.
+        #[arg(long, value_delimiter = ',', default_value = "full74,mmg,sparse-gp")]
+        bases: Vec<String>,
+        #[arg(long, default_value = "results/diagnose-known-wind")]
+        out: PathBuf,
+        #[arg(long, default_value_t = 3)]
+        seeds: u64,
     },
     /// Paper 001 Tab. 6 and Fig. 9–12 on the imported HSVA tests.
     Paper001 {
@@ -114,6 +126,14 @@ fn main() -> ExitCode {
                 ExitCode::from(1)
             }
         }),
+        Task::BenchKnownWind { bases, out, seeds } => bench_known_wind::run(&bases, &out, seeds)
+            .map(|all_ok| {
+                if all_ok {
+                    ExitCode::SUCCESS
+                } else {
+                    ExitCode::from(1)
+                }
+            }),
         Task::Paper001 {
             dataset,
             out,

@@ -1,0 +1,394 @@
+//! The recorded environment in the report: which recordings carry a wind or a current (part of the
+//! base: the diagnosis looks for what they do not carry), which windage turns a wind into forces, a
+//! found wind or current against the recorded one, and the `--reveal` check, which conceals the
+//! recorded channels on purpose and compares the verdict with them.
+
+use serde::Serialize;
+use shipid_io::{Dataset, FlowSeries};
+use shipid_pipeline::environment::{ChosenWindage, WindageSource};
+use shipid_sim::Effect;
+
+use crate::verdict::Verdict;
+
+/// A recorded flow over its samples.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct FlowSummary {
+    /// Mean of the recorded speed [m/s].
+    pub speed_mean_m_s: f64,
+    /// Direction the mean velocity comes from [deg], earth-fixed, clockwise from north (velocities, not
+    /// directions, are averaged, so a flow veering through north does not average to south).
+    pub from_mean_deg: f64,
+    pub speed_min_m_s: f64,
+    pub speed_max_m_s: f64,
+    /// Mean velocity [north, east] [m/s].
+    #[serde(skip)]
+    pub mean_velocity_m_s: [f64; 2],
+}
+
+/// The direction [deg, 0–360) a flow of velocity [north, east] comes from.
+fn from_deg(velocity: [f64; 2]) -> f64 {
+    (-velocity[1])
+        .atan2(-velocity[0])
+        .to_degrees()
+        .rem_euclid(360.0)
+}
+
+/// The velocity [north, east] [m/s] of a flow of `speed_m_s` from `from_deg`.
+fn velocity(speed_m_s: f64, from_deg: f64) -> [f64; 2] {
+    let (s, c) = from_deg.to_radians().sin_cos();
+    [-speed_m_s * c, -speed_m_s * s]
+}
+
+/// The smaller angle [deg, 0–180] between two directions.
+pub fn angle_difference_deg(a_deg: f64, b_deg: f64) -> f64 {
+    ((a_deg - b_deg + 180.0).rem_euclid(360.0) - 180.0).abs()
+}
+
+impl FlowSummary {
+    /// The flow over every sample of `series` pooled; `None` without samples.
+    pub fn of<'a>(series: impl IntoIterator<Item = &'a FlowSeries>) -> Option<FlowSummary> {
+        let (mut n, mut sum_speed, mut sum_v) = (0usize, 0.0, [0.0; 2]);
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for f in series {
+            for i in 0..f.speed_m_s.len().min(f.from_rad.len()) {
+                let s = f.speed_m_s[i];
+                let v = f.velocity_earth(i);
+                n += 1;
+                sum_speed += s;
+                sum_v = [sum_v[0] + v[0], sum_v[1] + v[1]];
+                lo = lo.min(s);
+                hi = hi.max(s);
+            }
+        }
+        (n > 0).then(|| {
+            let mean = [sum_v[0] / n as f64, sum_v[1] / n as f64];
+            FlowSummary {
+                speed_mean_m_s: sum_speed / n as f64,
+                from_mean_deg: from_deg(mean),
+                speed_min_m_s: lo,
+                speed_max_m_s: hi,
+                mean_velocity_m_s: mean,
+            }
+        })
+    }
+}
+
+/// One recording's recorded flow.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RecordedFlow {
+    pub recording: String,
+    #[serde(flatten)]
+    pub flow: FlowSummary,
+}
+
+/// The windage a wind is turned into forces with: the recorded wind's and the wind family's.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct WindageUse {
+    /// `dataset` (the data set's `[windage]`) or `assumed` (it has none).
+    pub source: WindageSource,
+    pub frontal_area_m2: f64,
+    pub lateral_area_m2: f64,
+    pub lateral_centre_x_m: f64,
+    pub model: &'static str,
+    /// In words, with the assumption named when there is one.
+    pub description: String,
+}
+
+impl WindageUse {
+    pub fn of(chosen: &ChosenWindage) -> WindageUse {
+        let w = &chosen.windage;
+        WindageUse {
+            source: chosen.source,
+            frontal_area_m2: w.frontal_area_m2,
+            lateral_area_m2: w.lateral_area_m2,
+            lateral_centre_x_m: w.lateral_centre_x_m,
+            model: w.model.name(),
+            description: chosen.describe(),
+        }
+    }
+}
+
+/// What the recordings carry as known inputs (absent from the report when they carry nothing).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RecordedEnvironment {
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub wind: Vec<RecordedFlow>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub current: Vec<RecordedFlow>,
+}
+
+impl RecordedEnvironment {
+    /// The flows the recordings of `ds` carry; `None` when none carries one.
+    pub fn of(ds: &Dataset) -> Option<RecordedEnvironment> {
+        let flows = |pick: fn(&shipid_io::Recording) -> Option<&FlowSeries>| -> Vec<RecordedFlow> {
+            ds.recordings
+                .iter()
+                .filter_map(|r| {
+                    Some(RecordedFlow {
+                        recording: r.file.clone(),
+                        flow: FlowSummary::of(pick(&r.recording))?,
+                    })
+                })
+                .collect()
+        };
+        let env = RecordedEnvironment {
+            wind: flows(|r| r.wind.as_ref()),
+            current: flows(|r| r.current.as_ref()),
+        };
+        (!env.wind.is_empty() || !env.current.is_empty()).then_some(env)
+    }
+}
+
+/// A wind (or current) the diagnosis found on top of the one the recordings carry.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AgainstRecorded {
+    /// `wind` or `current`.
+    pub flow: &'static str,
+    /// The steady flow the diagnosis found, which the recordings do not carry.
+    pub found_speed_m_s: f64,
+    pub found_from_deg: f64,
+    /// The recorded flow, pooled over the recordings that carry it.
+    pub recorded: FlowSummary,
+    /// The recorded mean and the found flow together: what the ship felt if the found flow is a bias of
+    /// the recorded channels.
+    pub felt_speed_m_s: f64,
+    pub felt_from_deg: f64,
+    /// Found against recorded mean as ratio of speeds and angle between directions.
+    pub speed_ratio: f64,
+    pub direction_difference_deg: f64,
+}
+
+/// A wind or current of the verdict's effects, as (flow word, speed, from).
+fn flow_effect(e: &Effect) -> Option<(&'static str, f64, f64)> {
+    match e {
+        Effect::Wind(w) => Some(("wind", w.speed_m_s, w.from_deg)),
+        Effect::Current(c) => Some(("current", c.speed_m_s, c.from_deg)),
+        _ => None,
+    }
+}
+
+/// Every found wind or current that the recordings of `recorded` also carry, against the recorded one.
+pub fn against_recorded(effects: &[Effect], ds: &Dataset) -> Vec<AgainstRecorded> {
+    effects
+        .iter()
+        .filter_map(flow_effect)
+        .filter_map(|(flow, speed, from)| {
+            let recorded = FlowSummary::of(ds.recordings.iter().filter_map(|r| match flow {
+                "wind" => r.recording.wind.as_ref(),
+                _ => r.recording.current.as_ref(),
+            }))?;
+            let found = velocity(speed, from);
+            let m = recorded.mean_velocity_m_s;
+            let felt = [m[0] + found[0], m[1] + found[1]];
+            Some(AgainstRecorded {
+                flow,
+                found_speed_m_s: speed,
+                found_from_deg: from,
+                recorded,
+                felt_speed_m_s: felt[0].hypot(felt[1]),
+                felt_from_deg: from_deg(felt),
+                speed_ratio: speed / recorded.speed_mean_m_s.max(f64::MIN_POSITIVE),
+                direction_difference_deg: angle_difference_deg(from, recorded.from_mean_deg),
+            })
+        })
+        .collect()
+}
+
+impl AgainstRecorded {
+    /// One sentence for the explanation.
+    pub fn sentence(&self) -> String {
+        format!(
+            "the recordings carry a {flow} of {:.2} m/s from {:.0}° (mean) as a known input; the {flow} found is one they do not carry, {:.2} m/s from {:.0}° ({:.0} % of the recorded speed, {:.0}° from its direction): together the ship felt {:.2} m/s from {:.0}°, so the recorded {flow} channels (or the windage) may be off",
+            self.recorded.speed_mean_m_s,
+            self.recorded.from_mean_deg,
+            self.found_speed_m_s,
+            self.found_from_deg,
+            100.0 * self.speed_ratio,
+            self.direction_difference_deg,
+            self.felt_speed_m_s,
+            self.felt_from_deg,
+            flow = self.flow
+        )
+    }
+}
+
+/// The recorded channels `--reveal` left out on purpose.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Concealed {
+    pub wind: Option<FlowSummary>,
+    pub current: Option<FlowSummary>,
+    /// The recordings whose channels were removed.
+    pub recordings: Vec<String>,
+}
+
+/// Remove every recorded wind and current from `ds` (the diagnosis then sees recordings without
+/// them) and return what was removed; `None` when no recording carries either.
+pub fn conceal(ds: &mut Dataset) -> Option<Concealed> {
+    let wind = FlowSummary::of(
+        ds.recordings
+            .iter()
+            .filter_map(|r| r.recording.wind.as_ref()),
+    );
+    let current = FlowSummary::of(
+        ds.recordings
+            .iter()
+            .filter_map(|r| r.recording.current.as_ref()),
+    );
+    let mut recordings = Vec::new();
+    for r in &mut ds.recordings {
+        let had = r.recording.wind.take().is_some() | r.recording.current.take().is_some();
+        if had {
+            recordings.push(r.file.clone());
+        }
+    }
+    (!recordings.is_empty()).then_some(Concealed {
+        wind,
+        current,
+        recordings,
+    })
+}
+
+/// A concealed flow against what the diagnosis found.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RevealedFlow {
+    /// The recorded channels that were concealed, pooled over their recordings.
+    pub recorded: FlowSummary,
+    /// The flow the diagnosis found, when it found one of this kind.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub found_speed_m_s: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub found_from_deg: Option<f64>,
+    /// Found minus recorded mean speed [m/s].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub speed_error_m_s: Option<f64>,
+    /// Angle between the found direction and the recorded mean velocity's [deg, 0–180].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub direction_error_deg: Option<f64>,
+}
+
+/// The `--reveal` check: the verdict on recordings whose wind and current were concealed, against the
+/// concealed channels.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RevealCheck {
+    /// The recordings whose channels were concealed.
+    pub recordings: Vec<String>,
+    /// The verdicts that name what was concealed (`none` when the concealed flows were calm).
+    pub expected: Vec<Verdict>,
+    pub verdict: Verdict,
+    pub verdict_right: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wind: Option<RevealedFlow>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub current: Option<RevealedFlow>,
+}
+
+/// The check of a diagnosis with `verdict` and `effects` against what was `concealed`.
+pub fn reveal(verdict: Verdict, effects: &[Effect], concealed: &Concealed) -> RevealCheck {
+    let found = |word: &str| {
+        effects
+            .iter()
+            .filter_map(flow_effect)
+            .find(|(w, _, _)| *w == word)
+    };
+    let flow = |word: &str, recorded: Option<FlowSummary>| {
+        recorded.map(|recorded| {
+            let f = found(word);
+            RevealedFlow {
+                recorded,
+                found_speed_m_s: f.map(|x| x.1),
+                found_from_deg: f.map(|x| x.2),
+                speed_error_m_s: f.map(|x| x.1 - recorded.speed_mean_m_s),
+                direction_error_deg: f.map(|x| angle_difference_deg(x.2, recorded.from_mean_deg)),
+            }
+        })
+    };
+    // A concealed flow that never blew is no effect to find.
+    let blew = |s: &Option<FlowSummary>| s.is_some_and(|s| s.speed_max_m_s > 0.0);
+    let mut expected = Vec::new();
+    if blew(&concealed.wind) {
+        expected.push(Verdict::Wind);
+    }
+    if blew(&concealed.current) {
+        expected.push(Verdict::Current);
+    }
+    if expected.is_empty() {
+        expected.push(Verdict::None);
+    }
+    RevealCheck {
+        recordings: concealed.recordings.clone(),
+        verdict_right: expected.contains(&verdict),
+        expected,
+        verdict,
+        wind: flow("wind", concealed.wind),
+        current: flow("current", concealed.current),
+    }
+}
+
+impl RevealCheck {
+    /// Lines for the command's output.
+    pub fn lines(&self) -> Vec<String> {
+        let words: Vec<&str> = self.expected.iter().map(|v| v.word()).collect();
+        let mut out = vec![format!(
+            "reveal: the recorded wind/current of {} recording(s) was concealed; verdict {} ({}: expected {})",
+            self.recordings.len(),
+            self.verdict,
+            if self.verdict_right { "right" } else { "wrong" },
+            words.join(" or ")
+        )];
+        for (word, f) in [("wind", &self.wind), ("current", &self.current)] {
+            let Some(f) = f else { continue };
+            let r = &f.recorded;
+            out.push(match (f.found_speed_m_s, f.found_from_deg) {
+                (Some(s), Some(d)) => format!(
+                    "  {word}: recorded {:.3} m/s from {:.0}° (mean), found {s:.3} m/s from {d:.0}°: speed error {:+.3} m/s, direction error {:.0}°",
+                    r.speed_mean_m_s,
+                    r.from_mean_deg,
+                    f.speed_error_m_s.unwrap_or(f64::NAN),
+                    f.direction_error_deg.unwrap_or(f64::NAN)
+                ),
+                _ => format!(
+                    "  {word}: recorded {:.3} m/s from {:.0}° (mean), none found",
+                    r.speed_mean_m_s, r.from_mean_deg
+                ),
+            });
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn series(speed: &[f64], from_deg: &[f64]) -> FlowSeries {
+        FlowSeries {
+            speed_m_s: speed.to_vec(),
+            from_rad: from_deg.iter().map(|d| d.to_radians()).collect(),
+        }
+    }
+
+    #[test]
+    fn a_wind_veering_through_north_averages_to_north() {
+        // Regression guard: averaging the directions 350° and 10° gives 180°.
+        let s = FlowSummary::of([&series(&[2.0, 2.0], &[350.0, 10.0])]).unwrap();
+        assert!(angle_difference_deg(s.from_mean_deg, 0.0) < 1e-9, "{s:?}");
+        assert_eq!((s.speed_min_m_s, s.speed_max_m_s), (2.0, 2.0));
+    }
+
+    #[test]
+    fn the_reveal_check_scores_the_found_wind_against_the_concealed_one() {
+        let concealed = Concealed {
+            wind: FlowSummary::of([&series(&[3.0, 3.0], &[80.0, 80.0])]),
+            current: None,
+            recordings: vec!["a.csv".into()],
+        };
+        let found: Effect = "wind:speed=2.5,from=100".parse().unwrap();
+        let check = reveal(Verdict::Wind, &[found], &concealed);
+        assert!(check.verdict_right);
+        let w = check.wind.unwrap();
+        assert!((w.speed_error_m_s.unwrap() + 0.5).abs() < 1e-9);
+        assert!((w.direction_error_deg.unwrap() - 20.0).abs() < 1e-9);
+        let wrong = reveal(Verdict::Current, &[], &concealed);
+        assert!(!wrong.verdict_right && wrong.wind.unwrap().found_speed_m_s.is_none());
+    }
+}

@@ -1,0 +1,512 @@
+//! The proof of the diagnosis with a recorded wind as known input (issue 27, item 4).
+//!
+//! Training runs: the six default manoeuvres simulated with the MMG reference, each in its own wind
+//! (speed and direction drawn per run, none calm, some gusty), the wind written as recorded channels
+//! (`wind_speed`, `wind_from`) and the data set's `[windage]` given. A base identified from them with
+//! the wind as input ([`hydrodynamic_dataset`]: velocities through the water and accelerations
+//! without the recorded wind's, as `shipid fit` takes a recorded wind) is the calm-water model.
+//!
+//! Cases: other runs of the six manoeuvres under one wind per case (steady, or gusty about a mean),
+//! with towing-tank noise of the case's seed. Wind cases conceal the wind channels ([`conceal`]) and
+//! must be diagnosed `wind`, the direction within [`DIRECTION_TARGET_DEG`] of the concealed mean and the
+//! held-out position RMSE reduced by at least [`IMPROVEMENT_TARGET`]; controls keep them (the wind is
+//! part of the base) and must not be diagnosed with an effect.
+//!
+//! This module holds the generator, the grid, the per-case diagnosis and the scoring;
+//! `cargo xtask bench-known-wind` identifies the bases, runs the cases and writes the tables.
+
+use std::time::Instant;
+
+use shipid_io::{Dataset, DatasetRecording, FlowSeries, Manoeuvre, Recording, Windage};
+use shipid_pipeline::environment::hydrodynamic_recording;
+use shipid_pipeline::generate::{
+    DT_S, NoiseModel, SAMPLE_INTERVAL_S, T_EXECUTE_S, default_manoeuvres, fnv1a,
+    standard_duration_s,
+};
+use shipid_pipeline::spec::manoeuvre_stem;
+use shipid_sim::environment::assumed_windage;
+use shipid_sim::{
+    Effect, KnownEnvironment, MmgModel, SimOptions, SimStatus, State, WithEnvironment,
+    controller_for, kvlcc2_added_mass, kvlcc2_ship,
+};
+
+use crate::bench::WORDS;
+use crate::environment::{FlowSummary, RevealCheck, conceal, reveal};
+use crate::input::{DiagnoseInput, DiagnoseOptions};
+use crate::report::diagnose;
+use crate::verdict::Verdict;
+
+/// Wind speeds of the cases [m/s], weakest first (model scale KVLCC2; as the concealed-effect grid).
+pub const WIND_SPEEDS_M_S: [f64; 4] = [1.0, 2.0, 3.0, 4.5];
+/// Gust standard deviation ÷ mean speed of a gusty wind.
+pub const GUST_INTENSITY: f64 = 0.3;
+/// Standard deviation [deg] of a gusty wind's direction about its mean.
+pub const GUST_DIRECTION_DEG: f64 = 10.0;
+/// Periods [s] of the gusts (model scale: 1.5–8 L/U0).
+const GUST_PERIODS_S: [f64; 3] = [9.0, 21.0, 47.0];
+/// Targets of issue 27: direction error and held-out improvement of a right verdict.
+pub const DIRECTION_TARGET_DEG: f64 = 30.0;
+pub const IMPROVEMENT_TARGET: f64 = 0.5;
+
+/// One run's wind: a mean speed and direction, and gusts about them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WindRun {
+    pub speed_m_s: f64,
+    pub from_deg: f64,
+    /// Gust standard deviation ÷ mean speed (0: steady).
+    pub gust: f64,
+    /// Seeds the gusts' phases.
+    pub seed: u64,
+}
+
+/// A number in [0, 1) drawn from `key` (a fixed hash, so everything is reproducible).
+fn unit(key: &str) -> f64 {
+    (fnv1a(key) % 1_000_003) as f64 / 1_000_003.0
+}
+
+impl WindRun {
+    /// Speed [m/s] and direction [deg] at time `t_s`: three sinusoids of unit total variance with
+    /// phases from the seed scale the speed and turn the direction.
+    pub fn at(&self, t_s: f64) -> (f64, f64) {
+        if self.gust == 0.0 {
+            return (self.speed_m_s, self.from_deg);
+        }
+        let amplitude = (2.0 / GUST_PERIODS_S.len() as f64).sqrt();
+        let wave = |salt: &str| -> f64 {
+            GUST_PERIODS_S
+                .iter()
+                .map(|p| {
+                    let phase = std::f64::consts::TAU * unit(&format!("{}:{salt}:{p}", self.seed));
+                    amplitude * (std::f64::consts::TAU * t_s / p + phase).sin()
+                })
+                .sum()
+        };
+        let speed = (self.speed_m_s * (1.0 + self.gust * wave("speed"))).max(0.0);
+        let from = self.from_deg + GUST_DIRECTION_DEG * (self.gust / GUST_INTENSITY) * wave("from");
+        (speed, from.rem_euclid(360.0))
+    }
+
+    /// The wind channels at the times `t`.
+    pub fn series(&self, t: &[f64]) -> FlowSeries {
+        let (speed_m_s, from_rad) = t
+            .iter()
+            .map(|&t| {
+                let (s, d) = self.at(t);
+                (s, d.to_radians())
+            })
+            .unzip();
+        FlowSeries {
+            speed_m_s,
+            from_rad,
+        }
+    }
+}
+
+/// The benchmark ship's windage, given as a data set's `[windage]`: the hull above water of the loaded
+/// KVLCC2 model (the areas the assumed windage takes, here named by the data set).
+pub fn benchmark_windage() -> Windage {
+    Windage {
+        source: Some("benchmark: hull above water of the loaded KVLCC2 model (freeboard 0.44 × draft), Fossen (2011) coefficients".into()),
+        ..assumed_windage(&kvlcc2_ship())
+    }
+}
+
+/// The MMG reference's run of `m` in the wind `wind`, its wind written as recorded channels, with
+/// towing-tank noise of `noise_seed` on the motion channels (the wind channels are kept clean).
+pub fn windy_run(
+    m: &Manoeuvre,
+    wind: &WindRun,
+    windage: &Windage,
+    noise_seed: Option<u64>,
+) -> Result<DatasetRecording, String> {
+    let ship = kvlcc2_ship();
+    let file = format!("{}.csv", manoeuvre_stem(m));
+    let duration_s = standard_duration_s(m, &ship);
+    // The environment interpolates between its samples: the simulation's output grid.
+    let steps = (duration_s / SAMPLE_INTERVAL_S).round() as usize;
+    let t: Vec<f64> = (0..=steps).map(|i| i as f64 * SAMPLE_INTERVAL_S).collect();
+    let template = Recording {
+        wind: Some(wind.series(&t)),
+        t,
+        ..Recording::default()
+    };
+    let env = KnownEnvironment::of_recording(&template, Some(windage), &ship)
+        .map_err(|e| format!("{file}: {e}"))?
+        .ok_or_else(|| format!("{file}: no wind"))?;
+    let model = WithEnvironment::new(MmgModel::kvlcc2(), env);
+    let mut controller = controller_for(m, T_EXECUTE_S).map_err(|e| format!("{file}: {e}"))?;
+    let options = SimOptions::new(duration_s).with_step(DT_S, SAMPLE_INTERVAL_S);
+    let out = shipid_sim::simulate(
+        &model,
+        controller.as_mut(),
+        State::approach(ship.u0),
+        &options,
+    )
+    .map_err(|e| format!("{file}: {e}"))?;
+    if let SimStatus::Diverged { t_s, reason } = out.status {
+        return Err(format!(
+            "{file}: the MMG reference diverged at {t_s} s: {reason}"
+        ));
+    }
+    let mut rec = out.recording;
+    if let Some(seed) = noise_seed {
+        NoiseModel::TANK.apply(&mut rec, &ship, seed, &file);
+    }
+    rec.wind = Some(wind.series(&rec.t));
+    Ok(DatasetRecording {
+        file,
+        manoeuvre: *m,
+        recording: rec,
+    })
+}
+
+/// The six default manoeuvres, each in the wind `wind_of(k, manoeuvre)`, as a data set in memory with
+/// the benchmark windage.
+pub fn windy_dataset(
+    name: &str,
+    noise_seed: Option<u64>,
+    wind_of: &dyn Fn(usize, &Manoeuvre) -> WindRun,
+) -> Result<Dataset, String> {
+    let windage = benchmark_windage();
+    let recordings = default_manoeuvres()
+        .iter()
+        .enumerate()
+        .map(|(k, m)| windy_run(m, &wind_of(k, m), &windage, noise_seed))
+        .collect::<Result<Vec<_>, String>>()?;
+    Ok(Dataset {
+        path: std::path::PathBuf::from(name),
+        name: name.into(),
+        ship: kvlcc2_ship(),
+        added_mass: Some(kvlcc2_added_mass()),
+        propeller: None,
+        rudder: None,
+        windage: Some(windage),
+        recordings,
+    })
+}
+
+/// The training runs: every default manoeuvre in its own wind, 1.5–4.5 m/s from any direction, every
+/// other one gusty, noise-free (as the concealed-effect benchmark's bases are fitted on clean data).
+pub fn training_dataset() -> Result<Dataset, String> {
+    windy_dataset("training runs in recorded winds", None, &|k, _| WindRun {
+        speed_m_s: 1.5 + 3.0 * unit(&format!("train-speed:{k}")),
+        from_deg: 360.0 * unit(&format!("train-from:{k}")),
+        gust: if k % 2 == 1 { GUST_INTENSITY } else { 0.0 },
+        seed: 1000 + k as u64,
+    })
+}
+
+/// `ds` as its hydrodynamics see it: each recording with its recorded wind and current removed
+/// (velocities through the water, accelerations without the recorded wind's M⁻¹F through the data set's
+/// added mass) and its environment channels dropped, so that any fit on it is a fit with the recorded
+/// environment as input.
+pub fn hydrodynamic_dataset(ds: &Dataset) -> Result<Dataset, String> {
+    let added = ds
+        .added_mass
+        .ok_or_else(|| format!("{}: no [added_mass]", ds.path.display()))?;
+    let recordings = ds
+        .recordings
+        .iter()
+        .map(|r| {
+            let h = hydrodynamic_recording(ds, r, &added).map_err(|e| e.to_string())?;
+            let mut rec = h.recording;
+            rec.accelerations = Some(h.accelerations);
+            rec.wind = None;
+            rec.current = None;
+            Ok(DatasetRecording {
+                recording: rec,
+                ..r.clone()
+            })
+        })
+        .collect::<Result<Vec<_>, String>>()?;
+    Ok(Dataset {
+        recordings,
+        ..ds.clone()
+    })
+}
+
+/// One case of the grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KnownWindCase {
+    pub id: String,
+    /// The wind of every run of the case (gusts seeded per run).
+    pub wind: WindRun,
+    /// A control keeps the wind channels (the wind is then part of the base).
+    pub control: bool,
+    /// Noise seed.
+    pub seed: u64,
+}
+
+/// The grid: per seed, every speed steady and gusty with the wind concealed, and controls (wind kept)
+/// at the second and last speed, steady and gusty. Directions are drawn per seed and speed.
+pub fn cases(seeds: u64) -> Vec<KnownWindCase> {
+    let mut out = Vec::new();
+    for seed in 0..seeds {
+        for (k, &speed) in WIND_SPEEDS_M_S.iter().enumerate() {
+            for gust in [0.0, GUST_INTENSITY] {
+                let wind = WindRun {
+                    speed_m_s: speed,
+                    from_deg: (360.0 * unit(&format!("case-from:{seed}:{k}"))).round(),
+                    gust,
+                    seed: 10 * seed + k as u64,
+                };
+                let kind = if gust > 0.0 { "gusty" } else { "steady" };
+                out.push(KnownWindCase {
+                    id: format!("wind-{speed}-{kind}-s{seed}"),
+                    wind,
+                    control: false,
+                    seed,
+                });
+                if k == 1 || k == WIND_SPEEDS_M_S.len() - 1 {
+                    out.push(KnownWindCase {
+                        id: format!("control-{speed}-{kind}-s{seed}"),
+                        wind,
+                        control: true,
+                        seed,
+                    });
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The case's runs: the six manoeuvres in its wind, gusts seeded per run, noise of its seed.
+pub fn case_dataset(case: &KnownWindCase) -> Result<Dataset, String> {
+    windy_dataset(&case.id, Some(case.seed), &|k, _| WindRun {
+        seed: case.wind.seed * 100 + k as u64,
+        ..case.wind
+    })
+}
+
+/// One case's outcome.
+#[derive(Debug, Clone)]
+pub struct KnownWindRow {
+    pub case: KnownWindCase,
+    pub verdict: Verdict,
+    pub before: f64,
+    pub after: f64,
+    /// The recorded wind of the case's runs (concealed or kept).
+    pub recorded: FlowSummary,
+    /// For a concealed wind: the verdict and the found wind against it.
+    pub check: Option<RevealCheck>,
+    pub effects: String,
+    pub time_s: f64,
+}
+
+impl KnownWindRow {
+    /// A wind case diagnosed `wind`; a control with no effect claimed.
+    pub fn correct(&self) -> bool {
+        if self.case.control {
+            !self.verdict.names_effect()
+        } else {
+            self.verdict == Verdict::Wind
+        }
+    }
+
+    /// 1 − after/before of the held-out position RMSE.
+    pub fn improvement(&self) -> f64 {
+        1.0 - self.after / self.before
+    }
+
+    pub fn direction_error_deg(&self) -> Option<f64> {
+        self.check.as_ref()?.wind.as_ref()?.direction_error_deg
+    }
+
+    pub fn found_speed_m_s(&self) -> Option<f64> {
+        self.check.as_ref()?.wind.as_ref()?.found_speed_m_s
+    }
+
+    /// A wind case that meets every target: right verdict, direction within 30°, held-out
+    /// improvement ≥ 50 %.
+    pub fn meets_targets(&self) -> bool {
+        self.correct()
+            && (self.case.control
+                || (self
+                    .direction_error_deg()
+                    .is_some_and(|d| d <= DIRECTION_TARGET_DEG)
+                    && self.improvement() >= IMPROVEMENT_TARGET))
+    }
+}
+
+/// Generates the case's runs, conceals the wind unless it is a control, and diagnoses them against
+/// the base of `input`; an error names the case.
+pub fn run_case(
+    input: &DiagnoseInput,
+    opts: &DiagnoseOptions,
+    case: &KnownWindCase,
+) -> Result<KnownWindRow, String> {
+    let started = Instant::now();
+    let mut ds = case_dataset(case).map_err(|e| format!("{}: {e}", case.id))?;
+    let recorded = FlowSummary::of(
+        ds.recordings
+            .iter()
+            .filter_map(|r| r.recording.wind.as_ref()),
+    )
+    .ok_or_else(|| format!("{}: no wind recorded", case.id))?;
+    let concealed = if case.control { None } else { conceal(&mut ds) };
+    let report = diagnose(input, &ds, opts).map_err(|e| format!("{}: {e}", case.id))?;
+    let effects: Vec<Effect> = report
+        .effects
+        .iter()
+        .filter_map(|e| e.parse().ok())
+        .collect();
+    Ok(KnownWindRow {
+        check: concealed.map(|c| reveal(report.verdict, &effects, &c)),
+        verdict: report.verdict,
+        before: report.fit_before.position_rmse_over_l,
+        after: report.fit_after.position_rmse_over_l,
+        recorded,
+        effects: report.effects.join(" "),
+        time_s: started.elapsed().as_secs_f64(),
+        case: case.clone(),
+    })
+}
+
+/// Verdict counts of the wind cases and of the controls, per column of [`WORDS`].
+pub fn confusion(rows: &[KnownWindRow]) -> [(&'static str, [usize; WORDS.len()]); 2] {
+    let count = |control: bool| {
+        let mut n = [0; WORDS.len()];
+        for r in rows.iter().filter(|r| r.case.control == control) {
+            let column = Verdict::ALL
+                .iter()
+                .position(|v| *v == r.verdict)
+                .unwrap_or(WORDS.len() - 1);
+            n[column] += 1;
+        }
+        n
+    };
+    [
+        ("wind concealed", count(false)),
+        ("wind kept (control)", count(true)),
+    ]
+}
+
+fn mean(x: &[f64]) -> Option<f64> {
+    (!x.is_empty()).then(|| x.iter().sum::<f64>() / x.len() as f64)
+}
+
+/// The summary of one base in markdown: the targets met, the table per speed and gustiness with the
+/// parameter recovery, and the confusion matrix.
+pub fn summary_markdown(rows: &[KnownWindRow], base_name: &str, level: f64) -> String {
+    let wind: Vec<&KnownWindRow> = rows.iter().filter(|r| !r.case.control).collect();
+    let controls: Vec<&KnownWindRow> = rows.iter().filter(|r| r.case.control).collect();
+    let right = wind.iter().filter(|r| r.correct()).count();
+    let within = wind
+        .iter()
+        .filter(|r| {
+            r.direction_error_deg()
+                .is_some_and(|d| d <= DIRECTION_TARGET_DEG)
+        })
+        .count();
+    let improved = wind
+        .iter()
+        .filter(|r| r.correct() && r.improvement() >= IMPROVEMENT_TARGET)
+        .count();
+    let all = wind.iter().filter(|r| r.meets_targets()).count();
+    let alarms = controls.iter().filter(|r| r.verdict.names_effect()).count();
+    let mut md = format!(
+        "### Base: {base_name}\n\nIts own level (segment replays of its training runs in their recorded winds): {level:.4} L. {} wind cases, {} controls.\n\n",
+        wind.len(),
+        controls.len()
+    );
+    md.push_str(&format!(
+        "- Verdict `wind` with the wind concealed: {right} of {}; direction within {DIRECTION_TARGET_DEG:.0}°: {within}; held-out improvement ≥ {:.0} % (right verdicts): {improved}; all three targets: {all} of {}.\n",
+        wind.len(),
+        100.0 * IMPROVEMENT_TARGET,
+        wind.len()
+    ));
+    md.push_str(&format!(
+        "- Controls (wind channels kept): effects claimed on {alarms} of {}.\n",
+        controls.len()
+    ));
+    let t = mean(&rows.iter().map(|r| r.time_s).collect::<Vec<_>>()).unwrap_or(0.0);
+    md.push_str(&format!(
+        "- Mean wall time per case (generation + diagnosis): {t:.1} s.\n\n"
+    ));
+    md.push_str("| wind | right / cases | all targets | mean improvement (right) | speed recorded → found (mean) | direction error mean / max |\n|---|---|---|---|---|---|\n");
+    for &speed in &WIND_SPEEDS_M_S {
+        for gusty in [false, true] {
+            let group: Vec<&&KnownWindRow> = wind
+                .iter()
+                .filter(|r| r.case.wind.speed_m_s == speed && (r.case.wind.gust > 0.0) == gusty)
+                .collect();
+            if group.is_empty() {
+                continue;
+            }
+            let ok: Vec<&&&KnownWindRow> = group.iter().filter(|r| r.correct()).collect();
+            let imp = mean(&ok.iter().map(|r| r.improvement()).collect::<Vec<_>>());
+            let rec: Vec<(f64, f64)> = ok
+                .iter()
+                .filter_map(|r| Some((r.recorded.speed_mean_m_s, r.found_speed_m_s()?)))
+                .collect();
+            let dirs: Vec<f64> = ok.iter().filter_map(|r| r.direction_error_deg()).collect();
+            md.push_str(&format!(
+                "| {speed} m/s {} | {}/{} | {} | {} | {} | {} |\n",
+                if gusty { "gusty" } else { "steady" },
+                ok.len(),
+                group.len(),
+                group.iter().filter(|r| r.meets_targets()).count(),
+                imp.map_or("—".into(), |x| format!("{:.0} %", 100.0 * x)),
+                match (
+                    mean(&rec.iter().map(|x| x.0).collect::<Vec<_>>()),
+                    mean(&rec.iter().map(|x| x.1).collect::<Vec<_>>())
+                ) {
+                    (Some(a), Some(b)) => format!("{a:.2} → {b:.2} m/s"),
+                    _ => "—".into(),
+                },
+                match mean(&dirs) {
+                    Some(m) =>
+                        format!("{m:.0}° / {:.0}°", dirs.iter().copied().fold(0.0, f64::max)),
+                    None => "—".into(),
+                }
+            ));
+        }
+    }
+    md.push_str("\nConfusion matrix (rows: case, columns: verdict):\n\n| case |");
+    for w in WORDS {
+        md.push_str(&format!(" {w} |"));
+    }
+    md.push_str("\n|---|");
+    for _ in WORDS {
+        md.push_str("---|");
+    }
+    md.push('\n');
+    for (k, n) in confusion(rows) {
+        md.push_str(&format!("| {k} |"));
+        for c in n {
+            md.push_str(&format!(" {c} |"));
+        }
+        md.push('\n');
+    }
+    md.push('\n');
+    md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_gusty_wind_varies_about_its_mean_and_a_steady_one_does_not() {
+        let steady = WindRun {
+            speed_m_s: 3.0,
+            from_deg: 350.0,
+            gust: 0.0,
+            seed: 1,
+        };
+        assert_eq!(steady.at(12.3), (3.0, 350.0));
+        let gusty = WindRun {
+            gust: GUST_INTENSITY,
+            ..steady
+        };
+        let t: Vec<f64> = (0..20000).map(|i| i as f64 * 0.1).collect();
+        let s = FlowSummary::of([&gusty.series(&t)]).unwrap();
+        assert!((s.speed_mean_m_s - 3.0).abs() < 0.1, "{s:?}");
+        assert!(s.speed_max_m_s > 3.5 && s.speed_min_m_s < 2.5, "{s:?}");
+        assert!(
+            crate::angle_difference_deg(s.from_mean_deg, 350.0) < 3.0,
+            "{s:?}"
+        );
+    }
+}
