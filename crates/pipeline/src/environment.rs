@@ -80,7 +80,7 @@ impl ChosenWindage {
     pub fn describe(&self) -> String {
         let w = &self.windage;
         format!(
-            "{} (frontal {} m², lateral {} m², lateral centre {} m, model {}, air {} kg/m³{})",
+            "{} (frontal {:.3} m², lateral {:.3} m², lateral centre {:.3} m, model {}, air {} kg/m³{})",
             self.source.words(),
             w.frontal_area_m2,
             w.lateral_area_m2,

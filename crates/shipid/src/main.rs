@@ -246,6 +246,23 @@ enum Command {
             conflicts_with = "replay"
         )]
         bands: Option<f64>,
+        /// A constant true wind: its speed [m/s] and the direction it comes from [deg, clockwise from
+        /// north]; the windage is the model file's, else its data set's, else assumed (said so).
+        #[arg(
+            long,
+            value_name = "SPEED_M_S,FROM_DEG",
+            conflicts_with = "replay",
+            allow_hyphen_values = true
+        )]
+        wind: Option<String>,
+        /// A constant current: its speed [m/s] and the direction it comes from [deg, clockwise from north].
+        #[arg(
+            long,
+            value_name = "SPEED_M_S,FROM_DEG",
+            conflicts_with = "replay",
+            allow_hyphen_values = true
+        )]
+        current: Option<String>,
     },
     /// Paper 003: hydrodynamics of a ship from its motion indexes (SVD modes, simulated database, MLP).
     Inverse {
@@ -420,6 +437,8 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             json,
             out,
             bands,
+            wind,
+            current,
         } => match (manoeuvre, replay) {
             (_, Some(ds)) => {
                 // A replay follows each recording's own time base: these would be silently ignored.
@@ -446,6 +465,8 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                 json,
                 out_csv: out.as_deref(),
                 bands,
+                wind: wind.as_deref(),
+                current: current.as_deref(),
             }),
             (None, None) => Err(shipid::bad_input("give --manoeuvre or --replay")),
         },

@@ -1,4 +1,6 @@
-//! `shipid simulate MODEL --manoeuvre SPEC [--dt S] [--duration S] [--json] [--out FILE.csv]`.
+//! `shipid simulate MODEL --manoeuvre SPEC [--dt S] [--duration S] [--wind SPEED,FROM]
+//! [--current SPEED,FROM] [--json] [--out FILE.csv]`, or `--replay DATASET.toml` (each recording in
+//! its recorded wind and current).
 
 use std::path::Path;
 
@@ -7,7 +9,10 @@ use shipid_io::Manoeuvre;
 use shipid_io::write::{recording_csv, write_atomic};
 use shipid_pipeline::bands::{BandRun, ManoeuvreBands, manoeuvre_bands, replicate_models};
 use shipid_pipeline::model_file::load_model;
-use shipid_pipeline::simulate::{MAX_STORED_SAMPLES, SimRequest, sim_grid, simulate_on_grid};
+use shipid_pipeline::simulate::{
+    MAX_STORED_SAMPLES, SimRequest, constant_environment, parse_flow, sim_grid,
+    simulate_on_grid_in, simulation_windage,
+};
 use shipid_pipeline::spec::parse_manoeuvre;
 use shipid_sim::{Dynamics, SimOutput, SimStatus, metrics};
 
@@ -34,14 +39,26 @@ pub fn outcome_json(out: &SimOutput, m: &Manoeuvre, model: &dyn Dynamics) -> Val
     Value::Object(o)
 }
 
-/// `--replay DATASET.toml`: every recording's rudder replayed from its initial state.
+/// `--replay DATASET.toml`: every recording's rudder replayed from its initial state, in its recorded
+/// wind and current.
 pub fn run_replay(model_spec: &str, dataset: &Path, as_json: bool) -> Result<Outcome, CliError> {
     let model = load_model(model_spec)?;
     let ds = shipid_io::Dataset::load(dataset)?;
+    let windage = shipid_pipeline::validate::validation_windage(model_spec, &ds);
+    let warnings = shipid_pipeline::validate::validation_warnings(model_spec, &ds);
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
     let mut recs = Map::new();
     let mut any_failed = false;
     for r in &ds.recordings {
-        let sim = shipid_pipeline::validate::replay(model.as_ref(), &r.recording);
+        let env = shipid_pipeline::environment::environment_with(
+            &r.recording,
+            &windage,
+            &ds.ship,
+            &r.file,
+        )?;
+        let sim = shipid_pipeline::validate::replay_in(model.as_ref(), &r.recording, env);
         let errors = shipid_pipeline::validate::replay_errors(&sim, &r.recording, model.ship());
         let mut o = match serde_json::to_value(&sim.status) {
             Ok(Value::Object(o)) => o,
@@ -62,7 +79,12 @@ pub fn run_replay(model_spec: &str, dataset: &Path, as_json: bool) -> Result<Out
         );
         recs.insert(r.file.clone(), Value::Object(o));
     }
-    let value = json!({ "model": model_spec, "dataset": dataset.display().to_string(), "recordings": recs });
+    let mut value = json!({ "model": model_spec, "dataset": dataset.display().to_string(), "recordings": recs });
+    if !warnings.is_empty()
+        && let Value::Object(o) = &mut value
+    {
+        o.insert("warnings".into(), json!(warnings));
+    }
     if as_json {
         println!(
             "{}",
@@ -91,6 +113,10 @@ pub struct SimulateArgs<'a> {
     pub out_csv: Option<&'a Path>,
     /// `--bands LEVEL`: bands over the model file's bootstrap replicates.
     pub bands: Option<f64>,
+    /// `--wind SPEED_M_S,FROM_DEG`: a constant true wind.
+    pub wind: Option<&'a str>,
+    /// `--current SPEED_M_S,FROM_DEG`: a constant current.
+    pub current: Option<&'a str>,
 }
 
 pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
@@ -102,7 +128,30 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
             "--bands must be a level strictly between 0 and 1 (e.g. 0.9), got {level}"
         )));
     }
+    let wind = a.wind.map(|w| parse_flow("--wind", w)).transpose()?;
+    let current = a.current.map(|c| parse_flow("--current", c)).transpose()?;
+    if a.bands.is_some() && (wind.is_some() || current.is_some()) {
+        return Err(bad_input(
+            "--bands does not apply with --wind or --current: the bootstrap replicates run in calm water",
+        ));
+    }
     let model = load_model(a.model)?;
+    let mut warnings = Vec::new();
+    let windage = simulation_windage(a.model, model.ship());
+    if wind.is_some() {
+        let w = format!("--wind: the wind's force uses {}", windage.describe());
+        if windage.is_assumed() {
+            warnings.push(format!(
+                "{}: the model file records no windage and its data set gives no [windage]; {w}",
+                a.model
+            ));
+        } else {
+            eprintln!("note: {w}");
+        }
+    }
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
     // Before the simulation: a model without replicates is refused at once.
     let replicates = a.bands.map(|_| replicate_models(a.model)).transpose()?;
     let request = SimRequest {
@@ -117,7 +166,8 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
             grid.steps, grid.dt_s, grid.sample_interval_s, MAX_STORED_SAMPLES
         );
     }
-    let out = simulate_on_grid(model.as_ref(), &m, &grid)?;
+    let env = constant_environment(wind, current, &windage, model.ship(), grid.duration_s)?;
+    let out = simulate_on_grid_in(model.as_ref(), &m, &grid, env)?;
     if let Some(path) = a.out_csv {
         let comments = vec![format!(
             "shipid {} simulate {} --manoeuvre {}; midship, SI, rudder positive to starboard",
@@ -129,6 +179,23 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
             .map_err(|e| crate::write_failed(path, e))?;
     }
     let mut value = outcome_json(&out, &m, model.as_ref());
+    if let Value::Object(o) = &mut value {
+        if let Some(w) = wind {
+            o.insert(
+                "wind".into(),
+                json!({ "speed_m_s": w.speed_m_s, "from_deg": w.from_deg, "windage": windage.describe(), "windage_assumed": windage.is_assumed() }),
+            );
+        }
+        if let Some(c) = current {
+            o.insert(
+                "current".into(),
+                json!({ "speed_m_s": c.speed_m_s, "from_deg": c.from_deg }),
+            );
+        }
+        if !warnings.is_empty() {
+            o.insert("warnings".into(), json!(warnings));
+        }
+    }
     if let (Some(level), Some(replicates)) = (a.bands, &replicates) {
         let bands = manoeuvre_bands(
             model.as_ref(),
