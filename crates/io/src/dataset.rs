@@ -493,6 +493,7 @@ fn check_windage(path: &Path, w: &Windage, lpp: f64) -> Result<(), InputError> {
         ("windage.length_overall_m", w.length_overall_m),
         ("windage.lateral_centre_height_m", w.lateral_centre_height_m),
         ("windage.height_m", w.height_m),
+        ("windage.lateral_perimeter_m", w.lateral_perimeter_m),
     ] {
         if let Some(v) = value {
             positive(path, key, v)?;

@@ -264,6 +264,14 @@ pub struct Windage {
     /// Height of the highest point of the ship above the waterline [m] (Fujiwara 2005 H_BR).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub height_m: Option<f64>,
+    /// Perimeter of the lateral projection above water [m], waterline and slender bodies (masts,
+    /// ventilators) excluded (Isherwood 1973 S; required by `isherwood1973`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lateral_perimeter_m: Option<f64>,
+    /// Number of distinct groups of masts or king posts seen in the lateral projection, king posts close
+    /// against the bridge front not counted (Isherwood 1973 M); default 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mast_groups: Option<u32>,
     /// Where these values come from (drawings, an estimate, …): model files repeat it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub source: Option<String>,

@@ -110,6 +110,8 @@ impl Wind {
             superstructure_lateral_area_m2: None,
             lateral_centre_height_m: None,
             height_m: None,
+            lateral_perimeter_m: None,
+            mast_groups: None,
             source: None,
         });
         Windage {

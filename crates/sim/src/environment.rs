@@ -48,27 +48,128 @@ pub struct Aerodynamics {
     windage: Windage,
     /// Reference length of the yaw moment [m] (length overall; L_pp when not given).
     length_m: f64,
+    /// Isherwood's ship parameters, when that is the model.
+    isherwood: Option<IsherwoodShip>,
 }
 
 /// Fossen's mid-range merchant-ship constants [c_x, c_y, c_n] (Fossen 2011, §8.1: c_x 0.50–0.90,
 /// c_y 0.70–0.95, c_n 0.05–0.20).
 pub const FOSSEN_COEFFICIENTS: [f64; 3] = [0.70, 0.825, 0.125];
 
+/// The regression constants of Isherwood (1973), "Wind resistance of merchant ships", Trans. RINA 115,
+/// 327–338, Tables 1–3, as tabulated in the MSS toolbox (Fossen, `GNC/isherwood72.m`, revision
+/// 2008-11-20), per 10° of the relative wind angle from 0° (ahead) to 180° (astern). Rows:
+/// [A0 … A6] of C_X, [B0 … B6] of C_Y, [C0 … C5, 0] of C_N, with the regressors
+/// [1, 2A_L/L², 2A_F/B², L/B, S/L, C/L, M] for C_X, [1, 2A_L/L², 2A_F/B², L/B, S/L, C/L, A_SS/A_L] for
+/// C_Y and [1, 2A_L/L², 2A_F/B², L/B, S/L, C/L] for C_N (L length overall, B beam, S perimeter, C the
+/// lateral centroid's distance from the bow, M the mast groups).
+#[rustfmt::skip]
+pub const ISHERWOOD_TABLES: [[[f64; 7]; 3]; 19] = [
+    [[2.152, -5.00, 0.243, -0.164, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]],
+    [[1.714, -3.33, 0.145, -0.121, 0.0, 0.0, 0.0], [0.096, 0.22, 0.0, 0.0, 0.0, 0.0, 0.0], [0.0596, 0.061, 0.0, 0.0, 0.0, -0.074, 0.0]],
+    [[1.818, -3.97, 0.211, -0.143, 0.0, 0.0, 0.033], [0.176, 0.71, 0.0, 0.0, 0.0, 0.0, 0.0], [0.1106, 0.204, 0.0, 0.0, 0.0, -0.170, 0.0]],
+    [[1.965, -4.81, 0.243, -0.154, 0.0, 0.0, 0.041], [0.225, 1.38, 0.0, 0.023, 0.0, -0.29, 0.0], [0.2258, 0.245, 0.0, 0.0, 0.0, -0.380, 0.0]],
+    [[2.333, -5.99, 0.247, -0.190, 0.0, 0.0, 0.042], [0.329, 1.82, 0.0, 0.043, 0.0, -0.59, 0.0], [0.2017, 0.457, 0.0, 0.0067, 0.0, -0.472, 0.0]],
+    [[1.726, -6.54, 0.189, -0.173, 0.348, 0.0, 0.048], [1.164, 1.26, 0.121, 0.0, -0.242, -0.95, 0.0], [0.1759, 0.573, 0.0, 0.0118, 0.0, -0.523, 0.0]],
+    [[0.913, -4.68, 0.0, -0.104, 0.482, 0.0, 0.052], [1.163, 0.96, 0.101, 0.0, -0.177, -0.88, 0.0], [0.1925, 0.480, 0.0, 0.0115, 0.0, -0.546, 0.0]],
+    [[0.457, -2.88, 0.0, -0.068, 0.346, 0.0, 0.043], [0.916, 0.53, 0.069, 0.0, 0.0, -0.65, 0.0], [0.2133, 0.315, 0.0, 0.0081, 0.0, -0.526, 0.0]],
+    [[0.341, -0.91, 0.0, -0.031, 0.0, 0.0, 0.032], [0.844, 0.55, 0.082, 0.0, 0.0, -0.54, 0.0], [0.1827, 0.254, 0.0, 0.0053, 0.0, -0.443, 0.0]],
+    [[0.355, 0.0, 0.0, 0.0, -0.247, 0.0, 0.018], [0.889, 0.0, 0.138, 0.0, 0.0, -0.66, 0.0], [0.2627, 0.0, 0.0, 0.0, 0.0, -0.508, 0.0]],
+    [[0.601, 0.0, 0.0, 0.0, -0.372, 0.0, -0.020], [0.799, 0.0, 0.155, 0.0, 0.0, -0.55, 0.0], [0.2102, 0.0, -0.0195, 0.0, 0.0335, -0.492, 0.0]],
+    [[0.651, 1.29, 0.0, 0.0, -0.582, 0.0, -0.031], [0.797, 0.0, 0.151, 0.0, 0.0, -0.55, 0.0], [0.1567, 0.0, -0.0258, 0.0, 0.0497, -0.457, 0.0]],
+    [[0.564, 2.54, 0.0, 0.0, -0.748, 0.0, -0.024], [0.996, 0.0, 0.184, 0.0, -0.212, -0.66, 0.34], [0.0801, 0.0, -0.0311, 0.0, 0.0740, -0.396, 0.0]],
+    [[-0.142, 3.58, 0.0, 0.047, -0.700, 0.0, -0.028], [1.014, 0.0, 0.191, 0.0, -0.280, -0.69, 0.44], [-0.0189, 0.0, -0.0488, 0.0101, 0.1128, -0.420, 0.0]],
+    [[-0.677, 3.64, 0.0, 0.069, -0.529, 0.0, -0.032], [0.784, 0.0, 0.166, 0.0, -0.209, -0.53, 0.38], [0.0256, 0.0, -0.0422, 0.0100, 0.0889, -0.463, 0.0]],
+    [[-0.723, 3.14, 0.0, 0.064, -0.475, 0.0, -0.032], [0.536, 0.0, 0.176, -0.029, -0.163, 0.0, 0.27], [0.0552, 0.0, -0.0381, 0.0109, 0.0689, -0.476, 0.0]],
+    [[-2.148, 2.56, 0.0, 0.081, 0.0, 1.27, -0.027], [0.251, 0.0, 0.106, -0.022, 0.0, 0.0, 0.0], [0.0881, 0.0, -0.0306, 0.0091, 0.0366, -0.415, 0.0]],
+    [[-2.707, 3.97, -0.175, 0.126, 0.0, 1.81, 0.0], [0.125, 0.0, 0.046, -0.012, 0.0, 0.0, 0.0], [0.0851, 0.0, -0.0122, 0.0025, 0.0, -0.220, 0.0]],
+    [[-2.529, 3.76, -0.174, 0.128, 0.0, 1.55, 0.0], [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]],
+];
+
+/// The regressors of Isherwood's tables for one ship (see [`ISHERWOOD_TABLES`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct IsherwoodShip {
+    /// [1, 2A_L/L², 2A_F/B², L/B, S/L, C/L] and the last regressor of C_X (M) and of C_Y (A_SS/A_L).
+    common: [f64; 6],
+    masts: f64,
+    superstructure: f64,
+}
+
+impl IsherwoodShip {
+    /// Isherwood's coefficients as he gives them, for a relative wind `gamma_deg` in [0°, 180°] off the
+    /// bow: C_X (positive pushing the ship forward), the side force C_Y and yaw moment C_N (both
+    /// positive to leeward and bow to leeward), interpolated linearly between the 10° rows.
+    fn tabulated(&self, gamma_deg: f64) -> [f64; 3] {
+        let x = (gamma_deg / 10.0).clamp(0.0, 18.0);
+        let k = (x.floor() as usize).min(17);
+        let w = x - k as f64;
+        let row = |i: usize, which: usize, last: f64| {
+            let t = &ISHERWOOD_TABLES[i][which];
+            let mut v = last * t[6];
+            for (j, r) in self.common.iter().enumerate() {
+                v += t[j] * r;
+            }
+            v
+        };
+        let at =
+            |which: usize, last: f64| (1.0 - w) * row(k, which, last) + w * row(k + 1, which, last);
+        // Isherwood's C_X is a resistance (positive aft); MSS negates it (Blendermann's signs).
+        [-at(0, self.masts), at(1, self.superstructure), at(2, 0.0)]
+    }
+}
+
 impl Aerodynamics {
-    /// The force model of `windage` for `ship`, checked against what its wind model needs.
+    /// The force model of `windage` for `ship`, checked against what its wind model needs: Isherwood
+    /// (1973) needs `length_overall_m` and `lateral_perimeter_m`; Fujiwara et al. (2005) is refused
+    /// (see [`WindModel::Fujiwara2005`] in `docs/data-format.md`).
     pub fn new(windage: &Windage, ship: &Ship) -> Result<Aerodynamics, EnvironmentError> {
-        match windage.model {
-            WindModel::Fossen => {}
-            m @ (WindModel::Isherwood1973 | WindModel::Fujiwara2005) => {
+        let length_m = windage.length_overall_m.unwrap_or(ship.lpp);
+        let missing = |key: &str, what: &str| EnvironmentError::Windage {
+            model: windage.model.name(),
+            reason: format!("needs the [windage] key `{key}` ({what})"),
+        };
+        let isherwood = match windage.model {
+            WindModel::Fossen => None,
+            WindModel::Isherwood1973 => {
+                let loa = windage.length_overall_m.ok_or_else(|| {
+                    missing("length_overall_m", "length overall [m], Isherwood's L")
+                })?;
+                let perimeter = windage.lateral_perimeter_m.ok_or_else(|| {
+                    missing(
+                        "lateral_perimeter_m",
+                        "perimeter of the lateral projection above water [m], Isherwood's S",
+                    )
+                })?;
+                // Isherwood's C counts from the bow; midship is taken at half the length overall.
+                let c_from_bow = 0.5 * loa - windage.lateral_centre_x_m;
+                Some(IsherwoodShip {
+                    common: [
+                        1.0,
+                        2.0 * windage.lateral_area_m2 / (loa * loa),
+                        2.0 * windage.frontal_area_m2 / (ship.beam * ship.beam),
+                        loa / ship.beam,
+                        perimeter / loa,
+                        c_from_bow / loa,
+                    ],
+                    masts: f64::from(windage.mast_groups.unwrap_or(0)),
+                    superstructure: windage.superstructure_lateral_area_m2.unwrap_or(0.0)
+                        / windage.lateral_area_m2,
+                })
+            }
+            WindModel::Fujiwara2005 => {
                 return Err(EnvironmentError::Windage {
-                    model: m.name(),
-                    reason: "not available in this build; use model = \"fossen\"".into(),
+                    model: windage.model.name(),
+                    reason: "not available in this build: its regression constants are not yet \
+                             checked against a published source; use model = \"isherwood1973\" or \
+                             \"fossen\""
+                        .into(),
                 });
             }
-        }
+        };
         Ok(Aerodynamics {
-            length_m: windage.length_overall_m.unwrap_or(ship.lpp),
+            length_m,
             windage: windage.clone(),
+            isherwood,
         })
     }
 
@@ -78,11 +179,20 @@ impl Aerodynamics {
     }
 
     /// Force coefficients [C_X, C_Y, C_N] for the relative wind coming from `gamma_rad` (0 from ahead,
-    /// +90° from starboard), with X = q A_F C_X, Y = q A_L C_Y, N = q A_L L C_N about midship (N before
-    /// the lateral centre's lever, which [`Aerodynamics::force`] adds).
+    /// +90° from starboard), with X = q A_F C_X, Y = q A_L C_Y, N = q A_L L C_N about midship. For
+    /// Fossen's model N is about the lateral centre ([`Aerodynamics::force`] adds its lever); Isherwood's
+    /// regression holds the centroid's position already. Signs are the project's: a head wind gives
+    /// C_X < 0, a wind from starboard C_Y < 0 (to port), one from the starboard bow C_N < 0.
     pub fn coefficients(&self, gamma_rad: f64) -> [f64; 3] {
-        match self.windage.model {
-            WindModel::Fossen | WindModel::Isherwood1973 | WindModel::Fujiwara2005 => {
+        match &self.isherwood {
+            Some(ish) => {
+                // Isherwood tabulates 0–180°; a wind from port mirrors one from starboard.
+                let g = gamma_rad.sin().atan2(gamma_rad.cos());
+                let side = if g < 0.0 { -1.0 } else { 1.0 };
+                let [cx, cy, cn] = ish.tabulated(g.abs().to_degrees());
+                [cx, -side * cy, -side * cn]
+            }
+            None => {
                 let [cx, cy, cn] = FOSSEN_COEFFICIENTS;
                 [
                     -cx * gamma_rad.cos(),
@@ -105,11 +215,15 @@ impl Aerodynamics {
         let gamma = (-va).atan2(-ua);
         let [cx, cy, cn] = self.coefficients(gamma);
         let y = q * self.windage.lateral_area_m2 * cy;
+        let lever_m = if self.isherwood.is_some() {
+            0.0
+        } else {
+            self.windage.lateral_centre_x_m
+        };
         [
             q * self.windage.frontal_area_m2 * cx,
             y,
-            q * self.windage.lateral_area_m2 * self.length_m * cn
-                + self.windage.lateral_centre_x_m * y,
+            q * self.windage.lateral_area_m2 * self.length_m * cn + lever_m * y,
         ]
     }
 }
@@ -129,6 +243,8 @@ pub fn assumed_windage(ship: &Ship) -> Windage {
         superstructure_lateral_area_m2: None,
         lateral_centre_height_m: None,
         height_m: None,
+        lateral_perimeter_m: None,
+        mast_groups: None,
         source: Some(ASSUMED_WINDAGE_SOURCE.into()),
     }
 }
@@ -493,6 +609,166 @@ mod tests {
                 .unwrap();
         let f = beam.wind_force(0.0, &still);
         assert!((f[1] + q * w.lateral_area_m2 * 0.825).abs() < 1e-9, "{f:?}");
+    }
+
+    /// A ship with round Isherwood regressors: L_oa 60 m, B 10 m (L/B = 6), 2A_L/L² = 0.2,
+    /// 2A_F/B² = 1, S/L = 2, C/L = 0.5, one mast group, A_SS/A_L = 0.2.
+    fn isherwood_ship() -> (Windage, Ship) {
+        let ship = Ship {
+            beam: 10.0,
+            lpp: 58.0,
+            ..ship()
+        };
+        let w = Windage {
+            frontal_area_m2: 50.0,
+            lateral_area_m2: 360.0,
+            model: WindModel::Isherwood1973,
+            length_overall_m: Some(60.0),
+            lateral_perimeter_m: Some(120.0),
+            mast_groups: Some(1),
+            superstructure_lateral_area_m2: Some(72.0),
+            ..assumed_windage(&ship)
+        };
+        (w, ship)
+    }
+
+    fn check_coefficients(aero: &Aerodynamics, gamma_deg: f64, expected: [f64; 3]) {
+        let c = aero.coefficients(gamma_deg.to_radians());
+        for i in 0..3 {
+            assert!(
+                (c[i] - expected[i]).abs() < 1e-12,
+                "γ = {gamma_deg}°: {c:?} against {expected:?}"
+            );
+        }
+    }
+
+    /// Head, beam and following wind against Isherwood's table rows 0°, 90° and 180° by hand, e.g.
+    /// C_X(0°) = −(2.152 − 5.00·0.2 + 0.243·1 − 0.164·6) = −0.411; C_Y(90°) = 0.889 + 0.138·1 − 0.66·0.5
+    /// = 0.697 to leeward; C_N(90°) = 0.2627 − 0.508·0.5 = 0.0087 bow to leeward.
+    #[test]
+    fn isherwood_matches_its_table_ahead_abeam_and_astern() {
+        let (w, ship) = isherwood_ship();
+        let aero = Aerodynamics::new(&w, &ship).unwrap();
+        check_coefficients(&aero, 0.0, [-0.411, 0.0, 0.0]);
+        check_coefficients(
+            &aero,
+            90.0,
+            [-(0.355 - 0.247 * 2.0 + 0.018), -0.697, -0.0087],
+        );
+        check_coefficients(
+            &aero,
+            180.0,
+            [
+                -(-2.529 + 3.76 * 0.2 - 0.174 + 0.128 * 6.0 + 1.55 * 0.5),
+                0.0,
+                0.0,
+            ],
+        );
+        // Halfway between the 30° and 40° rows: the mean of both.
+        let mean = |a: [f64; 3], b: [f64; 3]| {
+            [
+                0.5 * (a[0] + b[0]),
+                0.5 * (a[1] + b[1]),
+                0.5 * (a[2] + b[2]),
+            ]
+        };
+        let c30 = aero.coefficients(30f64.to_radians());
+        let c40 = aero.coefficients(40f64.to_radians());
+        check_coefficients(&aero, 35.0, mean(c30, c40));
+    }
+
+    /// Port mirrors starboard: C_X(−γ) = C_X(γ), C_Y(−γ) = −C_Y(γ), C_N(−γ) = −C_N(γ), for every model.
+    #[test]
+    fn wind_from_port_mirrors_wind_from_starboard() {
+        let (w, ship) = isherwood_ship();
+        for model in [WindModel::Fossen, WindModel::Isherwood1973] {
+            let aero = Aerodynamics::new(&Windage { model, ..w.clone() }, &ship).unwrap();
+            for deg in (5..=175).step_by(10) {
+                let g = f64::from(deg).to_radians();
+                let (a, b) = (aero.coefficients(g), aero.coefficients(-g));
+                assert!(
+                    (a[0] - b[0]).abs() < 1e-12
+                        && (a[1] + b[1]).abs() < 1e-12
+                        && (a[2] + b[2]).abs() < 1e-12,
+                    "{model:?} at {deg}°: {a:?} {b:?}"
+                );
+            }
+        }
+    }
+
+    /// Isherwood's wind pushes as physics says: a head wind back, a beam wind to leeward, a wind on
+    /// the bow turns the bow to leeward and one on the quarter the stern.
+    #[test]
+    fn isherwood_forces_have_the_signs_of_fossens() {
+        let (w, ship) = isherwood_ship();
+        let ish = Aerodynamics::new(&w, &ship).unwrap();
+        let fossen = Aerodynamics::new(
+            &Windage {
+                model: WindModel::Fossen,
+                ..w
+            },
+            &ship,
+        )
+        .unwrap();
+        for deg in [0.0, 30.0, 60.0, 150.0, -60.0] {
+            let g: f64 = f64::to_radians(deg);
+            let (a, b) = (ish.coefficients(g), fossen.coefficients(g));
+            for i in 0..3 {
+                assert!(a[i] * b[i] >= 0.0, "{deg}°: Isherwood {a:?}, Fossen {b:?}");
+            }
+        }
+    }
+
+    /// Fossen's model is the one of `effects::Wind`: −c_x cos γ, −c_y sin γ, −c_n sin 2γ.
+    #[test]
+    fn fossen_coefficients_are_unchanged() {
+        let aero = Aerodynamics::new(&assumed_windage(&ship()), &ship()).unwrap();
+        for deg in [0.0, 45.0, 90.0, 135.0, 180.0, -30.0] {
+            let g: f64 = f64::to_radians(deg);
+            check_coefficients(
+                &aero,
+                deg,
+                [-0.70 * g.cos(), -0.825 * g.sin(), -0.125 * (2.0 * g).sin()],
+            );
+        }
+    }
+
+    /// Isherwood without the keys it needs is refused naming the key; Fujiwara is refused.
+    #[test]
+    fn a_model_without_its_keys_is_refused_naming_the_key() {
+        let (w, ship) = isherwood_ship();
+        for (windage, key) in [
+            (
+                Windage {
+                    length_overall_m: None,
+                    ..w.clone()
+                },
+                "`length_overall_m`",
+            ),
+            (
+                Windage {
+                    lateral_perimeter_m: None,
+                    ..w.clone()
+                },
+                "`lateral_perimeter_m`",
+            ),
+        ] {
+            let e = Aerodynamics::new(&windage, &ship).unwrap_err().to_string();
+            assert!(e.contains(key) && e.contains("isherwood1973"), "{e}");
+        }
+        let e = Aerodynamics::new(
+            &Windage {
+                model: WindModel::Fujiwara2005,
+                ..w
+            },
+            &ship,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("fujiwara2005") && e.contains("not available"),
+            "{e}"
+        );
     }
 
     /// Regression guard: a recorded wind without windage is refused, not silently ignored.
