@@ -234,33 +234,37 @@ pub struct Ensemble {
     pub block_rows: Vec<usize>,
 }
 
-/// Fit every set of `sets` to the whole `recordings` of `ds` with `spec` and bootstrap each with
-/// `replicates / sets.len()` replicates (at least 2) of seed `seed`.
+/// How an ensemble is fitted: its structures (the first gives the point prediction), the estimator,
+/// training windows and solver they share, and the bootstrap replicates (pooled over the sets) and
+/// their seed.
+#[derive(Clone, Copy)]
+pub struct EnsembleSpec<'a> {
+    pub sets: &'a [CoefficientSet],
+    pub estimator: &'a EstimatorSpec,
+    pub window: WindowSpec,
+    pub solver: Solver,
+    pub replicates: usize,
+    pub seed: u64,
+}
+
+/// Fit every set of `how` to `recordings` of `ds` and bootstrap each with `replicates / sets`
+/// replicates (at least 2).
 pub fn fit_ensemble(
     ds: &Dataset,
-    sets: &[CoefficientSet],
-    spec: &EstimatorSpec,
+    how: &EnsembleSpec,
     recordings: &[String],
-    replicates: usize,
-    seed: u64,
 ) -> Result<Ensemble, PipelineError> {
+    let (sets, spec) = (how.sets, how.estimator);
     let mut point = None;
     let mut models = Vec::new();
     let mut block_rows = Vec::new();
-    let share = (replicates / sets.len().max(1)).max(2);
+    let share = (how.replicates / sets.len().max(1)).max(2);
     for set in sets {
-        let out = fit_dataset(
-            ds,
-            set.clone(),
-            spec,
-            recordings,
-            WindowSpec::Whole,
-            Solver::Fast,
-        )?;
+        let out = fit_dataset(ds, set.clone(), spec, recordings, how.window, how.solver)?;
         if let Some(none) = out.no_information() {
             return Err(failed(format!("{}: {none}", set.name)));
         }
-        let boot = bootstrap_fit(ds, &out, spec, Solver::Fast, share, seed)?;
+        let boot = bootstrap_fit(ds, &out, spec, how.solver, share, how.seed)?;
         models.extend(boot.models(&out.model));
         block_rows.push(boot.block.rows);
         if point.is_none() {
@@ -338,15 +342,12 @@ pub fn in_sample_errors(
     Ok(z)
 }
 
-/// Leave each of `recordings` out in turn, fit the ensemble of `sets` on the rest, and give the
+/// Leave each of `recordings` out in turn, fit the ensemble of `how` on the rest, and give the
 /// errors of the left-out recording's metrics (none with a single recording).
 pub fn held_out_errors(
     ds: &Dataset,
-    sets: &[CoefficientSet],
-    spec: &EstimatorSpec,
+    how: &EnsembleSpec,
     recordings: &[String],
-    replicates: usize,
-    seed: u64,
     level: f64,
 ) -> Result<Vec<BandError>, PipelineError> {
     let mut z = Vec::new();
@@ -360,7 +361,7 @@ pub fn held_out_errors(
             .filter(|&(j, _)| j != i)
             .map(|(_, r)| r.clone())
             .collect();
-        let e = fit_ensemble(ds, sets, spec, &rest, replicates, seed)?;
+        let e = fit_ensemble(ds, how, &rest)?;
         z.extend(
             in_sample_errors(&e, ds, std::slice::from_ref(left), level)?
                 .into_iter()
@@ -373,23 +374,17 @@ pub fn held_out_errors(
     Ok(z)
 }
 
-/// The calibration of the ensemble `e`, fitted with `sets` and `spec` to `recordings` of `ds`: the
-/// factors of its errors on its own recordings and of the held-out errors ([`calibrate`]).
-#[allow(clippy::too_many_arguments)]
+/// The calibration of the ensemble `e`, fitted as `how` says to `recordings` of `ds`: the factors of
+/// its errors on its own recordings and of the held-out errors ([`calibrate`]).
 pub fn calibrate_ensemble(
     e: &Ensemble,
     ds: &Dataset,
-    sets: &[CoefficientSet],
-    spec: &EstimatorSpec,
+    how: &EnsembleSpec,
     recordings: &[String],
-    replicates: usize,
-    seed: u64,
     level: f64,
 ) -> Result<Calibration, PipelineError> {
     let mut z = in_sample_errors(e, ds, recordings, level)?;
-    z.extend(held_out_errors(
-        ds, sets, spec, recordings, replicates, seed, level,
-    )?);
+    z.extend(held_out_errors(ds, how, recordings, level)?);
     let folds = if recordings.len() < 2 {
         0
     } else {

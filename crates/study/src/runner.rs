@@ -480,7 +480,8 @@ fn test_rows(
 
 /// The bands of every test of a polynomial case (studies with `bands`): the fit's block-bootstrap
 /// replicates, each re-simulated through the test's manoeuvre as the point prediction is (from the
-/// recording's initial state, [`BandRun::Recording`]). A bootstrap that cannot be made leaves the
+/// recording's initial state), and with `calibrate` widened by the case's calibration from its own
+/// training recordings (`shipid_pipeline::calibration::calibrate_ensemble`). A bootstrap that cannot be made leaves the
 /// rows without bands and says why in the case's message; the point results stand.
 fn add_bands(
     study: &Study,
@@ -490,7 +491,10 @@ fn add_bands(
     solver: Solver,
     tests: &mut [TestRow],
 ) -> Result<(), String> {
-    use shipid_pipeline::bands::{BandRun, manoeuvre_bands};
+    use shipid_pipeline::bands::BandRun;
+    use shipid_pipeline::calibration::{
+        Ensemble, EnsembleSpec, calibrate_ensemble, ensemble_bands, widen,
+    };
     let boot = shipid_pipeline::bootstrap::bootstrap_fit(
         &study.dataset,
         out,
@@ -500,8 +504,29 @@ fn add_bands(
         bands.seed,
     )
     .map_err(|e| format!("no bands: {e}"))?;
-    let replicates = boot.models(&out.model);
-    let point = AbkowitzDynamics(out.model.clone());
+    let ensemble = Ensemble {
+        point: out.model.clone(),
+        range: IdentificationRange::from_samples(&out.model.set, &out.training).ok(),
+        replicates: boot.models(&out.model),
+        block_rows: vec![boot.block.rows],
+    };
+    let calibration = if bands.calibrate {
+        let sets = [out.model.set.clone()];
+        let how = EnsembleSpec {
+            sets: &sets,
+            estimator: &case.estimator,
+            window: case.window,
+            solver,
+            replicates: bands.replicates,
+            seed: bands.seed,
+        };
+        Some(
+            calibrate_ensemble(&ensemble, &study.dataset, &how, &case.training, bands.level)
+                .map_err(|e| format!("no calibrated bands: {e}"))?,
+        )
+    } else {
+        None
+    };
     for row in tests.iter_mut() {
         let Some(r) = study.dataset.recording(&row.test) else {
             continue;
@@ -509,9 +534,8 @@ fn add_bands(
         if row.status == TestStatus::ReplayOnly {
             continue;
         }
-        let b = manoeuvre_bands(
-            &point,
-            &replicates,
+        let (b, reach) = ensemble_bands(
+            &ensemble,
             &r.manoeuvre,
             &study.dataset.ship,
             bands.level,
@@ -525,11 +549,17 @@ fn add_bands(
                 continue;
             }
             let entry = match &m.band {
-                Ok(band) => MetricBandRow::Band {
-                    lo: band.lo,
-                    hi: band.hi,
-                    inside: value.map(|v| band.contains(v)),
-                },
+                Ok(band) => {
+                    let band = match &calibration {
+                        Some(c) => widen(band, c.factor(m.metric), reach),
+                        None => *band,
+                    };
+                    MetricBandRow::Band {
+                        lo: band.lo,
+                        hi: band.hi,
+                        inside: value.map(|v| band.contains(v)),
+                    }
+                }
                 Err(e) => MetricBandRow::NoBand {
                     reason: e.to_string(),
                 },

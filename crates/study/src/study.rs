@@ -29,6 +29,8 @@
 //! `bootstrap = 200` block-bootstrap replicates of each case's fit, and `bands = 0.9` the nominal
 //! level of the percentile band over their re-simulations. They go together; the sparse GP and the
 //! mmg family have no replicates in a study yet, so a study that crosses them with bands is refused.
+//! `calibrate = true` widens every band by the case's calibration from its training recordings
+//! (`shipid_pipeline::calibration`; docs/uncertainty.md).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -152,6 +154,9 @@ pub struct RawStudy {
     /// Block-bootstrap replicates per case for the bands (needs `bands`).
     #[serde(default)]
     pub bootstrap: Option<i64>,
+    /// Widen each band by the calibration of `shipid_pipeline::calibration` (needs `bands`).
+    #[serde(default)]
+    pub calibrate: bool,
 }
 
 /// What the bands of a study are made of: `replicates` block-bootstrap refits of each case, and the
@@ -163,6 +168,9 @@ pub struct StudyBands {
     /// Seed of the replicate draws (`shipid fit --bootstrap-seed`'s default), so a rerun of the
     /// study gives the same bands.
     pub seed: u64,
+    /// Widened by the case's own calibration: inflation per metric family from its training
+    /// recordings' errors (in sample and left out in turn) and the reach outside its range.
+    pub calibrate: bool,
 }
 
 /// One grid point.
@@ -254,7 +262,7 @@ impl CheckedStudy {
         let estimators = check_estimators(path, &raw.estimators)?;
         check_mmg_estimators(path, &raw.sets, &estimators)?;
         let tests = test_recordings(path, &raw.test.recordings, known)?;
-        let bands = check_bands(path, raw.bands, raw.bootstrap, &raw.sets, &raw.estimators)?;
+        let bands = check_bands(path, &raw)?;
         let data_fnv1a = data_fingerprint(path, &dataset_path, &dataset)?;
         Ok(CheckedStudy {
             path: path.to_path_buf(),
@@ -344,15 +352,17 @@ impl CheckedStudy {
 /// of, and replicates without a level would cost their refits for no column. Only the polynomial
 /// cases have replicates in a study: a GP or mmg case among them would leave its rows without bands
 /// while the table promises them, so such a study is refused.
-fn check_bands(
-    path: &Path,
-    level: Option<f64>,
-    replicates: Option<i64>,
-    sets: &[String],
-    estimators: &[RawEstimator],
-) -> Result<Option<StudyBands>, InputError> {
+fn check_bands(path: &Path, raw: &RawStudy) -> Result<Option<StudyBands>, InputError> {
+    let (sets, estimators) = (&raw.sets, &raw.estimators);
     let max = shipid_pipeline::bootstrap::MAX_REPLICATES;
-    let (level, replicates) = match (level, replicates) {
+    let (level, replicates) = match (raw.bands, raw.bootstrap) {
+        (None, None) if raw.calibrate => {
+            return Err(InputError::key(
+                path,
+                "calibrate",
+                "widens bands, and there are none: give bands = 0.9 and bootstrap = 200 too",
+            ));
+        }
         (None, None) => return Ok(None),
         (Some(_), None) => {
             return Err(InputError::key(
@@ -414,6 +424,7 @@ fn check_bands(
         level,
         replicates,
         seed: 1,
+        calibrate: raw.calibrate,
     }))
 }
 

@@ -19,13 +19,14 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use serde_json::json;
+use shipid_estimators::Solver;
 use shipid_io::Manoeuvre;
 use shipid_model::CoefficientSet;
 use shipid_pipeline::bands::BandRun;
 use shipid_pipeline::calibration::{
-    MetricFamily, calibrate_ensemble, ensemble_bands, fit_ensemble, widen,
+    EnsembleSpec, MetricFamily, calibrate_ensemble, ensemble_bands, fit_ensemble, widen,
 };
-use shipid_pipeline::fit::EstimatorSpec;
+use shipid_pipeline::fit::{EstimatorSpec, WindowSpec};
 use shipid_pipeline::generate::{default_manoeuvres, generate_manoeuvres};
 use shipid_pipeline::spec::parse_manoeuvre;
 use shipid_sim::metrics::metrics;
@@ -103,19 +104,17 @@ pub fn run(
         for (s, (set_name, files)) in TRAINING_SETS.iter().enumerate() {
             let recordings: Vec<String> = files.iter().map(|f| f.to_string()).collect();
             let context = || format!("seed {seed}, {set_name}");
-            let ensemble = fit_ensemble(&noisy, &sets, &spec, &recordings, replicates, seed)
-                .with_context(context)?;
-            let calibration = calibrate_ensemble(
-                &ensemble,
-                &noisy,
-                &sets,
-                &spec,
-                &recordings,
+            let how = EnsembleSpec {
+                sets: &sets,
+                estimator: &spec,
+                window: WindowSpec::Whole,
+                solver: Solver::Fast,
                 replicates,
                 seed,
-                level,
-            )
-            .with_context(context)?;
+            };
+            let ensemble = fit_ensemble(&noisy, &how, &recordings).with_context(context)?;
+            let calibration = calibrate_ensemble(&ensemble, &noisy, &how, &recordings, level)
+                .with_context(context)?;
             for (r, (file, true_metrics)) in truth_data.recordings.iter().zip(&truth) {
                 let (bands, reach) =
                     ensemble_bands(&ensemble, &r.manoeuvre, &ship, level, BandRun::Standard)?;

@@ -8,7 +8,7 @@ use shipid_io::Dataset;
 use shipid_model::{CoefficientSet, IdentificationRange};
 use shipid_pipeline::bands::BandRun;
 use shipid_pipeline::calibration::{
-    BandError, FamilyFactor, MetricFamily, calibrate, ensemble_bands, fit_ensemble,
+    BandError, EnsembleSpec, FamilyFactor, MetricFamily, calibrate, ensemble_bands, fit_ensemble,
     held_out_errors, in_sample_errors, reach, standardised_error, widen,
 };
 use shipid_pipeline::fit::{EstimatorSpec, WindowSpec, fit_dataset};
@@ -103,6 +103,22 @@ fn widening_keeps_the_centre_and_scales_the_half_width_by_factor_and_reach() {
     assert_eq!(standardised_error(&band(3.0, 3.0), 3.0, 1.0), None);
 }
 
+/// Whole recordings, the fast solver, seed 1.
+fn how<'a>(
+    sets: &'a [CoefficientSet],
+    estimator: &'a EstimatorSpec,
+    replicates: usize,
+) -> EnsembleSpec<'a> {
+    EnsembleSpec {
+        sets,
+        estimator,
+        window: WindowSpec::Whole,
+        solver: Solver::Fast,
+        replicates,
+        seed: 1,
+    }
+}
+
 fn default_data() -> Dataset {
     Dataset::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/kvlcc2-mmg/dataset.toml"))
         .expect("the shipped default data load")
@@ -152,11 +168,11 @@ fn each_training_recording_is_predicted_in_sample_and_held_out_and_one_recording
     };
     let one: Vec<String> = vec!["zz35_35_ps.csv".into()];
     assert!(
-        held_out_errors(&ds, &sets, &spec, &one, 40, 1, 0.9)
+        held_out_errors(&ds, &how(&sets, &spec, 40), &one, 0.9)
             .unwrap()
             .is_empty()
     );
-    let e = fit_ensemble(&ds, &sets, &spec, &one, 40, 1).unwrap();
+    let e = fit_ensemble(&ds, &how(&sets, &spec, 40), &one).unwrap();
     let own = in_sample_errors(&e, &ds, &one, 0.9).unwrap();
     // ZZ35's overshoots and times, none of them held out, none a turning length.
     assert!((1..=4).contains(&own.len()), "{own:?}");
@@ -164,7 +180,7 @@ fn each_training_recording_is_predicted_in_sample_and_held_out_and_one_recording
     assert!(own.iter().all(|b| !b.held_out && b.reach < 1.1), "{own:?}");
 
     let two: Vec<String> = vec!["zz35_35_ps.csv".into(), "zz20_20_ps.csv".into()];
-    let z = held_out_errors(&ds, &sets, &spec, &two, 40, 1, 0.9).unwrap();
+    let z = held_out_errors(&ds, &how(&sets, &spec, 40), &two, 0.9).unwrap();
     assert!((2..=8).contains(&z.len()), "held-out errors {z:?}");
     assert!(
         z.iter()
@@ -183,7 +199,7 @@ fn the_ensemble_pools_every_structures_replicates_and_predicts_with_the_first() 
         lambda: Some(1e-6),
         ..EstimatorSpec::named("ridge")
     };
-    let e = fit_ensemble(&ds, &sets, &spec, &["zz35_35_ps.csv".into()], 60, 1).unwrap();
+    let e = fit_ensemble(&ds, &how(&sets, &spec, 60), &["zz35_35_ps.csv".into()]).unwrap();
     assert_eq!(e.point.set.name, "reduced32");
     assert_eq!(e.block_rows.len(), 2);
     assert!(

@@ -25,7 +25,7 @@ fn check_bad(name: &str, expected: &str) {
 fn bad_study_files_name_the_file_and_key() {
     check_bad(
         "unknown_key.toml",
-        ":2:1: key `colour`: unknown field `colour`, expected one of `name`, `description`, `dataset`, `sets`, `training`, `estimator`, `test`, `check`, `bands`, `bootstrap`",
+        ":2:1: key `colour`: unknown field `colour`, expected one of `name`, `description`, `dataset`, `sets`, `training`, `estimator`, `test`, `check`, `bands`, `bootstrap`, `calibrate`",
     );
     check_bad(
         "unknown_estimator.toml",

@@ -193,6 +193,16 @@ fn bands_and_bootstrap_go_together_and_are_checked() {
         "bands = 0.9\nbootstrap = -1",
         Err("key `bootstrap`: -1 replicates: give between 2 and 10000"),
     );
+    check_bands(
+        "calibrate = true",
+        Err(
+            "key `calibrate`: widens bands, and there are none: give bands = 0.9 and bootstrap = 200 too",
+        ),
+    );
+    check_bands(
+        "bands = 0.5\nbootstrap = 2\ncalibrate = true",
+        Ok(Some((0.5, 2))),
+    );
 }
 
 /// A result of `study`'s one case whose ZZ20 test has an overshoot band that misses the record and
