@@ -9,7 +9,12 @@ use crate::html::{badge, esc, facts, id_of, json_html, num, page, toml_block, wa
 use crate::{DiagnosisFiles, ReportError, RunMeta};
 
 /// Keys of the report that the page shows in their own place; any other key is listed as it is.
-const KNOWN: [&str; 14] = [
+const KNOWN: [&str; 19] = [
+    "warnings",
+    "windage",
+    "recorded_environment",
+    "against_recorded",
+    "reveal",
     "verdict",
     "candidates",
     "located",
@@ -183,6 +188,12 @@ pub fn diagnosis_page(files: &DiagnosisFiles, meta: &RunMeta) -> Result<String, 
     }
     b.push_str(&facts(&ev));
     b.push_str("</section>");
+
+    environment_section(&mut b, r);
+    // The diagnosis's own warnings (a varying propeller rate, an assumed windage) head the page.
+    if let Some(ws) = r.get("warnings").and_then(Value::as_array) {
+        notes.extend(ws.iter().filter_map(Value::as_str).map(str::to_string));
+    }
 
     // ---- candidates
     b.push_str("<section id=\"candidates\"><h2>Candidate effects</h2>");
@@ -391,6 +402,110 @@ pub fn diagnosis_page(files: &DiagnosisFiles, meta: &RunMeta) -> Result<String, 
         format!("{title}: {verdict} — shipid diagnosis report")
     };
     Ok(page(&page_title, &b))
+}
+
+/// The recorded environment: the windage a wind is turned into forces with, the wind and current the
+/// recordings carry as known inputs, a found flow against the recorded one, and the `--reveal` check.
+/// Nothing when the report has none of these keys (written before they existed).
+fn environment_section(b: &mut String, r: &Map<String, Value>) {
+    let windage = r.get("windage").and_then(Value::as_object);
+    let recorded = r.get("recorded_environment").and_then(Value::as_object);
+    let against = r.get("against_recorded").and_then(Value::as_array);
+    let reveal = r.get("reveal").and_then(Value::as_object);
+    if windage.is_none() && recorded.is_none() && against.is_none() && reveal.is_none() {
+        return;
+    }
+    let g = |v: &Value, k: &str| v.get(k).and_then(Value::as_f64);
+    let flow_text = |v: &Value| {
+        format!(
+            "{} m/s from {}° (mean; {}–{} m/s)",
+            g(v, "speed_mean_m_s").map_or("?".into(), num),
+            g(v, "from_mean_deg").map_or("?".into(), num),
+            g(v, "speed_min_m_s").map_or("?".into(), num),
+            g(v, "speed_max_m_s").map_or("?".into(), num)
+        )
+    };
+    b.push_str("<section id=\"environment\"><h2>Recorded environment</h2>");
+    let mut rows: Vec<(String, String)> = Vec::new();
+    if let Some(w) = windage {
+        let assumed = w.get("source").and_then(Value::as_str) == Some("assumed");
+        rows.push((
+            if assumed {
+                "windage (assumed: the data set gives no [windage])".into()
+            } else {
+                "windage (the data set's [windage])".into()
+            },
+            w.get("description")
+                .and_then(Value::as_str)
+                .unwrap_or_default()
+                .to_string(),
+        ));
+    }
+    for (key, word) in [("wind", "recorded wind"), ("current", "recorded current")] {
+        for x in recorded
+            .and_then(|e| e.get(key))
+            .and_then(Value::as_array)
+            .into_iter()
+            .flatten()
+        {
+            rows.push((
+                format!("{word} (known input), {}", str_field(x, "recording")),
+                flow_text(x),
+            ));
+        }
+    }
+    for a in against.into_iter().flatten() {
+        let flow = str_field(a, "flow");
+        rows.push((
+            format!("{flow} found, not recorded"),
+            format!(
+                "{} m/s from {}°, against the recorded {}: {} % of its speed, {}° from its direction; felt together {} m/s from {}°",
+                g(a, "found_speed_m_s").map_or("?".into(), num),
+                g(a, "found_from_deg").map_or("?".into(), num),
+                a.get("recorded").map_or("?".into(), flow_text),
+                g(a, "speed_ratio").map_or("?".into(), |x| num(100.0 * x)),
+                g(a, "direction_difference_deg").map_or("?".into(), num),
+                g(a, "felt_speed_m_s").map_or("?".into(), num),
+                g(a, "felt_from_deg").map_or("?".into(), num)
+            ),
+        ));
+    }
+    if let Some(c) = reveal {
+        let right = c.get("verdict_right").and_then(Value::as_bool) == Some(true);
+        let expected: Vec<&str> = c
+            .get("expected")
+            .and_then(Value::as_array)
+            .map(|a| a.iter().filter_map(Value::as_str).collect())
+            .unwrap_or_default();
+        rows.push((
+            "--reveal: verdict on the concealed channels".into(),
+            format!(
+                "{} ({}; expected {})",
+                c.get("verdict").and_then(Value::as_str).unwrap_or("?"),
+                if right { "right" } else { "wrong" },
+                expected.join(" or ")
+            ),
+        ));
+        for key in ["wind", "current"] {
+            let Some(f) = c.get(key) else { continue };
+            let recorded = f.get("recorded").map_or("?".into(), flow_text);
+            rows.push((
+                format!("--reveal: concealed {key}"),
+                match (g(f, "found_speed_m_s"), g(f, "found_from_deg")) {
+                    (Some(s), Some(d)) => format!(
+                        "recorded {recorded}; found {} m/s from {}°: speed error {} m/s, direction error {}°",
+                        num(s),
+                        num(d),
+                        g(f, "speed_error_m_s").map_or("?".into(), num),
+                        g(f, "direction_error_deg").map_or("?".into(), num)
+                    ),
+                    _ => format!("recorded {recorded}; none found"),
+                },
+            ));
+        }
+    }
+    b.push_str(&facts(&rows));
+    b.push_str("</section>");
 }
 
 /// An effect in the effect syntax (`name:key=value,…`) with its numbers at four significant digits.
