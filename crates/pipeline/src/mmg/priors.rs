@@ -11,6 +11,10 @@ const NU_M2_S: f64 = 1.139e-6;
 /// Form factor 1 + k of the resistance prior: a typical value of full-form single-screw ships.
 const FORM_FACTOR: f64 = 1.25;
 
+/// Upper bound of N'_vvv: the largest |N'_vvv| of the 20 ships of Yoshimura's captive-test database
+/// (data/paper003/ships.toml, ship S15: N'_βββ = 0.335, N'_vvv = −N'_βββ).
+pub const N_VVV_MAX: f64 = 0.335;
+
 /// Whether a parameter enters the forces linearly given the others (the hull derivatives, solved by
 /// the inner least-squares problem) or not (propeller and rudder interaction, the outer problem).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -97,16 +101,16 @@ pub fn priors(ship: &Ship, geometry: &MmgGeometry, added: &AddedMass) -> Vec<Par
                          single-screw ships' derivatives";
     let weak = "no empirical estimate: weakly informative prior at 0, sd = the magnitude of published \
                 single-screw ships' derivatives";
-    // Sign bounds of the cubic damping terms Y'_vvv, Y'_vrr, N'_vvv, N'_vvr, N'_rrr (≤ 0), as Y'_v and
-    // N'_r have theirs. The cross-flow drag of the hull (Hooft 1994, Ocean Eng. 21:329–342),
+    // Sign bounds of the cubic damping terms Y'_vvv, Y'_vrr, N'_vvr, N'_rrr (≤ 0), as Y'_v and N'_r
+    // have theirs. The cross-flow drag of the hull (Hooft 1994, Ocean Eng. 21:329–342),
     // −C_D ∫ (v' + ξr')|v' + ξr'| dξ and its moment, projected on the cubic form over |v'| ≤ 0.4,
-    // |r'| ≤ 1 gives Y'_vvv −1.22 C_D, Y'_vrr −0.26 C_D, N'_vvr −0.27 C_D, N'_rrr −0.010 C_D and
-    // N'_vvv 0, whatever C_D > 0; the regression's centres are negative for every ship of its population
-    // (N'_vvv for C_b < 0.96), and so are Yasukawa & Yoshimura's captive-test values for KVLCC2.
-    // Zig-zags hardly excite these terms: unbounded, they take whatever sign helps the equation error
-    // and carry it into a steady turn (docs/mmg.md, "The HSVA recordings"). Y'_vvr, Y'_rrr, N'_vrr come
-    // from the hull's fore-and-aft asymmetry (zero in the cross-flow model), on whose sign the sources
-    // disagree: no bound.
+    // |r'| ≤ 1 gives Y'_vvv −1.22 C_D, Y'_vrr −0.26 C_D, N'_vvr −0.27 C_D, N'_rrr −0.010 C_D, whatever
+    // C_D > 0; all 20 ships of Yoshimura's captive-test database (data/paper003/ships.toml) and the
+    // regression's centres have these signs. N'_vvv is 0 in the cross-flow model and 4 of those 20
+    // ships have it positive (up to 0.093): only its magnitude is bounded, N_VVV_MAX. Zig-zags hardly
+    // excite these terms: unbounded, they take whatever value helps the equation error and carry it
+    // into a steady turn (docs/mmg.md, "What carries the turn"). Y'_vvr, Y'_rrr, N'_vrr come from the
+    // hull's fore-and-aft asymmetry (zero in the cross-flow model) and take both signs there: no bound.
     let hull =
         |dof: usize, column: usize, bounds: (f64, f64), prior: f64, sd: f64, source: &str| {
             ParamSpec {
@@ -203,8 +207,8 @@ pub fn priors(ship: &Ship, geometry: &MmgGeometry, added: &AddedMass) -> Vec<Par
         hull(
             2,
             2,
-            (-INF, 0.0),
-            (0.69 * cb - 0.66).min(0.0),
+            (-INF, N_VVV_MAX),
+            (0.69 * cb - 0.66).min(N_VVV_MAX),
             ym_sd(0.69 * cb - 0.66, 0.2),
             &format!("{ym}: N'_vvv = −(−0.69 C_b + 0.66)"),
         ),
