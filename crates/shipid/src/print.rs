@@ -2,7 +2,7 @@
 
 use serde_json::{Map, Value, json};
 use shipid_io::Dataset;
-use shipid_pipeline::validate::{RangeSource, propeller_rate_variations, validate_dataset};
+use shipid_pipeline::validate::{RangeSource, validate_dataset};
 use shipid_sim::Dynamics;
 
 use crate::Outcome;
@@ -89,10 +89,7 @@ pub fn validation_with_bands(
         "method": "replay: recorded rudder from the recorded initial state (RMSEs); manoeuvre: the recording's standard manoeuvre re-simulated in closed loop (metrics)",
         "recordings": recs,
     });
-    let warnings: Vec<String> = propeller_rate_variations(&ds.recordings)
-        .iter()
-        .map(ToString::to_string)
-        .collect();
+    let warnings = shipid_pipeline::validate::validation_warnings(model_spec, ds);
     for w in &warnings {
         eprintln!("warning: {w}");
     }
