@@ -208,7 +208,10 @@ pub fn replicate_models(spec: &str) -> Result<Vec<Box<dyn Dynamics + Send + Sync
              N`) or a sparse-GP model file; `{spec}` is not one"
         )));
     }
-    let text = std::fs::read_to_string(path).map_err(|e| InputError::read(path, &e))?;
+    // A fit in a recorded wind appends `[environment]`, which the mmg and GP formats do not have.
+    let text = std::fs::read_to_string(path)
+        .map(|t| crate::environment::without_environment_table(&t))
+        .map_err(|e| InputError::read(path, &e))?;
     let kind = toml::from_str::<toml::Table>(&text)
         .ok()
         .and_then(|t| t.get("kind").and_then(|k| k.as_str()).map(String::from));
