@@ -106,10 +106,16 @@ pub fn report_json(out: &FitOutput, warnings: &[String]) -> Value {
 /// propeller rate that varies although the fitted model runs at one constant rate. With `--validate`
 /// the validation warns about every recording instead.
 fn training_warnings(ds: &Dataset, recordings: &[String], validate: bool) -> Vec<String> {
-    if validate {
-        return Vec::new();
+    // What the fit does with a recorded wind or current is said whether or not it validates after.
+    let mut warnings =
+        shipid_pipeline::fit::fit_environment_notes(ds, recordings).unwrap_or_default();
+    for w in &warnings {
+        eprintln!("warning: {w}");
     }
-    let warnings: Vec<String> = propeller_rate_variations(
+    if validate {
+        return warnings;
+    }
+    let rates: Vec<String> = propeller_rate_variations(
         ds.recordings
             .iter()
             .filter(|r| recordings.is_empty() || recordings.contains(&r.file)),
@@ -117,10 +123,26 @@ fn training_warnings(ds: &Dataset, recordings: &[String], validate: bool) -> Vec
     .iter()
     .map(ToString::to_string)
     .collect();
-    for w in &warnings {
+    for w in &rates {
         eprintln!("warning: {w}");
     }
+    warnings.extend(rates);
     warnings
+}
+
+/// `text` of an mmg or sparse-GP model file with the `[environment]` of its fit appended (their
+/// formats have no such table; the loader reads it apart).
+fn with_environment_table(
+    text: String,
+    ds: &Dataset,
+    recordings: &[String],
+) -> Result<String, CliError> {
+    Ok(
+        match shipid_pipeline::fit::fit_environment_record(ds, recordings)? {
+            Some(record) => text + &shipid_pipeline::environment::environment_table_text(&record)?,
+            None => text,
+        },
+    )
 }
 
 /// A fit's status in words: `ok`, `ill-conditioned`, `rank-deficient (no information on …)`, …
@@ -278,7 +300,7 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
         file.bootstrap = Some(boot.record());
     }
     shipid_pipeline::model_file::anchor_training(&mut file.training, a.out);
-    let text = write_mmg_model_file(&file)?;
+    let text = with_environment_table(write_mmg_model_file(&file)?, &ds, &a.recordings)?;
     write_atomic(a.out, text.as_bytes()).map_err(|e| crate::write_failed(a.out, e))?;
     if a.json {
         let report = json!({
@@ -331,7 +353,7 @@ pub fn run_gp(
         .warnings
         .extend(training_warnings(&ds, recordings, validate));
     shipid_pipeline::model_file::anchor_training(&mut file.training, out);
-    let text = model_text(&file).map_err(failed)?;
+    let text = with_environment_table(model_text(&file).map_err(failed)?, &ds, recordings)?;
     write_atomic(out, text.as_bytes()).map_err(|e| crate::write_failed(out, e))?;
     if json {
         println!(
