@@ -12,6 +12,7 @@ mod bench_diagnose;
 mod bench_known_wind;
 mod circles;
 mod coverage;
+mod coverage_family;
 mod fit_bench;
 mod inverse_bench;
 mod paper001;
@@ -93,6 +94,9 @@ enum Task {
         /// Coefficient sets whose replicates are pooled (the first gives the point prediction).
         #[arg(long, value_delimiter = ',', default_value = "reduced32")]
         structures: Vec<String>,
+        /// The model family: polynomial (`--structures`), mmg or sparse-gp.
+        #[arg(long, value_enum, default_value = "polynomial")]
+        family: coverage_family::Family,
     },
     /// List every crate's file import edges and fail on a circle (ARCHITECTURE.md's invariant).
     Circles,
@@ -157,7 +161,16 @@ fn main() -> ExitCode {
             replicates,
             level,
             structures,
+            family: coverage_family::Family::Polynomial,
         } => coverage::run(&out, seeds, replicates, level, &structures).map(|()| ExitCode::SUCCESS),
+        Task::Coverage {
+            out,
+            seeds,
+            replicates,
+            level,
+            family,
+            ..
+        } => coverage_family::run(&out, family, seeds, replicates, level).map(|()| ExitCode::SUCCESS),
         Task::Circles => {
             let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
             Ok(if circles::run(&root) {
