@@ -170,7 +170,9 @@ fn main() -> ExitCode {
             level,
             family,
             ..
-        } => coverage_family::run(&out, family, seeds, replicates, level).map(|()| ExitCode::SUCCESS),
+        } => {
+            coverage_family::run(&out, family, seeds, replicates, level).map(|()| ExitCode::SUCCESS)
+        }
         Task::Circles => {
             let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
             Ok(if circles::run(&root) {
