@@ -95,11 +95,11 @@ fn mmg_from_the_hsva_zigzags_predicts_the_35_degree_turn_of_docs_mmg() {
         "{}",
         String::from_utf8_lossy(&fit.stderr)
     );
-    // docs/mmg.md: tactical diameters of 3.9–4.0 L, 25–30 % above the MMG reference's 3.1 L (the
-    // zig-zags' small drift angles leave the cubic hull terms to extrapolate into the turn).
+    // docs/mmg.md: tactical diameters of 3.6–3.7 L, 15–18 % above the MMG reference's 3.1 L (3.9–4.0 L
+    // before the cubic damping terms' bounds: the zig-zags leave the N' cubic terms to extrapolate).
     for side in ["port", "starboard"] {
         let d = simulated(model, &format!("turning:35:{side}"), "tactical_diameter");
-        assert!((3.6..4.4).contains(&d), "{side}: tactical diameter {d} L");
+        assert!((3.4..3.9).contains(&d), "{side}: tactical diameter {d} L");
     }
 }
 
