@@ -17,7 +17,9 @@
 
 use std::time::Instant;
 
-use shipid_io::{Dataset, DatasetRecording, FlowSeries, Manoeuvre, Recording, Windage};
+use shipid_io::{
+    Dataset, DatasetRecording, FlowSeries, Manoeuvre, PropellerData, Recording, RudderData, Windage,
+};
 use shipid_pipeline::environment::hydrodynamic_recording;
 use shipid_pipeline::generate::{
     DT_S, NoiseModel, SAMPLE_INTERVAL_S, T_EXECUTE_S, default_manoeuvres, fnv1a,
@@ -26,8 +28,8 @@ use shipid_pipeline::generate::{
 use shipid_pipeline::spec::manoeuvre_stem;
 use shipid_sim::environment::assumed_windage;
 use shipid_sim::{
-    Effect, KnownEnvironment, MmgModel, SimOptions, SimStatus, State, WithEnvironment,
-    controller_for, kvlcc2_added_mass, kvlcc2_ship,
+    Dynamics, Effect, KnownEnvironment, MmgModel, MmgParameters, SimOptions, SimStatus, State,
+    WithEnvironment, controller_for, kvlcc2_added_mass, kvlcc2_ship,
 };
 
 use crate::bench::WORDS;
@@ -161,7 +163,7 @@ pub fn windy_run(
 }
 
 /// The six default manoeuvres, each in the wind `wind_of(k, manoeuvre)`, as a data set in memory with
-/// the benchmark windage.
+/// the benchmark windage and the reference's propeller (at its self-propulsion rate) and rudder.
 pub fn windy_dataset(
     name: &str,
     noise_seed: Option<u64>,
@@ -173,13 +175,27 @@ pub fn windy_dataset(
         .enumerate()
         .map(|(k, m)| windy_run(m, &wind_of(k, m), &windage, noise_seed))
         .collect::<Result<Vec<_>, String>>()?;
+    let ship = kvlcc2_ship();
+    // The reference's propeller and rudder, as `shipid generate` writes them: what an `mmg` fit needs.
+    let reference = MmgParameters::kvlcc2();
     Ok(Dataset {
         path: std::path::PathBuf::from(name),
         name: name.into(),
-        ship: kvlcc2_ship(),
+        ship,
         added_mass: Some(kvlcc2_added_mass()),
-        propeller: None,
-        rudder: None,
+        propeller: Some(PropellerData {
+            diameter_m: reference.propeller_diameter_m,
+            x_m: reference.x_p * ship.lpp,
+            k_t: reference.k_t,
+            open_water: None,
+            k_t_default: None,
+            rate_rps: MmgModel::kvlcc2().propeller_rate_hz(),
+        }),
+        rudder: Some(RudderData {
+            area_m2: reference.rudder_area_m2,
+            span_m: reference.rudder_span_m,
+            x_m: reference.x_r * ship.lpp,
+        }),
         windage: Some(windage),
         recordings,
     })

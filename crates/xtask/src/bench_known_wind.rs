@@ -17,7 +17,7 @@ use shipid_estimators::Solver;
 use shipid_model::IdentificationRange;
 use shipid_pipeline::fit::{EstimatorSpec, WindowSpec, fit_dataset, load_set};
 use shipid_pipeline::fit_gp::{DEFAULT_SIMILARITY, fit_gp_dataset};
-use shipid_pipeline::mmg::{MmgFitOptions, MmgGeometry, fit_mmg};
+use shipid_pipeline::mmg::{MmgFitOptions, fit_mmg_dataset};
 use shipid_sim::{AbkowitzDynamics, Dynamics};
 use shipid_tables::Table;
 
@@ -55,30 +55,7 @@ fn identify(kind: &str) -> Result<Base> {
             )
         }
         "mmg" => {
-            // The reference's propeller and rudder, as `shipid generate` writes them.
-            let reference = shipid_sim::MmgParameters::kvlcc2();
-            let ship = hydro.ship;
-            let mut with_tables = hydro.clone();
-            with_tables.propeller = Some(shipid_io::PropellerData {
-                diameter_m: reference.propeller_diameter_m,
-                x_m: reference.x_p * ship.lpp,
-                k_t: reference.k_t,
-                open_water: None,
-                k_t_default: None,
-                rate_rps: None,
-            });
-            with_tables.rudder = Some(shipid_io::RudderData {
-                area_m2: reference.rudder_area_m2,
-                span_m: reference.rudder_span_m,
-                x_m: reference.x_r * ship.lpp,
-            });
-            let geometry = MmgGeometry::of_dataset(&with_tables)?;
-            // The generated runs record no `n`: the reference's self-propulsion rate.
-            let opts = MmgFitOptions {
-                propeller_rate_hz: shipid_sim::MmgModel::kvlcc2().propeller_rate_hz(),
-                ..MmgFitOptions::default()
-            };
-            let fit = fit_mmg(&with_tables, &geometry, &opts)?;
+            let fit = fit_mmg_dataset(&hydro, &MmgFitOptions::default())?;
             (
                 Box::new(fit.model),
                 format!("mmg family (bounded LSQ with priors) {said}"),

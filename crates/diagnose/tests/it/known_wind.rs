@@ -1,0 +1,126 @@
+//! The proof with a recorded wind as known input, CI-sized (the full grid is `cargo xtask
+//! bench-known-wind`, docs/benchmarks.md): a base identified from windy training runs with the wind as
+//! input, a concealed strong wind found with its direction, a control with the wind kept left alone,
+//! and replays that feel the recorded wind.
+
+use shipid_diagnose::known_wind::{
+    KnownWindCase, WindRun, hydrodynamic_dataset, run_case, training_dataset,
+};
+use shipid_diagnose::{DiagnoseInput, DiagnoseOptions, Verdict, conceal, model_level};
+use shipid_pipeline::mmg::{MmgFitOptions, fit_mmg_dataset};
+use shipid_sim::MmgModel;
+
+/// The mmg family identified from the training runs with their recorded wind as input, and its own
+/// level on them.
+fn base() -> (MmgModel, f64) {
+    let training = training_dataset().unwrap();
+    let hydro = hydrodynamic_dataset(&training).unwrap();
+    let model = fit_mmg_dataset(&hydro, &MmgFitOptions::default())
+        .unwrap()
+        .model;
+    let level = model_level(&input(&model, None), &training, &DiagnoseOptions::default());
+    (model, level)
+}
+
+fn input(model: &MmgModel, level: Option<f64>) -> DiagnoseInput<'_> {
+    DiagnoseInput {
+        base: model,
+        base_effects: &[],
+        model_level_over_l: level,
+        identification_range: None,
+    }
+}
+
+/// What a case must give: the verdict, and for a concealed wind the largest direction error and the
+/// smallest held-out improvement.
+struct Expected {
+    verdict: Verdict,
+    max_direction_error_deg: Option<f64>,
+    min_improvement: Option<f64>,
+}
+
+fn check(model: &MmgModel, level: f64, case: &KnownWindCase, expected: Expected) {
+    let row = run_case(
+        &input(model, Some(level)),
+        &DiagnoseOptions::default(),
+        case,
+    )
+    .unwrap();
+    assert_eq!(
+        row.verdict, expected.verdict,
+        "{}: {}",
+        case.id, row.effects
+    );
+    if let Some(max) = expected.max_direction_error_deg {
+        let d = row.direction_error_deg().unwrap();
+        assert!(d <= max, "{}: direction error {d}°", case.id);
+        let check = row.check.as_ref().unwrap();
+        assert!(check.verdict_right, "{}", case.id);
+    }
+    if let Some(min) = expected.min_improvement {
+        assert!(
+            row.improvement() >= min,
+            "{}: improvement {}",
+            case.id,
+            row.improvement()
+        );
+    }
+}
+
+#[test]
+fn a_concealed_wind_is_found_and_a_recorded_one_is_part_of_the_base() {
+    let (model, level) = base();
+    let strong = WindRun {
+        speed_m_s: 4.5,
+        from_deg: 130.0,
+        gust: 0.0,
+        seed: 7,
+    };
+    check(
+        &model,
+        level,
+        &KnownWindCase {
+            id: "wind-4.5-steady".into(),
+            wind: strong,
+            control: false,
+            seed: 0,
+        },
+        Expected {
+            verdict: Verdict::Wind,
+            max_direction_error_deg: Some(30.0),
+            min_improvement: Some(0.5),
+        },
+    );
+    check(
+        &model,
+        level,
+        &KnownWindCase {
+            id: "control-4.5-gusty".into(),
+            wind: WindRun {
+                gust: 0.3,
+                ..strong
+            },
+            control: true,
+            seed: 1,
+        },
+        Expected {
+            verdict: Verdict::None,
+            max_direction_error_deg: None,
+            min_improvement: None,
+        },
+    );
+}
+
+#[test]
+fn replays_of_windy_runs_feel_their_recorded_wind() {
+    // The MMG reference replays its own windy runs to the replay resolution when the wind is known,
+    // and misses by far more with the channels concealed.
+    let reference = MmgModel::kvlcc2();
+    let mut ds = training_dataset().unwrap();
+    let opts = DiagnoseOptions::default();
+    let known = model_level(&input(&reference, None), &ds, &opts);
+    conceal(&mut ds).unwrap();
+    let concealed = model_level(&input(&reference, None), &ds, &opts);
+    assert!(known < 1e-3, "with the wind known: {known} L");
+    assert!(concealed > 10.0 * known, "{concealed} L against {known} L");
+}

@@ -1,0 +1,3 @@
+//! Integration tests of the diagnosis crate (one binary, a module per concern).
+
+mod known_wind;
