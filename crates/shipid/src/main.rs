@@ -34,6 +34,13 @@ enum Command {
         /// `turning:20:port`); repeatable.
         #[arg(long, value_name = "SPEC")]
         manoeuvre: Vec<String>,
+        /// A wind felt and written as recorded channels, varying between runs
+        /// (`mean=3,spread=1.5,from=120,from_spread=45,seed=7,gust=0.15,gust_time=2`; docs/data-format.md).
+        #[arg(long, value_name = "KEY=VALUE,...")]
+        recorded_wind: Option<String>,
+        /// A current felt and written as recorded channels (`speed=0.02,from=120`).
+        #[arg(long, value_name = "KEY=VALUE,...")]
+        recorded_current: Option<String>,
     },
     /// Import recordings of another layout through a mapping file.
     Import {
@@ -300,8 +307,18 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             noise,
             effect,
             manoeuvre,
+            recorded_wind,
+            recorded_current,
         } => {
             let effects = shipid_pipeline::generate::parse_effects(&effect)?;
+            let recorded = match (&recorded_wind, &recorded_current) {
+                (None, None) => None,
+                _ => Some(shipid_pipeline::generate::RecordedEnvironment {
+                    wind: recorded_wind.as_deref().map(str::parse).transpose()?,
+                    current: recorded_current.as_deref().map(str::parse).transpose()?,
+                    windage: shipid_pipeline::generate::default_windage(),
+                }),
+            };
             let manoeuvres = if manoeuvre.is_empty() {
                 shipid_pipeline::generate::default_manoeuvres()
             } else {
@@ -313,15 +330,21 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                     })
                     .collect::<Result<Vec<_>, _>>()?
             };
-            let g = shipid_pipeline::generate::generate_manoeuvres(noise, &effects, &manoeuvres)?;
+            let g = shipid_pipeline::generate::generate_recorded(
+                noise,
+                &effects,
+                &manoeuvres,
+                recorded.as_ref(),
+            )?;
             let recs: Vec<_> = g.recordings.iter().collect();
-            shipid_io::write::write_dataset(
-                &out,
-                &g.dataset,
-                &recs,
-                &shipid_pipeline::generate::provenance(noise),
-            )
-            .map_err(|e| shipid::write_failed(&out, e))?;
+            let mut comments = shipid_pipeline::generate::provenance(noise);
+            comments.extend(
+                recorded
+                    .iter()
+                    .flat_map(shipid_pipeline::generate::recorded_provenance),
+            );
+            shipid_io::write::write_dataset(&out, &g.dataset, &recs, &comments)
+                .map_err(|e| shipid::write_failed(&out, e))?;
             eprintln!(
                 "wrote {} recordings and {}",
                 recs.len(),
