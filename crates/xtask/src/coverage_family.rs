@@ -1,7 +1,8 @@
 //! Measured coverage of the bands of the mmg family and the sparse GP (`cargo xtask coverage
 //! --family mmg|sparse-gp`), on the data, training sets and truths of [`crate::coverage`].
 //!
-//! mmg: the default fit of `shipid fit --set mmg` (bounded LSQ, λ = 1e-6) and `--replicates`
+//! mmg: the default fit of `shipid fit --set mmg` (bounded LSQ, λ = 1e-6; the generator's KVLCC2
+//! propeller and rudder, which the in-memory data carry no tables of) and `--replicates`
 //! block-bootstrap replicates, each re-identified with that λ (`shipid_pipeline::bootstrap::bootstrap_mmg`).
 //! Sparse GP: the default fit (d_gen 0.96) and `--replicates` functions drawn from its posterior
 //! (`shipid_pipeline::bands::gp_draws`). Coverage is counted per training set, for manoeuvres in the
@@ -20,7 +21,7 @@ use shipid_pipeline::bootstrap::bootstrap_mmg;
 use shipid_pipeline::fit::WindowSpec;
 use shipid_pipeline::fit_gp::{DEFAULT_SIMILARITY, fit_gp_dataset};
 use shipid_pipeline::generate::generate_manoeuvres;
-use shipid_pipeline::mmg::{DEFAULT_PRIOR_WEIGHT, MmgFitOptions, fit_mmg_dataset, model_file};
+use shipid_pipeline::mmg::{DEFAULT_PRIOR_WEIGHT, MmgFitOptions, MmgGeometry, fit_mmg, model_file};
 use shipid_sim::Dynamics;
 use shipid_sim::metrics::metrics;
 use shipid_uncertainty::Coverage;
@@ -45,12 +46,18 @@ type Fitted = (
 );
 
 /// The default mmg fit on `recordings` of `noisy` and its block-bootstrap replicates.
-fn fit_mmg(noisy: &Dataset, recordings: &[String], replicates: usize, seed: u64) -> Result<Fitted> {
+fn fit_mmg_family(
+    noisy: &Dataset,
+    recordings: &[String],
+    replicates: usize,
+    seed: u64,
+) -> Result<Fitted> {
     let opts = MmgFitOptions {
         recordings: recordings.to_vec(),
         ..MmgFitOptions::default()
     };
-    let fit = fit_mmg_dataset(noisy, &opts)?;
+    // The generated data carry no [propeller]/[rudder] tables: the generator's own geometry.
+    let fit = fit_mmg(noisy, &MmgGeometry::kvlcc2_model_scale(), &opts)?;
     let boot = bootstrap_mmg(noisy, &fit, &opts, replicates, seed)?;
     let added = noisy.added_mass.context("no added masses")?;
     let mut file = model_file(&fit, added);
@@ -82,7 +89,7 @@ pub fn run(out: &Path, family: Family, seeds: u64, replicates: usize, level: f64
         String,
     ) = match family {
         Family::Mmg => (
-            fit_mmg,
+            fit_mmg_family,
             format!(
                 "mmg bounded-lsq (λ = {DEFAULT_PRIOR_WEIGHT:e}), {replicates} block-bootstrap \
                  replicates"
