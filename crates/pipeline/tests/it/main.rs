@@ -2,5 +2,6 @@
 
 mod bands;
 mod calibration;
+mod generate_environment;
 mod mmg;
 mod refine;
