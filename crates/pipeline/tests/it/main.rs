@@ -2,6 +2,7 @@
 
 mod bands;
 mod calibration;
+mod environment;
 mod generate_environment;
 mod mmg;
 mod refine;
