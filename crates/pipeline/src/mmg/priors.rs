@@ -101,12 +101,14 @@ pub fn priors(ship: &Ship, geometry: &MmgGeometry, added: &AddedMass) -> Vec<Par
                          single-screw ships' derivatives";
     let weak = "no empirical estimate: weakly informative prior at 0, sd = the magnitude of published \
                 single-screw ships' derivatives";
-    // Sign bounds of the cubic damping terms Y'_vvv, Y'_vrr, N'_vvr, N'_rrr (≤ 0), as Y'_v and N'_r
-    // have theirs. The cross-flow drag of the hull (Hooft 1994, Ocean Eng. 21:329–342),
+    // Sign bounds of the cubic damping terms Y'_vvv, N'_vvr, N'_rrr (≤ 0), as Y'_v and N'_r have
+    // theirs. The cross-flow drag of the hull (Hooft 1994, Ocean Eng. 21:329–342),
     // −C_D ∫ (v' + ξr')|v' + ξr'| dξ and its moment, projected on the cubic form over |v'| ≤ 0.4,
     // |r'| ≤ 1 gives Y'_vvv −1.22 C_D, Y'_vrr −0.26 C_D, N'_vvr −0.27 C_D, N'_rrr −0.010 C_D, whatever
     // C_D > 0; all 20 ships of Yoshimura's captive-test database (data/paper003/ships.toml) and the
-    // regression's centres have these signs. N'_vvv is 0 in the cross-flow model and 4 of those 20
+    // regression's centres have these signs. Y'_vrr has its sign there too but stays unbounded: on the
+    // HSVA zig-zags the bound moved no prediction (docs/mmg.md), and an inverse-method ship just past
+    // it (+0.065) would be refused for nothing. N'_vvv is 0 in the cross-flow model and 4 of those 20
     // ships have it positive (up to 0.093): only its magnitude is bounded, N_VVV_MAX. Zig-zags hardly
     // excite these terms: unbounded, they take whatever value helps the equation error and carry it
     // into a steady turn (docs/mmg.md, "What carries the turn"). Y'_vvr, Y'_rrr, N'_vrr come from the
@@ -189,7 +191,7 @@ pub fn priors(ship: &Ship, geometry: &MmgGeometry, added: &AddedMass) -> Vec<Par
         hull(
             1,
             4,
-            (-INF, 0.0),
+            (-INF, INF),
             -(0.26 * (1.0 - cb) * lb + 0.11),
             ym_sd(0.26 * (1.0 - cb) * lb + 0.11, 0.5),
             &format!("{ym}: Y'_vrr = −(0.26 (1 − C_b) L/B + 0.11)"),

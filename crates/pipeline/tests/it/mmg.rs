@@ -508,13 +508,13 @@ fn check_hull_bounds(name: &str, expected: (f64, f64)) {
 #[test]
 fn cubic_damping_terms_keep_the_sign_of_the_cross_flow_drag() {
     let inf = f64::INFINITY;
-    for name in ["y_vvv", "y_vrr", "n_vvr", "n_rrr"] {
+    for name in ["y_vvv", "n_vvr", "n_rrr"] {
         check_hull_bounds(name, (-inf, 0.0));
     }
     // Zero in the cross-flow model, of both signs among real ships: its magnitude is bounded.
     check_hull_bounds("n_vvv", (-inf, 0.335));
-    // Fore-and-aft asymmetry terms: the sources disagree on their sign.
-    for name in ["y_vvr", "y_rrr", "n_vrr"] {
+    // Fore-and-aft asymmetry terms (the sources disagree on their sign), and Y'_vrr (docs/mmg.md).
+    for name in ["y_vvr", "y_rrr", "n_vrr", "y_vrr"] {
         check_hull_bounds(name, (-inf, inf));
     }
 }
@@ -599,7 +599,6 @@ fn every_ship_of_the_captive_test_database_lies_within_the_cubic_term_bounds() {
         let get = |key: &str| ship[key].as_float().unwrap();
         for (name, value) in [
             ("y_vvv", -get("y_bbb")),
-            ("y_vrr", -get("y_brr")),
             ("n_vvv", -get("n_bbb")),
             ("n_vvr", get("n_bbr")),
             ("n_rrr", get("n_rrr")),
