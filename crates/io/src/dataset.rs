@@ -499,6 +499,31 @@ fn check_windage(path: &Path, w: &Windage, lpp: f64) -> Result<(), InputError> {
             positive(path, key, v)?;
         }
     }
+    // Isherwood's regression has no default for these: refused at load, not at the first wind.
+    if w.model == crate::types::WindModel::Isherwood1973 {
+        for (key, value, what) in [
+            (
+                "windage.length_overall_m",
+                w.length_overall_m,
+                "length overall [m]",
+            ),
+            (
+                "windage.lateral_perimeter_m",
+                w.lateral_perimeter_m,
+                "perimeter of the lateral projection above water [m]",
+            ),
+        ] {
+            if value.is_none() {
+                return Err(InputError::key(
+                    path,
+                    key,
+                    format!(
+                        "model = \"isherwood1973\" needs the {what} (docs/data-format.md, [windage])"
+                    ),
+                ));
+            }
+        }
+    }
     if let Some(a) = w.superstructure_lateral_area_m2
         && !(a.is_finite() && a >= 0.0 && a <= w.lateral_area_m2)
     {
