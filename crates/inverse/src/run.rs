@@ -1,6 +1,6 @@
 //! One target of `shipid inverse`, start to end: the number of modes chosen by growing it until the
 //! refined weights of every motion lie inside the box the network was trained on, then an ensemble of
-//! networks (different seeds), each refined by re-simulation, whose members give the model's band.
+//! networks (different seeds) and refinement restarts, whose members give the model's band.
 //!
 //! Why grow the modes: with six modes (95 % of the database's variation, paper 003) the refined
 //! weights of realistic targets sit on the ±3σ edge of the sampled box: the targets need variation the
@@ -8,6 +8,9 @@
 //! the generator that variation inside the box. The box stays ±3σ (paper 003): widening it would mostly
 //! add unphysical ships, which the physical checks then reject.
 
+use rand::Rng;
+use rand_chacha::ChaCha8Rng;
+use rand_chacha::rand_core::SeedableRng;
 use rayon::prelude::*;
 pub use shipid_uncertainty::Spread;
 
@@ -45,7 +48,8 @@ pub struct RunOptions {
     pub mode_step: usize,
     /// … and stops here.
     pub max_modes: usize,
-    /// Networks of the ensemble (seeds seed, seed + 1, …); 1: no band.
+    /// Networks of the ensemble (seeds seed, seed + 1, …), each refined from
+    /// [`RESTARTS_PER_NETWORK`] starts.
     pub networks: usize,
     /// Simulations per start of the refinement (0: network only, no ensemble).
     pub refine_evals: usize,
@@ -252,8 +256,20 @@ pub fn run_target(
     }
     let mut attempts = Vec::new();
     let mut chosen: Option<(usize, Stage)> = None;
+    let mut short: Option<String> = None;
     for &n in &candidates {
-        let st = stage(target, modes, given, n, o, tick)?;
+        let st = match stage(target, modes, given, n, o, tick) {
+            Ok(st) => st,
+            // More modes draw more unphysical ships: when too few remain to train on, the search
+            // keeps the last count that could be trained and says why it stopped.
+            Err(InverseError::TooFewSamples { valid, total, .. }) if chosen.is_some() => {
+                short = Some(format!(
+                    "search stopped at {n} modes: only {valid} of {total} simulated ships usable"
+                ));
+                break;
+            }
+            Err(e) => return Err(e),
+        };
         let a = attempt_of(modes, n, &st);
         let done = a.interior();
         attempts.push(a);
@@ -271,31 +287,41 @@ pub fn run_target(
         .map(|a| format!("{} modes: {}", a.modes, describe(a)))
         .collect::<Vec<_>>()
         .join("; ");
-    let reason = match (o.fixed_modes, capped) {
-        (Some(n), false) => {
-            format!("{n} modes as asked (--modes); every refined weight is interior")
-        }
-        (Some(n), true) => format!(
-            "{n} modes as asked (--modes); not interior: {}",
-            describe(last)
+    let reason = match (o.fixed_modes, capped, &short) {
+        (None, true, Some(why)) => format!(
+            "{n_modes} modes, not interior ({history}); {why}; the weights on the edge are flagged"
         ),
-        (None, false) if attempts.len() == 1 => format!(
-            "{n_modes} modes (the fewest reaching 95 % of the variation): every refined weight lies \
+        _ => String::new(),
+    };
+    let reason = if !reason.is_empty() {
+        reason
+    } else {
+        match (o.fixed_modes, capped) {
+            (Some(n), false) => {
+                format!("{n} modes as asked (--modes); every refined weight is interior")
+            }
+            (Some(n), true) => format!(
+                "{n} modes as asked (--modes); not interior: {}",
+                describe(last)
+            ),
+            (None, false) if attempts.len() == 1 => format!(
+                "{n_modes} modes (the fewest reaching 95 % of the variation): every refined weight lies \
              inside ±{}σ",
-            WEIGHT_RANGE_STD - INTERIOR_MARGIN_SIGMA
-        ),
-        (None, false) => format!(
-            "{n_modes} modes: the fewest (from {} in steps of {}) with every refined weight inside \
+                WEIGHT_RANGE_STD - INTERIOR_MARGIN_SIGMA
+            ),
+            (None, false) => format!(
+                "{n_modes} modes: the fewest (from {} in steps of {}) with every refined weight inside \
              ±{}σ; {history}",
-            o.start_modes,
-            o.mode_step,
-            WEIGHT_RANGE_STD - INTERIOR_MARGIN_SIGMA
-        ),
-        (None, true) => format!(
-            "cap of {} modes reached without every refined weight interior ({history}); the weights \
+                o.start_modes,
+                o.mode_step,
+                WEIGHT_RANGE_STD - INTERIOR_MARGIN_SIGMA
+            ),
+            (None, true) => format!(
+                "cap of {} modes reached without every refined weight interior ({history}); the weights \
              on the edge are flagged",
-            o.max_modes
-        ),
+                o.max_modes
+            ),
+        }
     };
     let held = held_out(
         target,
@@ -327,9 +353,18 @@ pub fn run_target(
     })
 }
 
-/// The other networks of the ensemble, trained on the same database with their own seeds (their own
-/// initialisation, split and batches), each refined from its own answer with the first network's
-/// mismatch (so that members are compared on one scale); members ranked by mismatch.
+/// Refinement restarts per network: its own answer and this many less one starts jittered around it.
+pub const RESTARTS_PER_NETWORK: usize = 6;
+/// Half-width of the uniform jitter of a restart's start, per mode [σ_i].
+pub const RESTART_JITTER_SIGMA: f64 = 1.0;
+
+/// The ensemble of each motion: the other networks, trained on the same database with their own seeds
+/// (their own initialisation, split and batches), and per network [`RESTARTS_PER_NETWORK`]
+/// refinements (from its answer and from seeded starts jittered by ±[`RESTART_JITTER_SIGMA`] σ around
+/// it), all with the first network's mismatch (so that members are compared on one scale), together
+/// with the first network's own refinement; members ranked by mismatch. Networks see the indexes
+/// differently; restarts find the other weights that match them about as well: the spread of both is
+/// what the indexes leave undetermined.
 fn ensembles(
     target: &TargetShip,
     modes: &VariationModes,
@@ -349,20 +384,42 @@ fn ensembles(
             )
         })
         .collect::<Result<_, _>>()?;
+    let nets: Vec<&InverseModel> = std::iter::once(&st.model).chain(&others).collect();
     Ok(given
         .iter()
         .zip(&st.motions)
-        .map(|((_, q), m)| {
-            let mut members: Vec<Refined> = others
+        .enumerate()
+        .map(|(motion, ((_, q), m))| {
+            let mut starts: Vec<Vec<f64>> = Vec::new();
+            for (k, net) in nets.iter().enumerate() {
+                let (answer, _) = clip_weights(modes, &net.predict(q));
+                let mut rng = ChaCha8Rng::seed_from_u64(
+                    o.seed
+                        .wrapping_add(1000 * k as u64)
+                        .wrapping_add(motion as u64),
+                );
+                // The first network's own answer is refined already (with the nearest ship).
+                if k > 0 {
+                    starts.push(answer.clone());
+                }
+                for _ in 1..RESTARTS_PER_NETWORK {
+                    let jittered: Vec<f64> = answer
+                        .iter()
+                        .zip(&modes.weight_std)
+                        .map(|(x, s)| x + RESTART_JITTER_SIGMA * s * rng.random_range(-1.0..=1.0))
+                        .collect();
+                    starts.push(clip_weights(modes, &jittered).0);
+                }
+            }
+            let mut members: Vec<Refined> = starts
                 .par_iter()
-                .filter_map(|net| {
-                    let (start, _) = clip_weights(modes, &net.predict(q));
+                .filter_map(|start| {
                     refine(
                         target,
                         modes,
                         &st.model,
                         q,
-                        &[start],
+                        std::slice::from_ref(start),
                         &o.settings,
                         &o.checks,
                         o.refine_evals,
@@ -373,7 +430,7 @@ fn ensembles(
                 members.push(refined.clone());
             }
             members.sort_by(|a, b| a.objective.total_cmp(&b.objective));
-            let total = others.len() + 1;
+            let total = starts.len() + 1;
             if let Some(best) = members.first().map(|b| b.objective) {
                 members.retain(|r| r.objective <= MEMBER_MISMATCH_FACTOR * best.max(1e-12));
             }

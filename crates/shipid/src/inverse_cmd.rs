@@ -27,8 +27,8 @@ use shipid_inverse::pipeline::{
     MIN_SAMPLES, SimulationDatabase, WEIGHT_RANGE_STD, build_database, sample_weights,
 };
 use shipid_inverse::run::{
-    Ensemble, INTERIOR_MARGIN_SIGMA, MEMBER_MISMATCH_FACTOR, RunOptions, Spread, TargetRun,
-    inside_box, member_parameters, run_target,
+    Ensemble, INTERIOR_MARGIN_SIGMA, MEMBER_MISMATCH_FACTOR, RESTART_JITTER_SIGMA,
+    RESTARTS_PER_NETWORK, RunOptions, Spread, TargetRun, inside_box, member_parameters, run_target,
 };
 use shipid_inverse::target::{TargetShip, TargetsFile};
 use shipid_io::write::write_atomic;
@@ -209,6 +209,42 @@ fn target_geometry(target: &TargetShip) -> (shipid_io::Ship, shipid_io::AddedMas
     (ship, added, geometry)
 }
 
+/// The parameters the inverse holds fixed (from the targets file or KVLCC2) must lie within the
+/// bounds of an `mmg` model file, or no ship of the target could be written as one.
+fn check_fixed(target: &TargetShip, path: &Path) -> Result<(), CliError> {
+    let checks = physical_checks(target);
+    let p = target.mmg_parameters(&shipid_inverse::database::Coefficients(
+        [0.0; shipid_inverse::database::N_COEF],
+    ));
+    let values = model_file_values(&p);
+    for (k, name) in MODEL_FILE_NAMES.iter().enumerate() {
+        let (found, _) = source_of(name, target, 0, false);
+        let Some(b) = checks.bounds.iter().find(|b| b.name == *name) else {
+            continue;
+        };
+        if found || (b.lower..=b.upper).contains(&values[k]) {
+            continue;
+        }
+        let key = match *name {
+            "t_p" => "t_p",
+            "f_alpha" if target.f_alpha.is_some() => "f_alpha",
+            "f_alpha" => "rudder_span_m / rudder_area_m2 (Fujii's f_alpha)",
+            "r0" => "lpp_m, beam_m, draft_m, cb, u0_m_s (the resistance R'_0)",
+            _ => "(fixed at KVLCC2's value)",
+        };
+        return Err(bad_input(format!(
+            "{}: target {}: {key}: {name} = {} is outside [{}, {}], the bounds of an mmg model file \
+             (docs/mmg.md); the inverse holds it fixed, so no ship of this target could be written",
+            path.display(),
+            target.name,
+            values[k],
+            b.lower,
+            b.upper
+        )));
+    }
+    Ok(())
+}
+
 /// Where each model-file parameter of an inverted ship comes from.
 fn source_of(name: &str, target: &TargetShip, n_modes: usize, refined: bool) -> (bool, String) {
     let found = format!(
@@ -246,13 +282,19 @@ fn deliver(
     modes: &VariationModes,
     m: &MotionInversion,
     e: Option<&Ensemble>,
+    checks: &PhysicalChecks,
 ) -> Delivered {
     let (weights, refined) = match (e.and_then(|e| e.members.first()), &m.refined) {
         (Some(best), _) => (best.weights.clone(), true),
         (None, RefineOutcome::Done { refined, .. }) => (refined.weights.clone(), true),
         _ => (m.weights.clone(), false),
     };
-    let model = modes.generate(&weights).ok().and_then(|c| target.model(&c));
+    let model = modes
+        .generate(&weights)
+        .ok()
+        .and_then(|c| target.model(&c))
+        // An unphysical ship (the network's clipped answer without refinement) is no model to deliver.
+        .filter(|model| checks.check(model).is_ok());
     Delivered {
         weights,
         refined,
@@ -307,14 +349,19 @@ fn model_file(
     let bootstrap = d.members.as_ref().map(|(vectors, spread)| MmgBootstrapRecord {
         method: format!(
             "not a bootstrap: an ensemble of {NETWORKS} inverse networks (seeds {seed}…{}) trained on one \
-             simulated database, each refined by re-simulation from its own answer; {} kept (mismatch \
-             within {MEMBER_MISMATCH_FACTOR} × the best), the best is the point model",
+             simulated database, each refined by re-simulation from its own answer and {} starts \
+             jittered by ±{RESTART_JITTER_SIGMA} σ around it; {} of {} kept (mismatch within \
+             {MEMBER_MISMATCH_FACTOR} × the best), the best is the point model",
             seed + NETWORKS as u64 - 1,
-            vectors.len()
+            RESTARTS_PER_NETWORK - 1,
+            vectors.len(),
+            vectors.len() + d.dropped
         ),
         seed,
         block_rows: 0,
-        block_reason: "no blocks: members differ by the network's seed, not by resampled data".into(),
+        block_reason: "no blocks: members differ by the network's seed and the refinement's start, not \
+                       by resampled data"
+            .into(),
         rejected: d.dropped,
         standard_error: MODEL_FILE_NAMES
             .iter()
@@ -441,6 +488,9 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
             modes.singular_values.len()
         )));
     }
+    for target in &targets {
+        check_fixed(target, a.targets)?;
+    }
     let max_modes = MAX_MODES.clamp(n95, modes.singular_values.len());
     std::fs::create_dir_all(a.out).map_err(|e| crate::write_failed(a.out, e))?;
     write_modes(a.out, &modes).map_err(failed)?;
@@ -509,7 +559,10 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
             run.build_time_s
         );
         let motions = &run.motions;
-        if motions.iter().any(MotionInversion::failed) {
+        // A motion without a delivered model is a failure (below); the network's own answer failing
+        // to re-simulate (often an unphysical ship) is reported in the table, and the refined model
+        // replaces it.
+        if motions.iter().any(|m| m.refined == RefineOutcome::Failed) {
             outcome = Outcome::SomeFailed;
         }
         let dir = a.out.join(slug(&target.name));
@@ -520,7 +573,7 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
         let mut model_lines = String::new();
         for (i, m) in motions.iter().enumerate() {
             let e = run.ensembles.get(i);
-            let d = deliver(target, &modes, m, e);
+            let d = deliver(target, &modes, m, e, &opts.checks);
             weights_csv_rows(
                 &mut weights_csv,
                 &m.name,
@@ -563,13 +616,16 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
                 "inside_box": inside,
                 "all_inside_box": inside.iter().all(|b| *b),
                 "ensemble_members": d.members.as_ref().map_or(0, |(v, _)| v.len()),
+                // Mean squared standardised index mismatch of each kept member, best (the model) first.
+                "ensemble_mismatch": e.map_or(Vec::new(), |e| e.members.iter().map(|r| r.objective).collect()),
                 "ensemble_dropped": d.dropped,
             });
             match &d.model {
                 Some(model) => {
                     let file = model_file(target, &modes, &run, m, &d, model, a.seed);
-                    let text =
-                        write_mmg_model_file(&file).map_err(|e| failed(anyhow::anyhow!(e)))?;
+                    let text = inverse_header(
+                        &write_mmg_model_file(&file).map_err(|e| failed(anyhow::anyhow!(e)))?,
+                    );
                     let path = dir.join(&file_name);
                     write_atomic(&path, text.as_bytes())
                         .map_err(|e| crate::write_failed(&path, e))?;
@@ -610,7 +666,7 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
                     mj["model_file"] = Value::Null;
                     let _ = writeln!(
                         model_lines,
-                        "model of {}: none (its weights give no MMG model)",
+                        "model of {}: none (its weights give no physical MMG model)",
                         m.name
                     );
                 }
@@ -692,6 +748,24 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
     write_atomic(&path, text.as_bytes()).map_err(|e| crate::write_failed(&path, e))?;
     println!("wrote {}", path.display());
     Ok(outcome)
+}
+
+/// The model file's text with a header that says where it comes from (the shared writer's header
+/// speaks of recordings).
+fn inverse_header(text: &str) -> String {
+    let body: String = text
+        .lines()
+        .skip_while(|l| l.starts_with('#'))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    format!(
+        "# MMG model (Yasukawa & Yoshimura 2015 structure) identified by shipid {} from motion indexes \
+         only (paper 003 inverse method).\n# Each [[parameter]]: value, bounds and its source \
+         (`prior_source`: inverse network or fixed); standard_error is the spread of the\n# ensemble of \
+         networks stored under [bootstrap] (not a bootstrap: see its `method`). \
+         docs/reproductions/paper003.md explains it.\n{body}",
+        env!("CARGO_PKG_VERSION")
+    )
 }
 
 fn fmt_metrics(v: &Value) -> String {

@@ -1,0 +1,140 @@
+//! The model `shipid inverse` delivers: its `mmg` model file reproduces the inverse command's own
+//! re-simulation when `simulate` reads it back, its weights are written at full precision, and every
+//! parameter names its source.
+
+use serde_json::Value;
+use shipid_inverse::indexes::{SimSettings, motion_indexes};
+
+use crate::common;
+
+/// The KVLCC2 target of `data/paper003/targets.toml` alone (a small, fast run).
+fn kvlcc2_targets() -> String {
+    let all = std::fs::read_to_string(common::root().join("data/paper003/targets.toml"))
+        .expect("targets file");
+    let second = all
+        .match_indices("[[target]]")
+        .nth(1)
+        .map(|(i, _)| i)
+        .expect("two targets");
+    all[..second].to_string()
+}
+
+fn json_of(stdout: &[u8]) -> Value {
+    serde_json::from_slice(stdout).expect("JSON on stdout")
+}
+
+/// `got` against `want`, relative to |want| (the same model simulated twice: solver tolerance).
+fn check_same(what: &str, got: f64, want: f64) {
+    assert!(
+        (got - want).abs() <= 1e-9 * want.abs().max(1e-12),
+        "{what}: the model file gives {got}, the inverse run {want}"
+    );
+}
+
+#[test]
+fn the_model_file_reproduces_the_inverse_re_simulation() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let targets = dir.path().join("kvlcc2.toml");
+    std::fs::write(&targets, kvlcc2_targets()).expect("write targets");
+    let out = dir.path().join("out");
+    let run = common::shipid(&[
+        "inverse",
+        targets.to_str().expect("utf-8"),
+        "--samples",
+        "150",
+        "--resimulate",
+        "2",
+        "--refine-evals",
+        "20",
+        "--out",
+        out.to_str().expect("utf-8"),
+    ]);
+    assert!(
+        matches!(run.status.code(), Some(0 | 1)),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let summary: Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("summary.json")).expect("summary.json"),
+    )
+    .expect("summary JSON");
+    let motion = &summary["targets"][0]["motions"][0];
+    assert_eq!(motion["model_file"], "model.toml", "{motion}");
+    let model_path = out.join("kvlcc2/model.toml");
+    let model = model_path.to_str().expect("utf-8");
+
+    // The 10/10 zig-zag and the 20° turn of `simulate` reading the file, against the inverse
+    // command's simulation of the ship it built in memory.
+    for (key, spec, metrics) in [
+        (
+            "zigzag_10_10_starboard",
+            "zigzag:10/10:starboard",
+            &["overshoot_1", "overshoot_2"][..],
+        ),
+        (
+            "turning_20_starboard",
+            "turning:20:starboard",
+            &["advance", "tactical_diameter"][..],
+        ),
+    ] {
+        let sim =
+            json_of(&common::shipid_ok(&["simulate", model, "--manoeuvre", spec, "--json"]).stdout);
+        for m in metrics {
+            let want = motion["model_metrics"][key][m]
+                .as_f64()
+                .unwrap_or_else(|| panic!("{key}.{m} in summary.json: {motion}"));
+            let got = sim[m].as_f64().expect("metric in simulate's JSON");
+            check_same(&format!("{spec} {m}"), got, want);
+        }
+    }
+
+    // The nine indexes of the model read back through the one model loader.
+    let loaded = shipid_pipeline::model_file::load_model(model).expect("the model file loads");
+    let q = motion_indexes(loaded.as_ref(), &SimSettings::default()).expect("simulates");
+    let want = motion["model_indexes"].as_array().expect("nine indexes");
+    assert_eq!(want.len(), 9);
+    for (i, w) in want.iter().enumerate() {
+        check_same(&format!("index {i}"), q.0[i], w.as_f64().expect("a number"));
+    }
+
+    // weights.csv holds the model's weights at full precision: they parse back to the same f64.
+    let csv = std::fs::read_to_string(out.join("kvlcc2/weights.csv")).expect("weights.csv");
+    let weights = motion["weights"].as_array().expect("weights");
+    let member1: Vec<f64> = csv
+        .lines()
+        .filter(|l| l.starts_with("Tab3,member 1,"))
+        .map(|l| {
+            l.split(',')
+                .nth(3)
+                .expect("weight column")
+                .parse()
+                .expect("f64")
+        })
+        .collect();
+    assert_eq!(member1.len(), weights.len(), "{csv}");
+    for (got, want) in member1.iter().zip(weights) {
+        assert_eq!(*got, want.as_f64().expect("a number"), "full precision");
+    }
+
+    // Every parameter names where it comes from.
+    let text = std::fs::read_to_string(&model_path).expect("model.toml");
+    let file: toml::Table = toml::from_str(&text).expect("TOML");
+    let params = file["parameter"].as_array().expect("[[parameter]]");
+    assert_eq!(params.len(), 31);
+    let source = |name: &str| -> String {
+        params
+            .iter()
+            .find(|p| p["name"].as_str() == Some(name))
+            .and_then(|p| p["prior_source"].as_str())
+            .unwrap_or_else(|| panic!("no {name}"))
+            .to_string()
+    };
+    assert!(
+        source("n_r").starts_with("inverse network, "),
+        "{}",
+        source("n_r")
+    );
+    assert!(source("t_r").starts_with("inverse network, "));
+    assert_eq!(source("w_p0"), "fixed: Yasukawa & Yoshimura 2015 KVLCC2");
+    assert_eq!(source("t_p"), "targets file: t_p");
+}
