@@ -11,6 +11,7 @@ mod hsva_import;
 mod hsva_paper001;
 mod identification;
 mod inverse_cli;
+mod inverse_model;
 mod mmg;
 mod plots;
 mod sparse_gp;
