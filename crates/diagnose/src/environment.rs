@@ -25,8 +25,12 @@ pub struct FlowSummary {
     pub mean_velocity_m_s: [f64; 2],
 }
 
-/// The direction [deg, 0–360) a flow of velocity [north, east] comes from.
+/// The direction [deg, 0–360) a flow of velocity [north, east] comes from (0 for no flow, which
+/// comes from nowhere).
 fn from_deg(velocity: [f64; 2]) -> f64 {
+    if velocity == [0.0, 0.0] {
+        return 0.0;
+    }
     (-velocity[1])
         .atan2(-velocity[0])
         .to_degrees()

@@ -36,7 +36,7 @@ fn identify(kind: &str) -> Result<Base> {
     let training = training_dataset().map_err(|e| anyhow!(e))?;
     let hydro = hydrodynamic_dataset(&training).map_err(|e| anyhow!(e))?;
     let names: Vec<String> = hydro.recordings.iter().map(|r| r.file.clone()).collect();
-    let said = "fitted on the six training runs, each in its own recorded wind (1.5–4.5 m/s, every other one gusty), with the wind as input";
+    let said = "fitted on the six training runs, each in its own recorded wind (1.5–4.5 m/s from any direction, gusts 15 %), with the wind as input";
     Ok(match kind {
         "full74" => {
             let fit = fit_dataset(
@@ -89,7 +89,7 @@ pub fn run(bases: &[String], out: &Path, seeds: u64) -> Result<bool> {
     let opts = DiagnoseOptions::default();
     let mut all_rows: Vec<(String, KnownWindRow)> = Vec::new();
     let mut md = format!(
-        "# Diagnosis with a recorded wind as known input\n\nTraining: the six default manoeuvres, each in its own recorded wind, noise-free; the base is identified with the wind as input. Cases: other runs of the six manoeuvres in one wind per case (steady, or gusty: speed σ 30 %, direction σ 10°), towing-tank noise; wind cases conceal the wind channels, controls keep them. {seeds} seeds.\n\n"
+        "# Diagnosis with a recorded wind as known input\n\nData from `shipid generate --recorded-wind` (`pipeline::generate::generate_recorded`). Training: the six default manoeuvres, each in its own recorded wind, noise-free; the base is identified with the wind as input. Cases: other runs of the six manoeuvres in one wind per case (steady, or gusty: turbulence intensity 30 %, correlation time 2 s), towing-tank noise on the motion and anemometer noise on the wind channels; wind cases conceal the wind channels, controls keep them. {seeds} seeds.\n\n"
     );
     let mut failures = Vec::new();
     for kind in bases {
