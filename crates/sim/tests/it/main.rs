@@ -4,6 +4,7 @@
 mod common;
 mod divergence;
 mod effects;
+mod environment;
 mod hsva_metrics;
 mod metrics_synthetic;
 mod mmg_check_values;
