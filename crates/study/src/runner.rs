@@ -21,7 +21,7 @@ use crate::progress::Progress;
 use crate::study::{Case, Study};
 use shipid_pipeline::fit::{fit_dataset, load_set};
 use shipid_pipeline::range::outside_fraction;
-use shipid_pipeline::validate::validate_recording;
+use shipid_pipeline::validate::validate_recording_with;
 
 /// How a case's fit (or one DOF's) ended. Stored as kebab-case words in `result.json` and the tables.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
@@ -434,7 +434,9 @@ fn test_rows(
         .iter()
         .filter_map(|f| study.dataset.recording(f))
         .map(|r| {
-            let v = validate_recording(model, r, &study.dataset.ship);
+            // In the recording's recorded wind and current, with the data set's windage.
+            let windage = shipid_pipeline::environment::ChosenWindage::of_dataset(&study.dataset);
+            let v = validate_recording_with(model, r, &study.dataset.ship, &windage);
             let (status, diverged_at_s, recorded, predicted, relative_error, mrae) =
                 match v.manoeuvre {
                     Some(m) => {
