@@ -114,6 +114,19 @@ fn check(dir: &Path) -> Vec<String> {
         .stderr(Stdio::piped())
         .spawn()
         .expect("the shipid binary starts");
+    // Drain both pipes while the case runs: a case that prints more than a pipe holds (64 KiB) would
+    // otherwise block on its write and be reported as a timeout.
+    let drain = |pipe: Option<Box<dyn std::io::Read + Send>>| {
+        std::thread::spawn(move || {
+            let mut bytes = Vec::new();
+            if let Some(mut p) = pipe {
+                let _ = p.read_to_end(&mut bytes);
+            }
+            bytes
+        })
+    };
+    let out_reader = drain(child.stdout.take().map(|p| Box::new(p) as _));
+    let err_reader = drain(child.stderr.take().map(|p| Box::new(p) as _));
     let started = Instant::now();
     let status = loop {
         if let Some(status) = child.try_wait().unwrap() {
@@ -126,10 +139,14 @@ fn check(dir: &Path) -> Vec<String> {
         }
         std::thread::sleep(Duration::from_millis(20));
     };
+    let output = std::process::Output {
+        status: status.unwrap_or_default(),
+        stdout: out_reader.join().unwrap_or_default(),
+        stderr: err_reader.join().unwrap_or_default(),
+    };
     let Some(status) = status else {
         return vec![format!("still running after {} s", CASE_TIMEOUT.as_secs())];
     };
-    let output = child.wait_with_output().unwrap();
     let stdout = String::from_utf8_lossy(&output.stdout);
     let stderr = String::from_utf8_lossy(&output.stderr);
     let mut wrong = Vec::new();
