@@ -6,8 +6,12 @@
 //! from any directory.
 //!
 //! Outputs under `--out` (default `results/paper003/`): `modes.csv` and `modes.svg` (paper 003 Fig. 3),
-//! per target `<target>/indexes.csv` (given vs obtained), `<target>/summary.md` (tables), `<target>/motions.svg`
-//! (Fig. 6/7: red = simulated with the predicted hydrodynamics, black dashed = given indexes).
+//! `summary.json` (mode choice, rejections, weights at full precision with `inside_box`, the models'
+//! metrics), per target `<target>/indexes.csv` (given vs obtained), `<target>/weights.csv`,
+//! `<target>/summary.md` (tables), `<target>/motions.svg` (Fig. 6/7: red = simulated with the predicted
+//! hydrodynamics, black dashed = given indexes) and the delivered `mmg` model file per motion
+//! (`model.toml`, or `model_<motion>.toml` when the target has several) with its ensemble as
+//! `[bootstrap]` replicates for `--bands`.
 
 use std::fmt::Write as _;
 use std::path::Path;
