@@ -64,6 +64,7 @@ pub const FOSSEN_COEFFICIENTS: [f64; 3] = [0.70, 0.825, 0.125];
 /// C_Y and [1, 2A_L/L², 2A_F/B², L/B, S/L, C/L] for C_N (L length overall, B beam, S perimeter, C the
 /// lateral centroid's distance from the bow, M the mast groups).
 #[rustfmt::skip]
+#[allow(clippy::approx_constant)] // A1 = 3.14 at 150° is Isherwood's regression constant, not π.
 pub const ISHERWOOD_TABLES: [[[f64; 7]; 3]; 19] = [
     [[2.152, -5.00, 0.243, -0.164, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]],
     [[1.714, -3.33, 0.145, -0.121, 0.0, 0.0, 0.0], [0.096, 0.22, 0.0, 0.0, 0.0, 0.0, 0.0], [0.0596, 0.061, 0.0, 0.0, 0.0, -0.074, 0.0]],
