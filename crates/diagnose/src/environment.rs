@@ -153,8 +153,9 @@ pub struct AgainstRecorded {
     pub found_from_deg: f64,
     /// The recorded flow, pooled over the recordings that carry it.
     pub recorded: FlowSummary,
-    /// The recorded mean and the found flow together: what the ship felt if the found flow is a bias of
-    /// the recorded channels.
+    /// The single flow that pushes as the recorded mean and the found flow together do (their
+    /// velocities weighted by their speeds, as forces grow with the square of the speed): what the
+    /// ship felt if the found flow is a bias of the recorded channels.
     pub felt_speed_m_s: f64,
     pub felt_from_deg: f64,
     /// Found against recorded mean as ratio of speeds and angle between directions.
@@ -181,16 +182,22 @@ pub fn against_recorded(effects: &[Effect], ds: &Dataset) -> Vec<AgainstRecorded
                 "wind" => r.recording.wind.as_ref(),
                 _ => r.recording.current.as_ref(),
             }))?;
-            let found = velocity(speed, from);
+            // The found flow acts as a force of its own beside the recorded one's, and a wind's
+            // force grows with the square of its speed: the single flow that pushes as both do adds
+            // their velocities weighted by their speeds (exact for flows from one direction, with the
+            // ship's own speed through the air left out).
+            let f = velocity(speed, from);
             let m = recorded.mean_velocity_m_s;
-            let felt = [m[0] + found[0], m[1] + found[1]];
+            let (sm, sf) = (m[0].hypot(m[1]), speed);
+            let pressure = [sm * m[0] + sf * f[0], sm * m[1] + sf * f[1]];
+            let p = pressure[0].hypot(pressure[1]);
             Some(AgainstRecorded {
                 flow,
                 found_speed_m_s: speed,
                 found_from_deg: from,
                 recorded,
-                felt_speed_m_s: felt[0].hypot(felt[1]),
-                felt_from_deg: from_deg(felt),
+                felt_speed_m_s: p.sqrt(),
+                felt_from_deg: from_deg(pressure),
                 speed_ratio: speed / recorded.speed_mean_m_s.max(f64::MIN_POSITIVE),
                 direction_difference_deg: angle_difference_deg(from, recorded.from_mean_deg),
             })

@@ -12,6 +12,11 @@
 //!    would hide every effect; segments keep the model's own error small and an effect's signature
 //!    (a drift, a lag, a bias) intact. The equation-error residual — recorded (or differentiated)
 //!    accelerations minus the model's at the recorded state and rudder — says *where* and in *which DOF*.
+//!    A recording's recorded wind and current are part of the base: replays and residuals feel them
+//!    at the recording's time ([`shipid_sim::WithEnvironment`], the wind through the data set's
+//!    `[windage]`, else an assumed one), so what the diagnosis may find is a wind or current the
+//!    recordings do not carry; a found one is reported against the recorded one, and `--reveal`
+//!    ([`conceal`], [`reveal`]) conceals the recorded channels to check the verdict against them.
 //! 2. **Name.** Every effect of the library ([`Family`]) is fitted to half of the recordings in the
 //!    equation-error sense (cheap, no integration; Levenberg–Marquardt on a handful of physical
 //!    parameters, base model fixed) and judged by the segment-replay position error on the other half;
@@ -28,10 +33,11 @@
 //!    covariance with the residual autocorrelation accounted for by thinning the samples to one per
 //!    smoothing window.
 //!
-//! The phases are modules, each using only those before it: `input` (what is given), `verdict`
-//! (the vocabulary), `compare`, `locate`, `families`, `judge`, `report` (which runs them), and
-//! [`bench`](mod@bench), the concealed-effect benchmark on top; their public items are re-exported
-//! here.
+//! The phases are modules, each using only those before it: `input` (what is given), `error`,
+//! `verdict` (the vocabulary), `environment` (the recorded wind and current in the report, the
+//! `--reveal` check), `compare`, `locate`, `families`, `judge`, `report` (which runs them), and on top
+//! [`bench`](mod@bench), the concealed-effect benchmark, and [`known_wind`], the benchmark with a
+//! recorded wind as known input; their public items are re-exported here.
 
 mod augment;
 pub mod bench;

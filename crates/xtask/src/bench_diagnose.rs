@@ -142,7 +142,12 @@ fn write_results(
     t.push_text("concealed", text(&|r| r.case.concealed.to_string()));
     t.push_text(
         "concealed_effect",
-        text(&|r| r.case.effect.as_ref().map_or("none".into(), |e| e.to_string())),
+        text(&|r| {
+            r.case
+                .effect
+                .as_ref()
+                .map_or("none".into(), |e| e.to_string())
+        }),
     );
     t.push_num("magnitude", num(&|r| Some(r.case.magnitude)));
     t.push_text("magnitude_name", text(&|r| r.case.magnitude_name.into()));

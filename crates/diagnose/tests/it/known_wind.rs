@@ -124,3 +124,47 @@ fn replays_of_windy_runs_feel_their_recorded_wind() {
     assert!(known < 1e-3, "with the wind known: {known} L");
     assert!(concealed > 10.0 * known, "{concealed} L against {known} L");
 }
+
+#[test]
+fn a_recorded_wind_that_reads_half_the_true_one_is_found_against_the_recorded() {
+    // The anemometer of these runs reads half the wind's speed: the diagnosis, with the recorded
+    // wind part of the base, finds the missing half in the same direction and says that together
+    // the ship felt the true wind.
+    let (model, level) = base();
+    let case = KnownWindCase {
+        id: "half-read-anemometer".into(),
+        wind: WindRun {
+            speed_m_s: 4.5,
+            from_deg: 250.0,
+            gust: 0.0,
+            seed: 3,
+        },
+        control: true,
+        seed: 2,
+    };
+    let mut ds = shipid_diagnose::known_wind::case_dataset(&case).unwrap();
+    for r in &mut ds.recordings {
+        let w = r.recording.wind.as_mut().unwrap();
+        w.speed_m_s.iter_mut().for_each(|s| *s *= 0.5);
+    }
+    let report = shipid_diagnose::diagnose(
+        &input(&model, Some(level)),
+        &ds,
+        &DiagnoseOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(report.verdict, Verdict::Wind, "{}", report.explanation);
+    let against = &report.against_recorded[0];
+    assert_eq!(against.flow, "wind");
+    assert!(
+        against.direction_difference_deg < 10.0,
+        "{}",
+        against.sentence()
+    );
+    assert!(
+        (against.felt_speed_m_s - 4.5).abs() < 0.3,
+        "{}",
+        against.sentence()
+    );
+    assert!(report.explanation.contains("the recordings carry a wind"));
+}
