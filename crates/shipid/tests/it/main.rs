@@ -5,6 +5,7 @@ mod cli;
 mod common;
 mod diagnose;
 mod embedded_data;
+mod environment;
 mod foreign_dir;
 mod hostile;
 mod hsva_import;
