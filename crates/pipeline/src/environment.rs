@@ -241,29 +241,49 @@ pub fn environment_notes<'a>(
     chosen: &ChosenWindage,
     what: &str,
 ) -> Vec<String> {
-    let mut notes = Vec::new();
+    // One note per kind of flow, naming its recordings: a data set of windy runs says it once.
+    let mut by_flows: Vec<(&'static str, bool, Vec<&str>)> = Vec::new();
     for r in recordings {
         let (wind, current) = (r.recording.wind.is_some(), r.recording.current.is_some());
-        if !wind && !current {
-            continue;
-        }
         let flows = match (wind, current) {
+            (false, false) => continue,
             (true, true) => "a recorded wind and current",
             (true, false) => "a recorded wind",
             _ => "a recorded current",
         };
-        let windage = if wind {
-            format!(", the wind's force with {}", chosen.describe())
-        } else {
-            String::new()
-        };
-        notes.push(format!(
-            "{}: `{}` carries {flows}; {what} takes it as a known input{windage}",
-            ds.path.display(),
-            r.file
-        ));
+        match by_flows.iter_mut().find(|(f, _, _)| *f == flows) {
+            Some((_, _, files)) => files.push(&r.file),
+            None => by_flows.push((flows, wind, vec![&r.file])),
+        }
     }
-    notes
+    by_flows
+        .into_iter()
+        .map(|(flows, wind, files)| {
+            let windage = if wind {
+                format!(", the wind's force with {}", chosen.describe())
+            } else {
+                String::new()
+            };
+            let (which, verb) = match files.as_slice() {
+                [one] => (format!("`{one}`"), "carries"),
+                many => (
+                    format!(
+                        "{} recordings ({})",
+                        many.len(),
+                        many.iter()
+                            .map(|f| format!("`{f}`"))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                    "carry",
+                ),
+            };
+            format!(
+                "{}: {which} {verb} {flows}; {what} takes it as a known input{windage}",
+                ds.path.display()
+            )
+        })
+        .collect()
 }
 
 /// How deep `base = …` chains of augmented model files are followed for their `[environment]`.

@@ -49,7 +49,10 @@ pub fn run_and_write(
     let results = run_study(study, out, jobs, force, progress)
         .map_err(|e| failed(anyhow::anyhow!("writing into {}: {e}", out.display())))?;
     write_tables(study, &results, out)?;
-    let mut warnings = shipid_figures::write_figures(study, out).warnings;
+    // What the data carry that the models may not: a varying propeller rate, a recorded wind or
+    // current (removed before each fit and applied in each test's replays), and the windage used.
+    let mut warnings = shipid_pipeline::validate::validation_warnings("", &study.dataset);
+    warnings.extend(shipid_figures::write_figures(study, out).warnings);
     RunRecord::new(
         env!("CARGO_PKG_VERSION"),
         study,

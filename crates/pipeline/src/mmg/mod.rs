@@ -42,8 +42,9 @@ pub use refine::{ParametricMmg, refine_mmg};
 use crate::error::{PipelineError, bad_input, failed};
 use crate::fit::{EstimatorSpec, WindowSpec, chosen_recordings, training_window, window_range};
 use crate::refine::RefineOptions;
-use crate::replay::{replay_segment, segments};
+use crate::replay::{replay_segment_in, segments};
 use crate::validate::interp;
+use shipid_sim::environment::KnownEnvironment;
 
 /// How the hull derivatives are solved inside: bounded least squares on the prior-augmented design
 /// (the physical sign bounds of [`priors`] hold), or the same without bounds (a ridge toward the
@@ -154,6 +155,8 @@ pub struct TrainingData {
     pub samples: Vec<EqSample>,
     pub windows: Vec<TrainingWindow>,
     pub recordings: Vec<Recording>,
+    /// Each training recording's recorded wind and current (`None`: calm), which its replays feel.
+    pub environments: Vec<Option<KnownEnvironment>>,
 }
 
 /// The [`TrainingData`] of `opts` on `ds`.
@@ -181,9 +184,11 @@ pub fn training_samples(ds: &Dataset, opts: &MmgFitOptions) -> Result<TrainingDa
     let mut samples = Vec::new();
     let mut windows = Vec::new();
     let mut recordings = Vec::new();
+    let mut environments = Vec::new();
     for (g, r) in chosen.iter().enumerate() {
         let range = window_range(r, ds, opts.window)?;
         recordings.push(r.recording.slice(range.clone()));
+        environments.push(crate::environment::recording_environment(ds, &r.recording)?.0);
         // The recorded wind and current are known inputs: identify from what is left.
         let hydro = crate::environment::hydrodynamic_recording(ds, r, &added)?;
         let (rec, acc, estimated) = (&hydro.recording, &hydro.accelerations, hydro.estimated);
@@ -249,6 +254,7 @@ pub fn training_samples(ds: &Dataset, opts: &MmgFitOptions) -> Result<TrainingDa
         samples,
         windows,
         recordings,
+        environments,
     })
 }
 
@@ -297,6 +303,7 @@ pub fn fit_mmg_with_priors(
         samples,
         windows,
         recordings,
+        environments,
     } = training_samples(ds, opts)?;
     let added = ds.added_mass.unwrap_or_default();
     let rate = samples.iter().map(|s| s.n_hz).sum::<f64>() / samples.len() as f64;
@@ -313,7 +320,7 @@ pub fn fit_mmg_with_priors(
     let (lambda, cv, start) = match opts.prior_weight {
         PriorWeight::Fixed(l) => (l, Vec::new(), problem.prior_phi()),
         PriorWeight::CrossValidated(criterion) => {
-            cross_validate(&problem, &all, &recordings, criterion, rate)?
+            cross_validate(&problem, &all, &recordings, &environments, criterion, rate)?
         }
     };
     let (phi, beta, iterations) = problem.solve(&start, &all, lambda)?;
@@ -343,6 +350,7 @@ fn cross_validate(
     problem: &Problem,
     all: &[usize],
     recordings: &[Recording],
+    environments: &[Option<KnownEnvironment>],
     criterion: CvCriterion,
     rate_hz: f64,
 ) -> Result<(f64, Vec<CvScore>, Vec<f64>), PipelineError> {
@@ -384,7 +392,13 @@ fn cross_validate(
                     CvCriterion::EquationError => problem.data_cost(&phi_k, &beta_k, held),
                     CvCriterion::Replay => {
                         let model = problem.model_of(&phi_k, &beta_k, rate_hz)?;
-                        Ok(replay_score(&model, problem, held, recordings))
+                        Ok(replay_score(
+                            &model,
+                            problem,
+                            held,
+                            recordings,
+                            environments,
+                        ))
                     }
                 }
             })
@@ -469,6 +483,7 @@ fn replay_score(
     problem: &Problem,
     held: &[usize],
     recordings: &[Recording],
+    environments: &[Option<KnownEnvironment>],
 ) -> f64 {
     let mut spans: Vec<(usize, f64, f64)> = Vec::new();
     for &i in held {
@@ -495,7 +510,8 @@ fn replay_score(
         }
         let part = rec.slice(lo..hi);
         for (a, b) in segments(&part, horizon_s) {
-            let (sim, completed) = replay_segment(model, &part, a, b);
+            let env = environments.get(g).and_then(Option::as_ref);
+            let (sim, completed) = replay_segment_in(model, env, &part, a, b);
             let t_start = part.t[a];
             for i in a..b {
                 let t = part.t[i] - t_start;
