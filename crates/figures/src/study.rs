@@ -31,7 +31,7 @@ use shipid_tables::Table;
 use shipid_pipeline::fit::{WindowSpec, training_samples};
 use shipid_pipeline::mmg::load_mmg_model_if_kind;
 use shipid_pipeline::model_file::load_gp_model;
-use shipid_pipeline::validate::replay;
+use shipid_pipeline::validate::replay_in;
 use shipid_study::{Case, Study};
 
 use crate::error::Result;
@@ -64,7 +64,7 @@ pub struct FigureReport {
     pub warnings: Vec<String>,
 }
 
-use shipid_pipeline::validate::closed_loop;
+use shipid_pipeline::validate::closed_loop_in;
 
 /// (DOF, term, set, estimator) of a convergence line.
 type LineKey = (String, String, String, String);
@@ -307,6 +307,11 @@ struct Prediction {
 fn predictions(study: &Study, cases: &[CaseData], r: &DatasetRecording) -> Vec<Prediction> {
     let ship = &study.dataset.ship;
     let t0 = r.recording.t.first().copied().unwrap_or(0.0);
+    // As the study's own validation: the recording's wind and current act on every prediction (a
+    // recording whose environment cannot be used was already refused by the run).
+    let env = shipid_pipeline::environment::recording_environment(&study.dataset, &r.recording)
+        .ok()
+        .and_then(|(env, _)| env);
     cases
         .iter()
         .enumerate()
@@ -318,7 +323,8 @@ fn predictions(study: &Study, cases: &[CaseData], r: &DatasetRecording) -> Vec<P
                 (None, None, Some(m)) => m,
                 (None, None, None) => return None,
             };
-            let sim = closed_loop(model, r, ship).unwrap_or_else(|| replay(model, &r.recording));
+            let sim = closed_loop_in(model, r, ship, env.clone())
+                .unwrap_or_else(|| replay_in(model, &r.recording, env.clone()));
             let s = sim.recording;
             let diverged_at_s = match sim.status {
                 SimStatus::Ok => None,
