@@ -44,6 +44,9 @@ pub enum ModelError {
     MissingCoefficient(String),
     #[error("[bootstrap]: {0}")]
     Bootstrap(String),
+    /// A damaged `[calibration]`, naming the key.
+    #[error(transparent)]
+    Calibration(#[from] crate::calibration::CalibrationDamage),
 }
 
 impl AbkowitzModel {
@@ -309,6 +312,10 @@ pub struct ModelFile {
     /// `simulate --bands` and `validate` draw their bands.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bootstrap: Option<BootstrapRecord>,
+    /// What calibrated bands need (`shipid fit --bootstrap N --calibrate`): the pooled ensemble's
+    /// replicates per structure and the inflation factor per metric family.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub calibration: Option<crate::calibration::CalibrationRecord>,
     /// The recorded wind and current removed from the training recordings before identification
     /// (absent when they were calm).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -365,43 +372,7 @@ impl BootstrapRecord {
         &self,
         set: &CoefficientSet,
     ) -> Result<Vec<[Vec<f64>; 3]>, ModelError> {
-        let mut count: Option<usize> = None;
-        let mut per_dof: [Vec<&Vec<f64>>; 3] = Default::default();
-        for d in Dof::ALL {
-            let given = self.replicates.get(d.as_str());
-            for name in set.names(d) {
-                let values = given
-                    .and_then(|g| g.get(&name))
-                    .ok_or_else(|| ModelError::Bootstrap(format!("no replicates of {name}")))?;
-                match count {
-                    None => count = Some(values.len()),
-                    Some(n) if n != values.len() => {
-                        return Err(ModelError::Bootstrap(format!(
-                            "{name} has {} replicates, other coefficients {n}",
-                            values.len()
-                        )));
-                    }
-                    Some(_) => {}
-                }
-                if values.iter().any(|v| !v.is_finite()) {
-                    return Err(ModelError::Bootstrap(format!(
-                        "a replicate of {name} is not finite"
-                    )));
-                }
-                per_dof[d.index()].push(values);
-            }
-            if let Some(g) = given {
-                if let Some(extra) = g.keys().find(|k| !set.names(d).contains(k)) {
-                    return Err(ModelError::Bootstrap(format!(
-                        "{extra} is not a term of the set"
-                    )));
-                }
-            }
-        }
-        let n = count.unwrap_or(0);
-        Ok((0..n)
-            .map(|k| Dof::ALL.map(|d| per_dof[d.index()].iter().map(|v| v[k]).collect()))
-            .collect())
+        crate::calibration::replicate_vectors(&self.replicates, set).map_err(ModelError::Bootstrap)
     }
 }
 
@@ -462,6 +433,7 @@ impl ModelFile {
             coefficients,
             effects: Vec::new(),
             bootstrap: None,
+            calibration: None,
             environment: None,
         }
     }

@@ -7,10 +7,13 @@
 //!   per-term force contributions;
 //! - [`abkowitz`]: an identified model ([`AbkowitzModel`]), its accelerations for any state, and the
 //!   model file written by `shipid fit` ([`ModelFile`]);
+//! - [`calibration`]: the model file's `[calibration]` (ensemble replicates per structure and
+//!   inflation factors per metric family) and its checks;
 //! - [`envelope`]: where an identified model's regression extrapolates ([`IdentificationRange`]: the
 //!   leverage of a state against the training design).
 
 pub mod abkowitz;
+pub mod calibration;
 pub mod design;
 pub mod envelope;
 pub mod set;
@@ -18,6 +21,9 @@ pub mod set;
 pub use abkowitz::{
     AbkowitzModel, AugmentedModelFile, BootstrapRecord, EffectEntry, EnvironmentRecord,
     EstimatorInfo, ModelError, ModelFile, Refinement, TrainingWindow,
+};
+pub use calibration::{
+    CalibrationDamage, CalibrationRecord, CheckedCalibration, FactorRecord, StructureRecord,
 };
 pub use design::{Design, PrimeInertia, Samples, design};
 pub use envelope::{IdentificationRange, RangeError};
