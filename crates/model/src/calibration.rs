@@ -47,7 +47,7 @@ pub struct FactorRecord {
     pub factor: f64,
     /// Standardised errors the factor is the `level` quantile of.
     pub errors: usize,
-    /// Of those of the family itself: predicted by the ensemble fitted to them, and held out.
+    /// Of those errors: predicted by the ensemble fitted to them (in sample), and held out.
     pub in_sample: usize,
     pub held_out: usize,
 }

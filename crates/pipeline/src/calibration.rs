@@ -23,7 +23,13 @@
 //!    bands miss even where the data are (equation-error bias from noisy states, the structure's
 //!    misfit); held-out ones what they miss on a manoeuvre the fit did not see.
 //!
-//! The widened band is centre ± factor · reach · half-width. No I/O.
+//! The widened band is centre ± factor · reach · half-width.
+//!
+//! `shipid fit --bootstrap N --calibrate` stores the ensemble's replicates and the factors in the
+//! model file's `[calibration]` ([`calibration_record`]); `simulate --bands` and `validate --bands`
+//! read them back ([`stored_calibration`]) and widen the pooled band by the stored factor and the
+//! reach of the run at hand ([`StoredCalibration::bands`]). No I/O but the reading of that model
+//! file and of its training data (for the identification range).
 
 use std::collections::BTreeMap;
 
@@ -35,6 +41,9 @@ use shipid_model::{AbkowitzModel, CoefficientSet, IdentificationRange};
 use shipid_sim::metrics::metrics;
 use shipid_sim::{AbkowitzDynamics, Dynamics};
 use shipid_uncertainty::Band;
+
+use shipid_model::{CalibrationRecord, FactorRecord, ModelFile, StructureRecord};
+use shipid_sim::{Effect, WithEffects};
 
 use crate::bands::{BandRun, ManoeuvreBands, manoeuvre_bands};
 use crate::bootstrap::bootstrap_fit;
@@ -254,10 +263,21 @@ pub fn fit_ensemble(
     how: &EnsembleSpec,
     recordings: &[String],
 ) -> Result<Ensemble, PipelineError> {
+    fit_ensemble_stored(ds, how, recordings).map(|(e, _)| e)
+}
+
+/// [`fit_ensemble`], with each structure's set and replicates as a model file's `[calibration]`
+/// stores them.
+pub fn fit_ensemble_stored(
+    ds: &Dataset,
+    how: &EnsembleSpec,
+    recordings: &[String],
+) -> Result<(Ensemble, Vec<StructureRecord>), PipelineError> {
     let (sets, spec) = (how.sets, how.estimator);
     let mut point = None;
     let mut models = Vec::new();
     let mut block_rows = Vec::new();
+    let mut stored = Vec::new();
     let share = (how.replicates / sets.len().max(1)).max(2);
     for set in sets {
         let out = fit_dataset(ds, set.clone(), spec, recordings, how.window, how.solver)?;
@@ -267,18 +287,26 @@ pub fn fit_ensemble(
         let boot = bootstrap_fit(ds, &out, spec, how.solver, share, how.seed)?;
         models.extend(boot.models(&out.model));
         block_rows.push(boot.block.rows);
+        stored.push(StructureRecord {
+            set: set.file.clone(),
+            block_rows: boot.block.rows,
+            replicates: boot.record(&out.model).replicates,
+        });
         if point.is_none() {
             let range = IdentificationRange::from_samples(&out.model.set, &out.training).ok();
             point = Some((out.model, range));
         }
     }
     let (point, range) = point.ok_or_else(|| bad_input("no coefficient set for the ensemble"))?;
-    Ok(Ensemble {
-        point,
-        range,
-        replicates: models,
-        block_rows,
-    })
+    Ok((
+        Ensemble {
+            point,
+            range,
+            replicates: models,
+            block_rows,
+        },
+        stored,
+    ))
 }
 
 /// The ensemble's bands of manoeuvre `m` run as `how` says, and the reach of its point run.
@@ -391,4 +419,249 @@ pub fn calibrate_ensemble(
         recordings.len()
     };
     Ok(calibrate(&z, level, folds))
+}
+
+/// The calibration in words, as the model file's `[calibration]` states it.
+pub const METHOD: &str = "pooled moving-block bootstrap replicates of every structure (equal shares, \
+the same windows, estimator and seed), each band widened about its centre by the reach of the run \
+outside the identification range and by the inflation factor of its metric family: the `level` \
+quantile (at least 1) of the training recordings' standardised errors, in sample and left out in \
+turn (docs/uncertainty.md)";
+
+/// The model file's `[calibration]` of calibration `c`, made as `how` says from the ensemble whose
+/// structures are `structures` ([`fit_ensemble_stored`]).
+pub fn calibration_record(
+    c: &Calibration,
+    how: &EnsembleSpec,
+    structures: Vec<StructureRecord>,
+) -> CalibrationRecord {
+    let factors = MetricFamily::ALL
+        .iter()
+        .map(|&fam| {
+            let f = c
+                .factors
+                .get(&fam)
+                .copied()
+                .unwrap_or(FamilyFactor::TooFew { errors: 0 });
+            let counted: Vec<&BandError> = c
+                .errors
+                .iter()
+                .filter(|e| matches!(f, FamilyFactor::Pooled { .. }) || e.family == fam)
+                .collect();
+            let (outcome, errors) = match f {
+                FamilyFactor::Own { errors, .. } => ("own", errors),
+                FamilyFactor::Pooled { errors, .. } => ("pooled", errors),
+                FamilyFactor::TooFew { errors } => ("too-few", errors),
+            };
+            (
+                fam.as_str().to_string(),
+                FactorRecord {
+                    outcome: outcome.into(),
+                    factor: f.factor(),
+                    errors,
+                    in_sample: counted.iter().filter(|e| !e.held_out).count(),
+                    held_out: counted.iter().filter(|e| e.held_out).count(),
+                },
+            )
+        })
+        .collect();
+    CalibrationRecord {
+        method: METHOD.into(),
+        level: c.level,
+        seed: how.seed,
+        folds: c.folds,
+        factors,
+        structures,
+    }
+}
+
+/// A model file's calibration, ready to band a run: the pooled replicates of every structure (with
+/// the file's effects), the factors, and the identification range of its training data (None when
+/// that data cannot be read: the reach is then taken as 1 and said).
+pub struct StoredCalibration {
+    pub level: f64,
+    pub folds: usize,
+    /// Each structure's name and number of replicates, the model's own first.
+    pub structures: Vec<(String, usize)>,
+    pub factors: BTreeMap<MetricFamily, FamilyFactor>,
+    pub replicates: Vec<Box<dyn Dynamics + Send + Sync>>,
+    pub range: Option<IdentificationRange>,
+}
+
+/// Bands of one run widened by a stored calibration.
+pub struct CalibratedBands {
+    /// The pooled percentile bands, every metric's widened (the track band is not: it is the
+    /// ensemble's pointwise percentiles).
+    pub bands: ManoeuvreBands,
+    /// The run's reach outside the identification range (1 when the range is unknown).
+    pub reach: f64,
+}
+
+fn family_factor(f: &FactorRecord) -> FamilyFactor {
+    match f.outcome.as_str() {
+        "own" => FamilyFactor::Own {
+            factor: f.factor,
+            errors: f.errors,
+        },
+        "pooled" => FamilyFactor::Pooled {
+            factor: f.factor,
+            errors: f.errors,
+        },
+        _ => FamilyFactor::TooFew { errors: f.errors },
+    }
+}
+
+impl StoredCalibration {
+    /// The factor of `metric`'s family (1 for a metric of no family).
+    pub fn factor(&self, metric: &str) -> f64 {
+        MetricFamily::of(metric)
+            .and_then(|f| self.factors.get(&f))
+            .map_or(1.0, |f| f.factor())
+    }
+
+    /// Which band this is, in one line: "calibrated: ensemble of reduced32 (200 replicates), factor
+    /// overshoot 2.10 (own, 4 errors), …".
+    pub fn describe(&self) -> String {
+        let structures: Vec<String> = self
+            .structures
+            .iter()
+            .map(|(name, n)| format!("{name} ({n} replicates)"))
+            .collect();
+        let factors: Vec<String> = self
+            .factors
+            .iter()
+            .map(|(fam, f)| match f {
+                FamilyFactor::Own { factor, errors } => {
+                    format!("{} {factor:.2} (own, {errors} errors)", fam.as_str())
+                }
+                FamilyFactor::Pooled { factor, errors } => {
+                    format!("{} {factor:.2} (pooled, {errors} errors)", fam.as_str())
+                }
+                FamilyFactor::TooFew { errors } => {
+                    format!("{} 1 (too few errors: {errors})", fam.as_str())
+                }
+            })
+            .collect();
+        let held = if self.folds == 0 {
+            "in-sample errors only (one training recording)".to_string()
+        } else {
+            format!("in-sample and {} held-out folds", self.folds)
+        };
+        format!(
+            "calibrated: ensemble of {}, factor {} from {held}, times the reach outside the identification range{}",
+            structures.join(" + "),
+            factors.join(", "),
+            if self.range.is_none() {
+                " (unknown: the training data cannot be read; taken as 1)"
+            } else {
+                ""
+            }
+        )
+    }
+
+    /// The bands of manoeuvre `m` run as `how` says, with `point` (the model file's own model) as
+    /// the point prediction: the pooled replicates' percentile band of every metric, widened by its
+    /// family's factor and the point run's reach.
+    pub fn bands(
+        &self,
+        point: &dyn Dynamics,
+        m: &Manoeuvre,
+        ship: &Ship,
+        how: BandRun,
+    ) -> Result<CalibratedBands, PipelineError> {
+        let mut bands = manoeuvre_bands(point, &self.replicates, m, ship, self.level, how)?;
+        let run = match how {
+            BandRun::Standard => simulate_manoeuvre(point, m, None, None).ok(),
+            BandRun::Grid(g) => simulate_on_grid(point, m, g).ok(),
+            BandRun::Recording(r) => closed_loop(point, r, ship),
+        };
+        let reach = match (&self.range, run) {
+            (Some(range), Some(run)) => reach(range, &run.recording, ship),
+            _ => 1.0,
+        };
+        for b in &mut bands.metrics {
+            if let Ok(band) = &b.band {
+                b.band = Ok(widen(band, self.factor(b.metric), reach));
+            }
+        }
+        Ok(CalibratedBands { bands, reach })
+    }
+}
+
+/// The calibration of the model file `spec` at `level`: None when it is no polynomial model file or
+/// has no `[calibration]` (its bands are then the bootstrap's alone). Bad input, naming the key, for
+/// a damaged table, and for a `level` other than the one the factors were obtained at.
+pub fn stored_calibration(
+    spec: &str,
+    level: f64,
+) -> Result<Option<StoredCalibration>, PipelineError> {
+    let path = std::path::Path::new(spec);
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let text = std::fs::read_to_string(path).map_err(|e| shipid_io::InputError::read(path, &e))?;
+    let is_polynomial = toml::from_str::<toml::Table>(&text)
+        .ok()
+        .is_some_and(|t| t.get("kind").and_then(|k| k.as_str()) == Some("abkowitz"));
+    if !is_polynomial {
+        return Ok(None);
+    }
+    let file: ModelFile =
+        toml::from_str(&text).map_err(|e| shipid_io::InputError::toml(path, &text, &e))?;
+    let Some(record) = &file.calibration else {
+        return Ok(None);
+    };
+    let checked = record
+        .check(&file.set.name)
+        .map_err(|e| shipid_io::InputError::key(path, &e.key, e.reason))?;
+    if (record.level - level).abs() > 1e-9 {
+        return Err(bad_input(format!(
+            "{spec}: its calibration was obtained at level {} (key `calibration.level`) and widens \
+             bands of that level only: use --bands {}, or refit with --calibrate {level}",
+            record.level, record.level
+        )));
+    }
+    let effects: Vec<Effect> = file
+        .effects
+        .iter()
+        .map(|e| e.effect.parse::<Effect>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| shipid_io::InputError::key(path, "effects", e.to_string()))?;
+    let mut replicates: Vec<Box<dyn Dynamics + Send + Sync>> = Vec::new();
+    let mut structures = Vec::new();
+    for (set, vectors) in checked.structures {
+        structures.push((set.name.clone(), vectors.len()));
+        for c in vectors {
+            let Ok(m) = AbkowitzModel::new(set.clone(), c, file.ship, file.added_mass) else {
+                continue;
+            };
+            if effects.is_empty() {
+                replicates.push(Box::new(AbkowitzDynamics(m)));
+            } else {
+                let wrapped = WithEffects::new(AbkowitzDynamics(m), &effects)
+                    .map_err(|e| shipid_io::InputError::key(path, "effects", e.to_string()))?;
+                replicates.push(Box::new(wrapped));
+            }
+        }
+    }
+    let factors = MetricFamily::ALL
+        .iter()
+        .filter_map(|&fam| {
+            checked
+                .factors
+                .get(fam.as_str())
+                .map(|f| (fam, family_factor(f)))
+        })
+        .collect();
+    let range = crate::range::training_data(spec)
+        .as_ref()
+        .and_then(crate::range::identification_range);
+    Ok(Some(StoredCalibration {
+        level: record.level,
+        folds: record.folds,
+        structures,
+        factors,
+        replicates,
+        range,
+    }))
 }

@@ -9,8 +9,9 @@
 //! `validate`; `fit` (windows, polynomial fit) → `refine` → `lm`, `replay`, `validate`; `fit_gp` →
 //! `fit`; `range` (identification range); `spec` (manoeuvre specs) ← `generate` (default data) ←
 //! `simulate` (standard manoeuvres); `model_file` (the loader) → `fit_gp`;
-//! `bootstrap` (block-bootstrap replicates of a polynomial fit); `bands` (replicated models'
-//! manoeuvre bands) → `simulate`. `cargo xtask circles`
+//! `bootstrap` (block-bootstrap replicates of a polynomial or mmg fit); `bands` (replicated models'
+//! manoeuvre bands) → `simulate`; `calibration` (ensemble, reach, inflation, a model file's
+//! `[calibration]`) → `bands`, `bootstrap`, `fit`, `range`. `cargo xtask circles`
 //! checks that these stay one-way.
 
 pub mod bands;
