@@ -29,6 +29,9 @@ pub struct FitArgs<'a> {
     pub validate: bool,
     /// Bootstrap replicates and their seed (`--bootstrap N --bootstrap-seed S`).
     pub bootstrap: Option<(usize, u64)>,
+    /// `--calibrate [LEVEL] [--structures a,b]`: the level and the ensemble's other sets (empty: the
+    /// fitted set alone).
+    pub calibrate: Option<(f64, Vec<String>)>,
 }
 
 /// How many of the largest VIFs the report lists per DOF.
@@ -198,6 +201,9 @@ fn print_summary(out: &FitOutput, written: Option<&Path>, as_json: bool, warning
 }
 
 pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
+    if let Some((level, _)) = &a.calibrate {
+        check_calibrate(&a, *level)?;
+    }
     if a.set == shipid_pipeline::mmg::SET_NAME {
         return run_mmg(a);
     }
@@ -223,6 +229,9 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
             n,
         )?;
         file.bootstrap = Some(boot.record(&out.model));
+        if let Some((level, others)) = &a.calibrate {
+            file.calibration = Some(calibrate(&a, &ds, &out, (n, seed), *level, others)?);
+        }
     }
     shipid_pipeline::model_file::anchor_training(&mut file.training, a.out);
     let text = toml::to_string(&file).map_err(failed)?;
@@ -249,6 +258,90 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
         }
     }
     Ok(outcome)
+}
+
+/// `--calibrate` is refused before any work where it cannot apply: a level outside (0, 1), the mmg
+/// family (its bands come from its own bootstrap; the calibration fits polynomial structures) and a
+/// refined fit (the ensemble is fitted in the equation-error sense, so its replicates would not be
+/// centred on the refined model).
+fn check_calibrate(a: &FitArgs<'_>, level: f64) -> Result<(), CliError> {
+    if !(level > 0.0 && level < 1.0) {
+        return Err(crate::bad_input(format!(
+            "--calibrate must be a level strictly between 0 and 1 (e.g. 0.9), got {level}"
+        )));
+    }
+    if a.set == shipid_pipeline::mmg::SET_NAME {
+        return Err(crate::bad_input(
+            "--calibrate applies to polynomial sets (an ensemble of coefficient sets); the mmg family's bands are its own bootstrap's: drop --calibrate",
+        ));
+    }
+    if a.estimator.refine {
+        return Err(crate::bad_input(
+            "--calibrate does not apply with --refine: the ensemble is fitted in the equation-error sense and would not be centred on the refined model",
+        ));
+    }
+    Ok(())
+}
+
+/// The model file's `[calibration]`: the ensemble of the fitted set and `others` (same windows,
+/// estimator, solver, `n` replicates pooled, the bootstrap's seed) and its factors at `level` from
+/// the training recordings (all of the data set's when none were named).
+fn calibrate(
+    a: &FitArgs<'_>,
+    ds: &Dataset,
+    out: &FitOutput,
+    (n, seed): (usize, u64),
+    level: f64,
+    others: &[String],
+) -> Result<shipid_model::CalibrationRecord, CliError> {
+    use shipid_pipeline::calibration::{
+        EnsembleSpec, calibrate_ensemble, calibration_record, fit_ensemble_stored,
+    };
+    let mut sets = vec![out.model.set.clone()];
+    for name in others {
+        let set = load_set(name).map_err(|e| crate::bad_input(format!("--structures: {e}")))?;
+        if !sets.iter().any(|s| s.name == set.name) {
+            sets.push(set);
+        }
+    }
+    if n < 2 * sets.len() {
+        return Err(crate::bad_input(format!(
+            "--bootstrap {n} is too few for {} structures: each needs at least 2 replicates",
+            sets.len()
+        )));
+    }
+    let recordings: Vec<String> = if a.recordings.is_empty() {
+        ds.recordings.iter().map(|r| r.file.clone()).collect()
+    } else {
+        a.recordings.clone()
+    };
+    let how = EnsembleSpec {
+        sets: &sets,
+        estimator: &a.estimator,
+        window: a.window,
+        solver: a.solver,
+        replicates: n,
+        seed,
+    };
+    let (ensemble, structures) = fit_ensemble_stored(ds, &how, &recordings)?;
+    let c = calibrate_ensemble(&ensemble, ds, &how, &recordings, level)?;
+    let record = calibration_record(&c, &how, structures);
+    let factors: Vec<String> = record
+        .factors
+        .iter()
+        .map(|(fam, f)| format!("{fam} {:.2} ({}, {} errors)", f.factor, f.outcome, f.errors))
+        .collect();
+    eprintln!(
+        "calibration at {level}: ensemble of {} ({} replicates each), {} held-out folds; factors {}; in the model file's [calibration]",
+        sets.iter()
+            .map(|s| s.name.as_str())
+            .collect::<Vec<_>>()
+            .join(" + "),
+        (n / sets.len()).max(2),
+        c.folds,
+        factors.join(", ")
+    );
+    Ok(record)
 }
 
 /// The bootstrap's line on stderr; a failure when too few replicates are left for a band.

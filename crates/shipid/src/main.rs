@@ -122,6 +122,21 @@ enum Command {
             allow_negative_numbers = true
         )]
         bootstrap_seed: u64,
+        /// Also store what calibrated bands need at LEVEL (default 0.9): the pooled bootstrap
+        /// replicates of --structures and the inflation per metric family from the training
+        /// recordings (docs/uncertainty.md); `simulate --bands` and `validate --bands` then use them.
+        #[arg(long, value_name = "LEVEL", num_args = 0..=1, default_missing_value = "0.9",
+            requires = "bootstrap", allow_negative_numbers = true)]
+        calibrate: Option<f64>,
+        /// Coefficient sets of the calibration's ensemble, comma-separated (default: --set alone,
+        /// as a study's `calibrate = true`); --set is always its first structure.
+        #[arg(
+            long,
+            value_name = "SET,SET,…",
+            requires = "calibrate",
+            value_delimiter = ','
+        )]
+        structures: Option<Vec<String>>,
     },
     /// Run a study: its grid of cases in parallel, result tables under results/<study>/.
     Run {
@@ -377,6 +392,8 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             validate,
             bootstrap,
             bootstrap_seed,
+            calibrate,
+            structures,
         } => {
             let bootstrap = match bootstrap {
                 None => None,
@@ -447,6 +464,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                 json,
                 validate,
                 bootstrap: bootstrap.map(|n| (n, bootstrap_seed)),
+                calibrate: calibrate.map(|level| (level, structures.unwrap_or_default())),
             })
         }
         Command::Metrics { dataset, json } => shipid::metrics_cmd::run(&dataset, json),
