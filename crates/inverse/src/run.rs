@@ -355,6 +355,12 @@ pub fn run_target(
 
 /// Refinement restarts per network: its own answer and this many less one starts jittered around it.
 pub const RESTARTS_PER_NETWORK: usize = 6;
+/// Members a band needs: the bands' fewest defining replicates (`shipid_pipeline::bands`). An ensemble
+/// with fewer kept members after a round of restarts gets another round, up to
+/// [`MAX_RESTART_ROUNDS`].
+pub const BAND_MEMBERS: usize = 20;
+/// Rounds of restarts at most (each [`RESTARTS_PER_NETWORK`] − 1 jittered starts per network).
+pub const MAX_RESTART_ROUNDS: usize = 3;
 /// Half-width of the uniform jitter of a restart's start, per mode [σ_i].
 pub const RESTART_JITTER_SIGMA: f64 = 1.0;
 
@@ -390,30 +396,39 @@ fn ensembles(
         .zip(&st.motions)
         .enumerate()
         .map(|(motion, ((_, q), m))| {
-            let mut starts: Vec<Vec<f64>> = Vec::new();
-            for (k, net) in nets.iter().enumerate() {
-                let (answer, _) = clip_weights(modes, &net.predict(q));
-                let mut rng = ChaCha8Rng::seed_from_u64(
-                    o.seed
-                        .wrapping_add(1000 * k as u64)
-                        .wrapping_add(motion as u64),
-                );
-                // The first network's own answer is refined already (with the nearest ship).
-                if k > 0 {
-                    starts.push(answer.clone());
-                }
-                for _ in 1..RESTARTS_PER_NETWORK {
-                    let jittered: Vec<f64> = answer
-                        .iter()
-                        .zip(&modes.weight_std)
-                        .map(|(x, s)| x + RESTART_JITTER_SIGMA * s * rng.random_range(-1.0..=1.0))
-                        .collect();
-                    starts.push(clip_weights(modes, &jittered).0);
-                }
+            let mut candidates: Vec<Refined> = Vec::new();
+            if let RefineOutcome::Done { refined, .. } = &m.refined {
+                candidates.push(refined.clone());
             }
-            let mut members: Vec<Refined> = starts
-                .par_iter()
-                .filter_map(|start| {
+            let mut tried = 1;
+            let mut members = Vec::new();
+            for round in 0..MAX_RESTART_ROUNDS {
+                let mut starts: Vec<Vec<f64>> = Vec::new();
+                for (k, net) in nets.iter().enumerate() {
+                    let (answer, _) = clip_weights(modes, &net.predict(q));
+                    let mut rng = ChaCha8Rng::seed_from_u64(
+                        o.seed
+                            .wrapping_add(1000 * k as u64)
+                            .wrapping_add(motion as u64)
+                            .wrapping_add(1_000_000 * round as u64),
+                    );
+                    // The first network's own answer is refined already (with the nearest ship).
+                    if k > 0 && round == 0 {
+                        starts.push(answer.clone());
+                    }
+                    for _ in 1..RESTARTS_PER_NETWORK {
+                        let jittered: Vec<f64> = answer
+                            .iter()
+                            .zip(&modes.weight_std)
+                            .map(|(x, s)| {
+                                x + RESTART_JITTER_SIGMA * s * rng.random_range(-1.0..=1.0)
+                            })
+                            .collect();
+                        starts.push(clip_weights(modes, &jittered).0);
+                    }
+                }
+                tried += starts.len();
+                candidates.par_extend(starts.par_iter().filter_map(|start| {
                     refine(
                         target,
                         modes,
@@ -424,18 +439,18 @@ fn ensembles(
                         &o.checks,
                         o.refine_evals,
                     )
-                })
-                .collect();
-            if let RefineOutcome::Done { refined, .. } = &m.refined {
-                members.push(refined.clone());
-            }
-            members.sort_by(|a, b| a.objective.total_cmp(&b.objective));
-            let total = starts.len() + 1;
-            if let Some(best) = members.first().map(|b| b.objective) {
-                members.retain(|r| r.objective <= MEMBER_MISMATCH_FACTOR * best.max(1e-12));
+                }));
+                candidates.sort_by(|a, b| a.objective.total_cmp(&b.objective));
+                members = candidates.clone();
+                if let Some(best) = members.first().map(|b| b.objective) {
+                    members.retain(|r| r.objective <= MEMBER_MISMATCH_FACTOR * best.max(1e-12));
+                }
+                if members.len() >= BAND_MEMBERS {
+                    break;
+                }
             }
             Ensemble {
-                dropped: total - members.len(),
+                dropped: tried - members.len(),
                 members,
             }
         })
