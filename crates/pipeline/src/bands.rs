@@ -196,11 +196,50 @@ fn track_band(
     }
 }
 
+/// What a band without calibration is drawn from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum BandKind {
+    /// Block-bootstrap replicates of a polynomial or mmg fit.
+    Bootstrap,
+    /// Functions drawn from a sparse GP's posterior.
+    PosteriorDraws,
+}
+
+impl BandKind {
+    /// What the replicated models are called, in the plural.
+    pub fn noun(self) -> &'static str {
+        match self {
+            BandKind::Bootstrap => "bootstrap replicates",
+            BandKind::PosteriorDraws => "posterior draws",
+        }
+    }
+
+    /// What the band covers, in one sentence.
+    pub fn what(self) -> &'static str {
+        match self {
+            BandKind::Bootstrap => {
+                "bootstrap only: coefficient uncertainty of the fit (moving-block bootstrap), given the model's structure; not the structure's own error (docs/uncertainty.md)"
+            }
+            BandKind::PosteriorDraws => {
+                "posterior draws of the sparse GP, each simulated: the GP's own uncertainty given its kernel and sparse points; not calibrated (docs/uncertainty.md)"
+            }
+        }
+    }
+}
+
 /// The replicated models of the model file `spec` as simulation models: the bootstrap replicates of a
 /// polynomial (each with the file's effects) or mmg file, the posterior draws of a sparse GP. Bad input
 /// when the file holds no replicates (a model without them has no band, and saying so beats a band
 /// of zero width).
 pub fn replicate_models(spec: &str) -> Result<Vec<Box<dyn Dynamics + Send + Sync>>, PipelineError> {
+    replicated_models(spec).map(|(models, _)| models)
+}
+
+/// [`replicate_models`] and what they are.
+pub fn replicated_models(
+    spec: &str,
+) -> Result<(Vec<Box<dyn Dynamics + Send + Sync>>, BandKind), PipelineError> {
     let path = std::path::Path::new(spec);
     if !path.is_file() {
         return Err(bad_input(format!(
@@ -216,9 +255,9 @@ pub fn replicate_models(spec: &str) -> Result<Vec<Box<dyn Dynamics + Send + Sync
         .ok()
         .and_then(|t| t.get("kind").and_then(|k| k.as_str()).map(String::from));
     match kind.as_deref() {
-        Some("abkowitz") => abkowitz_replicates(path, &text),
-        Some(MMG_KIND) => mmg_replicates(path, &text),
-        Some(GP_KIND) => gp_posterior_draws(path, &text),
+        Some("abkowitz") => abkowitz_replicates(path, &text).map(|m| (m, BandKind::Bootstrap)),
+        Some(MMG_KIND) => mmg_replicates(path, &text).map(|m| (m, BandKind::Bootstrap)),
+        Some(GP_KIND) => gp_posterior_draws(path, &text).map(|m| (m, BandKind::PosteriorDraws)),
         _ => Err(bad_input(format!(
             "{spec}: --bands needs the replicates of a polynomial or mmg model file (`shipid fit … \
              --bootstrap N`) or a sparse-GP model file; this model is {}: bands for it are not \

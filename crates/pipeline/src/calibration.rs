@@ -45,7 +45,7 @@ use shipid_uncertainty::Band;
 use shipid_model::{CalibrationRecord, FactorRecord, ModelFile, StructureRecord};
 use shipid_sim::{Effect, WithEffects};
 
-use crate::bands::{BandRun, ManoeuvreBands, manoeuvre_bands};
+use crate::bands::{BandKind, BandRun, ManoeuvreBands, manoeuvre_bands, replicated_models};
 use crate::bootstrap::bootstrap_fit;
 use crate::error::{PipelineError, bad_input, failed};
 use crate::fit::{EstimatorSpec, WindowSpec, fit_dataset};
@@ -664,4 +664,103 @@ pub fn stored_calibration(
         replicates,
         range,
     }))
+}
+
+/// The bands `simulate --bands` and `validate --bands` give for a model file: calibrated when the
+/// file has a `[calibration]`, else its replicates' raw percentiles.
+pub enum ModelBands {
+    Calibrated(StoredCalibration),
+    Raw {
+        kind: BandKind,
+        replicates: Vec<Box<dyn Dynamics + Send + Sync>>,
+    },
+}
+
+/// The bands of one run and, when calibrated, its reach.
+pub struct RunBands {
+    pub bands: ManoeuvreBands,
+    pub reach: Option<f64>,
+}
+
+impl ModelBands {
+    /// The bands of the model file `spec` at `level` (see [`stored_calibration`] and
+    /// `bands::replicate_models` for what is refused).
+    pub fn of(spec: &str, level: f64) -> Result<ModelBands, PipelineError> {
+        if let Some(c) = stored_calibration(spec, level)? {
+            return Ok(ModelBands::Calibrated(c));
+        }
+        let (replicates, kind) = replicated_models(spec)?;
+        Ok(ModelBands::Raw { kind, replicates })
+    }
+
+    /// `calibrated`, `bootstrap` or `posterior-draws`.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            ModelBands::Calibrated(_) => "calibrated",
+            ModelBands::Raw {
+                kind: BandKind::Bootstrap,
+                ..
+            } => "bootstrap",
+            ModelBands::Raw {
+                kind: BandKind::PosteriorDraws,
+                ..
+            } => "posterior-draws",
+        }
+    }
+
+    /// What the replicated models are called, in the plural.
+    pub fn noun(&self) -> &'static str {
+        match self {
+            ModelBands::Calibrated(_) => "ensemble replicates",
+            ModelBands::Raw { kind, .. } => kind.noun(),
+        }
+    }
+
+    /// Which band this is, in one line.
+    pub fn what(&self) -> String {
+        match self {
+            ModelBands::Calibrated(c) => c.describe(),
+            ModelBands::Raw { kind, .. } => kind.what().into(),
+        }
+    }
+
+    pub fn replicates(&self) -> usize {
+        match self {
+            ModelBands::Calibrated(c) => c.replicates.len(),
+            ModelBands::Raw { replicates, .. } => replicates.len(),
+        }
+    }
+
+    /// The factor per metric family of a calibrated band (empty otherwise).
+    pub fn factors(&self) -> BTreeMap<&'static str, f64> {
+        match self {
+            ModelBands::Calibrated(c) => c
+                .factors
+                .iter()
+                .map(|(fam, f)| (fam.as_str(), f.factor()))
+                .collect(),
+            ModelBands::Raw { .. } => BTreeMap::new(),
+        }
+    }
+
+    /// The bands of manoeuvre `m` run as `how` says around `point` (the file's own model).
+    pub fn bands(
+        &self,
+        point: &dyn Dynamics,
+        m: &Manoeuvre,
+        ship: &Ship,
+        level: f64,
+        how: BandRun,
+    ) -> Result<RunBands, PipelineError> {
+        match self {
+            ModelBands::Calibrated(c) => c.bands(point, m, ship, how).map(|b| RunBands {
+                bands: b.bands,
+                reach: Some(b.reach),
+            }),
+            ModelBands::Raw { replicates, .. } => {
+                manoeuvre_bands(point, replicates, m, ship, level, how)
+                    .map(|bands| RunBands { bands, reach: None })
+            }
+        }
+    }
 }

@@ -13,10 +13,11 @@ pub fn validation(model: &dyn Dynamics, model_spec: &str, ds: &Dataset, as_json:
     validation_with_bands(model, model_spec, ds, as_json, None)
 }
 
-/// The bands `validate --bands LEVEL` checks the recorded metrics against.
+/// The bands `validate --bands LEVEL` checks the recorded metrics against: calibrated when the
+/// model file has a `[calibration]`, else its replicates' percentiles.
 pub struct BandCheck<'a> {
     pub level: f64,
-    pub replicates: &'a [Box<dyn Dynamics + Send + Sync>],
+    pub source: &'a shipid_pipeline::calibration::ModelBands,
 }
 
 /// Each recorded metric against its band: `(recording, metric, recorded, band or why none, inside)`.
@@ -28,17 +29,22 @@ type BandRow = (
     Option<bool>,
 );
 
-/// The band rows of every recording with a standard manoeuvre.
-fn band_rows(model: &dyn Dynamics, ds: &Dataset, check: &BandCheck) -> (Vec<BandRow>, usize) {
+/// The band rows of every recording with a standard manoeuvre, the replicate runs that diverged,
+/// and each recording's reach (calibrated bands only).
+fn band_rows(
+    model: &dyn Dynamics,
+    ds: &Dataset,
+    check: &BandCheck,
+) -> (Vec<BandRow>, usize, Map<String, Value>) {
     let mut rows = Vec::new();
     let mut diverged = 0;
+    let mut reaches = Map::new();
     for r in &ds.recordings {
         if matches!(r.manoeuvre, shipid_io::Manoeuvre::Free) {
             continue;
         }
-        let Ok(bands) = shipid_pipeline::bands::manoeuvre_bands(
+        let Ok(run) = check.source.bands(
             model,
-            check.replicates,
             &r.manoeuvre,
             &ds.ship,
             check.level,
@@ -48,6 +54,10 @@ fn band_rows(model: &dyn Dynamics, ds: &Dataset, check: &BandCheck) -> (Vec<Band
         ) else {
             continue;
         };
+        if let Some(reach) = run.reach {
+            reaches.insert(r.file.clone(), json!(reach));
+        }
+        let bands = run.bands;
         diverged += bands.diverged;
         let recorded = shipid_sim::metrics(&r.recording, &r.manoeuvre, &ds.ship);
         for (b, (_, value)) in bands.metrics.iter().zip(recorded.entries()) {
@@ -64,7 +74,7 @@ fn band_rows(model: &dyn Dynamics, ds: &Dataset, check: &BandCheck) -> (Vec<Band
             rows.push((r.file.clone(), b.metric, value, band, inside));
         }
     }
-    (rows, diverged)
+    (rows, diverged, reaches)
 }
 
 /// [`validation`], and with `bands` each recorded metric checked against its band over the model's
@@ -99,7 +109,9 @@ pub fn validation_with_bands(
         o.insert("warnings".into(), json!(warnings));
     }
     let band_check = bands.as_ref().map(|b| (b, band_rows(model, ds, b)));
-    if let (Some((check, (band_rows, diverged))), Value::Object(o)) = (&band_check, &mut value) {
+    if let (Some((check, (band_rows, diverged, reaches))), Value::Object(o)) =
+        (&band_check, &mut value)
+    {
         let mut per: Map<String, Value> = Map::new();
         for (file, metric, recorded, band, inside) in band_rows {
             let entry = per
@@ -122,16 +134,21 @@ pub fn validation_with_bands(
                 m.insert((*metric).into(), Value::Object(cell));
             }
         }
-        o.insert(
-            "bands".into(),
-            json!({
-                "level": check.level,
-                "replicates": check.replicates.len(),
-                "diverged_replicate_runs": diverged,
-                "what": "coefficient uncertainty of the fit (moving-block bootstrap), given the model's structure; not the structure's own error (docs/uncertainty.md)",
-                "recordings": per,
-            }),
-        );
+        let mut about = json!({
+            "level": check.level,
+            "kind": check.source.kind(),
+            "replicates": check.source.replicates(),
+            "diverged_replicate_runs": diverged,
+            "what": check.source.what(),
+            "recordings": per,
+        });
+        if let Value::Object(a) = &mut about
+            && !reaches.is_empty()
+        {
+            a.insert("reach".into(), Value::Object(reaches.clone()));
+            a.insert("factors".into(), json!(check.source.factors()));
+        }
+        o.insert("bands".into(), about);
     }
     if as_json {
         println!(
@@ -187,13 +204,25 @@ pub fn validation_with_bands(
             );
         }
     }
-    if !as_json && let Some((check, (band_rows, diverged))) = &band_check {
+    if !as_json && let Some((check, (band_rows, diverged, reaches))) = &band_check {
         println!(
-            "\nbands: {:.0} % over {} bootstrap replicates ({} replicate runs diverged); coefficient uncertainty given the model's structure, not the structure's own error (docs/uncertainty.md)",
+            "\nbands: {:.0} % over {} {} ({} replicate runs diverged); {}",
             check.level * 100.0,
-            check.replicates.len(),
-            diverged
+            check.source.replicates(),
+            check.source.noun(),
+            diverged,
+            check.source.what()
         );
+        if !reaches.is_empty() {
+            let each: Vec<String> = reaches
+                .iter()
+                .map(|(file, r)| format!("{file} {:.2}", r.as_f64().unwrap_or(f64::NAN)))
+                .collect();
+            println!(
+                "reach outside the identification range: {}",
+                each.join(", ")
+            );
+        }
         println!(
             "{:<16} {:<18} {:>10} {:>22} {:>7}",
             "recording", "metric", "recorded", "band", "inside"

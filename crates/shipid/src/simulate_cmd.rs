@@ -7,7 +7,8 @@ use std::path::Path;
 use serde_json::{Map, Value, json};
 use shipid_io::Manoeuvre;
 use shipid_io::write::{recording_csv, write_atomic};
-use shipid_pipeline::bands::{BandRun, ManoeuvreBands, manoeuvre_bands, replicate_models};
+use shipid_pipeline::bands::BandRun;
+use shipid_pipeline::calibration::{ModelBands, RunBands};
 use shipid_pipeline::model_file::load_model;
 use shipid_pipeline::simulate::{
     MAX_STORED_SAMPLES, SimRequest, constant_environment, parse_flow, sim_grid,
@@ -111,7 +112,8 @@ pub struct SimulateArgs<'a> {
     pub allow_large: bool,
     pub json: bool,
     pub out_csv: Option<&'a Path>,
-    /// `--bands LEVEL`: bands over the model file's bootstrap replicates.
+    /// `--bands LEVEL`: bands over the model file's replicates, calibrated when it has a
+    /// `[calibration]`.
     pub bands: Option<f64>,
     /// `--wind SPEED_M_S,FROM_DEG`: a constant true wind.
     pub wind: Option<&'a str>,
@@ -152,8 +154,12 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
     for w in &warnings {
         eprintln!("warning: {w}");
     }
-    // Before the simulation: a model without replicates is refused at once.
-    let replicates = a.bands.map(|_| replicate_models(a.model)).transpose()?;
+    // Before the simulation: a model without replicates (or with a damaged calibration) is refused
+    // at once.
+    let replicates = a
+        .bands
+        .map(|level| ModelBands::of(a.model, level))
+        .transpose()?;
     let request = SimRequest {
         dt_s: a.dt_s,
         duration_s: a.duration_s,
@@ -197,15 +203,14 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
         }
     }
     if let (Some(level), Some(replicates)) = (a.bands, &replicates) {
-        let bands = manoeuvre_bands(
+        let bands = replicates.bands(
             model.as_ref(),
-            replicates,
             &m,
             model.ship(),
             level,
             BandRun::Grid(&grid),
         )?;
-        add_bands(&mut value, &bands, a.json);
+        add_bands(&mut value, &bands, replicates, a.json);
     }
     if matches!(out.status, SimStatus::Ok) {
         let undefined: Vec<&str> = metrics(&out.recording, &m, model.ship())
@@ -248,12 +253,16 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
         }
         if let Some(about) = o.get("bands") {
             println!(
-                "{:>18}: {} % over {} bootstrap replicates ({} diverged): {}",
+                "{:>18}: {} % over {} {} ({} diverged): {}{}",
                 "bands",
                 about["level"].as_f64().unwrap_or(f64::NAN) * 100.0,
                 about["replicates"],
+                replicates.as_ref().map_or("", |r| r.noun()),
                 about["diverged"],
-                about["what"].as_str().unwrap_or_default()
+                about["what"].as_str().unwrap_or_default(),
+                about["reach"]
+                    .as_f64()
+                    .map_or(String::new(), |r| format!("; reach of this run {r:.2}"))
             );
         }
     }
@@ -264,10 +273,12 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
 }
 
 /// The bands into the output: `<metric>_band: [lo, hi]` for every metric with a band, and a `bands`
-/// object saying what they are (level, replicates, diverged runs, metrics without a band and why,
-/// and with `--json` the track band).
-fn add_bands(value: &mut Value, bands: &ManoeuvreBands, with_track: bool) {
+/// object saying what they are (`kind`: calibrated, bootstrap or posterior-draws, and `what` in
+/// words; level, replicates, diverged runs, a calibrated band's `reach` and `factors`, metrics
+/// without a band and why, and with `--json` the track band).
+fn add_bands(value: &mut Value, run: &RunBands, source: &ModelBands, with_track: bool) {
     let Value::Object(o) = value else { return };
+    let bands = &run.bands;
     let mut without = Map::new();
     for b in &bands.metrics {
         match &b.band {
@@ -284,10 +295,12 @@ fn add_bands(value: &mut Value, bands: &ManoeuvreBands, with_track: bool) {
     about.insert("level".into(), json!(bands.level));
     about.insert("replicates".into(), json!(bands.replicates));
     about.insert("diverged".into(), json!(bands.diverged));
-    about.insert(
-        "what".into(),
-        json!("coefficient uncertainty of the fit (moving-block bootstrap), given the model's structure; not the structure's own error (docs/uncertainty.md)"),
-    );
+    about.insert("kind".into(), json!(source.kind()));
+    about.insert("what".into(), json!(source.what()));
+    if let Some(reach) = run.reach {
+        about.insert("reach".into(), json!(reach));
+        about.insert("factors".into(), json!(source.factors()));
+    }
     if !without.is_empty() {
         about.insert("without_band".into(), Value::Object(without));
     }
@@ -300,8 +313,10 @@ fn add_bands(value: &mut Value, bands: &ManoeuvreBands, with_track: bool) {
     o.insert("bands".into(), Value::Object(about));
     if bands.diverged > 0 {
         eprintln!(
-            "warning: {} of {} bootstrap replicates diverged in this manoeuvre (their metrics are undefined; the band is over the others)",
-            bands.diverged, bands.replicates
+            "warning: {} of {} {} diverged in this manoeuvre (their metrics are undefined; the band is over the others)",
+            bands.diverged,
+            bands.replicates,
+            source.noun()
         );
     }
 }

@@ -22,9 +22,10 @@ pub fn run(
         )));
     }
     let model = load_model(model_spec)?;
-    // Before the validation: a model without replicates is refused at once.
+    // Before the validation: a model without replicates (or with a damaged calibration) is refused
+    // at once.
     let replicates = bands
-        .map(|_| shipid_pipeline::bands::replicate_models(model_spec))
+        .map(|level| shipid_pipeline::calibration::ModelBands::of(model_spec, level))
         .transpose()?;
     let ds = Dataset::load(dataset)?;
     // Validation still runs: its errors are what the user asked for; the warnings say what they
@@ -45,8 +46,8 @@ pub fn run(
         &ds,
         as_json,
         bands
-            .zip(replicates.as_deref())
-            .map(|(level, replicates)| crate::print::BandCheck { level, replicates }),
+            .zip(replicates.as_ref())
+            .map(|(level, source)| crate::print::BandCheck { level, source }),
     ))
 }
 
