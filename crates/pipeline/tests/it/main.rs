@@ -6,3 +6,4 @@ mod environment;
 mod generate_environment;
 mod mmg;
 mod refine;
+mod stored_calibration;
