@@ -261,9 +261,9 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
 }
 
 /// `--calibrate` is refused before any work where it cannot apply: a level outside (0, 1), the mmg
-/// family (its bands come from its own bootstrap; the calibration fits polynomial structures) and a
+/// family (its bands come from its own bootstrap; the calibration fits polynomial structures), a
 /// refined fit (the ensemble is fitted in the equation-error sense, so its replicates would not be
-/// centred on the refined model).
+/// centred on the refined model), an unknown structure, and fewer than 2 replicates per structure.
 fn check_calibrate(a: &FitArgs<'_>, level: f64) -> Result<(), CliError> {
     if !(level > 0.0 && level < 1.0) {
         return Err(crate::bad_input(format!(
@@ -279,6 +279,22 @@ fn check_calibrate(a: &FitArgs<'_>, level: f64) -> Result<(), CliError> {
         return Err(crate::bad_input(
             "--calibrate does not apply with --refine: the ensemble is fitted in the equation-error sense and would not be centred on the refined model",
         ));
+    }
+    let mut names = vec![a.set.to_string()];
+    for name in a.calibrate.iter().flat_map(|(_, others)| others) {
+        let set = load_set(name).map_err(|e| crate::bad_input(format!("--structures: {e}")))?;
+        if !names.contains(&set.name) {
+            names.push(set.name);
+        }
+    }
+    if let Some((n, _)) = a.bootstrap
+        && n < 2 * names.len()
+    {
+        return Err(crate::bad_input(format!(
+            "--bootstrap {n} is too few for {} structures ({}): each needs at least 2 replicates",
+            names.len(),
+            names.join(", ")
+        )));
     }
     Ok(())
 }
@@ -303,12 +319,6 @@ fn calibrate(
         if !sets.iter().any(|s| s.name == set.name) {
             sets.push(set);
         }
-    }
-    if n < 2 * sets.len() {
-        return Err(crate::bad_input(format!(
-            "--bootstrap {n} is too few for {} structures: each needs at least 2 replicates",
-            sets.len()
-        )));
     }
     let recordings: Vec<String> = if a.recordings.is_empty() {
         ds.recordings.iter().map(|r| r.file.clone()).collect()
