@@ -231,7 +231,8 @@ enum Command {
         #[arg(long)]
         json: bool,
         /// Check every recorded metric against its band at this level (e.g. 0.9) over the model's
-        /// bootstrap replicates (`fit --bootstrap N`).
+        /// bootstrap replicates (`fit --bootstrap N`), calibrated when the file has a
+        /// `[calibration]` (`fit --calibrate`), or a sparse GP's posterior draws.
         #[arg(long, value_name = "LEVEL", allow_negative_numbers = true)]
         bands: Option<f64>,
     },
@@ -260,7 +261,9 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
         /// Central band of every metric at this level (e.g. 0.9) over the model's bootstrap
-        /// replicates (`fit --bootstrap N`); JSON adds `<metric>_band: [lo, hi]` and the track band.
+        /// replicates (`fit --bootstrap N`), calibrated when the file has a `[calibration]` (`fit
+        /// --calibrate`), or a sparse GP's posterior draws; JSON adds `<metric>_band: [lo, hi]`,
+        /// the track band and which band it is.
         #[arg(
             long,
             value_name = "LEVEL",
