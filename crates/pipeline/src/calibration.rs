@@ -669,7 +669,7 @@ pub fn stored_calibration(
 /// The bands `simulate --bands` and `validate --bands` give for a model file: calibrated when the
 /// file has a `[calibration]`, else its replicates' raw percentiles.
 pub enum ModelBands {
-    Calibrated(StoredCalibration),
+    Calibrated(Box<StoredCalibration>),
     Raw {
         kind: BandKind,
         replicates: Vec<Box<dyn Dynamics + Send + Sync>>,
@@ -687,7 +687,7 @@ impl ModelBands {
     /// `bands::replicate_models` for what is refused).
     pub fn of(spec: &str, level: f64) -> Result<ModelBands, PipelineError> {
         if let Some(c) = stored_calibration(spec, level)? {
-            return Ok(ModelBands::Calibrated(c));
+            return Ok(ModelBands::Calibrated(Box::new(c)));
         }
         let (replicates, kind) = replicated_models(spec)?;
         Ok(ModelBands::Raw { kind, replicates })
