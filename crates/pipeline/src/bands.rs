@@ -20,7 +20,8 @@ use crate::bootstrap::replicate_rng;
 use crate::error::{PipelineError, bad_input};
 use crate::mmg::file::{MMG_KIND, MmgModelFile};
 use crate::simulate::{SimGrid, simulate_manoeuvre, simulate_on_grid};
-use crate::validate::closed_loop;
+use crate::validate::closed_loop_in;
+use shipid_sim::environment::KnownEnvironment;
 
 pub use shipid_uncertainty::band::MIN_FINITE_REPLICATES;
 
@@ -86,8 +87,9 @@ pub enum BandRun<'a> {
     /// The standard manoeuvre on a given step and duration (`simulate --dt/--duration`).
     Grid(&'a SimGrid),
     /// The recording's own manoeuvre from its recorded initial state and first execute, for its
-    /// recorded length, as `validate` re-simulates it ([`closed_loop`]).
-    Recording(&'a DatasetRecording),
+    /// recorded length, as `validate` re-simulates it ([`closed_loop_in`]), in its recorded wind and
+    /// current when it has them (`None`: calm).
+    Recording(&'a DatasetRecording, Option<&'a KnownEnvironment>),
 }
 
 /// Simulate `point` and every model of `replicates` through `m`, each as `how` says; the `level`
@@ -103,12 +105,14 @@ pub fn manoeuvre_bands(
     let run = |model: &dyn Dynamics| match how {
         BandRun::Standard => simulate_manoeuvre(model, m, None, None),
         BandRun::Grid(g) => simulate_on_grid(model, m, g),
-        BandRun::Recording(r) => closed_loop(model, r, ship).ok_or_else(|| {
-            bad_input(format!(
-                "{}: no standard manoeuvre to re-simulate for a band",
-                r.file
-            ))
-        }),
+        BandRun::Recording(r, env) => {
+            closed_loop_in(model, r, ship, env.cloned()).ok_or_else(|| {
+                bad_input(format!(
+                    "{}: no standard manoeuvre to re-simulate for a band",
+                    r.file
+                ))
+            })
+        }
     };
     let point_run = run(point)?;
     let point_metrics = metrics(&point_run.recording, m, ship);

@@ -50,7 +50,7 @@ use crate::bootstrap::bootstrap_fit;
 use crate::error::{PipelineError, bad_input, failed};
 use crate::fit::{EstimatorSpec, WindowSpec, fit_dataset};
 use crate::simulate::{simulate_manoeuvre, simulate_on_grid};
-use crate::validate::closed_loop;
+use crate::validate::closed_loop_in;
 
 /// Fewest errors of a family for a factor of its own (below, the families' pooled one).
 pub const MIN_ERRORS: usize = 3;
@@ -322,7 +322,7 @@ pub fn ensemble_bands(
     let run = match how {
         BandRun::Standard => simulate_manoeuvre(&point, m, None, None).ok(),
         BandRun::Grid(g) => simulate_on_grid(&point, m, g).ok(),
-        BandRun::Recording(r) => closed_loop(&point, r, ship),
+        BandRun::Recording(r, env) => closed_loop_in(&point, r, ship, env.cloned()),
     };
     let reach = match (&e.range, run) {
         (Some(range), Some(run)) => reach(range, &run.recording, ship),
@@ -348,8 +348,14 @@ pub fn in_sample_errors(
         if matches!(r.manoeuvre, Manoeuvre::Free) {
             continue;
         }
-        let (bands, reach) =
-            ensemble_bands(e, &r.manoeuvre, &ds.ship, level, BandRun::Recording(r))?;
+        let env = crate::environment::recording_environment(ds, &r.recording)?.0;
+        let (bands, reach) = ensemble_bands(
+            e,
+            &r.manoeuvre,
+            &ds.ship,
+            level,
+            BandRun::Recording(r, env.as_ref()),
+        )?;
         let recorded = metrics(&r.recording, &r.manoeuvre, &ds.ship);
         for (b, (_, value)) in bands.metrics.iter().zip(recorded.entries()) {
             let (Ok(band), Some(value), Some(family)) =
@@ -573,7 +579,7 @@ impl StoredCalibration {
         let run = match how {
             BandRun::Standard => simulate_manoeuvre(point, m, None, None).ok(),
             BandRun::Grid(g) => simulate_on_grid(point, m, g).ok(),
-            BandRun::Recording(r) => closed_loop(point, r, ship),
+            BandRun::Recording(r, env) => closed_loop_in(point, r, ship, env.cloned()),
         };
         let reach = match (&self.range, run) {
             (Some(range), Some(run)) => reach(range, &run.recording, ship),

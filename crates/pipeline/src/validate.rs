@@ -288,6 +288,20 @@ pub fn validate_recording_with(
     }
 }
 
+/// The recorded wind and current of `r` as a validation of `model_spec` on `ds` applies them (with
+/// [`validation_windage`]); `None` for a calm recording or one whose environment cannot be used
+/// (its validation says why).
+pub fn validation_environment(
+    model_spec: &str,
+    ds: &shipid_io::Dataset,
+    r: &DatasetRecording,
+) -> Option<KnownEnvironment> {
+    let windage = validation_windage(model_spec, ds);
+    environment_with(&r.recording, &windage, &ds.ship, &r.file)
+        .ok()
+        .flatten()
+}
+
 /// The windage a validation of `model_spec` on `ds` gives a recorded wind: the data set's, else the
 /// one the model file was identified with, else assumed.
 pub fn validation_windage(model_spec: &str, ds: &shipid_io::Dataset) -> ChosenWindage {

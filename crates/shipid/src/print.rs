@@ -33,6 +33,7 @@ type BandRow = (
 /// and each recording's reach (calibrated bands only).
 fn band_rows(
     model: &dyn Dynamics,
+    model_spec: &str,
     ds: &Dataset,
     check: &BandCheck,
 ) -> (Vec<BandRow>, usize, Map<String, Value>) {
@@ -43,14 +44,16 @@ fn band_rows(
         if matches!(r.manoeuvre, shipid_io::Manoeuvre::Free) {
             continue;
         }
+        let env = shipid_pipeline::validate::validation_environment(model_spec, ds, r);
         let Ok(run) = check.source.bands(
             model,
             &r.manoeuvre,
             &ds.ship,
             check.level,
             // The band goes with validate's own prediction: the recording's manoeuvre re-simulated
-            // from its recorded initial state, not a standard approach at U0.
-            shipid_pipeline::bands::BandRun::Recording(r),
+            // from its recorded initial state (in its recorded wind and current), not a standard
+            // approach at U0.
+            shipid_pipeline::bands::BandRun::Recording(r, env.as_ref()),
         ) else {
             continue;
         };
@@ -108,7 +111,9 @@ pub fn validation_with_bands(
     {
         o.insert("warnings".into(), json!(warnings));
     }
-    let band_check = bands.as_ref().map(|b| (b, band_rows(model, ds, b)));
+    let band_check = bands
+        .as_ref()
+        .map(|b| (b, band_rows(model, model_spec, ds, b)));
     if let (Some((check, (band_rows, diverged, reaches))), Value::Object(o)) =
         (&band_check, &mut value)
     {

@@ -536,12 +536,16 @@ fn add_bands(
         if row.status == TestStatus::ReplayOnly {
             continue;
         }
+        // As the test's own validation: in the recording's wind and current.
+        let env = shipid_pipeline::environment::recording_environment(&study.dataset, &r.recording)
+            .ok()
+            .and_then(|(env, _)| env);
         let (b, reach) = ensemble_bands(
             &ensemble,
             &r.manoeuvre,
             &study.dataset.ship,
             bands.level,
-            BandRun::Recording(r),
+            BandRun::Recording(r, env.as_ref()),
         )
         .map_err(|e| format!("no bands for {}: {e}", row.test))?;
         let recorded = row.recorded.entries();
