@@ -85,7 +85,7 @@ fn main() {
             check_deg: 20.0,
             side: Side::Starboard,
         };
-        let (mt, _) = run(&[e.clone()], tc, 500.0);
+        let (mt, _) = run(std::slice::from_ref(&e), tc, 500.0);
         let (mz, _) = run(&[e], zz, 200.0);
         println!(
             "{effect:30} TC35 stbd advance {:.3} tactical {:.3} steady {:.3} | ZZ20/20 stbd {:.2}° / {:.2}°",

@@ -49,6 +49,8 @@ pub fn spread(replicates: &[Vec<f64>]) -> Result<Spread, UncertaintyError> {
         }
     }
     let dof = (n - 1) as f64;
+    // Fill the lower triangle from the upper one: each (i, j) is written twice, so index loops.
+    #[allow(clippy::needless_range_loop)]
     for i in 0..k {
         for j in i..k {
             let c = cov[i][j] / dof;

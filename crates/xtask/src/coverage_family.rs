@@ -82,12 +82,12 @@ fn fit_sparse_gp(
     Ok((Box::new(model), draws))
 }
 
+/// A family's fit: data set, training recordings, replicates, seed → the fitted model and its bands.
+type FitFn = fn(&Dataset, &[String], usize, u64) -> Result<Fitted>;
+
 /// Coverage of `family`'s bands (mmg or sparse GP) over `seeds` noise seeds.
 pub fn run(out: &Path, family: Family, seeds: u64, replicates: usize, level: f64) -> Result<()> {
-    let (fit, what): (
-        fn(&Dataset, &[String], usize, u64) -> Result<Fitted>,
-        String,
-    ) = match family {
+    let (fit, what): (FitFn, String) = match family {
         Family::Mmg => (
             fit_mmg_family,
             format!(

@@ -81,7 +81,7 @@ fn replicate_keeps_every_recording_length_and_its_rows_inside_it() {
     assert_eq!(rows, again);
     assert_ne!(rows, other);
     assert_eq!(
-        replicate_rows(&[0..0], 5, &mut rng),
+        replicate_rows(std::slice::from_ref(&(0..0)), 5, &mut rng),
         Err(UncertaintyError::NoRows)
     );
 }
@@ -99,7 +99,8 @@ fn bootstrap_se_of_mean(x: &[f64], block: usize, replicates: usize) -> f64 {
     let mut rng = SplitMix64::new(99);
     let means: Vec<Vec<f64>> = (0..replicates)
         .map(|_| {
-            let rows = replicate_rows(&[0..x.len()], block, &mut rng).unwrap();
+            let rows =
+                replicate_rows(std::slice::from_ref(&(0..x.len())), block, &mut rng).unwrap();
             vec![rows.iter().map(|&i| x[i]).sum::<f64>() / rows.len() as f64]
         })
         .collect();
