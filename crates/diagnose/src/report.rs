@@ -133,6 +133,19 @@ pub fn diagnose(
     ds: &Dataset,
     opts: &DiagnoseOptions,
 ) -> Result<Report, DiagnoseError> {
+    // Candidates are fitted on one half of the recordings and judged on the other: a single
+    // recording is judged in two halves of its time instead, so that one run (with its own wind,
+    // say) can be diagnosed on its own.
+    let halves;
+    // Warnings and the recorded environment are the whole recording's.
+    let whole = ds;
+    let ds = match ds.recordings.as_slice() {
+        [one] if one.recording.len() >= 4 * shipid_io::table::MIN_SAMPLES => {
+            halves = in_halves(ds, one);
+            &halves
+        }
+        _ => ds,
+    };
     let baseline = Baseline::of(input, ds, opts)?;
     let real_threshold = baseline.real_threshold(input.model_level_over_l, opts);
     let judge = Judge::new(input, &baseline, opts);
@@ -150,7 +163,7 @@ pub fn diagnose(
         conclusion,
         real_threshold,
     );
-    report.warnings = propeller_rate_variations(&ds.recordings)
+    report.warnings = propeller_rate_variations(&whole.recordings)
         .iter()
         .map(ToString::to_string)
         .collect();
@@ -159,11 +172,11 @@ pub fn diagnose(
         .iter()
         .filter_map(|e| e.parse().ok())
         .collect();
-    report.against_recorded = against_recorded(&found, ds);
+    report.against_recorded = against_recorded(&found, whole);
     for a in &report.against_recorded {
         report.explanation = format!("{}; {}", report.explanation, a.sentence());
     }
-    report.recorded_environment = RecordedEnvironment::of(ds);
+    report.recorded_environment = RecordedEnvironment::of(whole);
     let wind_used = report
         .recorded_environment
         .as_ref()
@@ -429,5 +442,31 @@ fn assemble(
         recorded_environment: None,
         against_recorded: Vec::new(),
         reveal: None,
+    }
+}
+
+/// `ds` with its one recording `r` cut into its first and second half in time (names say which;
+/// the second half is a free run: it does not start with the manoeuvre's execute).
+fn in_halves(ds: &Dataset, r: &shipid_io::DatasetRecording) -> Dataset {
+    let n = r.recording.len();
+    let half = |range: std::ops::Range<usize>, manoeuvre| {
+        let rec = r.recording.slice(range);
+        shipid_io::DatasetRecording {
+            file: format!(
+                "{} [{:.1}–{:.1} s]",
+                r.file,
+                rec.t.first().copied().unwrap_or(0.0),
+                rec.t.last().copied().unwrap_or(0.0)
+            ),
+            manoeuvre,
+            recording: rec,
+        }
+    };
+    Dataset {
+        recordings: vec![
+            half(0..n / 2, r.manoeuvre),
+            half(n / 2..n, shipid_io::Manoeuvre::Free),
+        ],
+        ..ds.clone()
     }
 }

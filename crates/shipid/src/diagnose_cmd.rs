@@ -72,15 +72,31 @@ fn refused(dataset: &Path, e: DiagnoseError) -> CliError {
     bad_input(format!("{}: {e}", dataset.display()))
 }
 
-pub fn run(
-    model_spec: &str,
-    dataset: &Path,
-    json_out: Option<&Path>,
-    plots: Option<&Path>,
-    model_out: Option<&Path>,
-    horizon_l_over_u0: f64,
-    reveal_check: bool,
-) -> Result<Outcome, CliError> {
+/// Arguments of `shipid diagnose`.
+pub struct DiagnoseArgs<'a> {
+    pub model_spec: &'a str,
+    pub dataset: &'a Path,
+    pub json_out: Option<&'a Path>,
+    pub plots: Option<&'a Path>,
+    pub model_out: Option<&'a Path>,
+    pub horizon_l_over_u0: f64,
+    /// `--reveal`: conceal the recorded environment and check the verdict against it.
+    pub reveal_check: bool,
+    /// `--recording`: diagnose this recording of the data set alone.
+    pub only_recording: Option<&'a str>,
+}
+
+pub fn run(args: &DiagnoseArgs) -> Result<Outcome, CliError> {
+    let &DiagnoseArgs {
+        model_spec,
+        dataset,
+        json_out,
+        plots,
+        model_out,
+        horizon_l_over_u0,
+        reveal_check,
+        only_recording,
+    } = args;
     if !(horizon_l_over_u0.is_finite() && horizon_l_over_u0 > 0.5) {
         return Err(bad_input(format!(
             "--horizon {horizon_l_over_u0}: must be a number of L/U0 above 0.5"
@@ -88,6 +104,17 @@ pub fn run(
     }
     let (base, base_effects) = load_model_parts(model_spec)?;
     let mut ds = Dataset::load(dataset)?;
+    if let Some(name) = only_recording {
+        let names: Vec<String> = ds.recordings.iter().map(|r| r.file.clone()).collect();
+        ds.recordings.retain(|r| r.file == name);
+        if ds.recordings.is_empty() {
+            return Err(bad_input(format!(
+                "--recording {name}: {} has no such recording (it has: {})",
+                dataset.display(),
+                names.join(", ")
+            )));
+        }
+    }
     // Checked before any work: a recorded environment that cannot be turned into forces is bad input.
     environments(&ds, &ChosenWindage::of_dataset(&ds)).map_err(|e| refused(dataset, e))?;
     let concealed = if reveal_check {

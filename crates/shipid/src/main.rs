@@ -222,6 +222,10 @@ enum Command {
         /// verdict and the found wind or current with them.
         #[arg(long)]
         reveal: bool,
+        /// Diagnose this one recording of the data set alone (its file name as the data set gives
+        /// it): one run's own wind or current, judged on two halves of its time.
+        #[arg(long)]
+        recording: Option<String>,
     },
     /// Validate a model on a data set: replayed-rudder RMSEs and closed-loop manoeuvre metrics.
     Validate {
@@ -561,15 +565,17 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             model_out,
             horizon,
             reveal,
-        } => shipid::diagnose_cmd::run(
-            &model,
-            &dataset,
-            json.as_deref(),
-            plots.as_deref(),
-            model_out.as_deref(),
-            horizon,
-            reveal,
-        ),
+            recording,
+        } => shipid::diagnose_cmd::run(&shipid::diagnose_cmd::DiagnoseArgs {
+            model_spec: &model,
+            dataset: &dataset,
+            json_out: json.as_deref(),
+            plots: plots.as_deref(),
+            model_out: model_out.as_deref(),
+            horizon_l_over_u0: horizon,
+            reveal_check: reveal,
+            only_recording: recording.as_deref(),
+        }),
         Command::Inverse {
             targets,
             ships,

@@ -168,3 +168,51 @@ fn a_recorded_wind_that_reads_half_the_true_one_is_found_against_the_recorded() 
     );
     assert!(report.explanation.contains("the recordings carry a wind"));
 }
+
+#[test]
+fn one_run_diagnosed_alone_finds_its_own_wind() {
+    // Real trials meet a different wind on every run, and one wind cannot explain them all: each
+    // run is diagnosed on its own (`diagnose --recording`), judged on the two halves of its time.
+    // Regression: a single recording had no held-out half, so no effect could ever be accepted.
+    let (model, level) = base();
+    for (id, from_deg) in [("alone-from-060", 60.0), ("alone-from-200", 200.0)] {
+        let case = KnownWindCase {
+            id: id.into(),
+            wind: WindRun {
+                speed_m_s: 4.5,
+                from_deg,
+                gust: 0.0,
+                seed: 5,
+            },
+            control: false,
+            seed: 4,
+        };
+        let mut ds = shipid_diagnose::known_wind::case_dataset(&case).unwrap();
+        ds.recordings.retain(|r| r.file.starts_with("zz20"));
+        assert_eq!(ds.recordings.len(), 1);
+        conceal(&mut ds).unwrap();
+        let report = shipid_diagnose::diagnose(
+            &input(&model, Some(level)),
+            &ds,
+            &DiagnoseOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(
+            report.verdict,
+            Verdict::Wind,
+            "{id}: {}",
+            report.explanation
+        );
+        let found: shipid_sim::Effect = report.effects[0].parse().unwrap();
+        let shipid_sim::Effect::Wind(w) = found else {
+            panic!("{id}: {}", report.effects[0]);
+        };
+        let error = ((w.from_deg - from_deg + 540.0).rem_euclid(360.0) - 180.0).abs();
+        assert!(error < 30.0, "{id}: found from {}°", w.from_deg);
+        assert!(
+            (w.speed_m_s - 4.5).abs() < 1.0,
+            "{id}: found {} m/s",
+            w.speed_m_s
+        );
+    }
+}
