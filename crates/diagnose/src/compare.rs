@@ -13,7 +13,7 @@ use shipid_io::{
 };
 use shipid_pipeline::environment::ChosenWindage;
 use shipid_pipeline::range::outside_count;
-use shipid_pipeline::replay::{differentiator_margin, replay_segment, segments};
+use shipid_pipeline::replay::{differentiator_margin, replay_segment_in, segments};
 use shipid_pipeline::validate::interp;
 use shipid_sim::{
     Dynamics, Effect, KnownEnvironment, RudderFilter, State, WithEffects, WithEnvironment,
@@ -204,26 +204,6 @@ pub const REPLAY_RESOLUTION_OVER_L: f64 = 1e-3;
 /// whole data set.
 pub const POSITION_ERROR_CAP_OVER_L: f64 = 1.0;
 
-/// A segment replay of `model` from sample `a` to `b` of `rec`, feeling the recorded environment `env`
-/// (built from `rec`) from the segment's start on.
-fn replay_in(
-    model: &dyn Dynamics,
-    env: Option<&KnownEnvironment>,
-    rec: &Recording,
-    a: usize,
-    b: usize,
-) -> (Recording, bool) {
-    match env {
-        Some(env) => replay_segment(
-            &WithEnvironment::new(model, env.replay_from(rec.t[a])),
-            rec,
-            a,
-            b,
-        ),
-        None => replay_segment(model, rec, a, b),
-    }
-}
-
 /// Segment-replay score of `model` on recording `rec` in its recorded environment `env`.
 pub(crate) fn replay_score(
     model: &dyn Dynamics,
@@ -234,7 +214,7 @@ pub(crate) fn replay_score(
     let mut s = ReplayScore::default();
     let cap = POSITION_ERROR_CAP_OVER_L * model.ship().lpp;
     for (a, b) in segments(rec, horizon_s) {
-        let (sim, ok) = replay_in(model, env, rec, a, b);
+        let (sim, ok) = replay_segment_in(model, env, rec, a, b);
         if !ok {
             s.diverged_segments += 1;
         }
@@ -270,7 +250,7 @@ pub fn segment_tracks(
     segments(rec, horizon_s)
         .into_iter()
         .map(|(a, b)| {
-            let (sim, _) = replay_in(model, env, rec, a, b);
+            let (sim, _) = replay_segment_in(model, env, rec, a, b);
             SegmentTrack {
                 t_s: sim.t.iter().map(|t| t + rec.t[a]).collect(),
                 x0: sim.x0,
