@@ -4,80 +4,9 @@
 //! running. The SVD generator mixes modes linearly, so it produces ships no hull has (t_R < 0, a rudder
 //! force acting ahead of midship, …); such a sample is rejected and counted, never trained on.
 
-use shipid_sim::{Dynamics, MmgModel, MmgParameters, State};
+use shipid_sim::{Dynamics, MmgModel, State};
 
-/// The 31 parameters of an `mmg` model file, in its order (hull derivatives, then propeller and rudder
-/// interaction), by the names the file uses.
-pub const MODEL_FILE_NAMES: [&str; 31] = [
-    "r0",
-    "x_vv",
-    "x_vr",
-    "x_rr",
-    "x_vvvv",
-    "y_v",
-    "y_r",
-    "y_vvv",
-    "y_vvr",
-    "y_vrr",
-    "y_rrr",
-    "n_v",
-    "n_r",
-    "n_vvv",
-    "n_vvr",
-    "n_vrr",
-    "n_rrr",
-    "t_p",
-    "w_p0",
-    "c1",
-    "c2_pos",
-    "c2_neg",
-    "epsilon",
-    "kappa",
-    "gamma_r_neg",
-    "gamma_r_pos",
-    "l_r",
-    "t_r",
-    "a_h",
-    "x_h",
-    "f_alpha",
-];
-
-/// The values of [`MODEL_FILE_NAMES`] in `p`.
-pub fn model_file_values(p: &MmgParameters) -> [f64; 31] {
-    [
-        p.r0,
-        p.x_vv,
-        p.x_vr,
-        p.x_rr,
-        p.x_vvvv,
-        p.y_v,
-        p.y_r,
-        p.y_vvv,
-        p.y_vvr,
-        p.y_vrr,
-        p.y_rrr,
-        p.n_v,
-        p.n_r,
-        p.n_vvv,
-        p.n_vvr,
-        p.n_vrr,
-        p.n_rrr,
-        p.t_p,
-        p.w_p0,
-        p.c1,
-        p.c2_pos,
-        p.c2_neg,
-        p.epsilon,
-        p.kappa,
-        p.gamma_r_neg,
-        p.gamma_r_pos,
-        p.l_r,
-        p.t_r,
-        p.a_h,
-        p.x_h,
-        p.f_alpha,
-    ]
-}
+pub use shipid_sim::mmg::{MODEL_FILE_NAMES, model_file_values};
 
 /// Bounds of one parameter (a name of [`MODEL_FILE_NAMES`]).
 #[derive(Debug, Clone, PartialEq)]

@@ -614,3 +614,19 @@ fn every_ship_of_the_captive_test_database_lies_within_the_cubic_term_bounds() {
         }
     }
 }
+
+/// The identification's parameter names (hull, then propeller and rudder) are those the sim crate
+/// writes model files and checks ships with, in the same order: the inverse method's model files and
+/// the fit's must name the same parameters.
+#[test]
+fn identified_parameter_names_are_the_model_file_names() {
+    use shipid_pipeline::mmg::priors::{HULL_NAMES, NONLINEAR_NAMES};
+    let identified: Vec<&str> = HULL_NAMES
+        .iter()
+        .flatten()
+        .copied()
+        .filter(|n| !n.is_empty())
+        .chain(NONLINEAR_NAMES)
+        .collect();
+    assert_eq!(identified, shipid_sim::mmg::MODEL_FILE_NAMES);
+}
