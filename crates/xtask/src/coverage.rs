@@ -173,18 +173,7 @@ pub fn run(
                 .push(json!({"seed": seed, "training": set_name, "calibration": calibration}));
         }
     }
-    let cell = |c: Option<&Coverage>| {
-        let Some(c) = c else { return "–".to_string() };
-        let (lo, hi) = c.wilson_95().unwrap_or((f64::NAN, f64::NAN));
-        format!(
-            "{:.0} % ({}/{}; {:.0}–{:.0})",
-            100.0 * c.measured().unwrap_or(f64::NAN),
-            c.inside,
-            c.total,
-            100.0 * lo,
-            100.0 * hi
-        )
-    };
+    let cell = |c: Option<&Coverage>| coverage_cell(c, "", "");
     let mut md = String::new();
     writeln!(
         md,
@@ -240,4 +229,21 @@ pub fn run(
     print!("{md}");
     eprintln!("wrote {} and {}", md_path.display(), json_path.display());
     Ok(())
+}
+
+/// A coverage table cell: measured share, count, and the 95 % Wilson interval between `ci_before`
+/// and `ci_after` ("–" without cases).
+pub(crate) fn coverage_cell(c: Option<&Coverage>, ci_before: &str, ci_after: &str) -> String {
+    let Some(c) = c else {
+        return "–".to_string();
+    };
+    let (lo, hi) = c.wilson_95().unwrap_or((f64::NAN, f64::NAN));
+    format!(
+        "{:.0} % ({}/{}; {ci_before}{:.0}–{:.0}{ci_after})",
+        100.0 * c.measured().unwrap_or(f64::NAN),
+        c.inside,
+        c.total,
+        100.0 * lo,
+        100.0 * hi
+    )
 }

@@ -160,18 +160,7 @@ pub fn run(out: &Path, family: Family, seeds: u64, replicates: usize, level: f64
             );
         }
     }
-    let cell = |c: Option<&Coverage>| {
-        let Some(c) = c else { return "–".to_string() };
-        let (lo, hi) = c.wilson_95().unwrap_or((f64::NAN, f64::NAN));
-        format!(
-            "{:.0} % ({}/{}; 95 % CI {:.0}–{:.0} %)",
-            100.0 * c.measured().unwrap_or(f64::NAN),
-            c.inside,
-            c.total,
-            100.0 * lo,
-            100.0 * hi
-        )
-    };
+    let cell = |c: Option<&Coverage>| crate::coverage::coverage_cell(c, "95 % CI ", " %");
     let mut md = String::new();
     writeln!(
         md,
