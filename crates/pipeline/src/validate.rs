@@ -288,16 +288,15 @@ pub fn validate_recording_with(
     }
 }
 
-/// The recorded wind and current of `r` as a validation of `model_spec` on `ds` applies them (with
+/// The recorded wind and current of `r` as a validation applies them with `windage` (its
 /// [`validation_windage`]); `None` for a calm recording or one whose environment cannot be used
 /// (its validation says why).
 pub fn validation_environment(
-    model_spec: &str,
+    windage: &ChosenWindage,
     ds: &shipid_io::Dataset,
     r: &DatasetRecording,
 ) -> Option<KnownEnvironment> {
-    let windage = validation_windage(model_spec, ds);
-    environment_with(&r.recording, &windage, &ds.ship, &r.file)
+    environment_with(&r.recording, windage, &ds.ship, &r.file)
         .ok()
         .flatten()
 }

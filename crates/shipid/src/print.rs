@@ -39,12 +39,14 @@ fn band_rows(
 ) -> (Vec<BandRow>, usize, Map<String, Value>) {
     let mut rows = Vec::new();
     let mut diverged = 0;
+    // Once: the model file's windage is read from disk.
+    let windage = shipid_pipeline::validate::validation_windage(model_spec, ds);
     let mut reaches = Map::new();
     for r in &ds.recordings {
         if matches!(r.manoeuvre, shipid_io::Manoeuvre::Free) {
             continue;
         }
-        let env = shipid_pipeline::validate::validation_environment(model_spec, ds, r);
+        let env = shipid_pipeline::validate::validation_environment(&windage, ds, r);
         let Ok(run) = check.source.bands(
             model,
             &r.manoeuvre,
