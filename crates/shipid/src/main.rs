@@ -57,7 +57,7 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Identify an Abkowitz model from a data set.
+    /// Identify a model (Abkowitz polynomial, mmg or sparse GP) from a data set.
     Fit {
         dataset: PathBuf,
         /// reduced32, full68, full74 (full68 + port/starboard asymmetry), chen2021, a set file, or mmg
