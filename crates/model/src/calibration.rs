@@ -91,47 +91,8 @@ impl CalibrationRecord {
     /// `point_set` (the file's own), and each structure's replicates against its set. The error names
     /// the key.
     pub fn check(&self, point_set: &str) -> Result<CheckedCalibration, CalibrationDamage> {
-        if !(self.level > 0.0 && self.level < 1.0) {
-            return Err(damaged(
-                "calibration.level",
-                format!("{} is not strictly between 0 and 1", self.level),
-            ));
-        }
-        for family in FAMILIES {
-            let key = format!("calibration.factors.{family}");
-            let f = self
-                .factors
-                .get(family)
-                .ok_or_else(|| damaged(&key, "missing"))?;
-            if !OUTCOMES.contains(&f.outcome.as_str()) {
-                return Err(damaged(
-                    format!("{key}.outcome"),
-                    format!("`{}` is none of {}", f.outcome, OUTCOMES.join(", ")),
-                ));
-            }
-            if !(f.factor.is_finite() && f.factor >= 1.0) {
-                return Err(damaged(
-                    format!("{key}.factor"),
-                    format!("{} is not a finite factor of at least 1", f.factor),
-                ));
-            }
-            if f.outcome == "too-few" && f.factor != 1.0 {
-                return Err(damaged(
-                    format!("{key}.factor"),
-                    format!("{} with outcome `too-few`, which inflates by 1", f.factor),
-                ));
-            }
-        }
-        if let Some(extra) = self
-            .factors
-            .keys()
-            .find(|k| !FAMILIES.contains(&k.as_str()))
-        {
-            return Err(damaged(
-                format!("calibration.factors.{extra}"),
-                format!("not a metric family ({})", FAMILIES.join(", ")),
-            ));
-        }
+        check_level(self.level)?;
+        check_factors(&self.factors)?;
         if self.structures.is_empty() {
             return Err(damaged("calibration.structure", "no structure"));
         }
@@ -160,6 +121,82 @@ impl CalibrationRecord {
             structures,
             factors: self.factors.clone(),
         })
+    }
+}
+
+fn check_level(level: f64) -> Result<(), CalibrationDamage> {
+    if !(level > 0.0 && level < 1.0) {
+        return Err(damaged(
+            "calibration.level",
+            format!("{level} is not strictly between 0 and 1"),
+        ));
+    }
+    Ok(())
+}
+
+/// The three families each with a known outcome and a finite factor ≥ 1 (exactly 1 for
+/// `too-few`), and no other key.
+fn check_factors(factors: &BTreeMap<String, FactorRecord>) -> Result<(), CalibrationDamage> {
+    for family in FAMILIES {
+        let key = format!("calibration.factors.{family}");
+        let f = factors
+            .get(family)
+            .ok_or_else(|| damaged(&key, "missing"))?;
+        if !OUTCOMES.contains(&f.outcome.as_str()) {
+            return Err(damaged(
+                format!("{key}.outcome"),
+                format!("`{}` is none of {}", f.outcome, OUTCOMES.join(", ")),
+            ));
+        }
+        if !(f.factor.is_finite() && f.factor >= 1.0) {
+            return Err(damaged(
+                format!("{key}.factor"),
+                format!("{} is not a finite factor of at least 1", f.factor),
+            ));
+        }
+        if f.outcome == "too-few" && f.factor != 1.0 {
+            return Err(damaged(
+                format!("{key}.factor"),
+                format!("{} with outcome `too-few`, which inflates by 1", f.factor),
+            ));
+        }
+    }
+    if let Some(extra) = factors.keys().find(|k| !FAMILIES.contains(&k.as_str())) {
+        return Err(damaged(
+            format!("calibration.factors.{extra}"),
+            format!("not a metric family ({})", FAMILIES.join(", ")),
+        ));
+    }
+    Ok(())
+}
+
+/// `[calibration]` of an mmg or sparse-GP model file (`shipid fit --set mmg --bootstrap N
+/// --calibrate`, `shipid fit --estimator sparse-gp --calibrate`): the inflation factors alone. The
+/// replicates the factors widen are the file's own (the mmg `[bootstrap]`, the GP's posterior
+/// draws), so none are stored twice.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FactorCalibrationRecord {
+    /// The method in words.
+    pub method: String,
+    /// Nominal level the factors were obtained at (the bands they widen must be at this level).
+    pub level: f64,
+    /// Seed of the replicates of every refit (bootstrap draws or posterior draws).
+    pub seed: u64,
+    /// Training recordings left out in turn (0: a single recording, in-sample errors only).
+    pub folds: usize,
+    /// Replicates (bootstrap replicates or posterior draws) of every refit.
+    pub replicates: usize,
+    /// Inflation factor per metric family (`overshoot`, `zigzag-time`, `turning-length`).
+    pub factors: BTreeMap<String, FactorRecord>,
+}
+
+impl FactorCalibrationRecord {
+    /// Check every key as [`CalibrationRecord::check`] checks the level and the factors; the error
+    /// names the key.
+    pub fn check(&self) -> Result<(), CalibrationDamage> {
+        check_level(self.level)?;
+        check_factors(&self.factors)
     }
 }
 

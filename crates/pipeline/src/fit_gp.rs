@@ -181,6 +181,7 @@ pub fn fit_gp_dataset(
         },
         outputs,
         points: x.to_rows(),
+        calibration: None,
     };
     let model = GpDynamics::from_file(&file)
         .map_err(|e| bad_input(format!("trained GP model is unusable: {e}")))?;

@@ -424,6 +424,7 @@ fn model_file(
         training: Vec::new(),
         parameters,
         bootstrap,
+        calibration: None,
     }
 }
 

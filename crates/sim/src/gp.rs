@@ -75,6 +75,9 @@ pub struct GpModelFile {
     pub outputs: Vec<GpOutputFile>,
     /// The sparse training inputs, one row per point, columns as [`GpModelFile::inputs`].
     pub points: Vec<Vec<f64>>,
+    /// Inflation factors of calibrated bands (`shipid fit --estimator sparse-gp --calibrate`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub calibration: Option<shipid_model::calibration::FactorCalibrationRecord>,
 }
 
 /// Why a GP model file cannot be used.

@@ -107,6 +107,10 @@ pub struct MmgModelFile {
     /// which `simulate --bands` and `validate --bands` draw their bands.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bootstrap: Option<MmgBootstrapRecord>,
+    /// Inflation factors of calibrated bands over the `[bootstrap]` replicates (`shipid fit --set
+    /// mmg --bootstrap N --calibrate`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub calibration: Option<shipid_model::calibration::FactorCalibrationRecord>,
 }
 
 /// `[bootstrap]` of an mmg model file: the parameter uncertainty by a moving-block bootstrap.

@@ -688,6 +688,7 @@ pub fn model_file(fit: &MmgFit, added: AddedMass) -> MmgModelFile {
             })
             .collect(),
         bootstrap: None,
+        calibration: None,
     }
 }
 
