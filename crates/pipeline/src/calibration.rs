@@ -42,13 +42,20 @@ use shipid_sim::metrics::metrics;
 use shipid_sim::{AbkowitzDynamics, Dynamics};
 use shipid_uncertainty::Band;
 
-use shipid_model::{CalibrationRecord, FactorRecord, ModelFile, StructureRecord};
+use shipid_model::calibration::FactorCalibrationRecord;
+use shipid_model::{CalibrationRecord, FactorRecord, ModelFile, StructureRecord, TrainingWindow};
+use shipid_sim::gp::{GP_KIND, GpDynamics, GpModelFile};
 use shipid_sim::{Effect, WithEffects};
 
-use crate::bands::{BandKind, BandRun, ManoeuvreBands, manoeuvre_bands, replicated_models};
-use crate::bootstrap::bootstrap_fit;
+use crate::bands::{
+    BandKind, BandRun, GP_DRAW_SEED, GP_DRAWS, ManoeuvreBands, gp_draws, manoeuvre_bands,
+    replicated_models,
+};
+use crate::bootstrap::{MmgBootstrap, bootstrap_fit, bootstrap_mmg};
 use crate::error::{PipelineError, bad_input, failed};
 use crate::fit::{EstimatorSpec, WindowSpec, fit_dataset};
+use crate::mmg::file::{MMG_KIND, MmgModelFile};
+use crate::mmg::{MmgFit, MmgFitOptions, MmgGeometry};
 use crate::simulate::{simulate_manoeuvre, simulate_on_grid};
 use crate::validate::closed_loop_in;
 
@@ -309,6 +316,87 @@ pub fn fit_ensemble_stored(
     ))
 }
 
+/// One fit of a model family with what its band needs: the point model, the replicated models of
+/// its band (bootstrap replicates, posterior draws), and the identification range of its training
+/// data (None: the reach is taken as 1).
+pub struct FittedBands {
+    pub point: Box<dyn Dynamics + Send + Sync>,
+    pub replicates: Vec<Box<dyn Dynamics + Send + Sync>>,
+    pub range: Option<IdentificationRange>,
+}
+
+impl FittedBands {
+    pub fn source(&self) -> BandSource<'_> {
+        BandSource {
+            point: self.point.as_ref(),
+            replicates: &self.replicates,
+            range: self.range.as_ref(),
+        }
+    }
+}
+
+/// A fit's band as the calibration reads it (borrowed: an [`Ensemble`] keeps its point model as
+/// coefficients, a [`FittedBands`] as a simulation model).
+#[derive(Clone, Copy)]
+pub struct BandSource<'a> {
+    pub point: &'a dyn Dynamics,
+    pub replicates: &'a [Box<dyn Dynamics + Send + Sync>],
+    pub range: Option<&'a IdentificationRange>,
+}
+
+/// What the calibration needs of a model family: a fit on any subset of the training recordings,
+/// with the replicated models of its band. The in-sample errors, the held-out refits and the factors
+/// are one code path for every family ([`calibrate_fit`]); a family only says how it fits:
+/// polynomial ensembles ([`EnsembleSpec`]), the mmg family ([`MmgFamily`]), the sparse GP
+/// ([`GpFamily`]).
+pub trait FamilyFit: Sync {
+    /// Fit to `recordings` of `ds` (every recording when empty).
+    fn fit(&self, ds: &Dataset, recordings: &[String]) -> Result<FittedBands, PipelineError>;
+}
+
+impl FamilyFit for EnsembleSpec<'_> {
+    fn fit(&self, ds: &Dataset, recordings: &[String]) -> Result<FittedBands, PipelineError> {
+        let e = fit_ensemble(ds, self, recordings)?;
+        Ok(FittedBands {
+            point: Box::new(AbkowitzDynamics(e.point)),
+            replicates: e.replicates,
+            range: e.range,
+        })
+    }
+}
+
+/// The bands of manoeuvre `m` run as `how` says, and the reach of the point run outside the
+/// source's identification range (1 without a range or without a run).
+pub fn source_bands(
+    src: BandSource,
+    m: &Manoeuvre,
+    ship: &Ship,
+    level: f64,
+    how: BandRun,
+) -> Result<(ManoeuvreBands, f64), PipelineError> {
+    let bands = manoeuvre_bands(src.point, src.replicates, m, ship, level, how)?;
+    Ok((bands, run_reach(src.point, src.range, m, ship, how)))
+}
+
+/// The reach of `point`'s run of `m` (as `how` says) outside `range`; 1 without either.
+fn run_reach(
+    point: &dyn Dynamics,
+    range: Option<&IdentificationRange>,
+    m: &Manoeuvre,
+    ship: &Ship,
+    how: BandRun,
+) -> f64 {
+    let Some(range) = range else {
+        return 1.0;
+    };
+    let run = match how {
+        BandRun::Standard => simulate_manoeuvre(point, m, None, None).ok(),
+        BandRun::Grid(g) => simulate_on_grid(point, m, g).ok(),
+        BandRun::Recording(r, env) => closed_loop_in(point, r, ship, env.cloned()),
+    };
+    run.map_or(1.0, |run| reach(range, &run.recording, ship))
+}
+
 /// The ensemble's bands of manoeuvre `m` run as `how` says, and the reach of its point run.
 pub fn ensemble_bands(
     e: &Ensemble,
@@ -318,24 +406,25 @@ pub fn ensemble_bands(
     how: BandRun,
 ) -> Result<(ManoeuvreBands, f64), PipelineError> {
     let point = AbkowitzDynamics(e.point.clone());
-    let bands = manoeuvre_bands(&point, &e.replicates, m, ship, level, how)?;
-    let run = match how {
-        BandRun::Standard => simulate_manoeuvre(&point, m, None, None).ok(),
-        BandRun::Grid(g) => simulate_on_grid(&point, m, g).ok(),
-        BandRun::Recording(r, env) => closed_loop_in(&point, r, ship, env.cloned()),
-    };
-    let reach = match (&e.range, run) {
-        (Some(range), Some(run)) => reach(range, &run.recording, ship),
-        _ => 1.0,
-    };
-    Ok((bands, reach))
+    source_bands(e.source(&point), m, ship, level, how)
 }
 
-/// The errors of the ensemble `e` on `recordings` (its own training recordings, or a held-out one),
+impl Ensemble {
+    /// The ensemble as the calibration reads it, with `point` its point model as a simulation model.
+    pub fn source<'a>(&'a self, point: &'a AbkowitzDynamics) -> BandSource<'a> {
+        BandSource {
+            point,
+            replicates: &self.replicates,
+            range: self.range.as_ref(),
+        }
+    }
+}
+
+/// The errors of the fit `src` on `recordings` (its own training recordings, or a held-out one),
 /// each re-simulated from its recorded start: what the bands miss even where the data are. With a
 /// single training recording these are the only errors to calibrate on.
-pub fn in_sample_errors(
-    e: &Ensemble,
+pub fn recording_errors(
+    src: BandSource,
     ds: &Dataset,
     recordings: &[String],
     level: f64,
@@ -349,8 +438,8 @@ pub fn in_sample_errors(
             continue;
         }
         let env = crate::environment::recording_environment(ds, &r.recording)?.0;
-        let (bands, reach) = ensemble_bands(
-            e,
+        let (bands, reach) = source_bands(
+            src,
             &r.manoeuvre,
             &ds.ship,
             level,
@@ -376,11 +465,22 @@ pub fn in_sample_errors(
     Ok(z)
 }
 
-/// Leave each of `recordings` out in turn, fit the ensemble of `how` on the rest, and give the
-/// errors of the left-out recording's metrics (none with a single recording).
-pub fn held_out_errors(
+/// [`recording_errors`] of a polynomial ensemble.
+pub fn in_sample_errors(
+    e: &Ensemble,
     ds: &Dataset,
-    how: &EnsembleSpec,
+    recordings: &[String],
+    level: f64,
+) -> Result<Vec<BandError>, PipelineError> {
+    let point = AbkowitzDynamics(e.point.clone());
+    recording_errors(e.source(&point), ds, recordings, level)
+}
+
+/// Leave each of `recordings` out in turn, fit `family` on the rest, and give the errors of the
+/// left-out recording's metrics (none with a single recording).
+pub fn refit_errors(
+    family: &dyn FamilyFit,
+    ds: &Dataset,
     recordings: &[String],
     level: f64,
 ) -> Result<Vec<BandError>, PipelineError> {
@@ -395,9 +495,9 @@ pub fn held_out_errors(
             .filter(|&(j, _)| j != i)
             .map(|(_, r)| r.clone())
             .collect();
-        let e = fit_ensemble(ds, how, &rest)?;
+        let fitted = family.fit(ds, &rest)?;
         z.extend(
-            in_sample_errors(&e, ds, std::slice::from_ref(left), level)?
+            recording_errors(fitted.source(), ds, std::slice::from_ref(left), level)?
                 .into_iter()
                 .map(|b| BandError {
                     held_out: true,
@@ -408,8 +508,37 @@ pub fn held_out_errors(
     Ok(z)
 }
 
-/// The calibration of the ensemble `e`, fitted as `how` says to `recordings` of `ds`: the factors of
-/// its errors on its own recordings and of the held-out errors ([`calibrate`]).
+/// [`refit_errors`] of a polynomial ensemble fitted as `how` says.
+pub fn held_out_errors(
+    ds: &Dataset,
+    how: &EnsembleSpec,
+    recordings: &[String],
+    level: f64,
+) -> Result<Vec<BandError>, PipelineError> {
+    refit_errors(how, ds, recordings, level)
+}
+
+/// The calibration of the fit `src` of `family` to `recordings` of `ds`: the factors of its errors
+/// on its own recordings and of the held-out refits' errors ([`calibrate`]).
+pub fn calibrate_fit(
+    src: BandSource,
+    family: &dyn FamilyFit,
+    ds: &Dataset,
+    recordings: &[String],
+    level: f64,
+) -> Result<Calibration, PipelineError> {
+    let mut z = recording_errors(src, ds, recordings, level)?;
+    z.extend(refit_errors(family, ds, recordings, level)?);
+    let folds = if recordings.len() < 2 {
+        0
+    } else {
+        recordings.len()
+    };
+    Ok(calibrate(&z, level, folds))
+}
+
+/// The calibration of the ensemble `e`, fitted as `how` says to `recordings` of `ds`
+/// ([`calibrate_fit`]).
 pub fn calibrate_ensemble(
     e: &Ensemble,
     ds: &Dataset,
@@ -417,14 +546,168 @@ pub fn calibrate_ensemble(
     recordings: &[String],
     level: f64,
 ) -> Result<Calibration, PipelineError> {
-    let mut z = in_sample_errors(e, ds, recordings, level)?;
-    z.extend(held_out_errors(ds, how, recordings, level)?);
-    let folds = if recordings.len() < 2 {
-        0
-    } else {
-        recordings.len()
-    };
-    Ok(calibrate(&z, level, folds))
+    let point = AbkowitzDynamics(e.point.clone());
+    calibrate_fit(e.source(&point), how, ds, recordings, level)
+}
+
+/// The coefficient set whose leverage gives the reach of a family without a regression of its own
+/// (mmg, sparse GP): a third-order polynomial in Δu′, v′, r′, δ, the states' own ellipsoid of
+/// where the training data were. The same for every such family, so their reaches compare.
+pub const STATE_RANGE_SET: &str = "reduced32";
+
+/// The identification range of [`STATE_RANGE_SET`] over primed states; None when it cannot be
+/// formed (too few or degenerate states: the reach is then 1).
+fn state_range_of(states: &[[f64; 4]]) -> Option<IdentificationRange> {
+    let set = CoefficientSet::builtin(STATE_RANGE_SET)?;
+    IdentificationRange::new(&set, states).ok()
+}
+
+/// The [`STATE_RANGE_SET`] range of the training windows `window` of `recordings` of `ds`.
+pub fn state_range(
+    ds: &Dataset,
+    recordings: &[String],
+    window: WindowSpec,
+) -> Option<IdentificationRange> {
+    let scale = PrimeScale::of(&ds.ship);
+    let mut states = Vec::new();
+    for r in crate::fit::chosen_recordings(ds, recordings).ok()? {
+        let range = crate::fit::window_range(r, ds, window).ok()?;
+        states.extend(range.map(|i| primed_state(&r.recording, &scale, i)));
+    }
+    state_range_of(&states)
+}
+
+/// The [`STATE_RANGE_SET`] range of a model file's training windows (None when its training data
+/// cannot be read).
+fn stored_state_range(spec: &str, windows: &[TrainingWindow]) -> Option<IdentificationRange> {
+    let (_, ds, _) = crate::range::training_data(spec)?;
+    let scale = PrimeScale::of(&ds.ship);
+    let mut states = Vec::new();
+    for w in windows {
+        let rec = &ds.recording(&w.recording)?.recording;
+        states.extend(
+            (0..rec.len())
+                .filter(|&i| rec.t[i] >= w.t_start_s && rec.t[i] <= w.t_end_s)
+                .map(|i| primed_state(rec, &scale, i)),
+        );
+    }
+    state_range_of(&states)
+}
+
+/// The mmg family as the calibration refits it: the options of the fit (its recordings are
+/// replaced by each fold's), the propeller and rudder, whether each refit is refined in the
+/// output-error sense as the fit was (`--refine`), and the block-bootstrap replicates and seed.
+#[derive(Clone)]
+pub struct MmgFamily {
+    pub opts: MmgFitOptions,
+    pub geometry: MmgGeometry,
+    pub refine: bool,
+    pub replicates: usize,
+    pub seed: u64,
+}
+
+impl MmgFamily {
+    /// Fit (and refine, when asked) the mmg model to `recordings` of `ds`.
+    pub fn fit_mmg(&self, ds: &Dataset, recordings: &[String]) -> Result<MmgFit, PipelineError> {
+        let opts = self.options(ds, recordings);
+        let fit = crate::mmg::fit_mmg(ds, &self.geometry, &opts)?;
+        if !self.refine {
+            return Ok(fit);
+        }
+        let added = ds
+            .added_mass
+            .ok_or_else(|| bad_input(format!("{}: no [added_mass] table", ds.path.display())))?;
+        let windows = crate::mmg::training_samples(ds, &opts)?.recordings;
+        let refine = crate::refine::RefineOptions::for_dataset(ds);
+        Ok(crate::mmg::refine_mmg(&fit, added, &windows, &refine)?.0)
+    }
+
+    fn options(&self, ds: &Dataset, recordings: &[String]) -> MmgFitOptions {
+        let mut opts = MmgFitOptions {
+            recordings: recordings.to_vec(),
+            ..self.opts.clone()
+        };
+        if opts.propeller_rate_hz.is_none() {
+            opts.propeller_rate_hz = ds.propeller.as_ref().and_then(|p| p.rate_rps);
+        }
+        opts
+    }
+
+    /// The band of `fit` (to `recordings` of `ds`): its block-bootstrap replicates as models, the
+    /// replicates themselves (for the model file's `[bootstrap]`), and the state range of its
+    /// training windows.
+    pub fn bands_of(
+        &self,
+        ds: &Dataset,
+        fit: &MmgFit,
+        recordings: &[String],
+    ) -> Result<(FittedBands, MmgBootstrap), PipelineError> {
+        let opts = self.options(ds, recordings);
+        let boot = bootstrap_mmg(ds, fit, &opts, self.replicates, self.seed)?;
+        let added = ds
+            .added_mass
+            .ok_or_else(|| bad_input(format!("{}: no [added_mass] table", ds.path.display())))?;
+        let mut file = crate::mmg::model_file(fit, added);
+        file.bootstrap = Some(boot.record());
+        let replicates = file
+            .replicate_models(&ds.path)?
+            .into_iter()
+            .map(|m| Box::new(m) as Box<dyn Dynamics + Send + Sync>)
+            .collect();
+        Ok((
+            FittedBands {
+                point: Box::new(fit.model.clone()),
+                replicates,
+                range: state_range(ds, recordings, self.opts.window),
+            },
+            boot,
+        ))
+    }
+}
+
+impl FamilyFit for MmgFamily {
+    fn fit(&self, ds: &Dataset, recordings: &[String]) -> Result<FittedBands, PipelineError> {
+        let fit = self.fit_mmg(ds, recordings)?;
+        Ok(self.bands_of(ds, &fit, recordings)?.0)
+    }
+}
+
+/// The sparse GP as the calibration refits it: the windows and similarity threshold of the fit,
+/// and the posterior draws of each refit's band (as many, and seeded, as `simulate --bands` draws:
+/// [`crate::bands::GP_DRAWS`], [`crate::bands::GP_DRAW_SEED`]).
+#[derive(Clone, Copy)]
+pub struct GpFamily {
+    pub window: WindowSpec,
+    pub similarity: f64,
+    pub draws: usize,
+    pub seed: u64,
+}
+
+impl GpFamily {
+    /// The band of the sparse GP `model` fitted to `recordings` of `ds`: its posterior draws and the
+    /// state range of its training windows.
+    pub fn bands_of(
+        &self,
+        ds: &Dataset,
+        model: GpDynamics,
+        recordings: &[String],
+    ) -> Result<FittedBands, PipelineError> {
+        let replicates = gp_draws(&model, self.draws, self.seed)
+            .map_err(|e| failed(format!("posterior draws: {e}")))?;
+        Ok(FittedBands {
+            point: Box::new(model),
+            replicates,
+            range: state_range(ds, recordings, self.window),
+        })
+    }
+}
+
+impl FamilyFit for GpFamily {
+    fn fit(&self, ds: &Dataset, recordings: &[String]) -> Result<FittedBands, PipelineError> {
+        let (_, model, _) =
+            crate::fit_gp::fit_gp_dataset(ds, recordings, self.window, self.similarity)?;
+        self.bands_of(ds, model, recordings)
+    }
 }
 
 /// The calibration in words, as the model file's `[calibration]` states it.
@@ -441,7 +724,46 @@ pub fn calibration_record(
     how: &EnsembleSpec,
     structures: Vec<StructureRecord>,
 ) -> CalibrationRecord {
-    let factors = MetricFamily::ALL
+    CalibrationRecord {
+        method: METHOD.into(),
+        level: c.level,
+        seed: how.seed,
+        folds: c.folds,
+        factors: factor_records(c),
+        structures,
+    }
+}
+
+/// The calibration of an mmg or sparse-GP fit in words, as its model file's `[calibration]` states
+/// it.
+pub const FAMILY_METHOD: &str = "the model file's own replicates (mmg: its [bootstrap]; sparse GP: \
+its posterior draws), each band widened about its centre by the reach of the run outside the \
+training states' range (the leverage of a third-order polynomial in du', v', r', delta) and by the \
+inflation factor of its metric family: the `level` quantile (at least 1) of the training \
+recordings' standardised errors, in sample and left out in turn, each refit made as the fit was \
+(docs/uncertainty.md)";
+
+/// The `[calibration]` of an mmg or sparse-GP model file: calibration `c` of a fit whose refits
+/// had `replicates` replicates drawn with `seed`.
+pub fn factor_calibration_record(
+    c: &Calibration,
+    replicates: usize,
+    seed: u64,
+) -> FactorCalibrationRecord {
+    FactorCalibrationRecord {
+        method: FAMILY_METHOD.into(),
+        level: c.level,
+        seed,
+        folds: c.folds,
+        replicates,
+        factors: factor_records(c),
+    }
+}
+
+/// Every family's factor as a model file stores it, with how many of its errors were in sample and
+/// held out.
+fn factor_records(c: &Calibration) -> BTreeMap<String, FactorRecord> {
+    MetricFamily::ALL
         .iter()
         .map(|&fam| {
             let f = c
@@ -470,15 +792,7 @@ pub fn calibration_record(
                 },
             )
         })
-        .collect();
-    CalibrationRecord {
-        method: METHOD.into(),
-        level: c.level,
-        seed: how.seed,
-        folds: c.folds,
-        factors,
-        structures,
-    }
+        .collect()
 }
 
 /// A model file's calibration, ready to band a run: the pooled replicates of every structure (with
@@ -487,11 +801,36 @@ pub fn calibration_record(
 pub struct StoredCalibration {
     pub level: f64,
     pub folds: usize,
-    /// Each structure's name and number of replicates, the model's own first.
+    /// What the replicates are.
+    pub source: CalibratedSource,
+    /// Each structure's name and number of replicates, the model's own first (one entry, the
+    /// family's name, for an mmg or sparse-GP file).
     pub structures: Vec<(String, usize)>,
     pub factors: BTreeMap<MetricFamily, FamilyFactor>,
     pub replicates: Vec<Box<dyn Dynamics + Send + Sync>>,
     pub range: Option<IdentificationRange>,
+}
+
+/// What a calibrated band's replicates are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CalibratedSource {
+    /// The pooled bootstrap replicates of a polynomial file's `[calibration.structure]`s.
+    Ensemble,
+    /// The block-bootstrap replicates of an mmg file's `[bootstrap]`.
+    MmgBootstrap,
+    /// Posterior draws of a sparse-GP file.
+    PosteriorDraws,
+}
+
+impl CalibratedSource {
+    /// What the replicated models are called, in the plural.
+    pub fn noun(self) -> &'static str {
+        match self {
+            CalibratedSource::Ensemble => "ensemble replicates",
+            CalibratedSource::MmgBootstrap => "bootstrap replicates",
+            CalibratedSource::PosteriorDraws => "posterior draws",
+        }
+    }
 }
 
 /// Bands of one run widened by a stored calibration.
@@ -533,6 +872,25 @@ impl StoredCalibration {
             .iter()
             .map(|(name, n)| format!("{name} ({n} replicates)"))
             .collect();
+        let replicates = match self.source {
+            CalibratedSource::Ensemble => format!("ensemble of {}", structures.join(" + ")),
+            CalibratedSource::MmgBootstrap | CalibratedSource::PosteriorDraws => format!(
+                "{} {} ({})",
+                self.structures
+                    .iter()
+                    .map(|(name, _)| name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(" + "),
+                self.source.noun(),
+                self.replicates.len()
+            ),
+        };
+        let range = match self.source {
+            CalibratedSource::Ensemble => "the identification range",
+            CalibratedSource::MmgBootstrap | CalibratedSource::PosteriorDraws => {
+                "the training states' range"
+            }
+        };
         let factors: Vec<String> = self
             .factors
             .iter()
@@ -554,8 +912,7 @@ impl StoredCalibration {
             format!("in-sample and {} held-out folds", self.folds)
         };
         format!(
-            "calibrated: ensemble of {}, factor {} from {held}, times the reach outside the identification range{}",
-            structures.join(" + "),
+            "calibrated: {replicates}, factor {} from {held}, times the reach outside {range}{}",
             factors.join(", "),
             if self.range.is_none() {
                 " (unknown: the training data cannot be read; taken as 1)"
@@ -576,15 +933,7 @@ impl StoredCalibration {
         how: BandRun,
     ) -> Result<CalibratedBands, PipelineError> {
         let mut bands = manoeuvre_bands(point, &self.replicates, m, ship, self.level, how)?;
-        let run = match how {
-            BandRun::Standard => simulate_manoeuvre(point, m, None, None).ok(),
-            BandRun::Grid(g) => simulate_on_grid(point, m, g).ok(),
-            BandRun::Recording(r, env) => closed_loop_in(point, r, ship, env.cloned()),
-        };
-        let reach = match (&self.range, run) {
-            (Some(range), Some(run)) => reach(range, &run.recording, ship),
-            _ => 1.0,
-        };
+        let reach = run_reach(point, self.range.as_ref(), m, ship, how);
         for b in &mut bands.metrics {
             if let Ok(band) = &b.band {
                 b.band = Ok(widen(band, self.factor(b.metric), reach));
@@ -594,9 +943,10 @@ impl StoredCalibration {
     }
 }
 
-/// The calibration of the model file `spec` at `level`: None when it is no polynomial model file or
-/// has no `[calibration]` (its bands are then the bootstrap's alone). Bad input, naming the key, for
-/// a damaged table, and for a `level` other than the one the factors were obtained at.
+/// The calibration of the model file `spec` at `level`: None when it is no fitted model file
+/// (polynomial, mmg or sparse GP) or has no `[calibration]` (its bands are then its replicates'
+/// alone). Bad input, naming the key, for a damaged table, and for a `level` other than the one the
+/// factors were obtained at.
 pub fn stored_calibration(
     spec: &str,
     level: f64,
@@ -605,28 +955,131 @@ pub fn stored_calibration(
     if !path.is_file() {
         return Ok(None);
     }
-    let text = std::fs::read_to_string(path).map_err(|e| shipid_io::InputError::read(path, &e))?;
-    let is_polynomial = toml::from_str::<toml::Table>(&text)
+    // A fit in a recorded wind appends `[environment]`, which the mmg and GP formats do not have.
+    let text = std::fs::read_to_string(path)
+        .map(|t| crate::environment::without_environment_table(&t))
+        .map_err(|e| shipid_io::InputError::read(path, &e))?;
+    let kind = toml::from_str::<toml::Table>(&text)
         .ok()
-        .is_some_and(|t| t.get("kind").and_then(|k| k.as_str()) == Some("abkowitz"));
-    if !is_polynomial {
-        return Ok(None);
+        .and_then(|t| t.get("kind").and_then(|k| k.as_str()).map(String::from));
+    match kind.as_deref() {
+        Some("abkowitz") => {
+            // The polynomial format has `[environment]`: its own reader, on the whole text.
+            let whole =
+                std::fs::read_to_string(path).map_err(|e| shipid_io::InputError::read(path, &e))?;
+            polynomial_calibration(spec, &whole, level)
+        }
+        Some(MMG_KIND) => mmg_calibration(spec, &text, level),
+        Some(GP_KIND) => gp_calibration(spec, &text, level),
+        _ => Ok(None),
     }
+}
+
+/// A level other than the calibration's is refused, naming the key.
+fn check_stored_level(spec: &str, stored: f64, level: f64) -> Result<(), PipelineError> {
+    if (stored - level).abs() > 1e-9 {
+        return Err(bad_input(format!(
+            "{spec}: its calibration was obtained at level {stored} (key `calibration.level`) and \
+             widens bands of that level only: use --bands {stored}, or refit with --calibrate {level}"
+        )));
+    }
+    Ok(())
+}
+
+/// The factors of an mmg or sparse-GP `[calibration]`, checked (a damaged key named) at `level`.
+fn stored_factors(
+    spec: &str,
+    record: &FactorCalibrationRecord,
+    level: f64,
+) -> Result<BTreeMap<MetricFamily, FamilyFactor>, PipelineError> {
+    let path = std::path::Path::new(spec);
+    record
+        .check()
+        .map_err(|e| shipid_io::InputError::key(path, &e.key, e.reason))?;
+    check_stored_level(spec, record.level, level)?;
+    Ok(MetricFamily::ALL
+        .iter()
+        .filter_map(|&fam| {
+            record
+                .factors
+                .get(fam.as_str())
+                .map(|f| (fam, family_factor(f)))
+        })
+        .collect())
+}
+
+fn mmg_calibration(
+    spec: &str,
+    text: &str,
+    level: f64,
+) -> Result<Option<StoredCalibration>, PipelineError> {
+    let path = std::path::Path::new(spec);
+    let file: MmgModelFile =
+        toml::from_str(text).map_err(|e| shipid_io::InputError::toml(path, text, &e))?;
+    let Some(record) = &file.calibration else {
+        return Ok(None);
+    };
+    let factors = stored_factors(spec, record, level)?;
+    file.to_model(path)?;
+    let replicates: Vec<Box<dyn Dynamics + Send + Sync>> = file
+        .replicate_models(path)?
+        .into_iter()
+        .map(|m| Box::new(m) as Box<dyn Dynamics + Send + Sync>)
+        .collect();
+    Ok(Some(StoredCalibration {
+        level: record.level,
+        folds: record.folds,
+        source: CalibratedSource::MmgBootstrap,
+        structures: vec![(MMG_KIND.to_string(), replicates.len())],
+        factors,
+        replicates,
+        range: stored_state_range(spec, &file.training),
+    }))
+}
+
+fn gp_calibration(
+    spec: &str,
+    text: &str,
+    level: f64,
+) -> Result<Option<StoredCalibration>, PipelineError> {
+    let path = std::path::Path::new(spec);
+    let file: GpModelFile =
+        toml::from_str(text).map_err(|e| shipid_io::InputError::toml(path, text, &e))?;
+    let Some(record) = &file.calibration else {
+        return Ok(None);
+    };
+    let factors = stored_factors(spec, record, level)?;
+    let model =
+        GpDynamics::from_file(&file).map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
+    let replicates = gp_draws(&model, GP_DRAWS, GP_DRAW_SEED)
+        .map_err(|e| failed(format!("{}: posterior draws: {e}", path.display())))?;
+    Ok(Some(StoredCalibration {
+        level: record.level,
+        folds: record.folds,
+        source: CalibratedSource::PosteriorDraws,
+        structures: vec![("sparse-GP".to_string(), replicates.len())],
+        factors,
+        replicates,
+        range: stored_state_range(spec, &file.training),
+    }))
+}
+
+/// A polynomial file's `[calibration]`: its structures' pooled replicates (with the file's effects).
+fn polynomial_calibration(
+    spec: &str,
+    text: &str,
+    level: f64,
+) -> Result<Option<StoredCalibration>, PipelineError> {
+    let path = std::path::Path::new(spec);
     let file: ModelFile =
-        toml::from_str(&text).map_err(|e| shipid_io::InputError::toml(path, &text, &e))?;
+        toml::from_str(text).map_err(|e| shipid_io::InputError::toml(path, text, &e))?;
     let Some(record) = &file.calibration else {
         return Ok(None);
     };
     let checked = record
         .check(&file.set.name)
         .map_err(|e| shipid_io::InputError::key(path, &e.key, e.reason))?;
-    if (record.level - level).abs() > 1e-9 {
-        return Err(bad_input(format!(
-            "{spec}: its calibration was obtained at level {} (key `calibration.level`) and widens \
-             bands of that level only: use --bands {}, or refit with --calibrate {level}",
-            record.level, record.level
-        )));
-    }
+    check_stored_level(spec, record.level, level)?;
     let effects: Vec<Effect> = file
         .effects
         .iter()
@@ -665,6 +1118,7 @@ pub fn stored_calibration(
     Ok(Some(StoredCalibration {
         level: record.level,
         folds: record.folds,
+        source: CalibratedSource::Ensemble,
         structures,
         factors,
         replicates,
@@ -717,7 +1171,7 @@ impl ModelBands {
     /// What the replicated models are called, in the plural.
     pub fn noun(&self) -> &'static str {
         match self {
-            ModelBands::Calibrated(_) => "ensemble replicates",
+            ModelBands::Calibrated(c) => c.source.noun(),
             ModelBands::Raw { kind, .. } => kind.noun(),
         }
     }

@@ -3,6 +3,7 @@
 mod bands;
 mod calibration;
 mod environment;
+mod family_calibration;
 mod generate_environment;
 mod mmg;
 mod refine;

@@ -1,0 +1,221 @@
+//! Calibrated bands of the mmg family and the sparse GP (`shipid fit --set mmg --bootstrap N
+//! --calibrate`, `shipid fit --estimator sparse-gp --calibrate`): the one calibration path of
+//! `shipid_pipeline::calibration` over a family's own replicates, stored in the model file's
+//! `[calibration]` and read back by `ModelBands`.
+
+use std::path::{Path, PathBuf};
+
+use shipid_io::{Dataset, Manoeuvre, Side};
+use shipid_pipeline::bands::{BandRun, manoeuvre_bands, replicate_models};
+use shipid_pipeline::calibration::{
+    FamilyFit, GpFamily, MmgFamily, ModelBands, calibrate_fit, factor_calibration_record,
+};
+use shipid_pipeline::fit::WindowSpec;
+use shipid_pipeline::fit_gp::{DEFAULT_SIMILARITY, fit_gp_dataset, model_text};
+use shipid_pipeline::mmg::{MmgFitOptions, MmgModelFile, fit_mmg_model_file, write_mmg_model_file};
+use shipid_uncertainty::Band;
+
+fn default_data() -> Dataset {
+    Dataset::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/kvlcc2-mmg/dataset.toml"))
+        .expect("the shipped default data load")
+}
+
+/// A folder of its own for one test's files (no two tests share one).
+fn scratch(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("shipid-{test}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn turning_35() -> Manoeuvre {
+    Manoeuvre::Turning {
+        rudder_deg: 35.0,
+        side: Side::Port,
+    }
+}
+
+/// Every metric band of `calibrated` holds the same metric's band of `raw` (widening never narrows).
+fn check_widened(raw: &[(&str, Band)], calibrated: &[(&str, Band)]) {
+    assert_eq!(raw.len(), calibrated.len());
+    assert!(!raw.is_empty(), "no metric has a band");
+    for ((m, r), (n, c)) in raw.iter().zip(calibrated) {
+        assert_eq!(m, n);
+        assert!(
+            c.lo <= r.lo + 1e-12 && c.hi >= r.hi - 1e-12,
+            "{m}: calibrated [{}, {}] does not hold the bootstrap band [{}, {}]",
+            c.lo,
+            c.hi,
+            r.lo,
+            r.hi
+        );
+    }
+}
+
+fn metric_bands(b: &shipid_pipeline::bands::ManoeuvreBands) -> Vec<(&'static str, Band)> {
+    b.metrics
+        .iter()
+        .filter_map(|m| m.band.as_ref().ok().map(|band| (m.metric, *band)))
+        .collect()
+}
+
+/// The mmg fit of ZZ35 port with 30 bootstrap replicates, calibrated at 0.9, written as `model.toml`
+/// in `dir` as `shipid fit --set mmg --bootstrap 30 --calibrate` writes it.
+fn write_calibrated_mmg(dir: &Path) -> PathBuf {
+    let ds = default_data();
+    let recordings = vec!["zz35_35_ps.csv".to_string()];
+    let opts = MmgFitOptions {
+        recordings: recordings.clone(),
+        ..MmgFitOptions::default()
+    };
+    let (fit, mut file) = fit_mmg_model_file(&ds, &opts, false).unwrap();
+    let family = MmgFamily {
+        opts,
+        geometry: fit.geometry,
+        refine: false,
+        replicates: 30,
+        seed: 1,
+    };
+    let (fitted, boot) = family.bands_of(&ds, &fit, &recordings).unwrap();
+    let c = calibrate_fit(fitted.source(), &family, &ds, &recordings, 0.9).unwrap();
+    assert_eq!(c.folds, 0, "one recording: in-sample errors only");
+    assert!(!c.errors.is_empty(), "ZZ35's own metrics are errors");
+    file.bootstrap = Some(boot.record());
+    file.calibration = Some(factor_calibration_record(&c, 30, 1));
+    let path = dir.join("model.toml");
+    shipid_pipeline::model_file::anchor_training(&mut file.training, &path);
+    std::fs::write(&path, write_mmg_model_file(&file).unwrap()).unwrap();
+    path
+}
+
+#[test]
+fn mmg_bands_were_bootstrap_only() {
+    // The gap of issue 28: an mmg model file's bands were its bootstrap's alone (0–40 % coverage,
+    // the equation-error bias unseen). With a [calibration] they are calibrated, and at least as
+    // wide as the bootstrap band they widen.
+    let dir = scratch("mmg-bands-were-bootstrap-only");
+    let path = write_calibrated_mmg(&dir);
+    let spec = path.to_str().unwrap();
+    let bands = ModelBands::of(spec, 0.9).unwrap();
+    assert_eq!(bands.kind(), "calibrated");
+    assert_eq!(bands.noun(), "bootstrap replicates");
+    assert_eq!(bands.replicates(), 30);
+    assert!(
+        bands
+            .what()
+            .starts_with("calibrated: mmg bootstrap replicates (30)"),
+        "{}",
+        bands.what()
+    );
+    assert_eq!(bands.factors().len(), 3, "one factor per metric family");
+    let point = shipid_pipeline::model_file::load_model(spec).unwrap();
+    let m = turning_35();
+    let ship = *point.ship();
+    let calibrated = bands
+        .bands(point.as_ref(), &m, &ship, 0.9, BandRun::Standard)
+        .unwrap();
+    let reach = calibrated.reach.expect("a calibrated band has a reach");
+    assert!(reach >= 1.0, "reach {reach}");
+    let raw = manoeuvre_bands(
+        point.as_ref(),
+        &replicate_models(spec).unwrap(),
+        &m,
+        &ship,
+        0.9,
+        BandRun::Standard,
+    )
+    .unwrap();
+    check_widened(&metric_bands(&raw), &metric_bands(&calibrated.bands));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn mmg_calibration_round_trips_and_is_refused_at_another_level() {
+    let dir = scratch("mmg-calibration-round-trip");
+    let path = write_calibrated_mmg(&dir);
+    let text = std::fs::read_to_string(&path).unwrap();
+    let read: MmgModelFile = toml::from_str(&text).unwrap();
+    let record = read.calibration.expect("[calibration] is read back");
+    record.check().unwrap();
+    assert_eq!(
+        (record.level, record.folds, record.replicates),
+        (0.9, 0, 30)
+    );
+    // The file still loads as a model (the loader ignores nothing it does not know).
+    shipid_pipeline::model_file::load_model(path.to_str().unwrap()).unwrap();
+    let other = ModelBands::of(path.to_str().unwrap(), 0.8)
+        .err()
+        .expect("another level is refused")
+        .to_string();
+    assert!(other.contains("calibration.level"), "{other}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn family_refits_leave_each_recording_out() {
+    // With two recordings every family's calibration refits without each in turn: held-out errors
+    // exist and the folds are counted, through the one code path.
+    let ds = default_data();
+    let two = vec!["zz35_35_ps.csv".to_string(), "zz20_20_ps.csv".to_string()];
+    let gp = GpFamily {
+        window: WindowSpec::Whole,
+        similarity: DEFAULT_SIMILARITY,
+        draws: 24,
+        seed: 1,
+    };
+    let fitted = gp.fit(&ds, &two).unwrap();
+    assert_eq!(fitted.replicates.len(), 24);
+    assert!(fitted.range.is_some(), "the training states' range");
+    let c = calibrate_fit(fitted.source(), &gp, &ds, &two, 0.9).unwrap();
+    assert_eq!(c.folds, 2);
+    assert!(c.errors.iter().any(|e| e.held_out));
+    assert!(c.errors.iter().any(|e| !e.held_out));
+    for f in c.factors.values() {
+        assert!(f.factor() >= 1.0);
+    }
+}
+
+#[test]
+fn sparse_gp_calibration_is_stored_and_widens_its_posterior_draws() {
+    let dir = scratch("sparse-gp-calibration");
+    let ds = default_data();
+    let one = vec!["zz35_35_ps.csv".to_string()];
+    let (mut file, model, _) =
+        fit_gp_dataset(&ds, &one, WindowSpec::Whole, DEFAULT_SIMILARITY).unwrap();
+    let gp = GpFamily {
+        window: WindowSpec::Whole,
+        similarity: DEFAULT_SIMILARITY,
+        draws: shipid_pipeline::bands::GP_DRAWS,
+        seed: shipid_pipeline::bands::GP_DRAW_SEED,
+    };
+    let fitted = gp.bands_of(&ds, model, &one).unwrap();
+    let c = calibrate_fit(fitted.source(), &gp, &ds, &one, 0.9).unwrap();
+    file.calibration = Some(factor_calibration_record(&c, gp.draws, gp.seed));
+    let path = dir.join("gp.toml");
+    shipid_pipeline::model_file::anchor_training(&mut file.training, &path);
+    std::fs::write(&path, model_text(&file).unwrap()).unwrap();
+    let spec = path.to_str().unwrap();
+    let bands = ModelBands::of(spec, 0.9).unwrap();
+    assert_eq!(bands.kind(), "calibrated");
+    assert_eq!(bands.noun(), "posterior draws");
+    let point = shipid_pipeline::model_file::load_model(spec).unwrap();
+    let ship = *point.ship();
+    let m = Manoeuvre::ZigZag {
+        rudder_deg: 20.0,
+        check_deg: 20.0,
+        side: Side::Port,
+    };
+    let calibrated = bands
+        .bands(point.as_ref(), &m, &ship, 0.9, BandRun::Standard)
+        .unwrap();
+    let raw = manoeuvre_bands(
+        point.as_ref(),
+        &replicate_models(spec).unwrap(),
+        &m,
+        &ship,
+        0.9,
+        BandRun::Standard,
+    )
+    .unwrap();
+    check_widened(&metric_bands(&raw), &metric_bands(&calibrated.bands));
+    std::fs::remove_dir_all(&dir).ok();
+}
