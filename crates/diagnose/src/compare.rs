@@ -425,9 +425,8 @@ pub(crate) struct Baseline {
     /// Robust scale of those residuals per DOF: the unit of every fit's residuals, so that the DOFs
     /// weigh alike whatever their units.
     pub scale: [f64; 3],
-    /// Segment-replay scores of the model per recording, pooled, and the pooled position RMSE ÷ L.
+    /// Segment-replay scores of the model per recording and their pooled position RMSE ÷ L.
     pub before_each: Vec<ReplayScore>,
-    pub before: ReplayScore,
     pub before_l: f64,
     /// Position RMSE ÷ L expected from the recordings' noise alone.
     pub noise_floor: f64,
@@ -460,17 +459,16 @@ impl Baseline {
         let scale = robust_scale(&residuals);
         let all: Vec<usize> = (0..prep.len()).collect();
         let before_each = replay_scores(&model, &prep, &all, horizon_s);
-        let before = pooled(&before_each);
+        let before_l = pooled(&before_each).position_rmse() / ship.lpp;
         let noise_floor = noise_floor_over_l(&prep, horizon_s, ship.lpp);
         Ok(Baseline {
             ship,
             horizon_s,
-            before_l: before.position_rmse() / ship.lpp,
+            before_l,
             prep,
             residuals,
             scale,
             before_each,
-            before,
             noise_floor,
             windage,
         })

@@ -143,11 +143,34 @@ impl RecordedEnvironment {
     }
 }
 
+/// One recording's own wind, found by the per-recording wind family (a steady wind the recording
+/// does not carry; direction earth-fixed, clockwise from north, where it comes FROM).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RecordingWind {
+    pub recording: String,
+    /// Fitted on both time halves of the recording.
+    pub speed_m_s: f64,
+    pub from_deg: f64,
+    /// One standard error of each (Gauss–Newton, as every fitted effect's), when defined.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub speed_standard_error_m_s: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub from_standard_error_deg: Option<f64>,
+    /// Held-out position RMSE ÷ L of the recording's segment replays (each half judged with the
+    /// wind fitted on the other half) without and with its wind.
+    pub before_position_rmse_over_l: f64,
+    pub after_position_rmse_over_l: f64,
+}
+
 /// A wind (or current) the diagnosis found on top of the one the recordings carry.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct AgainstRecorded {
     /// `wind` or `current`.
     pub flow: &'static str,
+    /// The recording whose own wind this is (a wind found per recording); absent for a flow found
+    /// for all recordings.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub recording: Option<String>,
     /// The steady flow the diagnosis found, which the recordings do not carry.
     pub found_speed_m_s: f64,
     pub found_from_deg: f64,
@@ -172,44 +195,69 @@ fn flow_effect(e: &Effect) -> Option<(&'static str, f64, f64)> {
     }
 }
 
-/// Every found wind or current that the recordings of `recorded` also carry, against the recorded one.
-pub fn against_recorded(effects: &[Effect], ds: &Dataset) -> Vec<AgainstRecorded> {
-    effects
-        .iter()
-        .filter_map(flow_effect)
-        .filter_map(|(flow, speed, from)| {
-            let recorded = FlowSummary::of(ds.recordings.iter().filter_map(|r| match flow {
-                "wind" => r.recording.wind.as_ref(),
-                _ => r.recording.current.as_ref(),
-            }))?;
-            // The found flow acts as a force of its own beside the recorded one's, and a wind's
-            // force grows with the square of its speed: the single flow that pushes as both do adds
-            // their velocities weighted by their speeds (exact for flows from one direction, with the
-            // ship's own speed through the air left out).
-            let f = velocity(speed, from);
-            let m = recorded.mean_velocity_m_s;
-            let (sm, sf) = (m[0].hypot(m[1]), speed);
-            let pressure = [sm * m[0] + sf * f[0], sm * m[1] + sf * f[1]];
-            let p = pressure[0].hypot(pressure[1]);
-            Some(AgainstRecorded {
-                flow,
-                found_speed_m_s: speed,
-                found_from_deg: from,
-                recorded,
-                felt_speed_m_s: p.sqrt(),
-                felt_from_deg: from_deg(pressure),
-                speed_ratio: speed / recorded.speed_mean_m_s.max(f64::MIN_POSITIVE),
-                direction_difference_deg: angle_difference_deg(from, recorded.from_mean_deg),
-            })
-        })
-        .collect()
+/// Every found wind or current that the recordings of `ds` also carry, against the recorded one;
+/// then each recording's own wind (`per_recording`) against that recording's recorded wind.
+pub fn against_recorded(
+    effects: &[Effect],
+    per_recording: &[RecordingWind],
+    ds: &Dataset,
+) -> Vec<AgainstRecorded> {
+    let common = effects.iter().filter_map(flow_effect).filter_map(|found| {
+        let recorded = FlowSummary::of(ds.recordings.iter().filter_map(|r| match found.0 {
+            "wind" => r.recording.wind.as_ref(),
+            _ => r.recording.current.as_ref(),
+        }))?;
+        Some(against(found, recorded, None))
+    });
+    let own = per_recording.iter().filter_map(|w| {
+        let r = ds.recordings.iter().find(|r| r.file == w.recording)?;
+        let recorded = FlowSummary::of(r.recording.wind.as_ref())?;
+        Some(against(
+            ("wind", w.speed_m_s, w.from_deg),
+            recorded,
+            Some(w.recording.clone()),
+        ))
+    });
+    common.chain(own).collect()
+}
+
+/// The found flow `(word, speed, from)` against the `recorded` one.
+fn against(
+    (flow, speed, from): (&'static str, f64, f64),
+    recorded: FlowSummary,
+    recording: Option<String>,
+) -> AgainstRecorded {
+    // The found flow acts as a force of its own beside the recorded one's, and a wind's force grows
+    // with the square of its speed: the single flow that pushes as both do adds their velocities
+    // weighted by their speeds (exact for flows from one direction, with the ship's own speed
+    // through the air left out: a flow over ground, not the relative wind).
+    let f = velocity(speed, from);
+    let m = recorded.mean_velocity_m_s;
+    let (sm, sf) = (m[0].hypot(m[1]), speed);
+    let pressure = [sm * m[0] + sf * f[0], sm * m[1] + sf * f[1]];
+    let p = pressure[0].hypot(pressure[1]);
+    AgainstRecorded {
+        flow,
+        recording,
+        found_speed_m_s: speed,
+        found_from_deg: from,
+        recorded,
+        felt_speed_m_s: p.sqrt(),
+        felt_from_deg: from_deg(pressure),
+        speed_ratio: speed / recorded.speed_mean_m_s.max(f64::MIN_POSITIVE),
+        direction_difference_deg: angle_difference_deg(from, recorded.from_mean_deg),
+    }
 }
 
 impl AgainstRecorded {
     /// One sentence for the explanation.
     pub fn sentence(&self) -> String {
+        let (whose, they) = match &self.recording {
+            Some(r) => (format!("{r} carries"), "it does"),
+            None => ("the recordings carry".to_string(), "they do"),
+        };
         format!(
-            "the recordings carry a {flow} of {:.2} m/s from {:.0}° (mean) as a known input; the {flow} found is one they do not carry, {:.2} m/s from {:.0}° ({:.0} % of the recorded speed, {:.0}° from its direction): together the ship felt {:.2} m/s from {:.0}°, so the recorded {flow} channels (or the windage) may be off",
+            "{whose} a {flow} of {:.2} m/s from {:.0}° (mean) as a known input; the {flow} found is one {they} not carry, {:.2} m/s from {:.0}° ({:.0} % of the recorded speed, {:.0}° from its direction): together the ship felt {:.2} m/s from {:.0}°, so the recorded {flow} channels (or the windage) may be off",
             self.recorded.speed_mean_m_s,
             self.recorded.from_mean_deg,
             self.found_speed_m_s,
@@ -230,6 +278,8 @@ pub struct Concealed {
     pub current: Option<FlowSummary>,
     /// The recordings whose channels were removed.
     pub recordings: Vec<String>,
+    /// Each recording's concealed wind, for recordings that carried one.
+    pub wind_per_recording: Vec<(String, FlowSummary)>,
 }
 
 /// Remove every recorded wind and current from `ds` (the diagnosis then sees recordings without
@@ -245,6 +295,11 @@ pub fn conceal(ds: &mut Dataset) -> Option<Concealed> {
             .iter()
             .filter_map(|r| r.recording.current.as_ref()),
     );
+    let wind_per_recording = ds
+        .recordings
+        .iter()
+        .filter_map(|r| Some((r.file.clone(), FlowSummary::of(r.recording.wind.as_ref())?)))
+        .collect();
     let mut recordings = Vec::new();
     for r in &mut ds.recordings {
         let had = r.recording.wind.take().is_some() | r.recording.current.take().is_some();
@@ -256,6 +311,7 @@ pub fn conceal(ds: &mut Dataset) -> Option<Concealed> {
         wind,
         current,
         recordings,
+        wind_per_recording,
     })
 }
 
@@ -277,6 +333,15 @@ pub struct RevealedFlow {
     pub direction_error_deg: Option<f64>,
 }
 
+/// One recording's concealed wind against the wind found for it: its own (per-recording wind) or
+/// the one found for all recordings.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RevealedRecordingWind {
+    pub recording: String,
+    #[serde(flatten)]
+    pub wind: RevealedFlow,
+}
+
 /// The `--reveal` check: the verdict on recordings whose wind and current were concealed, against the
 /// concealed channels.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -291,28 +356,66 @@ pub struct RevealCheck {
     pub wind: Option<RevealedFlow>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub current: Option<RevealedFlow>,
+    /// Each recording's concealed wind against the wind found for it (when more than one recording
+    /// carried a wind: trials meet a different wind on every run).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub wind_per_recording: Vec<RevealedRecordingWind>,
 }
 
-/// The check of a diagnosis with `verdict` and `effects` against what was `concealed`.
-pub fn reveal(verdict: Verdict, effects: &[Effect], concealed: &Concealed) -> RevealCheck {
+/// The `recorded` flow against the one `found` (speed, from), if any.
+fn revealed(recorded: FlowSummary, found: Option<(f64, f64)>) -> RevealedFlow {
+    RevealedFlow {
+        recorded,
+        found_speed_m_s: found.map(|x| x.0),
+        found_from_deg: found.map(|x| x.1),
+        speed_error_m_s: found.map(|x| x.0 - recorded.speed_mean_m_s),
+        direction_error_deg: found.map(|x| angle_difference_deg(x.1, recorded.from_mean_deg)),
+    }
+}
+
+/// The check of a diagnosis with `verdict`, `effects` (for all recordings) and `per_recording`
+/// winds (each recording's own) against what was `concealed`. With winds found per recording the
+/// verdict is right only if every recording whose concealed wind blew has its wind named.
+pub fn reveal(
+    verdict: Verdict,
+    effects: &[Effect],
+    per_recording: &[RecordingWind],
+    concealed: &Concealed,
+) -> RevealCheck {
     let found = |word: &str| {
         effects
             .iter()
             .filter_map(flow_effect)
             .find(|(w, _, _)| *w == word)
+            .map(|(_, s, f)| (s, f))
     };
     let flow = |word: &str, recorded: Option<FlowSummary>| {
-        recorded.map(|recorded| {
-            let f = found(word);
-            RevealedFlow {
-                recorded,
-                found_speed_m_s: f.map(|x| x.1),
-                found_from_deg: f.map(|x| x.2),
-                speed_error_m_s: f.map(|x| x.1 - recorded.speed_mean_m_s),
-                direction_error_deg: f.map(|x| angle_difference_deg(x.2, recorded.from_mean_deg)),
-            }
-        })
+        recorded.map(|recorded| revealed(recorded, found(word)))
     };
+    let own = |recording: &str| {
+        per_recording
+            .iter()
+            .find(|w| w.recording == recording)
+            .map(|w| (w.speed_m_s, w.from_deg))
+    };
+    let wind_per_recording: Vec<RevealedRecordingWind> = if concealed.wind_per_recording.len() > 1 {
+        concealed
+            .wind_per_recording
+            .iter()
+            .map(|(recording, recorded)| RevealedRecordingWind {
+                recording: recording.clone(),
+                wind: revealed(*recorded, own(recording).or(found("wind"))),
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let every_own_named = per_recording.is_empty()
+        || concealed
+            .wind_per_recording
+            .iter()
+            .filter(|(_, w)| w.speed_max_m_s > 0.0)
+            .all(|(r, _)| own(r).is_some());
     // A concealed flow that never blew is no effect to find.
     let blew = |s: &Option<FlowSummary>| s.is_some_and(|s| s.speed_max_m_s > 0.0);
     let mut expected = Vec::new();
@@ -327,11 +430,17 @@ pub fn reveal(verdict: Verdict, effects: &[Effect], concealed: &Concealed) -> Re
     }
     RevealCheck {
         recordings: concealed.recordings.clone(),
-        verdict_right: expected.contains(&verdict),
+        verdict_right: expected.contains(&verdict) && every_own_named,
         expected,
         verdict,
-        wind: flow("wind", concealed.wind),
+        // Winds found per recording are compared run by run; a mean of them is no wind at all.
+        wind: if per_recording.is_empty() {
+            flow("wind", concealed.wind)
+        } else {
+            None
+        },
         current: flow("current", concealed.current),
+        wind_per_recording,
     }
 }
 
@@ -360,6 +469,23 @@ impl RevealCheck {
                 _ => format!(
                     "  {word}: recorded {:.3} m/s from {:.0}° (mean), none found",
                     r.speed_mean_m_s, r.from_mean_deg
+                ),
+            });
+        }
+        for w in &self.wind_per_recording {
+            let (r, f) = (&w.wind.recorded, &w.wind);
+            out.push(match (f.found_speed_m_s, f.found_from_deg) {
+                (Some(s), Some(d)) => format!(
+                    "  wind on {}: recorded {:.3} m/s from {:.0}°, found {s:.3} m/s from {d:.0}°: speed error {:+.3} m/s, direction error {:.0}°",
+                    w.recording,
+                    r.speed_mean_m_s,
+                    r.from_mean_deg,
+                    f.speed_error_m_s.unwrap_or(f64::NAN),
+                    f.direction_error_deg.unwrap_or(f64::NAN)
+                ),
+                _ => format!(
+                    "  wind on {}: recorded {:.3} m/s from {:.0}°, none found",
+                    w.recording, r.speed_mean_m_s, r.from_mean_deg
                 ),
             });
         }
@@ -392,14 +518,15 @@ mod tests {
             wind: FlowSummary::of([&series(&[3.0, 3.0], &[80.0, 80.0])]),
             current: None,
             recordings: vec!["a.csv".into()],
+            wind_per_recording: Vec::new(),
         };
         let found: Effect = "wind:speed=2.5,from=100".parse().unwrap();
-        let check = reveal(Verdict::Wind, &[found], &concealed);
+        let check = reveal(Verdict::Wind, &[found], &[], &concealed);
         assert!(check.verdict_right);
         let w = check.wind.unwrap();
         assert!((w.speed_error_m_s.unwrap() + 0.5).abs() < 1e-9);
         assert!((w.direction_error_deg.unwrap() - 20.0).abs() < 1e-9);
-        let wrong = reveal(Verdict::Current, &[], &concealed);
+        let wrong = reveal(Verdict::Current, &[], &[], &concealed);
         assert!(!wrong.verdict_right && wrong.wind.unwrap().found_speed_m_s.is_none());
     }
 }

@@ -25,6 +25,11 @@ pub enum Family {
     /// `asymmetry` as a constant side force and yaw moment (single-screw propeller).
     SideForce,
     ShallowWater,
+    /// `wind` as one steady wind of its own on each recording (trials meet a different wind on every
+    /// run). Not in [`Family::ALL`]: its parameters are per recording, so it is fitted recording by
+    /// recording and judged on each recording's time halves (`judge::Judge::per_recording_wind`);
+    /// [`Family::dim`] and [`Family::effect`] are those of one recording's wind.
+    WindPerRecording,
 }
 
 impl Family {
@@ -41,7 +46,7 @@ impl Family {
     pub fn verdict(self) -> Verdict {
         match self {
             Family::Current => Verdict::Current,
-            Family::Wind => Verdict::Wind,
+            Family::Wind | Family::WindPerRecording => Verdict::Wind,
             Family::RudderLag => Verdict::RudderLag,
             Family::RudderOffset | Family::SideForce => Verdict::Asymmetry,
             Family::ShallowWater => Verdict::ShallowWater,
@@ -58,22 +63,26 @@ impl Family {
         match self {
             Family::RudderOffset => Some("rudder_offset"),
             Family::SideForce => Some("side_force"),
+            Family::WindPerRecording => Some("per_recording"),
             _ => None,
         }
     }
 
     /// The family in prose, in the words of the vocabulary: `asymmetry (rudder_offset form)`.
     pub fn describe(self) -> String {
+        if self == Family::WindPerRecording {
+            return "a wind of its own on each recording".into();
+        }
         match self.variant() {
             Some(v) => format!("{} ({v} form)", self.word()),
             None => self.word().into(),
         }
     }
 
-    /// Number of fitted parameters.
+    /// Number of fitted parameters (per recording for [`Family::WindPerRecording`]).
     pub fn dim(self) -> usize {
         match self {
-            Family::Current | Family::Wind => 2,
+            Family::Current | Family::Wind | Family::WindPerRecording => 2,
             Family::RudderLag => 2,
             Family::RudderOffset => 1,
             Family::SideForce => 2,
@@ -86,7 +95,7 @@ impl Family {
     fn bounds(self) -> (Vec<f64>, Vec<f64>) {
         match self {
             Family::Current => (vec![-0.5, -0.5], vec![0.5, 0.5]),
-            Family::Wind => (vec![-15.0, -15.0], vec![15.0, 15.0]),
+            Family::Wind | Family::WindPerRecording => (vec![-15.0, -15.0], vec![15.0, 15.0]),
             Family::RudderLag => (vec![0.0, 0.0], vec![2.0, 2.0]),
             Family::RudderOffset => (vec![-10.0], vec![10.0]),
             Family::SideForce => (vec![-20.0, -20.0], vec![20.0, 20.0]),
@@ -100,7 +109,7 @@ impl Family {
     fn starts(self) -> Vec<Vec<f64>> {
         match self {
             Family::Current => vec![vec![0.0, 0.0]],
-            Family::Wind => {
+            Family::Wind | Family::WindPerRecording => {
                 let mut s = Vec::new();
                 for speed in [1.0, 2.5, 5.0] {
                     for k in 0..12 {
@@ -128,7 +137,7 @@ impl Family {
                 speed_m_s: p[0].hypot(p[1]) * ship.u0,
                 from_deg: from_deg(p[0], p[1]),
             }),
-            Family::Wind => {
+            Family::Wind | Family::WindPerRecording => {
                 // The data set's areas go into the effect's text too, so that the augmented model's
                 // wind acts on them (the assumed windage is the effect's own default).
                 let own = windage.source == WindageSource::Dataset;

@@ -1,8 +1,15 @@
 //! Judge: every candidate is fitted to half of the recordings and judged by the segment-replay
 //! position error on the other half, then the halves swap, so each recording is held out once. The
 //! acceptance, parsimony, pairing and near-rival rules are here (docs/diagnosis.md, "How it decides").
+//!
+//! The folds are either every other recording or, on a data set cut into time halves
+//! ([`time_halves`]), the recordings' first halves and their second halves: a single recording is
+//! judged that way, and so is a wind of its own on each recording ([`Judge::per_recording_wind`]),
+//! whose parameters cannot be predicted from the other recordings, only from the other half of
+//! the same one.
 
 use rayon::prelude::*;
+use shipid_io::{Dataset, DatasetRecording, Manoeuvre};
 use shipid_sim::{Dynamics, Effect};
 
 use crate::compare::{Baseline, Composite, ReplayScore, combine, pooled, replay_scores};
@@ -23,7 +30,8 @@ pub(crate) struct Judge<'a> {
     base_effects: &'a [Effect],
     baseline: &'a Baseline,
     opts: &'a DiagnoseOptions,
-    /// Every other recording: the two halves that are fitted and held out in turn.
+    /// Every other recording: the two halves that are fitted and held out in turn (on a baseline of
+    /// [`time_halves`], the first halves and the second halves).
     folds: [Vec<usize>; 2],
 }
 
@@ -283,6 +291,78 @@ impl<'a> Judge<'a> {
             .collect()
     }
 
+    /// `families` judged held-out on this judge's folds (on a baseline of [`time_halves`]: the same
+    /// criterion as [`Judge::per_recording_wind`], which must beat it clearly).
+    pub fn judge_families(&self, families: &[Family]) -> Judged {
+        let cross = self.cross(families, &Default::default());
+        Judged {
+            families: families.to_vec(),
+            assessed: self.assess(families.iter().map(|f| f.dim()).sum(), &cross.0),
+            cross,
+        }
+    }
+
+    /// A wind of its own on each recording, on a baseline of [`time_halves`] (units 2i and 2i + 1
+    /// are recording i's halves): each recording's wind fitted on one of its halves and judged on
+    /// the other, then swapped, so every half is held out once from data its wind was not fitted on.
+    /// A recording's parameters touch only its own residuals, so the joint fit is one small fit per
+    /// recording and half (in parallel). Returns the candidate (2 parameters per recording) and,
+    /// per recording, its wind refitted on both halves (warm-started from the two half fits).
+    pub fn per_recording_wind(&self) -> (Judged, Vec<(Effect, FitResult)>) {
+        let n_units = self.baseline.prep.len();
+        let recordings = n_units / 2;
+        let family = [Family::WindPerRecording];
+        let fit_on = |idx: &[usize], starts: Vec<Vec<f64>>, refine: usize| {
+            fit_families(
+                self.base,
+                self.base_effects,
+                &family,
+                &self.baseline.prep,
+                idx,
+                &self.baseline.scale,
+                &self.baseline.windage,
+                starts,
+                refine,
+            )
+        };
+        let halves: Vec<(usize, Vec<f64>, ReplayScore)> = (0..n_units)
+            .into_par_iter()
+            .map(|train| {
+                let test = train ^ 1;
+                let (effects, fit) = fit_on(&[train], start_grid(&family, &[]), 3);
+                let score = self.score(&effects, &[test]);
+                (train, fit.params, score[0])
+            })
+            .collect();
+        let mut scores = vec![ReplayScore::default(); n_units];
+        let mut fitted = Vec::with_capacity(n_units);
+        for (train, params, score) in halves {
+            scores[train ^ 1] = score;
+            fitted.push((train, params));
+        }
+        let finals: Vec<(Effect, FitResult)> = (0..recordings)
+            .into_par_iter()
+            .map(|i| {
+                let warm = fitted
+                    .iter()
+                    .filter(|(u, _)| u / 2 == i)
+                    .map(|(_, p)| p.clone())
+                    .collect();
+                let (mut effects, fit) = fit_on(&[2 * i, 2 * i + 1], warm, 1);
+                (effects.remove(0), fit)
+            })
+            .collect();
+        let assessed = self.assess(Family::WindPerRecording.dim() * recordings, &scores);
+        (
+            Judged {
+                families: family.to_vec(),
+                assessed,
+                cross: (scores, fitted),
+            },
+            finals,
+        )
+    }
+
     /// Parameters fitted on all recordings for every candidate (all are reported; the winner's are the
     /// model), from its fold fits: the grid of starts was searched there already.
     pub fn final_fits(&self, judged: &[Judged]) -> Vec<(Vec<Effect>, FitResult)> {
@@ -305,6 +385,48 @@ impl<'a> Judge<'a> {
             })
             .collect()
     }
+}
+
+/// Shortest recording [samples] cut into time halves: each half keeps the samples a replay segment
+/// and the differentiator need twice over.
+pub(crate) const MIN_SAMPLES_FOR_HALVES: usize = 4 * shipid_io::table::MIN_SAMPLES;
+
+/// `ds` with every recording cut into its first and second half in time, interleaved (recording i's
+/// halves are units 2i and 2i + 1, so the judge's alternating folds are the first halves and the
+/// second halves; names say which half; a second half is a free run: it does not start with the
+/// manoeuvre's execute). Recordings too short to diagnose are left out, as the diagnosis leaves them
+/// out; `None` when one that remains is too short to be cut.
+pub(crate) fn time_halves(ds: &Dataset) -> Option<Dataset> {
+    let mut recordings = Vec::new();
+    for r in ds
+        .recordings
+        .iter()
+        .filter(|r| r.recording.len() >= shipid_io::table::MIN_SAMPLES)
+    {
+        let n = r.recording.len();
+        if n < MIN_SAMPLES_FOR_HALVES {
+            return None;
+        }
+        let half = |range: std::ops::Range<usize>, manoeuvre| {
+            let rec = r.recording.slice(range);
+            DatasetRecording {
+                file: format!(
+                    "{} [{:.1}–{:.1} s]",
+                    r.file,
+                    rec.t.first().copied().unwrap_or(0.0),
+                    rec.t.last().copied().unwrap_or(0.0)
+                ),
+                manoeuvre,
+                recording: rec,
+            }
+        };
+        recordings.push(half(0..n / 2, r.manoeuvre));
+        recordings.push(half(n / 2..n, Manoeuvre::Free));
+    }
+    (!recordings.is_empty()).then(|| Dataset {
+        recordings,
+        ..ds.clone()
+    })
 }
 
 /// The accepted candidate with the highest score.

@@ -13,6 +13,12 @@
 //! held-out position RMSE reduced by at least [`IMPROVEMENT_TARGET`]; controls keep them (the wind is
 //! part of the base) and must not be diagnosed with an effect.
 //!
+//! Own-wind cases: real trials meet a different wind on every run, so in these cases each of the
+//! six runs carries its own wind (speed drawn within ±[`OWN_WIND_SPREAD_M_S`] of the case's
+//! strength, direction from anywhere), concealed: they must be diagnosed `wind` in its per-recording
+//! form, each run's direction within [`DIRECTION_TARGET_DEG`] of its own concealed mean; their
+//! controls keep the channels.
+//!
 //! This module holds the generator, the grid, the per-case diagnosis and the scoring;
 //! `cargo xtask bench-known-wind` identifies the bases, runs the cases and writes the tables.
 
@@ -26,7 +32,6 @@ use shipid_pipeline::generate::{
 };
 use shipid_sim::{Dynamics, Effect, MmgModel, MmgParameters};
 
-use crate::bench::WORDS;
 use crate::environment::{FlowSummary, RevealCheck, conceal, reveal};
 use crate::input::{DiagnoseInput, DiagnoseOptions};
 use crate::report::diagnose;
@@ -41,6 +46,10 @@ pub const GUST_TIME_S: f64 = 2.0;
 /// Targets of issue 27: direction error and held-out improvement of a right verdict.
 pub const DIRECTION_TARGET_DEG: f64 = 30.0;
 pub const IMPROVEMENT_TARGET: f64 = 0.5;
+/// Strengths of the own-wind cases: the centre of the runs' mean speeds [m/s].
+pub const OWN_WIND_SPEEDS_M_S: [f64; 3] = [2.0, 3.0, 4.0];
+/// Half-width of the runs' mean speeds about the strength [m/s] in an own-wind case.
+pub const OWN_WIND_SPREAD_M_S: f64 = 0.5;
 
 /// The wind of every run of a case: a mean speed and direction and gusts about them.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -167,6 +176,9 @@ pub struct KnownWindCase {
     pub control: bool,
     /// Noise seed.
     pub seed: u64,
+    /// Each run in its own wind: speeds within ±[`OWN_WIND_SPREAD_M_S`] of `wind.speed_m_s`, from
+    /// any direction (`wind.from_deg` unused), drawn from `wind.seed`.
+    pub own_winds: bool,
 }
 
 /// The grid: per seed, every speed steady and gusty with the wind concealed, and controls (wind kept)
@@ -188,6 +200,7 @@ pub fn cases(seeds: u64) -> Vec<KnownWindCase> {
                     wind,
                     control: false,
                     seed,
+                    own_winds: false,
                 });
                 if k == 1 || k == WIND_SPEEDS_M_S.len() - 1 {
                     out.push(KnownWindCase {
@@ -195,8 +208,42 @@ pub fn cases(seeds: u64) -> Vec<KnownWindCase> {
                         wind,
                         control: true,
                         seed,
+                        own_winds: false,
                     });
                 }
+            }
+        }
+    }
+    out
+}
+
+/// The own-wind grid: per seed, every strength with each run in its own concealed steady wind, and
+/// controls (winds kept) at the middle and the last strength.
+pub fn own_wind_cases(seeds: u64) -> Vec<KnownWindCase> {
+    let mut out = Vec::new();
+    for seed in 0..seeds {
+        for (k, &speed) in OWN_WIND_SPEEDS_M_S.iter().enumerate() {
+            let wind = WindRun {
+                speed_m_s: speed,
+                from_deg: 0.0,
+                gust: 0.0,
+                seed: 100 + 10 * seed + k as u64,
+            };
+            out.push(KnownWindCase {
+                id: format!("own-winds-{speed}-s{seed}"),
+                wind,
+                control: false,
+                seed,
+                own_winds: true,
+            });
+            if k >= 1 {
+                out.push(KnownWindCase {
+                    id: format!("own-winds-control-{speed}-s{seed}"),
+                    wind,
+                    control: true,
+                    seed,
+                    own_winds: true,
+                });
             }
         }
     }
@@ -206,7 +253,17 @@ pub fn cases(seeds: u64) -> Vec<KnownWindCase> {
 /// The case's runs: the six manoeuvres in its wind (gusts seeded per run by the generator), noise of
 /// its seed.
 pub fn case_dataset(case: &KnownWindCase) -> Result<Dataset, String> {
-    windy_dataset(&case.id, Some(case.seed), case.wind.recorded())
+    let wind = if case.own_winds {
+        RecordedWind {
+            spread_m_s: OWN_WIND_SPREAD_M_S,
+            from_deg: None,
+            from_spread_deg: 180.0,
+            ..case.wind.recorded()
+        }
+    } else {
+        case.wind.recorded()
+    };
+    windy_dataset(&case.id, Some(case.seed), wind)
 }
 
 /// One case's outcome.
@@ -221,6 +278,8 @@ pub struct KnownWindRow {
     /// For a concealed wind: the verdict and the found wind against it.
     pub check: Option<RevealCheck>,
     pub effects: String,
+    /// The verdict `wind` was given in its per-recording form (a wind of its own on each run).
+    pub per_recording: bool,
     pub time_s: f64,
 }
 
@@ -230,7 +289,7 @@ impl KnownWindRow {
         if self.case.control {
             !self.verdict.names_effect()
         } else {
-            self.verdict == Verdict::Wind
+            self.verdict == Verdict::Wind && self.per_recording == self.case.own_winds
         }
     }
 
@@ -239,12 +298,43 @@ impl KnownWindRow {
         1.0 - self.after / self.before
     }
 
+    /// The direction error of the found wind; in an own-wind case the largest over the runs (none
+    /// when a run has no wind found).
     pub fn direction_error_deg(&self) -> Option<f64> {
-        self.check.as_ref()?.wind.as_ref()?.direction_error_deg
+        let check = self.check.as_ref()?;
+        if self.case.own_winds {
+            self.own_errors()?.iter().map(|e| e.1).reduce(f64::max)
+        } else {
+            check.wind.as_ref()?.direction_error_deg
+        }
     }
 
+    /// The found speed; in an own-wind case the mean over the runs.
     pub fn found_speed_m_s(&self) -> Option<f64> {
-        self.check.as_ref()?.wind.as_ref()?.found_speed_m_s
+        let check = self.check.as_ref()?;
+        if self.case.own_winds {
+            mean(
+                &check
+                    .wind_per_recording
+                    .iter()
+                    .map(|w| w.wind.found_speed_m_s)
+                    .collect::<Option<Vec<f64>>>()?,
+            )
+        } else {
+            check.wind.as_ref()?.found_speed_m_s
+        }
+    }
+
+    /// Per run of an own-wind case: (speed error [m/s], direction error [deg]) of its found wind
+    /// against its concealed one; `None` when a run has none found.
+    pub fn own_errors(&self) -> Option<Vec<(f64, f64)>> {
+        self.check
+            .as_ref()?
+            .wind_per_recording
+            .iter()
+            .map(|w| Some((w.wind.speed_error_m_s?, w.wind.direction_error_deg?)))
+            .collect::<Option<Vec<_>>>()
+            .filter(|e| !e.is_empty())
     }
 
     /// A wind case that meets every target: right verdict, direction within 30°, held-out
@@ -282,7 +372,8 @@ pub fn run_case(
         .filter_map(|e| e.parse().ok())
         .collect();
     Ok(KnownWindRow {
-        check: concealed.map(|c| reveal(report.verdict, &effects, &c)),
+        check: concealed.map(|c| reveal(report.verdict, &effects, &report.per_recording_wind, &c)),
+        per_recording: !report.per_recording_wind.is_empty(),
         verdict: report.verdict,
         before: report.fit_before.position_rmse_over_l,
         after: report.fit_after.position_rmse_over_l,
@@ -293,23 +384,57 @@ pub fn run_case(
     })
 }
 
-/// Verdict counts of the wind cases and of the controls, per column of [`WORDS`].
-pub fn confusion(rows: &[KnownWindRow]) -> [(&'static str, [usize; WORDS.len()]); 2] {
-    let count = |control: bool| {
-        let mut n = [0; WORDS.len()];
-        for r in rows.iter().filter(|r| r.case.control == control) {
-            let column = Verdict::ALL
+/// Columns of the confusion matrix: the words of the vocabulary, `wind` split into one wind for all
+/// recordings and a wind of its own on each.
+pub const CONFUSION_COLUMNS: [&str; 8] = [
+    "none",
+    "current",
+    "wind (one for all)",
+    "wind (per recording)",
+    "rudder_lag",
+    "asymmetry",
+    "shallow_water",
+    "unexplained",
+];
+
+/// The column of a row's verdict in [`CONFUSION_COLUMNS`].
+fn confusion_column(r: &KnownWindRow) -> usize {
+    match r.verdict {
+        Verdict::None => 0,
+        Verdict::Current => 1,
+        Verdict::Wind if r.per_recording => 3,
+        Verdict::Wind => 2,
+        Verdict::RudderLag => 4,
+        Verdict::Asymmetry => 5,
+        Verdict::ShallowWater => 6,
+        Verdict::Unexplained => 7,
+    }
+}
+
+/// Verdict counts per kind of case (one wind concealed or kept, own winds concealed or kept; kinds
+/// without cases left out), per column of [`CONFUSION_COLUMNS`].
+pub fn confusion(rows: &[KnownWindRow]) -> Vec<(&'static str, [usize; CONFUSION_COLUMNS.len()])> {
+    let kinds = [
+        ("one wind for all runs, concealed", false, false),
+        ("one wind for all runs, kept (control)", false, true),
+        ("a wind of its own on each run, concealed", true, false),
+        ("a wind of its own on each run, kept (control)", true, true),
+    ];
+    kinds
+        .iter()
+        .filter_map(|&(name, own, control)| {
+            let mut n = [0; CONFUSION_COLUMNS.len()];
+            let mut any = false;
+            for r in rows
                 .iter()
-                .position(|v| *v == r.verdict)
-                .unwrap_or(WORDS.len() - 1);
-            n[column] += 1;
-        }
-        n
-    };
-    [
-        ("wind concealed", count(false)),
-        ("wind kept (control)", count(true)),
-    ]
+                .filter(|r| r.case.own_winds == own && r.case.control == control)
+            {
+                n[confusion_column(r)] += 1;
+                any = true;
+            }
+            any.then_some((name, n))
+        })
+        .collect()
 }
 
 fn mean(x: &[f64]) -> Option<f64> {
@@ -330,10 +455,111 @@ pub fn detectability_threshold(rows: &[KnownWindRow]) -> Option<f64> {
     .map(|m| 2.0 * m)
 }
 
-/// The summary of one base in markdown: the targets met (over all wind cases and over the
-/// detectable ones), the table per speed and gustiness with the parameter recovery, and the confusion
-/// matrix.
+/// The summary of one base in markdown: for the cases of one wind for all runs, the targets met
+/// (over all wind cases and over the detectable ones) and the table per speed and gustiness with the
+/// parameter recovery; the same for the own-wind cases (per run); the confusion matrix of both.
 pub fn summary_markdown(rows: &[KnownWindRow], base_name: &str, level: f64) -> String {
+    let (own, common): (Vec<KnownWindRow>, Vec<KnownWindRow>) =
+        rows.iter().cloned().partition(|r| r.case.own_winds);
+    let threshold = detectability_threshold(&common);
+    let mut md = format!(
+        "### Base: {base_name}\n\nIts own level (segment replays of its training runs in their recorded winds): {level:.4} L.\n\n"
+    );
+    if !common.is_empty() {
+        md.push_str(&common_markdown(&common));
+    }
+    if !own.is_empty() {
+        md.push_str(&own_markdown(&own, threshold));
+    }
+    md.push_str("Confusion matrix (rows: case, columns: verdict):\n\n| case |");
+    for w in CONFUSION_COLUMNS {
+        md.push_str(&format!(" {w} |"));
+    }
+    md.push_str("\n|---|");
+    for _ in CONFUSION_COLUMNS {
+        md.push_str("---|");
+    }
+    md.push('\n');
+    for (k, n) in confusion(rows) {
+        md.push_str(&format!("| {k} |"));
+        for c in n {
+            md.push_str(&format!(" {c} |"));
+        }
+        md.push('\n');
+    }
+    md.push('\n');
+    md
+}
+
+/// The own-wind cases in markdown: the targets met, and per strength the per-run recovery of speed
+/// and direction. A case is detectable as in the one-wind grid (before at least twice the one-wind
+/// controls' held-out error, `threshold`).
+fn own_markdown(rows: &[KnownWindRow], threshold: Option<f64>) -> String {
+    let wind: Vec<&KnownWindRow> = rows.iter().filter(|r| !r.case.control).collect();
+    let controls: Vec<&KnownWindRow> = rows.iter().filter(|r| r.case.control).collect();
+    let detectable = |r: &&&KnownWindRow| threshold.is_some_and(|t| r.before >= t);
+    let right = wind.iter().filter(|r| r.correct()).count();
+    let all = wind.iter().filter(|r| r.meets_targets()).count();
+    let alarms = controls.iter().filter(|r| r.verdict.names_effect()).count();
+    let mut md = format!(
+        "#### A wind of its own on each run\n\n{} cases whose six runs each carry their own steady wind (speed within ±{OWN_WIND_SPREAD_M_S} m/s of the strength, direction from anywhere), concealed; {} controls keep the channels.\n\n",
+        wind.len(),
+        controls.len()
+    );
+    md.push_str(&format!(
+        "- Verdict `wind` per recording: {right} of {}; with every run's direction within {DIRECTION_TARGET_DEG:.0}° and held-out improvement ≥ {:.0} %: {all}.\n",
+        wind.len(),
+        100.0 * IMPROVEMENT_TARGET
+    ));
+    md.push_str(&format!(
+        "- Detectable (before ≥ {}): {} of {}; all targets among them: {}.\n",
+        threshold.map_or("—".into(), |t| format!("{t:.4} L")),
+        wind.iter().filter(detectable).count(),
+        wind.len(),
+        wind.iter()
+            .filter(detectable)
+            .filter(|r| r.meets_targets())
+            .count()
+    ));
+    md.push_str(&format!(
+        "- Controls (wind channels kept): effects claimed on {alarms} of {}.\n\n",
+        controls.len()
+    ));
+    md.push_str("| strength | right / cases | all targets | mean improvement (right) | runs: speed error mean / max | runs: direction error mean / max |\n|---|---|---|---|---|---|\n");
+    for &speed in &OWN_WIND_SPEEDS_M_S {
+        let group: Vec<&&KnownWindRow> = wind
+            .iter()
+            .filter(|r| r.case.wind.speed_m_s == speed)
+            .collect();
+        if group.is_empty() {
+            continue;
+        }
+        let ok: Vec<&&&KnownWindRow> = group.iter().filter(|r| r.correct()).collect();
+        let imp = mean(&ok.iter().map(|r| r.improvement()).collect::<Vec<_>>());
+        let errors: Vec<(f64, f64)> = ok.iter().filter_map(|r| r.own_errors()).flatten().collect();
+        let stat = |x: Vec<f64>, unit: &str, digits: usize| match mean(&x) {
+            Some(m) => format!(
+                "{m:.digits$} / {:.digits$} {unit}",
+                x.iter().copied().fold(0.0, f64::max)
+            ),
+            None => "—".into(),
+        };
+        md.push_str(&format!(
+            "| {speed} ± {OWN_WIND_SPREAD_M_S} m/s | {}/{} | {} | {} | {} | {} |\n",
+            ok.len(),
+            group.len(),
+            group.iter().filter(|r| r.meets_targets()).count(),
+            imp.map_or("—".into(), |x| format!("{:.0} %", 100.0 * x)),
+            stat(errors.iter().map(|e| e.0.abs()).collect(), "m/s", 2),
+            stat(errors.iter().map(|e| e.1).collect(), "°", 1),
+        ));
+    }
+    md.push('\n');
+    md
+}
+
+/// The one-wind cases in markdown (see [`summary_markdown`]).
+fn common_markdown(rows: &[KnownWindRow]) -> String {
     let wind: Vec<&KnownWindRow> = rows.iter().filter(|r| !r.case.control).collect();
     let controls: Vec<&KnownWindRow> = rows.iter().filter(|r| r.case.control).collect();
     let threshold = detectability_threshold(rows);
@@ -356,7 +582,7 @@ pub fn summary_markdown(rows: &[KnownWindRow], base_name: &str, level: f64) -> S
     let all = wind.iter().filter(|r| r.meets_targets()).count();
     let alarms = controls.iter().filter(|r| r.verdict.names_effect()).count();
     let mut md = format!(
-        "### Base: {base_name}\n\nIts own level (segment replays of its training runs in their recorded winds): {level:.4} L. {} wind cases, {} controls.\n\n",
+        "#### One wind for all runs\n\n{} wind cases, {} controls.\n\n",
         wind.len(),
         controls.len()
     );
@@ -425,22 +651,6 @@ pub fn summary_markdown(rows: &[KnownWindRow], base_name: &str, level: f64) -> S
                 }
             ));
         }
-    }
-    md.push_str("\nConfusion matrix (rows: case, columns: verdict):\n\n| case |");
-    for w in WORDS {
-        md.push_str(&format!(" {w} |"));
-    }
-    md.push_str("\n|---|");
-    for _ in WORDS {
-        md.push_str("---|");
-    }
-    md.push('\n');
-    for (k, n) in confusion(rows) {
-        md.push_str(&format!("| {k} |"));
-        for c in n {
-            md.push_str(&format!(" {c} |"));
-        }
-        md.push('\n');
     }
     md.push('\n');
     md

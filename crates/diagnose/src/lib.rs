@@ -20,7 +20,10 @@
 //! 2. **Name.** Every effect of the library ([`Family`]) is fitted to half of the recordings in the
 //!    equation-error sense (cheap, no integration; Levenberg–Marquardt on a handful of physical
 //!    parameters, base model fixed) and judged by the segment-replay position error on the other half;
-//!    then the halves swap, so each recording is held out once.
+//!    then the halves swap, so each recording is held out once. A single recording is judged on the
+//!    two halves of its time instead; so is a wind of its own on each recording
+//!    ([`Family::WindPerRecording`], tried when a real mismatch needs explaining), which must beat one
+//!    wind for all (and the winner, if another) judged on the same halves clearly.
 //! 3. **Verdict.** A candidate is accepted when the held-out position RMSE of a typical recording (the
 //!    geometric mean of after/before over recordings) is at least `min_gain` lower than the model's,
 //!    at least 10 % lower in both halves, and the median recording improves by more than twice the
@@ -58,8 +61,9 @@ pub use compare::{
     SegmentTrack, environments, model_level, normalised_residuals, prepare, segment_tracks,
 };
 pub use environment::{
-    AgainstRecorded, Concealed, FlowSummary, RecordedEnvironment, RecordedFlow, RevealCheck,
-    RevealedFlow, WindageUse, angle_difference_deg, conceal, reveal,
+    AgainstRecorded, Concealed, FlowSummary, RecordedEnvironment, RecordedFlow, RecordingWind,
+    RevealCheck, RevealedFlow, RevealedRecordingWind, WindageUse, angle_difference_deg, conceal,
+    reveal,
 };
 pub use error::DiagnoseError;
 pub use families::{Family, depth_for_factor};

@@ -11,12 +11,12 @@ use shipid_sim::Effect;
 
 use crate::compare::{Baseline, ReplayScore, outside_counts, pooled};
 use crate::environment::{
-    AgainstRecorded, RecordedEnvironment, RevealCheck, WindageUse, against_recorded,
+    AgainstRecorded, RecordedEnvironment, RecordingWind, RevealCheck, WindageUse, against_recorded,
 };
 use crate::error::DiagnoseError;
-use crate::families::{FitResult, standard_errors};
+use crate::families::{Family, FitResult, standard_errors};
 use crate::input::{BaseRange, DiagnoseInput, DiagnoseOptions};
-use crate::judge::{Judge, Judged, rival_of};
+use crate::judge::{Judge, Judged, MIN_SAMPLES_FOR_HALVES, rival_of, time_halves};
 use crate::locate::{Located, Regime, locate, regimes};
 use crate::verdict::Verdict;
 
@@ -85,6 +85,10 @@ pub struct Report {
     pub effects: Vec<String>,
     /// One standard error of each chosen parameter.
     pub standard_errors: BTreeMap<String, f64>,
+    /// With the verdict `wind` in its per-recording form: each recording's own wind (the runs'
+    /// environment, not the model's, so `effects` is empty and no augmented model is written).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub per_recording_wind: Vec<RecordingWind>,
     pub per_recording: Vec<RecordingFit>,
     pub regimes: Vec<Regime>,
     /// Replay segment length [s] of every position/heading RMSE here.
@@ -134,26 +138,39 @@ pub fn diagnose(
     opts: &DiagnoseOptions,
 ) -> Result<Report, DiagnoseError> {
     // Candidates are fitted on one half of the recordings and judged on the other: a single
-    // recording is judged in two halves of its time instead, so that one run (with its own wind,
-    // say) can be diagnosed on its own.
+    // recording is judged in two halves of its time instead (the judge's time-halves folds), so
+    // that one run (with its own wind, say) can be diagnosed on its own.
     let halves;
     // Warnings and the recorded environment are the whole recording's.
     let whole = ds;
     let ds = match ds.recordings.as_slice() {
-        [one] if one.recording.len() >= 4 * shipid_io::table::MIN_SAMPLES => {
-            halves = in_halves(ds, one);
-            &halves
-        }
+        [one] if one.recording.len() >= MIN_SAMPLES_FOR_HALVES => match time_halves(ds) {
+            Some(h) => {
+                halves = h;
+                &halves
+            }
+            None => ds,
+        },
         _ => ds,
     };
+    let cut = !std::ptr::eq(ds, whole);
     let baseline = Baseline::of(input, ds, opts)?;
     let real_threshold = baseline.real_threshold(input.model_level_over_l, opts);
     let judge = Judge::new(input, &baseline, opts);
-    let (judged, best) = judge.candidates(baseline.before_l > real_threshold);
+    let mismatch_is_real = baseline.before_l > real_threshold;
+    let (judged, best) = judge.candidates(mismatch_is_real);
     let finals = judge.final_fits(&judged);
-    let conclusion = match best {
-        Some(b) => conclude_effect(&baseline, &judged, &finals, b),
-        None => conclude_nothing(&baseline, real_threshold, opts),
+    // A wind of its own on each run is tried only where a real mismatch needs explaining: runs whose
+    // winds are recorded (or calm) keep `none` without a family of many parameters being fitted.
+    let own = if mismatch_is_real && !cut && baseline.prep.len() >= 2 {
+        own_winds(input, ds, opts, &judged, best)?
+    } else {
+        None
+    };
+    let conclusion = match (own.as_ref().filter(|o| o.chosen), best) {
+        (Some(o), _) => conclude_own_winds(&baseline, o),
+        (None, Some(b)) => conclude_effect(&baseline, &judged, &finals, b),
+        (None, None) => conclude_nothing(&baseline, real_threshold, opts),
     };
     let mut report = assemble(
         input,
@@ -163,6 +180,12 @@ pub fn diagnose(
         conclusion,
         real_threshold,
     );
+    if let Some(o) = &own {
+        report.candidates.push(o.candidate());
+        if o.chosen {
+            report.per_recording_wind = o.winds.clone();
+        }
+    }
     report.warnings = propeller_rate_variations(&whole.recordings)
         .iter()
         .map(ToString::to_string)
@@ -172,7 +195,7 @@ pub fn diagnose(
         .iter()
         .filter_map(|e| e.parse().ok())
         .collect();
-    report.against_recorded = against_recorded(&found, whole);
+    report.against_recorded = against_recorded(&found, &report.per_recording_wind, whole);
     for a in &report.against_recorded {
         report.explanation = format!("{}; {}", report.explanation, a.sentence());
     }
@@ -198,7 +221,9 @@ struct Conclusion {
     verdict: Verdict,
     effects: Vec<Effect>,
     standard_errors: BTreeMap<String, f64>,
-    /// Held-out scores per recording with the chosen effects (the model's own when there are none).
+    /// Held-out scores per recording without the chosen effects and with them (the model's own when
+    /// there are none), judged the way the winner was.
+    before_scores: Vec<ReplayScore>,
     after_scores: Vec<ReplayScore>,
     explanation: String,
 }
@@ -234,6 +259,7 @@ fn conclude_effect(
             &baseline.ship,
             &baseline.windage,
         ),
+        before_scores: baseline.before_each.clone(),
         after_scores: winner.cross.0.clone(),
         explanation: format!(
             "{} explains {:.0} % of the held-out mismatch (position RMSE {:.4} L → {:.4} L, noise floor {:.4} L){}",
@@ -287,6 +313,7 @@ fn conclude_nothing(
         },
         effects: Vec::new(),
         standard_errors: BTreeMap::new(),
+        before_scores: baseline.before_each.clone(),
         after_scores: baseline.before_each.clone(),
         explanation: if real {
             format!(
@@ -360,11 +387,11 @@ fn with_caveats(
     let prep = &baseline.prep;
     let worse: Vec<&str> = prep
         .iter()
-        .zip(baseline.before_each.iter().zip(&c.after_scores))
+        .zip(c.before_scores.iter().zip(&c.after_scores))
         .filter(|(_, (b, a))| a.position_rmse() > 1.1 * b.position_rmse())
         .map(|(p, _)| p.file.as_str())
         .collect();
-    let explanation = if worse.is_empty() || c.effects.is_empty() {
+    let explanation = if worse.is_empty() || !c.verdict.names_effect() {
         c.explanation.clone()
     } else {
         format!(
@@ -406,7 +433,7 @@ fn assemble(
     let explanation = with_caveats(input, baseline, &c, outside_all, real_threshold);
     let per_recording = prep
         .iter()
-        .zip(baseline.before_each.iter().zip(&c.after_scores))
+        .zip(c.before_scores.iter().zip(&c.after_scores))
         .enumerate()
         .map(|(k, (p, (b, a)))| RecordingFit {
             recording: p.file.clone(),
@@ -416,13 +443,14 @@ fn assemble(
         })
         .collect();
     let after = pooled(&c.after_scores);
+    let before = pooled(&c.before_scores);
     Report {
         verdict: c.verdict,
         candidates: candidates(judged, finals),
         located: locate(prep, &baseline.residuals, &baseline.scale, ship),
         fit_before: Fit {
-            position_rmse_over_l: baseline.before_l,
-            heading_rmse_deg: baseline.before.heading_rmse_rad().to_degrees(),
+            position_rmse_over_l: before.position_rmse() / lpp,
+            heading_rmse_deg: before.heading_rmse_rad().to_degrees(),
         },
         fit_after: Fit {
             position_rmse_over_l: after.position_rmse() / lpp,
@@ -430,6 +458,7 @@ fn assemble(
         },
         effects: c.effects.iter().map(|e| e.to_string()).collect(),
         standard_errors: c.standard_errors,
+        per_recording_wind: Vec::new(),
         per_recording,
         regimes: regimes(prep, &baseline.residuals, &baseline.scale, ship),
         horizon_s: baseline.horizon_s,
@@ -445,28 +474,146 @@ fn assemble(
     }
 }
 
-/// `ds` with its one recording `r` cut into its first and second half in time (names say which;
-/// the second half is a free run: it does not start with the manoeuvre's execute).
-fn in_halves(ds: &Dataset, r: &shipid_io::DatasetRecording) -> Dataset {
-    let n = r.recording.len();
-    let half = |range: std::ops::Range<usize>, manoeuvre| {
-        let rec = r.recording.slice(range);
-        shipid_io::DatasetRecording {
-            file: format!(
-                "{} [{:.1}–{:.1} s]",
-                r.file,
-                rec.t.first().copied().unwrap_or(0.0),
-                rec.t.last().copied().unwrap_or(0.0)
-            ),
-            manoeuvre,
-            recording: rec,
-        }
+/// How much clearer than its rivals a wind of its own on each recording must be: its held-out
+/// position RMSE at most this share of the best rival's, on the same time halves (as a pair must be
+/// of its single effect: many parameters fit noise and a model's own error too).
+const OWN_WINDS_CLEARLY_BETTER: f64 = 0.7;
+
+/// A wind of its own on each recording, judged on the recordings' time halves against its rivals
+/// judged the same way: one wind for all, and the winner on the whole recordings, if another.
+struct OwnWinds {
+    judged: Judged,
+    /// The data set cut into time halves and the model against it.
+    halves: Baseline,
+    /// Per recording (in the order of the diagnosed recordings), its wind.
+    winds: Vec<RecordingWind>,
+    /// The best rival on the same halves: its description and held-out position RMSE ÷ L.
+    rival: (String, f64),
+    /// Accepted on its own and clearly better than every rival.
+    chosen: bool,
+}
+
+/// The per-recording wind family on `ds` cut into time halves (`None` when a recording is too short
+/// to be cut), with `best` the winner among the whole recordings' `judged` candidates.
+fn own_winds(
+    input: &DiagnoseInput,
+    ds: &Dataset,
+    opts: &DiagnoseOptions,
+    judged: &[Judged],
+    best: Option<usize>,
+) -> Result<Option<OwnWinds>, DiagnoseError> {
+    let Some(cut) = time_halves(ds) else {
+        return Ok(None);
     };
-    Dataset {
-        recordings: vec![
-            half(0..n / 2, r.manoeuvre),
-            half(n / 2..n, shipid_io::Manoeuvre::Free),
-        ],
-        ..ds.clone()
+    let halves = Baseline::of(input, &cut, opts)?;
+    let judge = Judge::new(input, &halves, opts);
+    let (own, finals) = judge.per_recording_wind();
+    let mut rivals = vec![vec![Family::Wind]];
+    if let Some(b) = best.filter(|&b| judged[b].families != [Family::Wind]) {
+        rivals.push(judged[b].families.clone());
+    }
+    let rival = rivals
+        .iter()
+        .map(|f| (describe(f), judge.judge_families(f).assessed.after_l))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap_or_else(|| (describe(&[Family::Wind]), f64::INFINITY));
+    let chosen = own.assessed.accepted && own.assessed.after_l < OWN_WINDS_CLEARLY_BETTER * rival.1;
+    let lpp = halves.ship.lpp;
+    let winds = finals
+        .iter()
+        .enumerate()
+        .filter_map(|(i, (effect, fit))| {
+            let Effect::Wind(w) = effect else {
+                return None;
+            };
+            let se = standard_errors(
+                &[Family::Wind],
+                std::slice::from_ref(effect),
+                fit,
+                &halves.ship,
+                &halves.windage,
+            );
+            let units = [2 * i, 2 * i + 1];
+            let before = pooled(&units.map(|u| halves.before_each[u]));
+            let after = pooled(&units.map(|u| own.cross.0[u]));
+            Some(RecordingWind {
+                recording: ds
+                    .recordings
+                    .iter()
+                    .filter(|r| r.recording.len() >= shipid_io::table::MIN_SAMPLES)
+                    .nth(i)
+                    .map_or_else(String::new, |r| r.file.clone()),
+                speed_m_s: w.speed_m_s,
+                from_deg: w.from_deg,
+                speed_standard_error_m_s: se.get("speed").copied(),
+                from_standard_error_deg: se.get("from_deg").copied(),
+                before_position_rmse_over_l: before.position_rmse() / lpp,
+                after_position_rmse_over_l: after.position_rmse() / lpp,
+            })
+        })
+        .collect();
+    Ok(Some(OwnWinds {
+        judged: own,
+        halves,
+        winds,
+        rival,
+        chosen,
+    }))
+}
+
+impl OwnWinds {
+    /// The candidate as reported: parameters keyed `<recording>.speed` and `<recording>.from_deg`.
+    fn candidate(&self) -> Candidate {
+        let a = &self.judged.assessed;
+        Candidate {
+            effect: Family::WindPerRecording.word(),
+            variant: Family::WindPerRecording.variant(),
+            combined_with: Vec::new(),
+            score: a.score,
+            parameters: self
+                .winds
+                .iter()
+                .flat_map(|w| {
+                    [
+                        (format!("{}.speed", w.recording), w.speed_m_s),
+                        (format!("{}.from_deg", w.recording), w.from_deg),
+                    ]
+                })
+                .collect(),
+            explains: a.explains,
+            held_out_position_rmse_over_l: a.after_l,
+            n_parameters: a.n_parameters,
+            accepted: self.chosen,
+        }
+    }
+
+    /// Scores per recording of the halves pooled back into recordings (before, after).
+    fn per_recording_scores(&self) -> (Vec<ReplayScore>, Vec<ReplayScore>) {
+        let pool = |s: &[ReplayScore]| -> Vec<ReplayScore> { s.chunks(2).map(pooled).collect() };
+        (pool(&self.halves.before_each), pool(&self.judged.cross.0))
+    }
+}
+
+/// The verdict `wind` in its per-recording form: each recording's own wind (no model effect: the
+/// winds are the runs' environment), held-out figures from the recordings' time halves.
+fn conclude_own_winds(baseline: &Baseline, o: &OwnWinds) -> Conclusion {
+    let a = &o.judged.assessed;
+    let (before_scores, after_scores) = o.per_recording_scores();
+    Conclusion {
+        verdict: Verdict::Wind,
+        effects: Vec::new(),
+        standard_errors: BTreeMap::new(),
+        before_scores,
+        after_scores,
+        explanation: format!(
+            "{} explains {:.0} % of the held-out mismatch, each recording's wind fitted on one half of its time and judged on the other (position RMSE {:.4} L → {:.4} L, against {:.4} L for {} judged the same way; noise floor {:.4} L): the winds are the runs' environment, not the model's, so the model is not augmented",
+            Family::WindPerRecording.describe(),
+            100.0 * a.explains,
+            o.halves.before_l,
+            a.after_l,
+            o.rival.1,
+            o.rival.0,
+            baseline.noise_floor
+        ),
     }
 }

@@ -175,7 +175,12 @@ pub fn run(args: &DiagnoseArgs) -> Result<Outcome, CliError> {
             .iter()
             .filter_map(|e| e.parse().ok())
             .collect();
-        report.reveal = Some(reveal(report.verdict, &found, c));
+        report.reveal = Some(reveal(
+            report.verdict,
+            &found,
+            &report.per_recording_wind,
+            c,
+        ));
     }
     for w in &report.warnings {
         eprintln!("warning: {w}");
@@ -210,6 +215,10 @@ pub fn run(args: &DiagnoseArgs) -> Result<Outcome, CliError> {
             }
             None => println!("(give --model-out FILE to write the augmented model)"),
         }
+    } else if !report.per_recording_wind.is_empty() {
+        println!(
+            "no augmented model: a wind of its own on each run is the runs' environment, not the model's"
+        );
     }
     if let Some(dir) = plots {
         let effects: Vec<Effect> = report
@@ -237,15 +246,35 @@ pub fn run(args: &DiagnoseArgs) -> Result<Outcome, CliError> {
             residual_figure(&path, file, t, e, &windows)
                 .map_err(|e| failed(anyhow::anyhow!("{}: {e}", path.display())))?;
         }
+        let windage = ChosenWindage::of_dataset(&ds);
         for (r, env) in ds.recordings.iter().zip(&envs) {
             let path = dir.join(format!("{}-tracks.svg", r.file.trim_end_matches(".csv")));
+            // A recording's own wind, when the verdict gave each run one, is its "after".
+            let own = report
+                .per_recording_wind
+                .iter()
+                .find(|w| w.recording == r.file)
+                .map(|w| own_wind_effect(w, &windage));
+            let own_after = match own {
+                Some(wind) => {
+                    // It replaces a wind of the base's own, as a found effect does.
+                    let mut with_own: Vec<Effect> = all
+                        .iter()
+                        .filter(|e| e.kind() != wind.kind())
+                        .cloned()
+                        .collect();
+                    with_own.push(wind);
+                    Some(WithEffects::new(base.as_ref(), &with_own).map_err(failed)?)
+                }
+                None => None,
+            };
             track_figure(
                 &path,
                 &r.file,
                 &r.recording,
                 env.as_ref(),
                 &before,
-                &after,
+                own_after.as_ref().unwrap_or(&after),
                 report.horizon_s,
             )
             .map_err(|e| failed(anyhow::anyhow!("{}: {e}", path.display())))?;
@@ -271,6 +300,18 @@ pub fn run(args: &DiagnoseArgs) -> Result<Outcome, CliError> {
         }
     }
     Ok(Outcome::Ok)
+}
+
+/// A recording's own wind as an effect acting on the data set's windage (as the diagnosis fitted it).
+fn own_wind_effect(w: &shipid_diagnose::RecordingWind, windage: &ChosenWindage) -> Effect {
+    let own = windage.source == shipid_pipeline::environment::WindageSource::Dataset;
+    Effect::Wind(shipid_sim::effects::Wind {
+        speed_m_s: w.speed_m_s,
+        from_deg: w.from_deg,
+        frontal_area_m2: own.then_some(windage.windage.frontal_area_m2),
+        lateral_area_m2: own.then_some(windage.windage.lateral_area_m2),
+        windage: Some(windage.windage.clone()),
+    })
 }
 
 fn print_summary(r: &Report, model: &str, dataset: &Path, level_from: Option<&str>) {
@@ -316,6 +357,24 @@ fn print_summary(r: &Report, model: &str, dataset: &Path, level_from: Option<&st
     }
     for e in &r.effects {
         println!("  effect: {e}");
+    }
+    if !r.per_recording_wind.is_empty() {
+        println!(
+            "  a wind of its own on each recording (speed [m/s], direction it comes from [deg, earth-fixed, clockwise from north]; held-out position RMSE ÷ L on the recording's time halves):"
+        );
+        let se = |x: Option<f64>| x.map_or(String::new(), |x| format!(" ± {x:.2}"));
+        for w in &r.per_recording_wind {
+            println!(
+                "    {:<20} {:.2}{} m/s from {:.0}{}°   {:.4} L → {:.4} L",
+                w.recording,
+                w.speed_m_s,
+                se(w.speed_standard_error_m_s),
+                w.from_deg,
+                se(w.from_standard_error_deg),
+                w.before_position_rmse_over_l,
+                w.after_position_rmse_over_l
+            );
+        }
     }
     if let Some(env) = &r.recorded_environment {
         let names = |f: &[shipid_diagnose::RecordedFlow]| {

@@ -11,18 +11,22 @@ use shipid_pipeline::mmg::{MmgFitOptions, fit_mmg_dataset};
 use shipid_sim::MmgModel;
 
 /// The mmg family identified from the training runs with their recorded wind as input, and its own
-/// level on them.
-fn base() -> (MmgModel, f64) {
-    let training = training_dataset().unwrap();
-    let hydro = hydrodynamic_dataset(&training).unwrap();
-    let model = fit_mmg_dataset(&hydro, &MmgFitOptions::default())
-        .unwrap()
-        .model;
-    let level = model_level(&input(&model, None), &training, &DiagnoseOptions::default());
-    (model, level)
+/// level on them (identified once for every test of the binary).
+pub(crate) fn base() -> (MmgModel, f64) {
+    static BASE: std::sync::OnceLock<(MmgModel, f64)> = std::sync::OnceLock::new();
+    BASE.get_or_init(|| {
+        let training = training_dataset().unwrap();
+        let hydro = hydrodynamic_dataset(&training).unwrap();
+        let model = fit_mmg_dataset(&hydro, &MmgFitOptions::default())
+            .unwrap()
+            .model;
+        let level = model_level(&input(&model, None), &training, &DiagnoseOptions::default());
+        (model, level)
+    })
+    .clone()
 }
 
-fn input(model: &MmgModel, level: Option<f64>) -> DiagnoseInput<'_> {
+pub(crate) fn input(model: &MmgModel, level: Option<f64>) -> DiagnoseInput<'_> {
     DiagnoseInput {
         base: model,
         base_effects: &[],
@@ -35,6 +39,8 @@ fn input(model: &MmgModel, level: Option<f64>) -> DiagnoseInput<'_> {
 /// smallest held-out improvement.
 struct Expected {
     verdict: Verdict,
+    /// A `wind` verdict in its per-recording form (a wind of its own on each run).
+    per_recording: bool,
     max_direction_error_deg: Option<f64>,
     min_improvement: Option<f64>,
 }
@@ -51,6 +57,7 @@ fn check(model: &MmgModel, level: f64, case: &KnownWindCase, expected: Expected)
         "{}: {}",
         case.id, row.effects
     );
+    assert_eq!(row.per_recording, expected.per_recording, "{}", case.id);
     if let Some(max) = expected.max_direction_error_deg {
         let d = row.direction_error_deg().unwrap();
         assert!(d <= max, "{}: direction error {d}°", case.id);
@@ -84,9 +91,11 @@ fn a_concealed_wind_is_found_and_a_recorded_one_is_part_of_the_base() {
             wind: strong,
             control: false,
             seed: 0,
+            own_winds: false,
         },
         Expected {
             verdict: Verdict::Wind,
+            per_recording: false,
             max_direction_error_deg: Some(30.0),
             min_improvement: Some(0.5),
         },
@@ -102,9 +111,11 @@ fn a_concealed_wind_is_found_and_a_recorded_one_is_part_of_the_base() {
             },
             control: true,
             seed: 1,
+            own_winds: false,
         },
         Expected {
             verdict: Verdict::None,
+            per_recording: false,
             max_direction_error_deg: None,
             min_improvement: None,
         },
@@ -141,6 +152,7 @@ fn a_recorded_wind_that_reads_half_the_true_one_is_found_against_the_recorded() 
         },
         control: true,
         seed: 2,
+        own_winds: false,
     };
     let mut ds = shipid_diagnose::known_wind::case_dataset(&case).unwrap();
     for r in &mut ds.recordings {
@@ -186,6 +198,7 @@ fn one_run_diagnosed_alone_finds_its_own_wind() {
             },
             control: false,
             seed: 4,
+            own_winds: false,
         };
         let mut ds = shipid_diagnose::known_wind::case_dataset(&case).unwrap();
         ds.recordings.retain(|r| r.file.starts_with("zz20"));

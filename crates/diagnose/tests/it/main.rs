@@ -1,3 +1,4 @@
 //! Integration tests of the diagnosis crate (one binary, a module per concern).
 
 mod known_wind;
+mod own_winds;
