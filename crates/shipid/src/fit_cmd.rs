@@ -260,20 +260,27 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     Ok(outcome)
 }
 
-/// `--calibrate` is refused before any work where it cannot apply: a level outside (0, 1), the mmg
-/// family (its bands come from its own bootstrap; the calibration fits polynomial structures), a
-/// refined fit (the ensemble is fitted in the equation-error sense, so its replicates would not be
-/// centred on the refined model), an unknown structure, and fewer than 2 replicates per structure.
+/// `--calibrate` is refused before any work where it cannot apply: a level outside (0, 1), no
+/// `--bootstrap` (the replicates it widens), `--structures` of the mmg family (one structure, its
+/// own), a refined polynomial fit (the ensemble is fitted in the equation-error sense, so its
+/// replicates would not be centred on the refined model; an mmg fit's replicates are shifted onto
+/// it and every refit is refined too), an unknown structure, and fewer than 2 replicates per
+/// structure.
 fn check_calibrate(a: &FitArgs<'_>, level: f64) -> Result<(), CliError> {
-    if !(level > 0.0 && level < 1.0) {
-        return Err(crate::bad_input(format!(
-            "--calibrate must be a level strictly between 0 and 1 (e.g. 0.9), got {level}"
-        )));
-    }
-    if a.set == shipid_pipeline::mmg::SET_NAME {
+    check_level(level)?;
+    let Some((n, _)) = a.bootstrap else {
         return Err(crate::bad_input(
-            "--calibrate applies to polynomial sets (an ensemble of coefficient sets); the mmg family's bands are its own bootstrap's: drop --calibrate",
+            "--calibrate widens the bands of bootstrap replicates: give --bootstrap N (e.g. 200) too",
         ));
+    };
+    let others = a.calibrate.iter().flat_map(|(_, others)| others);
+    if a.set == shipid_pipeline::mmg::SET_NAME {
+        if others.clone().next().is_some() {
+            return Err(crate::bad_input(
+                "--structures names polynomial sets of an ensemble; the mmg family is calibrated on its own bootstrap replicates: drop --structures",
+            ));
+        }
+        return Ok(());
     }
     if a.estimator.refine {
         return Err(crate::bad_input(
@@ -281,15 +288,13 @@ fn check_calibrate(a: &FitArgs<'_>, level: f64) -> Result<(), CliError> {
         ));
     }
     let mut names = vec![a.set.to_string()];
-    for name in a.calibrate.iter().flat_map(|(_, others)| others) {
+    for name in others {
         let set = load_set(name).map_err(|e| crate::bad_input(format!("--structures: {e}")))?;
         if !names.contains(&set.name) {
             names.push(set.name);
         }
     }
-    if let Some((n, _)) = a.bootstrap
-        && n < 2 * names.len()
-    {
+    if n < 2 * names.len() {
         return Err(crate::bad_input(format!(
             "--bootstrap {n} is too few for {} structures ({}): each needs at least 2 replicates",
             names.len(),
@@ -297,6 +302,42 @@ fn check_calibrate(a: &FitArgs<'_>, level: f64) -> Result<(), CliError> {
         )));
     }
     Ok(())
+}
+
+fn check_level(level: f64) -> Result<(), CliError> {
+    if !(level > 0.0 && level < 1.0) {
+        return Err(crate::bad_input(format!(
+            "--calibrate must be a level strictly between 0 and 1 (e.g. 0.9), got {level}"
+        )));
+    }
+    Ok(())
+}
+
+/// The training recordings a calibration re-simulates and leaves out in turn: those named, or every
+/// recording of the data set.
+fn calibration_recordings(ds: &Dataset, named: &[String]) -> Vec<String> {
+    if named.is_empty() {
+        ds.recordings.iter().map(|r| r.file.clone()).collect()
+    } else {
+        named.to_vec()
+    }
+}
+
+/// The calibration's line on stderr.
+fn report_calibration(
+    level: f64,
+    what: &str,
+    folds: usize,
+    factors: &std::collections::BTreeMap<String, shipid_model::FactorRecord>,
+) {
+    let factors: Vec<String> = factors
+        .iter()
+        .map(|(fam, f)| format!("{fam} {:.2} ({}, {} errors)", f.factor, f.outcome, f.errors))
+        .collect();
+    eprintln!(
+        "calibration at {level}: {what}, {folds} held-out folds; factors {}; in the model file's [calibration]",
+        factors.join(", ")
+    );
 }
 
 /// The model file's `[calibration]`: the ensemble of the fitted set and `others` (same windows,
@@ -320,11 +361,7 @@ fn calibrate(
             sets.push(set);
         }
     }
-    let recordings: Vec<String> = if a.recordings.is_empty() {
-        ds.recordings.iter().map(|r| r.file.clone()).collect()
-    } else {
-        a.recordings.clone()
-    };
+    let recordings = calibration_recordings(ds, &a.recordings);
     let how = EnsembleSpec {
         sets: &sets,
         estimator: &a.estimator,
@@ -336,21 +373,15 @@ fn calibrate(
     let (ensemble, structures) = fit_ensemble_stored(ds, &how, &recordings)?;
     let c = calibrate_ensemble(&ensemble, ds, &how, &recordings, level)?;
     let record = calibration_record(&c, &how, structures);
-    let factors: Vec<String> = record
-        .factors
-        .iter()
-        .map(|(fam, f)| format!("{fam} {:.2} ({}, {} errors)", f.factor, f.outcome, f.errors))
-        .collect();
-    eprintln!(
-        "calibration at {level}: ensemble of {} ({} replicates each), {} held-out folds; factors {}; in the model file's [calibration]",
+    let what = format!(
+        "ensemble of {} ({} replicates each)",
         sets.iter()
             .map(|s| s.name.as_str())
             .collect::<Vec<_>>()
             .join(" + "),
-        (n / sets.len()).max(2),
-        c.folds,
-        factors.join(", ")
+        (n / sets.len()).max(2)
     );
+    report_calibration(level, &what, c.folds, &record.factors);
     Ok(record)
 }
 
@@ -379,6 +410,7 @@ fn report_bootstrap(
 /// `shipid fit DATASET --set mmg --estimator bounded-lsq|ridge [--lambda λ | --tune] [--refine]`: the
 /// MMG family (docs/mmg.md); its model file gives every parameter with its prior and standard error.
 fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
+    use shipid_pipeline::calibration::{MmgFamily, calibrate_fit, factor_calibration_record};
     use shipid_pipeline::mmg::{MmgFitOptions, fit_mmg_model_file, write_mmg_model_file};
     let opts = MmgFitOptions::from_spec(&a.estimator, &a.recordings, a.window)?;
     let ds = Dataset::load(a.dataset)?;
@@ -393,7 +425,15 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     }
     let (fit, mut file) = fit_mmg_model_file(&ds, &opts, a.estimator.refine)?;
     if let Some((n, seed)) = a.bootstrap {
-        let boot = shipid_pipeline::bootstrap::bootstrap_mmg(&ds, &fit, &opts, n, seed)?;
+        let family = MmgFamily {
+            opts: opts.clone(),
+            geometry: fit.geometry,
+            refine: a.estimator.refine,
+            replicates: n,
+            seed,
+        };
+        let recordings = calibration_recordings(&ds, &a.recordings);
+        let (fitted, boot) = family.bands_of(&ds, &fit, &recordings)?;
         report_bootstrap(
             boot.replicates.len(),
             boot.rejected,
@@ -401,6 +441,20 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
             n,
         )?;
         file.bootstrap = Some(boot.record());
+        if let Some((level, _)) = &a.calibrate {
+            let c = calibrate_fit(fitted.source(), &family, &ds, &recordings, *level)?;
+            let record = factor_calibration_record(&c, n, seed);
+            let what = format!(
+                "mmg block-bootstrap replicates ({n} per refit{})",
+                if a.estimator.refine {
+                    ", every refit refined"
+                } else {
+                    ""
+                }
+            );
+            report_calibration(*level, &what, c.folds, &record.factors);
+            file.calibration = Some(record);
+        }
     }
     shipid_pipeline::model_file::anchor_training(&mut file.training, a.out);
     let text = with_environment_table(write_mmg_model_file(&file)?, &ds, &a.recordings)?;
@@ -436,21 +490,53 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     Ok(Outcome::Ok)
 }
 
-/// `shipid fit DATASET --estimator sparse-gp [--similarity D] --out MODEL.toml [--json] [--validate]`.
+/// `shipid fit DATASET --estimator sparse-gp [--similarity D] [--calibrate [LEVEL]] --out MODEL.toml
+/// [--json] [--validate]`.
+#[allow(clippy::too_many_arguments)]
 pub fn run_gp(
     dataset: &std::path::Path,
     recordings: &[String],
     window: WindowSpec,
     similarity: Option<f64>,
+    calibrate: Option<(f64, Vec<String>)>,
     out: &std::path::Path,
     json: bool,
     validate: bool,
 ) -> Result<Outcome, CliError> {
+    if let Some((level, others)) = &calibrate {
+        check_level(*level)?;
+        if !others.is_empty() {
+            return Err(crate::bad_input(
+                "--structures names polynomial sets of an ensemble; the sparse GP is calibrated on its own posterior draws: drop --structures",
+            ));
+        }
+    }
     let ds = Dataset::load(dataset)?;
     let threshold = similarity.unwrap_or(DEFAULT_SIMILARITY);
-    let (mut file, _model, mut report) = fit_gp_dataset(&ds, recordings, window, threshold)?;
+    let (mut file, model, mut report) = fit_gp_dataset(&ds, recordings, window, threshold)?;
     for w in &report.warnings {
         eprintln!("warning: {w}");
+    }
+    if let Some((level, _)) = calibrate {
+        use shipid_pipeline::bands::{GP_DRAW_SEED, GP_DRAWS};
+        use shipid_pipeline::calibration::{GpFamily, calibrate_fit, factor_calibration_record};
+        let family = GpFamily {
+            window,
+            similarity: threshold,
+            draws: GP_DRAWS,
+            seed: GP_DRAW_SEED,
+        };
+        let chosen = calibration_recordings(&ds, recordings);
+        let fitted = family.bands_of(&ds, model, &chosen)?;
+        let c = calibrate_fit(fitted.source(), &family, &ds, &chosen, level)?;
+        let record = factor_calibration_record(&c, GP_DRAWS, GP_DRAW_SEED);
+        report_calibration(
+            level,
+            &format!("sparse-GP posterior draws ({GP_DRAWS} per refit)"),
+            c.folds,
+            &record.factors,
+        );
+        file.calibration = Some(record);
     }
     report
         .warnings

@@ -122,11 +122,12 @@ enum Command {
             allow_negative_numbers = true
         )]
         bootstrap_seed: u64,
-        /// Also store what calibrated bands need at LEVEL (default 0.9): the pooled bootstrap
-        /// replicates of --structures and the inflation per metric family from the training
-        /// recordings (docs/uncertainty.md); `simulate --bands` and `validate --bands` then use them.
+        /// Also store what calibrated bands need at LEVEL (default 0.9): the inflation per metric
+        /// family from the training recordings and, for polynomial sets, the pooled bootstrap
+        /// replicates of --structures (polynomial and mmg need --bootstrap; a sparse GP widens its
+        /// posterior draws; docs/uncertainty.md); `simulate --bands` and `validate --bands` use them.
         #[arg(long, value_name = "LEVEL", num_args = 0..=1, default_missing_value = "0.9",
-            requires = "bootstrap", allow_negative_numbers = true)]
+            allow_negative_numbers = true)]
         calibrate: Option<f64>,
         /// Coefficient sets of the calibration's ensemble, comma-separated (default: --set alone,
         /// as a study's `calibrate = true`); --set is always its first structure.
@@ -452,6 +453,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                     &recordings,
                     window,
                     similarity,
+                    calibrate.map(|level| (level, structures.unwrap_or_default())),
                     &out,
                     json,
                     validate,
