@@ -9,8 +9,9 @@ use crate::html::{badge, esc, facts, id_of, json_html, num, page, toml_block, wa
 use crate::{DiagnosisFiles, ReportError, RunMeta};
 
 /// Keys of the report that the page shows in their own place; any other key is listed as it is.
-const KNOWN: [&str; 19] = [
+const KNOWN: [&str; 20] = [
     "warnings",
+    "per_recording_wind",
     "windage",
     "recorded_environment",
     "against_recorded",
@@ -121,9 +122,18 @@ pub fn diagnosis_page(files: &DiagnosisFiles, meta: &RunMeta) -> Result<String, 
                 .collect()
         })
         .unwrap_or_default();
+    let own_winds = r
+        .get("per_recording_wind")
+        .and_then(Value::as_array)
+        .filter(|a| !a.is_empty());
     ev.push((
         "effects found".into(),
-        if effects.is_empty() {
+        if let Some(w) = own_winds {
+            format!(
+                "a wind of its own on each of {} recordings (below): the runs' environment, not the model's, so the model is not augmented",
+                w.len()
+            )
+        } else if effects.is_empty() {
             "none".into()
         } else {
             effects
@@ -187,6 +197,22 @@ pub fn diagnosis_page(files: &DiagnosisFiles, meta: &RunMeta) -> Result<String, 
         ev.push(("replay segment length".into(), format!("{} s", num(x))));
     }
     b.push_str(&facts(&ev));
+    if own_winds.is_some() {
+        rows_table(
+            &mut b,
+            r.get("per_recording_wind"),
+            "A wind of its own on each recording (direction it comes from, earth-fixed, clockwise from north; held-out on the recording's time halves)",
+            &[
+                ("recording", "recording", false),
+                ("speed_m_s", "speed [m/s]", true),
+                ("speed_standard_error_m_s", "± [m/s]", true),
+                ("from_deg", "from [deg]", true),
+                ("from_standard_error_deg", "± [deg]", true),
+                ("before_position_rmse_over_l", "before ÷ L", true),
+                ("after_position_rmse_over_l", "after ÷ L", true),
+            ],
+        );
+    }
     b.push_str("</section>");
 
     environment_section(&mut b, r);
@@ -456,8 +482,12 @@ fn environment_section(b: &mut String, r: &Map<String, Value>) {
     }
     for a in against.into_iter().flatten() {
         let flow = str_field(a, "flow");
+        let on = match a.get("recording").and_then(Value::as_str) {
+            Some(rec) => format!(" on {rec}"),
+            None => String::new(),
+        };
         rows.push((
-            format!("{flow} found, not recorded"),
+            format!("{flow} found{on}, not recorded"),
             format!(
                 "{} m/s from {}°, against the recorded {}: {} % of its speed, {}° from its direction; felt together {} m/s from {}°",
                 g(a, "found_speed_m_s").map_or("?".into(), num),
@@ -498,6 +528,27 @@ fn environment_section(b: &mut String, r: &Map<String, Value>) {
                         num(d),
                         g(f, "speed_error_m_s").map_or("?".into(), num),
                         g(f, "direction_error_deg").map_or("?".into(), num)
+                    ),
+                    _ => format!("recorded {recorded}; none found"),
+                },
+            ));
+        }
+        for w in c
+            .get("wind_per_recording")
+            .and_then(Value::as_array)
+            .into_iter()
+            .flatten()
+        {
+            let recorded = w.get("recorded").map_or("?".into(), flow_text);
+            rows.push((
+                format!("--reveal: concealed wind of {}", str_field(w, "recording")),
+                match (g(w, "found_speed_m_s"), g(w, "found_from_deg")) {
+                    (Some(s), Some(d)) => format!(
+                        "recorded {recorded}; found {} m/s from {}°: speed error {} m/s, direction error {}°",
+                        num(s),
+                        num(d),
+                        g(w, "speed_error_m_s").map_or("?".into(), num),
+                        g(w, "direction_error_deg").map_or("?".into(), num)
                     ),
                     _ => format!("recorded {recorded}; none found"),
                 },
