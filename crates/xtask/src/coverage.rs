@@ -24,7 +24,7 @@ use shipid_io::Manoeuvre;
 use shipid_model::CoefficientSet;
 use shipid_pipeline::bands::BandRun;
 use shipid_pipeline::calibration::{
-    EnsembleSpec, MetricFamily, calibrate_ensemble, ensemble_bands, fit_ensemble, widen,
+    EnsembleSpec, FamilyFit, MetricFamily, calibrate_fit, source_bands, widen,
 };
 use shipid_pipeline::fit::{EstimatorSpec, WindowSpec};
 use shipid_pipeline::generate::{default_manoeuvres, generate_manoeuvres};
@@ -76,14 +76,6 @@ pub fn run(
     level: f64,
     structures: &[String],
 ) -> Result<()> {
-    let ms = manoeuvres();
-    let truth_data = generate_manoeuvres(None, &[], &ms)?.in_memory(&ms, "truth");
-    let ship = truth_data.ship;
-    let truth: Vec<_> = truth_data
-        .recordings
-        .iter()
-        .map(|r| (r.file.clone(), metrics(&r.recording, &r.manoeuvre, &ship)))
-        .collect();
     let sets: Vec<CoefficientSet> = structures
         .iter()
         .map(|n| CoefficientSet::builtin(n).with_context(|| format!("set {n}")))
@@ -92,32 +84,82 @@ pub fn run(
         tune: true,
         ..EstimatorSpec::named("ridge")
     };
+    let family = |seed: u64| -> Box<dyn FamilyFit + '_> {
+        Box::new(EnsembleSpec {
+            sets: &sets,
+            estimator: &spec,
+            window: WindowSpec::Whole,
+            solver: Solver::Fast,
+            replicates,
+            seed,
+        })
+    };
+    let what = format!(
+        "{} ridge (λ tuned), {replicates} block-bootstrap replicates pooled over the structures",
+        structures.join(" + ")
+    );
+    measure(out, &what, &family, seeds, level, true)
+}
+
+/// A family's fit for one noise seed (the seed of its replicates).
+pub(crate) type FamilyOf<'a> = dyn Fn(u64) -> Box<dyn FamilyFit + 'a> + 'a;
+
+/// Coverage of the bands of `family` (`what` it is, in words) over `seeds` noise seeds: raw, and
+/// with `calibrate` also calibrated (`shipid_pipeline::calibration::calibrate_fit`).
+pub(crate) fn measure(
+    out: &Path,
+    what: &str,
+    family: &FamilyOf,
+    seeds: u64,
+    level: f64,
+    calibrate: bool,
+) -> Result<()> {
+    let ms = manoeuvres();
+    let truth_data = generate_manoeuvres(None, &[], &ms)?.in_memory(&ms, "truth");
+    let ship = truth_data.ship;
+    let truth: Vec<_> = truth_data
+        .recordings
+        .iter()
+        .map(|r| (r.file.clone(), metrics(&r.recording, &r.manoeuvre, &ship)))
+        .collect();
+    let kinds: &[&str] = if calibrate {
+        &["raw", "calibrated"]
+    } else {
+        &["raw"]
+    };
     // (training set, place, raw | calibrated) → coverage; and per metric family.
     let mut by_set: BTreeMap<(usize, &str, &str), Coverage> = BTreeMap::new();
     let mut by_family: BTreeMap<(MetricFamily, &str, &str), Coverage> = BTreeMap::new();
-    let mut undefined = 0usize;
+    let (mut undefined, mut diverged, mut replicate_runs) = (0usize, 0usize, 0usize);
     let mut rows = Vec::new();
     let mut calibrations = Vec::new();
     for seed in 1..=seeds {
         let noisy = generate_manoeuvres(Some(seed), &[], &ms)?
             .in_memory(&ms, &format!("noise seed {seed}"));
+        let fit = family(seed);
         for (s, (set_name, files)) in TRAINING_SETS.iter().enumerate() {
             let recordings: Vec<String> = files.iter().map(|f| f.to_string()).collect();
             let context = || format!("seed {seed}, {set_name}");
-            let how = EnsembleSpec {
-                sets: &sets,
-                estimator: &spec,
-                window: WindowSpec::Whole,
-                solver: Solver::Fast,
-                replicates,
-                seed,
+            let fitted = fit.fit(&noisy, &recordings).with_context(context)?;
+            let calibration = if calibrate {
+                Some(
+                    calibrate_fit(fitted.source(), fit.as_ref(), &noisy, &recordings, level)
+                        .with_context(context)?,
+                )
+            } else {
+                None
             };
-            let ensemble = fit_ensemble(&noisy, &how, &recordings).with_context(context)?;
-            let calibration = calibrate_ensemble(&ensemble, &noisy, &how, &recordings, level)
-                .with_context(context)?;
+            let factor = |metric: &str| calibration.as_ref().map_or(1.0, |c| c.factor(metric));
             for (r, (file, true_metrics)) in truth_data.recordings.iter().zip(&truth) {
-                let (bands, reach) =
-                    ensemble_bands(&ensemble, &r.manoeuvre, &ship, level, BandRun::Standard)?;
+                let (bands, reach) = source_bands(
+                    fitted.source(),
+                    &r.manoeuvre,
+                    &ship,
+                    level,
+                    BandRun::Standard,
+                )?;
+                diverged += bands.diverged;
+                replicate_runs += bands.replicates;
                 let place = if files.contains(&file.as_str()) {
                     PLACES[0]
                 } else if reach < INSIDE_REACH {
@@ -134,11 +176,13 @@ pub fn run(
                     let Some(family) = MetricFamily::of(b.metric) else {
                         continue;
                     };
-                    let calibrated = widen(band, calibration.factor(b.metric), reach);
-                    for (kind, inside) in [
-                        ("raw", band.contains(t)),
-                        ("calibrated", calibrated.contains(t)),
-                    ] {
+                    let calibrated = widen(band, factor(b.metric), reach);
+                    for &kind in kinds {
+                        let inside = if kind == "raw" {
+                            band.contains(t)
+                        } else {
+                            calibrated.contains(t)
+                        };
                         by_set
                             .entry((s, place, kind))
                             .or_insert(Coverage::new(level))
@@ -152,22 +196,23 @@ pub fn run(
                         "seed": seed, "training": set_name, "manoeuvre": file, "place": place,
                         "metric": b.metric, "truth": t, "point": b.point, "lo": band.lo, "hi": band.hi,
                         "inside": band.contains(t), "reach": reach,
-                        "factor": calibration.factor(b.metric),
+                        "factor": factor(b.metric),
                         "calibrated_lo": calibrated.lo, "calibrated_hi": calibrated.hi,
                         "calibrated_inside": calibrated.contains(t),
-                        "block_rows": ensemble.block_rows,
                     }));
                 }
             }
             eprintln!(
-                "seed {seed}/{seeds}, {set_name}: blocks {:?} rows, {} replicate models, factors {}",
-                ensemble.block_rows,
-                ensemble.replicates.len(),
-                MetricFamily::ALL
-                    .iter()
-                    .map(|f| format!("{} {:.2}", f.as_str(), calibration.factors[f].factor()))
-                    .collect::<Vec<_>>()
-                    .join(", ")
+                "seed {seed}/{seeds}, {set_name}: {} replicate models{}",
+                fitted.replicates.len(),
+                calibration.as_ref().map_or(String::new(), |c| format!(
+                    ", factors {}",
+                    MetricFamily::ALL
+                        .iter()
+                        .map(|f| format!("{} {:.2}", f.as_str(), c.factor_of(*f)))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ))
             );
             calibrations
                 .push(json!({"seed": seed, "training": set_name, "calibration": calibration}));
@@ -177,13 +222,11 @@ pub fn run(
     let mut md = String::new();
     writeln!(
         md,
-        "Nominal {:.0} % bands, {} ridge (λ tuned), {replicates} block-bootstrap replicates pooled \
-         over the structures, seeds 1–{seeds}; truth: the noise-free MMG reference. Each cell: \
-         measured coverage (inside/total; 95 % Wilson interval in %). raw: the pooled percentiles; \
-         calibrated: widened by the factor of the training recordings' errors (in sample and \
-         left out) and the reach.\n",
+        "Nominal {:.0} % bands, {what}, seeds 1–{seeds}; truth: the noise-free MMG reference. Each \
+         cell: measured coverage (inside/total; 95 % Wilson interval in %). raw: the replicates' \
+         percentiles; calibrated: widened by the factor of the training recordings' errors (in \
+         sample and left out) and the reach.\n",
         100.0 * level,
-        structures.join(" + ")
     )?;
     let header = |md: &mut String, first: &str| -> std::fmt::Result {
         write!(md, "| {first} | band |")?;
@@ -194,7 +237,7 @@ pub fn run(
     };
     header(&mut md, "training set")?;
     for (s, (name, _)) in TRAINING_SETS.iter().enumerate() {
-        for kind in ["raw", "calibrated"] {
+        for &kind in kinds {
             write!(md, "| {name} | {kind} |")?;
             for p in PLACES {
                 write!(md, " {} |", cell(by_set.get(&(s, p, kind))))?;
@@ -205,7 +248,7 @@ pub fn run(
     writeln!(md)?;
     header(&mut md, "metric family")?;
     for f in MetricFamily::ALL {
-        for kind in ["raw", "calibrated"] {
+        for &kind in kinds {
             write!(md, "| {} | {kind} |", f.as_str())?;
             for p in PLACES {
                 write!(md, " {} |", cell(by_family.get(&(f, p, kind))))?;
@@ -215,7 +258,8 @@ pub fn run(
     }
     writeln!(
         md,
-        "\nMetrics without a band (fewer than 20 replicates define them): {undefined}."
+        "\nMetrics without a band (fewer than 20 replicates define them): {undefined}; replicate \
+         runs that diverged: {diverged} of {replicate_runs}."
     )?;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let md_path = out.join("coverage.md");

@@ -97,6 +97,9 @@ enum Task {
         /// The model family: polynomial (`--structures`), mmg or sparse-gp.
         #[arg(long, value_enum, default_value = "polynomial")]
         family: coverage_family::Family,
+        /// Also count the calibrated bands of mmg or sparse-gp (the polynomial's always are).
+        #[arg(long)]
+        calibrate: bool,
     },
     /// List every crate's file import edges and fail on a circle (ARCHITECTURE.md's invariant).
     Circles,
@@ -162,6 +165,7 @@ fn main() -> ExitCode {
             level,
             structures,
             family: coverage_family::Family::Polynomial,
+            ..
         } => coverage::run(&out, seeds, replicates, level, &structures).map(|()| ExitCode::SUCCESS),
         Task::Coverage {
             out,
@@ -169,10 +173,10 @@ fn main() -> ExitCode {
             replicates,
             level,
             family,
+            calibrate,
             ..
-        } => {
-            coverage_family::run(&out, family, seeds, replicates, level).map(|()| ExitCode::SUCCESS)
-        }
+        } => coverage_family::run(&out, family, seeds, replicates, level, calibrate)
+            .map(|()| ExitCode::SUCCESS),
         Task::Circles => {
             let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
             Ok(if circles::run(&root) {
