@@ -176,9 +176,11 @@ pub struct AgainstRecorded {
     pub found_from_deg: f64,
     /// The recorded flow, pooled over the recordings that carry it.
     pub recorded: FlowSummary,
-    /// The single flow that pushes as the recorded mean and the found flow together do (their
-    /// velocities weighted by their speeds, as forces grow with the square of the speed): what the
-    /// ship felt if the found flow is a bias of the recorded channels.
+    /// The single true flow (over ground, earth-fixed) that pushes as the recorded mean and the found
+    /// flow together do (their velocities weighted by their speeds, as forces grow with the square of
+    /// the speed): what the ship felt if the found flow is a bias of the recorded channels. Not the
+    /// relative wind: the ship's own velocity through the air is left out (for a wind, the relative
+    /// wind adds the ship's speed, about U0, from ahead), as both flows are true winds.
     pub felt_speed_m_s: f64,
     pub felt_from_deg: f64,
     /// Found against recorded mean as ratio of speeds and angle between directions.

@@ -2,7 +2,8 @@
 //! (issue 27 item 4; the generator, grid, per-case diagnosis and scoring live in
 //! `shipid_diagnose::known_wind`). Identifies each base from training runs that carry a recorded wind,
 //! with the wind as input, runs the cases in parallel and writes `cases.csv/.parquet` and `summary.md`
-//! into `--out`.
+//! into `--out`. Two grids per base: one wind for all the runs of a case, and a wind of its own on
+//! each run (trials meet a different wind on every run), each with controls that keep the channels.
 
 use std::path::Path;
 
@@ -10,7 +11,8 @@ use anyhow::{Result, anyhow};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use shipid_diagnose::known_wind::{
-    KnownWindRow, cases, hydrodynamic_dataset, run_case, summary_markdown, training_dataset,
+    KnownWindRow, OWN_WIND_SPREAD_M_S, cases, hydrodynamic_dataset, own_wind_cases, run_case,
+    summary_markdown, training_dataset,
 };
 use shipid_diagnose::{BaseRange, DiagnoseInput, DiagnoseOptions, model_level};
 use shipid_estimators::Solver;
@@ -85,11 +87,12 @@ fn identify(kind: &str) -> Result<Base> {
 
 pub fn run(bases: &[String], out: &Path, seeds: u64) -> Result<bool> {
     let training = training_dataset().map_err(|e| anyhow!(e))?;
-    let grid = cases(seeds);
+    let mut grid = cases(seeds);
+    grid.extend(own_wind_cases(seeds));
     let opts = DiagnoseOptions::default();
     let mut all_rows: Vec<(String, KnownWindRow)> = Vec::new();
     let mut md = format!(
-        "# Diagnosis with a recorded wind as known input\n\nData from `shipid generate --recorded-wind` (`pipeline::generate::generate_recorded`). Training: the six default manoeuvres, each in its own recorded wind, noise-free; the base is identified with the wind as input. Cases: other runs of the six manoeuvres in one wind per case (steady, or gusty: turbulence intensity 30 %, correlation time 2 s), towing-tank noise on the motion and anemometer noise on the wind channels; wind cases conceal the wind channels, controls keep them. {seeds} seeds.\n\n"
+        "# Diagnosis with a recorded wind as known input\n\nData from `shipid generate --recorded-wind` (`pipeline::generate::generate_recorded`). Training: the six default manoeuvres, each in its own recorded wind, noise-free; the base is identified with the wind as input. Cases: other runs of the six manoeuvres in one wind per case (steady, or gusty: turbulence intensity 30 %, correlation time 2 s), towing-tank noise on the motion and anemometer noise on the wind channels; wind cases conceal the wind channels, controls keep them. Own-wind cases: each of the six runs in its own steady wind (speed within ±{OWN_WIND_SPREAD_M_S} m/s of the case's strength, direction from anywhere), concealed; right when the verdict is `wind` in its per-recording form (and, for the one-wind cases, in its one-wind form). {seeds} seeds.\n\n"
     );
     let mut failures = Vec::new();
     for kind in bases {
@@ -147,8 +150,13 @@ fn write_cases(out: &Path, rows: &[(String, KnownWindRow)]) -> Result<()> {
     t.push_text("base", rows.iter().map(|(b, _)| b.clone()).collect());
     t.push_text("case", text(&|r| r.case.id.clone()));
     t.push_text("control", text(&|r| r.case.control.to_string()));
+    t.push_text("own_winds", text(&|r| r.case.own_winds.to_string()));
     t.push_num("wind_speed_m_s", num(&|r| Some(r.case.wind.speed_m_s)));
-    t.push_num("wind_from_deg", num(&|r| Some(r.case.wind.from_deg)));
+    // An own-wind case draws each run's direction: no direction of the case.
+    t.push_num(
+        "wind_from_deg",
+        num(&|r| (!r.case.own_winds).then_some(r.case.wind.from_deg)),
+    );
     t.push_num("gust", num(&|r| Some(r.case.wind.gust)));
     t.push_num("seed", num(&|r| Some(r.case.seed as f64)));
     t.push_num(
@@ -160,13 +168,28 @@ fn write_cases(out: &Path, rows: &[(String, KnownWindRow)]) -> Result<()> {
         num(&|r| Some(r.recorded.from_mean_deg)),
     );
     t.push_text("verdict", text(&|r| r.verdict.to_string()));
+    t.push_text("per_recording", text(&|r| r.per_recording.to_string()));
     t.push_text("correct", text(&|r| r.correct().to_string()));
     t.push_text("meets_targets", text(&|r| r.meets_targets().to_string()));
     t.push_num("before_position_rmse_over_l", num(&|r| Some(r.before)));
     t.push_num("after_position_rmse_over_l", num(&|r| Some(r.after)));
     t.push_num("improvement", num(&|r| Some(r.improvement())));
     t.push_num("found_speed_m_s", num(&|r| r.found_speed_m_s()));
+    // Own-wind cases: the largest over the runs; the runs' errors are in `own_errors`.
     t.push_num("direction_error_deg", num(&|r| r.direction_error_deg()));
+    t.push_text(
+        "own_errors",
+        text(&|r| {
+            r.own_errors()
+                .map(|e| {
+                    e.iter()
+                        .map(|(s, d)| format!("{s:+.3} m/s {d:.1} deg"))
+                        .collect::<Vec<_>>()
+                        .join("; ")
+                })
+                .unwrap_or_default()
+        }),
+    );
     t.push_text("found_effects", text(&|r| r.effects.clone()));
     t.push_num("time_s", num(&|r| Some(r.time_s)));
     t.write(out, "cases")?;
