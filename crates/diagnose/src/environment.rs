@@ -531,4 +531,71 @@ mod tests {
         let wrong = reveal(Verdict::Current, &[], &[], &concealed);
         assert!(!wrong.verdict_right && wrong.wind.unwrap().found_speed_m_s.is_none());
     }
+
+    fn own(recording: &str, speed_m_s: f64, from_deg: f64) -> RecordingWind {
+        RecordingWind {
+            recording: recording.into(),
+            speed_m_s,
+            from_deg,
+            speed_standard_error_m_s: None,
+            from_standard_error_deg: None,
+            before_position_rmse_over_l: 0.1,
+            after_position_rmse_over_l: 0.01,
+        }
+    }
+
+    /// Two recordings whose concealed winds are (speed, from) `a` and `b`, checked against the
+    /// `found` winds per recording: whether the verdict `wind` is right, and each recording's
+    /// direction error.
+    fn check_own(
+        a: (f64, f64),
+        b: (f64, f64),
+        found: &[RecordingWind],
+        expected: (bool, [Option<f64>; 2]),
+    ) {
+        let flow = |(s, f): (f64, f64)| FlowSummary::of([&series(&[s, s], &[f, f])]).unwrap();
+        let concealed = Concealed {
+            wind: FlowSummary::of([&series(&[a.0, b.0], &[a.1, b.1])]),
+            current: None,
+            recordings: vec!["a.csv".into(), "b.csv".into()],
+            wind_per_recording: vec![("a.csv".into(), flow(a)), ("b.csv".into(), flow(b))],
+        };
+        let check = reveal(Verdict::Wind, &[], found, &concealed);
+        let errors: Vec<Option<f64>> = check
+            .wind_per_recording
+            .iter()
+            .map(|w| w.wind.direction_error_deg.map(|d| d.round()))
+            .collect();
+        assert_eq!(
+            (check.verdict_right, errors.as_slice()),
+            (expected.0, &expected.1[..])
+        );
+        // Winds found per recording are compared run by run, never as a pooled mean.
+        assert_eq!(check.wind.is_some(), found.is_empty());
+    }
+
+    #[test]
+    fn the_reveal_check_scores_each_recordings_own_wind() {
+        let found = [own("a.csv", 3.0, 95.0), own("b.csv", 4.0, 250.0)];
+        check_own(
+            (3.0, 90.0),
+            (4.0, 270.0),
+            &found,
+            (true, [Some(5.0), Some(20.0)]),
+        );
+        // A recording whose wind blew but was not named: the verdict is not right.
+        check_own(
+            (3.0, 90.0),
+            (4.0, 270.0),
+            &found[..1],
+            (false, [Some(5.0), None]),
+        );
+        // A calm recording needs no wind of its own.
+        check_own(
+            (3.0, 90.0),
+            (0.0, 0.0),
+            &found[..1],
+            (true, [Some(5.0), None]),
+        );
+    }
 }

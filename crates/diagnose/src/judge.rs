@@ -505,6 +505,64 @@ pub(crate) fn rival_of(judged: &[Judged], winner: usize) -> Option<usize> {
 mod tests {
     use super::*;
 
+    /// The default data set with its recordings cut to `lengths` samples (all of them when `None`).
+    fn default_data(lengths: &[Option<usize>]) -> Dataset {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../data/kvlcc2-mmg/dataset.toml"
+        );
+        let mut ds = Dataset::load(std::path::Path::new(path)).unwrap();
+        ds.recordings.truncate(lengths.len());
+        for (r, n) in ds.recordings.iter_mut().zip(lengths) {
+            if let Some(n) = *n {
+                r.recording = r.recording.slice(0..n);
+            }
+        }
+        ds
+    }
+
+    /// `time_halves` of recordings of `lengths`: `None`, or per unit (recording, first sample's
+    /// time, sample count, manoeuvre is a free run).
+    fn check_halves(lengths: &[Option<usize>], expected: Option<&[(usize, usize, bool)]>) {
+        let ds = default_data(lengths);
+        let got = time_halves(&ds).map(|h| {
+            h.recordings
+                .iter()
+                .map(|u| {
+                    let whole = ds
+                        .recordings
+                        .iter()
+                        .position(|r| u.file.starts_with(&format!("{} [", r.file)))
+                        .unwrap();
+                    (whole, u.recording.len(), u.manoeuvre == Manoeuvre::Free)
+                })
+                .collect::<Vec<_>>()
+        });
+        assert_eq!(got.as_deref(), expected, "{lengths:?}");
+    }
+
+    #[test]
+    fn time_halves_interleave_each_recordings_first_and_second_half() {
+        // Units 2i and 2i + 1 are recording i's halves, so the alternating folds are the first
+        // halves and the second halves; a second half is a free run.
+        check_halves(
+            &[Some(100), Some(201)],
+            Some(&[
+                (0, 50, false),
+                (0, 50, true),
+                (1, 100, false),
+                (1, 101, true),
+            ]),
+        );
+        // A recording too short to diagnose at all is left out, as the diagnosis leaves it out.
+        check_halves(
+            &[Some(100), Some(19), Some(80)],
+            Some(&[(0, 50, false), (0, 50, true), (2, 40, false), (2, 40, true)]),
+        );
+        // One that is diagnosed but too short to be cut: no time halves.
+        check_halves(&[Some(100), Some(79)], None);
+    }
+
     fn check_rival(candidates: &[(&str, f64, bool)], winner: usize, expected: Option<usize>) {
         let words: Vec<Vec<&str>> = candidates
             .iter()
