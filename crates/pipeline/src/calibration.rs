@@ -25,11 +25,20 @@
 //!
 //! The widened band is centre ± factor · reach · half-width.
 //!
+//! Steps 2 and 3 are one code path for every model family ([`calibrate_fit`]): a family only says
+//! how it fits a subset of the training recordings and what its band's replicates are
+//! ([`FamilyFit`]): a polynomial ensemble ([`EnsembleSpec`], step 1), the mmg family's
+//! block-bootstrap replicates ([`MmgFamily`]; its in-sample errors measure the equation-error bias
+//! the bootstrap cannot see), the sparse GP's posterior draws ([`GpFamily`]). A family without a
+//! regression of its own (mmg, GP) measures its reach by the leverage of [`STATE_RANGE_SET`] over
+//! its training states.
+//!
 //! `shipid fit --bootstrap N --calibrate` stores the ensemble's replicates and the factors in the
-//! model file's `[calibration]` ([`calibration_record`]); `simulate --bands` and `validate --bands`
-//! read them back ([`stored_calibration`]) and widen the pooled band by the stored factor and the
-//! reach of the run at hand ([`StoredCalibration::bands`]). No I/O but the reading of that model
-//! file and of its training data (for the identification range).
+//! model file's `[calibration]` ([`calibration_record`]; an mmg or sparse-GP file stores the
+//! factors alone, [`factor_calibration_record`], over its own replicates); `simulate --bands` and
+//! `validate --bands` read them back ([`stored_calibration`]) and widen the band by the stored
+//! factor and the reach of the run at hand ([`StoredCalibration::bands`]). No I/O but the reading
+//! of that model file and of its training data (for the identification range).
 
 use std::collections::BTreeMap;
 

@@ -7,9 +7,10 @@
 //! block-bootstrap replicates, each re-identified with that λ
 //! (`shipid_pipeline::calibration::MmgFamily`). Sparse GP: the default fit (d_gen 0.96) and
 //! `--replicates` functions drawn from its posterior (`shipid_pipeline::calibration::GpFamily`). With
-//! `--calibrate` each band is also counted widened by the family's calibration from its training
-//! recordings, through the same code path as the polynomial's
-//! (`shipid_pipeline::calibration::calibrate_fit`).
+//! `--refine` every mmg fit (and every refit of its calibration) is refined in the output-error
+//! sense, as `shipid fit --refine`. With `--calibrate` each band is also counted widened by the
+//! family's calibration from its training recordings, through the same code path as the
+//! polynomial's (`shipid_pipeline::calibration::calibrate_fit`).
 
 use std::path::Path;
 
@@ -31,7 +32,7 @@ pub enum Family {
 }
 
 /// Coverage of `family`'s bands (mmg or sparse GP) over `seeds` noise seeds, raw and, with
-/// `calibrate`, calibrated.
+/// `calibrate`, calibrated; with `refine` every mmg fit is refined in the output-error sense.
 pub fn run(
     out: &Path,
     family: Family,
@@ -39,7 +40,11 @@ pub fn run(
     replicates: usize,
     level: f64,
     calibrate: bool,
+    refine: bool,
 ) -> Result<()> {
+    if refine && family != Family::Mmg {
+        anyhow::bail!("--refine applies to --family mmg");
+    }
     let (fit, what): (Box<crate::coverage::FamilyOf>, String) = match family {
         Family::Mmg => (
             Box::new(move |seed| -> Box<dyn FamilyFit> {
@@ -47,14 +52,19 @@ pub fn run(
                     opts: MmgFitOptions::default(),
                     // The generated data carry no [propeller]/[rudder] tables: the generator's own.
                     geometry: MmgGeometry::kvlcc2_model_scale(),
-                    refine: false,
+                    refine,
                     replicates,
                     seed,
                 })
             }),
             format!(
-                "mmg bounded-lsq (λ = {DEFAULT_PRIOR_WEIGHT:e}), {replicates} block-bootstrap \
-                 replicates"
+                "mmg bounded-lsq (λ = {DEFAULT_PRIOR_WEIGHT:e}){}, {replicates} block-bootstrap \
+                 replicates",
+                if refine {
+                    ", refined (output error; the replicates shifted onto it)"
+                } else {
+                    ""
+                }
             ),
         ),
         Family::SparseGp => (

@@ -100,6 +100,9 @@ enum Task {
         /// Also count the calibrated bands of mmg or sparse-gp (the polynomial's always are).
         #[arg(long)]
         calibrate: bool,
+        /// Refine every mmg fit in the output-error sense, as `fit --refine` (mmg only).
+        #[arg(long)]
+        refine: bool,
     },
     /// List every crate's file import edges and fail on a circle (ARCHITECTURE.md's invariant).
     Circles,
@@ -174,8 +177,9 @@ fn main() -> ExitCode {
             level,
             family,
             calibrate,
+            refine,
             ..
-        } => coverage_family::run(&out, family, seeds, replicates, level, calibrate)
+        } => coverage_family::run(&out, family, seeds, replicates, level, calibrate, refine)
             .map(|()| ExitCode::SUCCESS),
         Task::Circles => {
             let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");

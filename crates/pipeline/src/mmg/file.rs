@@ -1,6 +1,8 @@
 //! The model file `kind = "mmg"`: every identified parameter with its value, bounds, prior, the prior's
 //! source, standard error, the data's share of its precision and whether the data determine it; the
-//! ship, added masses, propeller and rudder data; the training windows and the estimator. (The file
+//! ship, added masses, propeller and rudder data; the training windows and the estimator; with
+//! `fit --bootstrap N` its `[bootstrap]` replicates and with `--calibrate` the `[calibration]` factors
+//! that widen them (docs/uncertainty.md). (The file
 //! of a fit is built in the parent module: this one, read by `model_file`, imports no fit.)
 
 use std::collections::BTreeMap;
