@@ -464,25 +464,38 @@ fn effect_table(rows: &[BenchRow]) -> String {
     md
 }
 
-/// The confusion matrix (rows: concealed, columns: verdict).
-fn confusion_markdown(rows: &[BenchRow]) -> String {
-    let mut md = String::new();
-    md.push_str("\nConfusion matrix (rows: concealed, columns: verdict):\n\n| concealed |");
-    for v in WORDS {
-        md.push_str(&format!(" {v} |"));
+/// A confusion matrix in markdown: `Confusion matrix (rows: {row_title}, columns: verdict):`, then
+/// a table with a row per (name, counts per column).
+pub(crate) fn count_table_markdown<I, K, C>(row_title: &str, columns: &[&str], rows: I) -> String
+where
+    I: IntoIterator<Item = (K, C)>,
+    K: std::fmt::Display,
+    C: AsRef<[usize]>,
+{
+    let mut md =
+        format!("Confusion matrix (rows: {row_title}, columns: verdict):\n\n| {row_title} |");
+    for c in columns {
+        md.push_str(&format!(" {c} |"));
     }
     md.push_str("\n|---|");
-    for _ in WORDS {
+    for _ in columns {
         md.push_str("---|");
     }
     md.push('\n');
-    for (k, counts) in confusion(rows) {
+    for (k, counts) in rows {
         md.push_str(&format!("| {k} |"));
-        for n in counts {
+        for n in counts.as_ref() {
             md.push_str(&format!(" {n} |"));
         }
         md.push('\n');
     }
+    md
+}
+
+/// The confusion matrix (rows: concealed, columns: verdict).
+fn confusion_markdown(rows: &[BenchRow]) -> String {
+    let mut md = String::from("\n");
+    md.push_str(&count_table_markdown("concealed", &WORDS, confusion(rows)));
     md
 }
 

@@ -446,6 +446,26 @@ pub fn reveal(
     }
 }
 
+impl RevealedFlow {
+    /// `  {label}: recorded … from …°{mean}, found …` for the command's output.
+    fn line(&self, label: &str, mean: &str) -> String {
+        let r = &self.recorded;
+        match (self.found_speed_m_s, self.found_from_deg) {
+            (Some(s), Some(d)) => format!(
+                "  {label}: recorded {:.3} m/s from {:.0}°{mean}, found {s:.3} m/s from {d:.0}°: speed error {:+.3} m/s, direction error {:.0}°",
+                r.speed_mean_m_s,
+                r.from_mean_deg,
+                self.speed_error_m_s.unwrap_or(f64::NAN),
+                self.direction_error_deg.unwrap_or(f64::NAN)
+            ),
+            _ => format!(
+                "  {label}: recorded {:.3} m/s from {:.0}°{mean}, none found",
+                r.speed_mean_m_s, r.from_mean_deg
+            ),
+        }
+    }
+}
+
 impl RevealCheck {
     /// Lines for the command's output.
     pub fn lines(&self) -> Vec<String> {
@@ -458,38 +478,12 @@ impl RevealCheck {
             words.join(" or ")
         )];
         for (word, f) in [("wind", &self.wind), ("current", &self.current)] {
-            let Some(f) = f else { continue };
-            let r = &f.recorded;
-            out.push(match (f.found_speed_m_s, f.found_from_deg) {
-                (Some(s), Some(d)) => format!(
-                    "  {word}: recorded {:.3} m/s from {:.0}° (mean), found {s:.3} m/s from {d:.0}°: speed error {:+.3} m/s, direction error {:.0}°",
-                    r.speed_mean_m_s,
-                    r.from_mean_deg,
-                    f.speed_error_m_s.unwrap_or(f64::NAN),
-                    f.direction_error_deg.unwrap_or(f64::NAN)
-                ),
-                _ => format!(
-                    "  {word}: recorded {:.3} m/s from {:.0}° (mean), none found",
-                    r.speed_mean_m_s, r.from_mean_deg
-                ),
-            });
+            if let Some(f) = f {
+                out.push(f.line(word, " (mean)"));
+            }
         }
         for w in &self.wind_per_recording {
-            let (r, f) = (&w.wind.recorded, &w.wind);
-            out.push(match (f.found_speed_m_s, f.found_from_deg) {
-                (Some(s), Some(d)) => format!(
-                    "  wind on {}: recorded {:.3} m/s from {:.0}°, found {s:.3} m/s from {d:.0}°: speed error {:+.3} m/s, direction error {:.0}°",
-                    w.recording,
-                    r.speed_mean_m_s,
-                    r.from_mean_deg,
-                    f.speed_error_m_s.unwrap_or(f64::NAN),
-                    f.direction_error_deg.unwrap_or(f64::NAN)
-                ),
-                _ => format!(
-                    "  wind on {}: recorded {:.3} m/s from {:.0}°, none found",
-                    w.recording, r.speed_mean_m_s, r.from_mean_deg
-                ),
-            });
+            out.push(w.wind.line(&format!("wind on {}", w.recording), ""));
         }
         out
     }

@@ -32,6 +32,7 @@ use shipid_pipeline::generate::{
 };
 use shipid_sim::{Dynamics, Effect, MmgModel, MmgParameters};
 
+use crate::bench::count_table_markdown;
 use crate::environment::{FlowSummary, RevealCheck, conceal, reveal};
 use crate::input::{DiagnoseInput, DiagnoseOptions};
 use crate::report::diagnose;
@@ -471,22 +472,11 @@ pub fn summary_markdown(rows: &[KnownWindRow], base_name: &str, level: f64) -> S
     if !own.is_empty() {
         md.push_str(&own_markdown(&own, threshold));
     }
-    md.push_str("Confusion matrix (rows: case, columns: verdict):\n\n| case |");
-    for w in CONFUSION_COLUMNS {
-        md.push_str(&format!(" {w} |"));
-    }
-    md.push_str("\n|---|");
-    for _ in CONFUSION_COLUMNS {
-        md.push_str("---|");
-    }
-    md.push('\n');
-    for (k, n) in confusion(rows) {
-        md.push_str(&format!("| {k} |"));
-        for c in n {
-            md.push_str(&format!(" {c} |"));
-        }
-        md.push('\n');
-    }
+    md.push_str(&count_table_markdown(
+        "case",
+        &CONFUSION_COLUMNS,
+        confusion(rows),
+    ));
     md.push('\n');
     md
 }

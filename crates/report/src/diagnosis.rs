@@ -516,22 +516,24 @@ fn environment_section(b: &mut String, r: &Map<String, Value>) {
                 expected.join(" or ")
             ),
         ));
-        for key in ["wind", "current"] {
-            let Some(f) = c.get(key) else { continue };
+        // A concealed flow against the one found for it.
+        let revealed = |f: &Value| {
             let recorded = f.get("recorded").map_or("?".into(), flow_text);
-            rows.push((
-                format!("--reveal: concealed {key}"),
-                match (g(f, "found_speed_m_s"), g(f, "found_from_deg")) {
-                    (Some(s), Some(d)) => format!(
-                        "recorded {recorded}; found {} m/s from {}°: speed error {} m/s, direction error {}°",
-                        num(s),
-                        num(d),
-                        g(f, "speed_error_m_s").map_or("?".into(), num),
-                        g(f, "direction_error_deg").map_or("?".into(), num)
-                    ),
-                    _ => format!("recorded {recorded}; none found"),
-                },
-            ));
+            match (g(f, "found_speed_m_s"), g(f, "found_from_deg")) {
+                (Some(s), Some(d)) => format!(
+                    "recorded {recorded}; found {} m/s from {}°: speed error {} m/s, direction error {}°",
+                    num(s),
+                    num(d),
+                    g(f, "speed_error_m_s").map_or("?".into(), num),
+                    g(f, "direction_error_deg").map_or("?".into(), num)
+                ),
+                _ => format!("recorded {recorded}; none found"),
+            }
+        };
+        for key in ["wind", "current"] {
+            if let Some(f) = c.get(key) {
+                rows.push((format!("--reveal: concealed {key}"), revealed(f)));
+            }
         }
         for w in c
             .get("wind_per_recording")
@@ -539,19 +541,9 @@ fn environment_section(b: &mut String, r: &Map<String, Value>) {
             .into_iter()
             .flatten()
         {
-            let recorded = w.get("recorded").map_or("?".into(), flow_text);
             rows.push((
                 format!("--reveal: concealed wind of {}", str_field(w, "recording")),
-                match (g(w, "found_speed_m_s"), g(w, "found_from_deg")) {
-                    (Some(s), Some(d)) => format!(
-                        "recorded {recorded}; found {} m/s from {}°: speed error {} m/s, direction error {}°",
-                        num(s),
-                        num(d),
-                        g(w, "speed_error_m_s").map_or("?".into(), num),
-                        g(w, "direction_error_deg").map_or("?".into(), num)
-                    ),
-                    _ => format!("recorded {recorded}; none found"),
-                },
+                revealed(w),
             ));
         }
     }
