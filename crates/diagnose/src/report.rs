@@ -161,8 +161,10 @@ pub fn diagnose(
     let (judged, best) = judge.candidates(mismatch_is_real);
     let finals = judge.final_fits(&judged);
     // A wind of its own on each run is tried only where a real mismatch needs explaining: runs whose
-    // winds are recorded (or calm) keep `none` without a family of many parameters being fitted.
-    let own = if mismatch_is_real && !cut && baseline.prep.len() >= 2 {
+    // winds are recorded (or calm) keep `none` without a family of many parameters being fitted, and
+    // a winner that leaves no real mismatch (one wind for all, say) leaves nothing for it.
+    let left_is_real = best.is_none_or(|b| judged[b].assessed.after_l > real_threshold);
+    let own = if mismatch_is_real && left_is_real && !cut && baseline.prep.len() >= 2 {
         own_winds(input, ds, opts, &judged, best)?
     } else {
         None
