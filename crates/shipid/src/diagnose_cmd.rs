@@ -405,13 +405,22 @@ fn print_summary(r: &Report, model: &str, dataset: &Path, level_from: Option<&st
     for (k, v) in &r.standard_errors {
         println!("    ± {k} {v:.4}");
     }
+    // Combined candidates ("asymmetry [rudder_offset] + wind") are long: the name column takes the
+    // widest title so that the numbers stay in their columns.
+    let name_width = r
+        .candidates
+        .iter()
+        .map(|c| c.title().chars().count())
+        .max()
+        .unwrap_or(0)
+        .max("candidate".len());
     println!(
-        "  {:<16} {:>6} {:>10} {:>9} {:>8}",
+        "  {:<name_width$} {:>6} {:>10} {:>9} {:>8}",
         "candidate", "params", "held-out/L", "explains", "accepted"
     );
     for c in &r.candidates {
         println!(
-            "  {:<16} {:>6} {:>10.4} {:>8.0}% {:>8}",
+            "  {:<name_width$} {:>6} {:>10.4} {:>8.0}% {:>8}",
             c.title(),
             c.n_parameters,
             c.held_out_position_rmse_over_l,
