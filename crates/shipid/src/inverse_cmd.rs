@@ -272,8 +272,8 @@ fn source_of(name: &str, target: &TargetShip, n_modes: usize, refined: bool) -> 
 
 /// Mode weights, ensemble and the model built from them, for one motion.
 struct Delivered {
-    /// The weights the model file holds: the best ensemble member, else the network's refined or
-    /// clipped answer.
+    /// The weights the model file holds: the best-matching ensemble member inside the sampled box
+    /// (the best one when none is), else the network's refined or clipped answer.
     weights: Vec<f64>,
     refined: bool,
     model: Option<MmgModel>,
@@ -288,7 +288,16 @@ fn deliver(
     e: Option<&Ensemble>,
     checks: &PhysicalChecks,
 ) -> Delivered {
-    let (weights, refined) = match (e.and_then(|e| e.members.first()), &m.refined) {
+    // Every kept member matches the indexes about as well as the best (within
+    // MEMBER_MISMATCH_FACTOR); among them a ship inside the sampled box is one the database's
+    // variation describes, so it is delivered before a better-matching one on the box's edge.
+    let best = e.and_then(|e| {
+        e.members
+            .iter()
+            .find(|r| inside_box(modes, &r.weights).iter().all(|inside| *inside))
+            .or(e.members.first())
+    });
+    let (weights, refined) = match (best, &m.refined) {
         (Some(best), _) => (best.weights.clone(), true),
         (None, RefineOutcome::Done { refined, .. }) => (refined.weights.clone(), true),
         _ => (m.weights.clone(), false),
@@ -355,7 +364,7 @@ fn model_file(
             "not a bootstrap: an ensemble of {NETWORKS} inverse networks (seeds {seed}…{}) trained on one \
              simulated database, each refined by re-simulation from its own answer and {} starts \
              jittered by ±{RESTART_JITTER_SIGMA} σ around it; {} of {} kept (mismatch within \
-             {MEMBER_MISMATCH_FACTOR} × the best), the best is the point model",
+             {MEMBER_MISMATCH_FACTOR} × the best), the best inside the sampled box is the point model",
             seed + NETWORKS as u64 - 1,
             RESTARTS_PER_NETWORK - 1,
             vectors.len(),
