@@ -320,6 +320,15 @@ fn mmg_replicates(
     text: &str,
 ) -> Result<Vec<Box<dyn Dynamics + Send + Sync>>, PipelineError> {
     let file: MmgModelFile = toml::from_str(text).map_err(|e| InputError::toml(path, text, &e))?;
+    mmg_file_replicates(&file, path)
+}
+
+/// The `[bootstrap]` replicates of the mmg model file `file` (read from `path`) as simulation
+/// models; its point model is checked first, a fault names the key.
+pub fn mmg_file_replicates(
+    file: &MmgModelFile,
+    path: &std::path::Path,
+) -> Result<Vec<Box<dyn Dynamics + Send + Sync>>, PipelineError> {
     file.to_model(path)?;
     Ok(file
         .replicate_models(path)?
@@ -416,8 +425,17 @@ fn gp_posterior_draws(
     text: &str,
 ) -> Result<Vec<Box<dyn Dynamics + Send + Sync>>, PipelineError> {
     let file: GpModelFile = toml::from_str(text).map_err(|e| InputError::toml(path, text, &e))?;
+    gp_file_draws(&file, path)
+}
+
+/// The [`GP_DRAWS`] posterior draws (seed [`GP_DRAW_SEED`]) of the sparse-GP model file `file`
+/// (read from `path`), as `--bands` draws them.
+pub fn gp_file_draws(
+    file: &GpModelFile,
+    path: &std::path::Path,
+) -> Result<Vec<Box<dyn Dynamics + Send + Sync>>, PipelineError> {
     let model =
-        GpDynamics::from_file(&file).map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
+        GpDynamics::from_file(file).map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
     gp_draws(&model, GP_DRAWS, GP_DRAW_SEED)
         .map_err(|e| crate::error::failed(format!("{}: posterior draws: {e}", path.display())))
 }

@@ -57,8 +57,8 @@ use shipid_sim::gp::{GP_KIND, GpDynamics, GpModelFile};
 use shipid_sim::{Effect, WithEffects};
 
 use crate::bands::{
-    BandKind, BandRun, GP_DRAW_SEED, GP_DRAWS, ManoeuvreBands, gp_draws, manoeuvre_bands,
-    replicated_models,
+    BandKind, BandRun, ManoeuvreBands, gp_draws, gp_file_draws, manoeuvre_bands,
+    mmg_file_replicates, replicated_models,
 };
 use crate::bootstrap::{MmgBootstrap, bootstrap_fit, bootstrap_mmg};
 use crate::error::{PipelineError, bad_input, failed};
@@ -978,8 +978,22 @@ pub fn stored_calibration(
                 std::fs::read_to_string(path).map_err(|e| shipid_io::InputError::read(path, &e))?;
             polynomial_calibration(spec, &whole, level)
         }
-        Some(MMG_KIND) => mmg_calibration(spec, &text, level),
-        Some(GP_KIND) => gp_calibration(spec, &text, level),
+        Some(MMG_KIND) => own_replicates(
+            spec,
+            &text,
+            level,
+            CalibratedSource::MmgBootstrap,
+            |f: &MmgModelFile| (f.calibration.as_ref(), &f.training),
+            |f| mmg_file_replicates(f, path),
+        ),
+        Some(GP_KIND) => own_replicates(
+            spec,
+            &text,
+            level,
+            CalibratedSource::PosteriorDraws,
+            |f: &GpModelFile| (f.calibration.as_ref(), &f.training),
+            |f| gp_file_draws(f, path),
+        ),
         _ => Ok(None),
     }
 }
@@ -1006,70 +1020,47 @@ fn stored_factors(
         .check()
         .map_err(|e| shipid_io::InputError::key(path, &e.key, e.reason))?;
     check_stored_level(spec, record.level, level)?;
-    Ok(MetricFamily::ALL
+    Ok(family_factors(&record.factors))
+}
+
+/// A checked record's factors by family.
+fn family_factors(stored: &BTreeMap<String, FactorRecord>) -> BTreeMap<MetricFamily, FamilyFactor> {
+    MetricFamily::ALL
         .iter()
-        .filter_map(|&fam| {
-            record
-                .factors
-                .get(fam.as_str())
-                .map(|f| (fam, family_factor(f)))
-        })
-        .collect())
+        .filter_map(|&fam| stored.get(fam.as_str()).map(|f| (fam, family_factor(f))))
+        .collect()
 }
 
-fn mmg_calibration(
+/// The calibration of an mmg or sparse-GP file (`spec`, of type `F`) over its own replicates:
+/// `parts` gives its `[calibration]` and training windows, `replicates` makes the replicates once
+/// the record has been checked at `level`; the reach comes from its training windows.
+fn own_replicates<F: serde::de::DeserializeOwned>(
     spec: &str,
     text: &str,
     level: f64,
+    source: CalibratedSource,
+    parts: impl Fn(&F) -> (Option<&FactorCalibrationRecord>, &[TrainingWindow]),
+    replicates: impl FnOnce(&F) -> Result<Vec<Box<dyn Dynamics + Send + Sync>>, PipelineError>,
 ) -> Result<Option<StoredCalibration>, PipelineError> {
     let path = std::path::Path::new(spec);
-    let file: MmgModelFile =
-        toml::from_str(text).map_err(|e| shipid_io::InputError::toml(path, text, &e))?;
-    let Some(record) = &file.calibration else {
+    let file: F = toml::from_str(text).map_err(|e| shipid_io::InputError::toml(path, text, &e))?;
+    let (Some(record), training) = parts(&file) else {
         return Ok(None);
     };
     let factors = stored_factors(spec, record, level)?;
-    file.to_model(path)?;
-    let replicates: Vec<Box<dyn Dynamics + Send + Sync>> = file
-        .replicate_models(path)?
-        .into_iter()
-        .map(|m| Box::new(m) as Box<dyn Dynamics + Send + Sync>)
-        .collect();
-    Ok(Some(StoredCalibration {
-        level: record.level,
-        folds: record.folds,
-        source: CalibratedSource::MmgBootstrap,
-        structures: vec![(MMG_KIND.to_string(), replicates.len())],
-        factors,
-        replicates,
-        range: stored_state_range(spec, &file.training),
-    }))
-}
-
-fn gp_calibration(
-    spec: &str,
-    text: &str,
-    level: f64,
-) -> Result<Option<StoredCalibration>, PipelineError> {
-    let path = std::path::Path::new(spec);
-    let file: GpModelFile =
-        toml::from_str(text).map_err(|e| shipid_io::InputError::toml(path, text, &e))?;
-    let Some(record) = &file.calibration else {
-        return Ok(None);
+    let replicates = replicates(&file)?;
+    let name = match source {
+        CalibratedSource::PosteriorDraws => "sparse-GP",
+        CalibratedSource::Ensemble | CalibratedSource::MmgBootstrap => MMG_KIND,
     };
-    let factors = stored_factors(spec, record, level)?;
-    let model =
-        GpDynamics::from_file(&file).map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
-    let replicates = gp_draws(&model, GP_DRAWS, GP_DRAW_SEED)
-        .map_err(|e| failed(format!("{}: posterior draws: {e}", path.display())))?;
     Ok(Some(StoredCalibration {
         level: record.level,
         folds: record.folds,
-        source: CalibratedSource::PosteriorDraws,
-        structures: vec![("sparse-GP".to_string(), replicates.len())],
+        source,
+        structures: vec![(name.to_string(), replicates.len())],
         factors,
         replicates,
-        range: stored_state_range(spec, &file.training),
+        range: stored_state_range(spec, training),
     }))
 }
 
@@ -1112,15 +1103,7 @@ fn polynomial_calibration(
             }
         }
     }
-    let factors = MetricFamily::ALL
-        .iter()
-        .filter_map(|&fam| {
-            checked
-                .factors
-                .get(fam.as_str())
-                .map(|f| (fam, family_factor(f)))
-        })
-        .collect();
+    let factors = family_factors(&checked.factors);
     let range = crate::range::training_data(spec)
         .as_ref()
         .and_then(crate::range::identification_range);

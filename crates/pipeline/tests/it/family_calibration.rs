@@ -51,6 +51,16 @@ fn check_widened(raw: &[(&str, Band)], calibrated: &[(&str, Band)]) {
     }
 }
 
+/// The bands of the model file `spec`'s replicates without its calibration.
+fn raw_bands(
+    spec: &str,
+    point: &dyn shipid_sim::Dynamics,
+    m: &Manoeuvre,
+) -> shipid_pipeline::bands::ManoeuvreBands {
+    let replicates = replicate_models(spec).unwrap();
+    manoeuvre_bands(point, &replicates, m, point.ship(), 0.9, BandRun::Standard).unwrap()
+}
+
 fn metric_bands(b: &shipid_pipeline::bands::ManoeuvreBands) -> Vec<(&'static str, Band)> {
     b.metrics
         .iter()
@@ -115,16 +125,10 @@ fn mmg_bands_were_bootstrap_only() {
         .unwrap();
     let reach = calibrated.reach.expect("a calibrated band has a reach");
     assert!(reach >= 1.0, "reach {reach}");
-    let raw = manoeuvre_bands(
-        point.as_ref(),
-        &replicate_models(spec).unwrap(),
-        &m,
-        &ship,
-        0.9,
-        BandRun::Standard,
-    )
-    .unwrap();
-    check_widened(&metric_bands(&raw), &metric_bands(&calibrated.bands));
+    check_widened(
+        &metric_bands(&raw_bands(spec, point.as_ref(), &m)),
+        &metric_bands(&calibrated.bands),
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -207,15 +211,9 @@ fn sparse_gp_calibration_is_stored_and_widens_its_posterior_draws() {
     let calibrated = bands
         .bands(point.as_ref(), &m, &ship, 0.9, BandRun::Standard)
         .unwrap();
-    let raw = manoeuvre_bands(
-        point.as_ref(),
-        &replicate_models(spec).unwrap(),
-        &m,
-        &ship,
-        0.9,
-        BandRun::Standard,
-    )
-    .unwrap();
-    check_widened(&metric_bands(&raw), &metric_bands(&calibrated.bands));
+    check_widened(
+        &metric_bands(&raw_bands(spec, point.as_ref(), &m)),
+        &metric_bands(&calibrated.bands),
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
