@@ -9,6 +9,7 @@
 //! - [`dataset`]: a data set TOML and its recordings → [`Dataset`];
 //! - [`import`]: a foreign layout described by a mapping TOML → a data set in the project's format;
 //! - [`open_water`]: the propeller's open-water CSV → the quadratic K_T(J);
+//! - [`relative_wind`]: the wind measured on board (relative) turned into the true wind;
 //! - [`write`]: atomic writing of recordings and data sets;
 //! - [`prime`]: the prime system I with U0 (`docs/conventions.md`);
 //! - [`deriv`]: the smoothing differentiator that estimates accelerations;
@@ -21,6 +22,7 @@ pub mod import;
 pub mod open_water;
 pub mod prime;
 pub mod recording;
+pub mod relative_wind;
 pub mod table;
 pub mod types;
 pub mod units;

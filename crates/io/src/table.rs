@@ -59,12 +59,20 @@ impl Columns {
             self.values.insert(Quantity::U, u);
             self.values.insert(Quantity::V, v);
         }
+        let relative = [Quantity::RelativeWindSpeed, Quantity::RelativeWindAngle]
+            .iter()
+            .any(|q| self.values.contains_key(q));
         for q in Quantity::RECORDING.iter().filter(|q| q.required()) {
             if !self.values.contains_key(q) {
+                let hint = if relative && matches!(q, Quantity::Psi | Quantity::U | Quantity::V) {
+                    " (the relative wind columns need it too: the true wind is the relative wind turned by the heading plus the ship's velocity over ground)"
+                } else {
+                    ""
+                };
                 return Err(InputError::line(
                     path,
                     self.header_line(),
-                    format!("missing required column `{}`", q.name()),
+                    format!("missing required column `{}`{hint}", q.name()),
                 ));
             }
         }
@@ -83,7 +91,7 @@ impl Columns {
             }
         }
         self.check_gaps(path)?;
-        let wind = self.flow(path, Quantity::WindSpeed, Quantity::WindFrom)?;
+        let wind = self.wind(path)?;
         let current = self.flow(path, Quantity::CurrentSpeed, Quantity::CurrentFrom)?;
         let mut take = |q: Quantity| self.values.remove(&q);
         let mut psi = take(Quantity::Psi).unwrap_or_default();
@@ -116,6 +124,83 @@ impl Columns {
         })
     }
 
+    /// The recorded true wind: from the true-wind columns, or from the relative-wind columns turned
+    /// into the true wind sample by sample with the recorded heading and velocities
+    /// ([`crate::relative_wind`]), never both (which one would be meant is not for shipid to guess).
+    fn wind(&mut self, path: &Path) -> Result<Option<FlowSeries>, InputError> {
+        let true_wind = self.flow(path, Quantity::WindSpeed, Quantity::WindFrom)?;
+        let relative = self.flow(
+            path,
+            Quantity::RelativeWindSpeed,
+            Quantity::RelativeWindAngle,
+        )?;
+        let Some(relative) = relative else {
+            return Ok(true_wind);
+        };
+        let (col, header) = self.column_of[&Quantity::RelativeWindSpeed].clone();
+        if true_wind.is_some() {
+            let (true_col, true_header) = self.column_of[&Quantity::WindSpeed].clone();
+            let (angle_col, angle_header) = self.column_of[&Quantity::RelativeWindAngle].clone();
+            let from_col = self.column_of[&Quantity::WindFrom].0;
+            return Err(InputError::cell(
+                path,
+                self.header_line(),
+                col,
+                &header,
+                format!(
+                    "the recording has both a true wind (`{true_header}`, `wind_from`: columns {true_col} and {from_col}) and a relative wind (`{header}`, `{angle_header}`: columns {col} and {angle_col}); give one of them (docs/data-format.md): the relative wind is turned into the true wind on reading, and two winds for one ship would disagree"
+                ),
+            ));
+        }
+        let (psi, u, v) = (
+            &self.values[&Quantity::Psi],
+            &self.values[&Quantity::U],
+            &self.values[&Quantity::V],
+        );
+        let mut wind = FlowSeries {
+            speed_m_s: Vec::with_capacity(psi.len()),
+            from_rad: Vec::with_capacity(psi.len()),
+        };
+        let bound = Quantity::WindSpeed.bound_si();
+        for i in 0..psi.len() {
+            let w = crate::relative_wind::true_wind(
+                crate::relative_wind::Wind {
+                    speed_m_s: relative.speed_m_s[i],
+                    from_rad: relative.from_rad[i],
+                },
+                crate::relative_wind::ShipMotion {
+                    psi_rad: psi[i],
+                    u_m_s: u[i],
+                    v_m_s: v[i],
+                },
+            );
+            match w {
+                Some(w) if w.speed_m_s <= bound => {
+                    wind.speed_m_s.push(w.speed_m_s);
+                    wind.from_rad.push(w.from_rad);
+                }
+                _ => {
+                    let what = w.map_or("not finite".to_string(), |w| {
+                        format!(
+                            "{} m/s, beyond the bound {bound} m/s of `wind_speed`",
+                            number(w.speed_m_s)
+                        )
+                    });
+                    return Err(InputError::cell(
+                        path,
+                        self.lines[i],
+                        col,
+                        &header,
+                        format!(
+                            "the true wind of this relative wind and the recorded psi, u, v is {what} (docs/data-format.md): a wrong unit or a corrupt value"
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(Some(wind))
+    }
+
     /// A recorded flow (wind or current) from its speed and direction columns: both or neither, the
     /// speed never negative (a direction cannot be told from a negative speed's sign convention).
     fn flow(
@@ -130,19 +215,19 @@ impl Columns {
             (Some(_), None) => Some((speed, from)),
             (None, Some(_)) => Some((from, speed)),
         };
+        let (what, direction) = match speed {
+            Quantity::WindSpeed => ("wind", "the direction it comes from"),
+            Quantity::RelativeWindSpeed => ("relative wind", "the angle off the bow it comes from"),
+            _ => ("current", "the direction it comes from"),
+        };
         if let Some((present, missing)) = lone {
             return Err(InputError::line(
                 path,
                 self.header_line(),
                 format!(
-                    "column `{}` needs the column `{}` too (a recorded {} is its speed and the direction it comes from, docs/data-format.md)",
+                    "column `{}` needs the column `{}` too (a recorded {what} is its speed and {direction}, docs/data-format.md)",
                     present.name(),
                     missing.name(),
-                    if speed == Quantity::WindSpeed {
-                        "wind"
-                    } else {
-                        "current"
-                    }
                 ),
             ));
         }
@@ -157,8 +242,7 @@ impl Columns {
                 col,
                 &header,
                 format!(
-                    "negative {} speed {} m/s: give the speed (≥ 0) and the direction it comes from",
-                    speed.name().trim_end_matches("_speed"),
+                    "negative {what} speed {} m/s: give the speed (≥ 0) and {direction}",
                     speed_m_s[i]
                 ),
             ));

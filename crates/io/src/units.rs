@@ -78,6 +78,12 @@ pub enum Quantity {
     WindSpeed,
     /// Direction the true wind comes from [rad], earth-fixed, clockwise from north (`wind_from`).
     WindFrom,
+    /// Relative (apparent) wind speed measured on board [m/s] (optional column
+    /// `relative_wind_speed`; turned into the true wind on reading, [`crate::relative_wind`]).
+    RelativeWindSpeed,
+    /// Angle off the bow the relative wind comes from [rad]: 0 from dead ahead, positive from
+    /// starboard (`relative_wind_angle`).
+    RelativeWindAngle,
     /// Current speed [m/s] (optional column `current_speed`).
     CurrentSpeed,
     /// Direction the current comes from [rad], earth-fixed, clockwise from north (`current_from`;
@@ -91,7 +97,7 @@ pub enum Quantity {
 
 impl Quantity {
     /// Columns of a recording file (`docs/data-format.md`), in the order the project writes them.
-    pub const RECORDING: [Quantity; 16] = [
+    pub const RECORDING: [Quantity; 18] = [
         Quantity::T,
         Quantity::X0,
         Quantity::Y0,
@@ -106,6 +112,8 @@ impl Quantity {
         Quantity::RDot,
         Quantity::WindSpeed,
         Quantity::WindFrom,
+        Quantity::RelativeWindSpeed,
+        Quantity::RelativeWindAngle,
         Quantity::CurrentSpeed,
         Quantity::CurrentFrom,
     ];
@@ -126,6 +134,8 @@ impl Quantity {
             Quantity::RDot => "r_dot",
             Quantity::WindSpeed => "wind_speed",
             Quantity::WindFrom => "wind_from",
+            Quantity::RelativeWindSpeed => "relative_wind_speed",
+            Quantity::RelativeWindAngle => "relative_wind_angle",
             Quantity::CurrentSpeed => "current_speed",
             Quantity::CurrentFrom => "current_from",
             Quantity::X0Dot => "x0_dot",
@@ -144,14 +154,17 @@ impl Quantity {
         match self {
             Quantity::T => Dimension::Time,
             Quantity::X0 | Quantity::Y0 => Dimension::Length,
-            Quantity::Psi | Quantity::Delta | Quantity::WindFrom | Quantity::CurrentFrom => {
-                Dimension::Angle
-            }
+            Quantity::Psi
+            | Quantity::Delta
+            | Quantity::WindFrom
+            | Quantity::RelativeWindAngle
+            | Quantity::CurrentFrom => Dimension::Angle,
             Quantity::U
             | Quantity::V
             | Quantity::X0Dot
             | Quantity::Y0Dot
             | Quantity::WindSpeed
+            | Quantity::RelativeWindSpeed
             | Quantity::CurrentSpeed => Dimension::Velocity,
             Quantity::R => Dimension::AngularRate,
             Quantity::N => Dimension::Frequency,
@@ -190,10 +203,10 @@ impl Quantity {
             Quantity::UDot | Quantity::VDot => 1e4,
             Quantity::RDot => 1e4,
             // Beyond any storm at full scale (the strongest gusts measured are near 110 m/s).
-            Quantity::WindSpeed => 200.0,
+            Quantity::WindSpeed | Quantity::RelativeWindSpeed => 200.0,
             // Beyond any ocean current (the fastest tidal races run near 8 m/s).
             Quantity::CurrentSpeed => 50.0,
-            Quantity::WindFrom | Quantity::CurrentFrom => 1e5,
+            Quantity::WindFrom | Quantity::RelativeWindAngle | Quantity::CurrentFrom => 1e5,
         }
     }
 

@@ -34,8 +34,38 @@ pub fn write_atomic(path: &Path, contents: &[u8]) -> std::io::Result<()> {
     std::fs::rename(&tmp, path)
 }
 
+/// The channels a recording's wind is written as: the true wind (`wind_speed`, `wind_from`), or the
+/// relative wind an anemometer on board would measure (`relative_wind_speed`, `relative_wind_angle`),
+/// computed from the true wind with the recording's own heading and velocities so that reading it
+/// back gives the same true wind (to the 9 digits written).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum WindChannels {
+    #[default]
+    True,
+    Relative,
+}
+
+impl std::str::FromStr for WindChannels {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<WindChannels, String> {
+        match s {
+            "true" => Ok(WindChannels::True),
+            "relative" => Ok(WindChannels::Relative),
+            _ => Err(format!(
+                "`{s}` is not a wind channel kind: `true` (wind_speed, wind_from) or `relative` (relative_wind_speed, relative_wind_angle)"
+            )),
+        }
+    }
+}
+
 /// The CSV text of a recording, with `comments` as `#` lines before the header.
 pub fn recording_csv(rec: &Recording, comments: &[String]) -> String {
+    recording_csv_with(rec, comments, WindChannels::True)
+}
+
+/// [`recording_csv`] with the wind written as `wind` channels.
+pub fn recording_csv_with(rec: &Recording, comments: &[String], wind: WindChannels) -> String {
     let mut out = String::new();
     for c in comments {
         for line in c.lines() {
@@ -49,8 +79,12 @@ pub fn recording_csv(rec: &Recording, comments: &[String]) -> String {
     if rec.accelerations.is_some() {
         header.extend(["u_dot", "v_dot", "r_dot"]);
     }
-    if rec.wind.is_some() {
-        header.extend(["wind_speed", "wind_from"]);
+    match (&rec.wind, wind) {
+        (None, _) => {}
+        (Some(_), WindChannels::True) => header.extend(["wind_speed", "wind_from"]),
+        (Some(_), WindChannels::Relative) => {
+            header.extend(["relative_wind_speed", "relative_wind_angle"]);
+        }
     }
     if rec.current.is_some() {
         header.extend(["current_speed", "current_from"]);
@@ -74,8 +108,31 @@ pub fn recording_csv(rec: &Recording, comments: &[String]) -> String {
         if let Some(a) = &rec.accelerations {
             row.extend([a.u_dot[i], a.v_dot[i], a.r_dot[i]]);
         }
-        for flow in [&rec.wind, &rec.current].into_iter().flatten() {
-            row.extend([flow.speed_m_s[i], flow.from_rad[i]]);
+        if let Some(w) = &rec.wind {
+            let true_wind = crate::relative_wind::Wind {
+                speed_m_s: w.speed_m_s[i],
+                from_rad: w.from_rad[i],
+            };
+            let written = match wind {
+                WindChannels::True => Some(true_wind),
+                WindChannels::Relative => crate::relative_wind::relative_wind(
+                    true_wind,
+                    crate::relative_wind::ShipMotion {
+                        psi_rad: rec.psi[i],
+                        u_m_s: rec.u[i],
+                        v_m_s: rec.v[i],
+                    },
+                ),
+            };
+            // A non-finite value is written as NaN, which every reader refuses naming the cell.
+            let w = written.unwrap_or(crate::relative_wind::Wind {
+                speed_m_s: f64::NAN,
+                from_rad: f64::NAN,
+            });
+            row.extend([w.speed_m_s, w.from_rad]);
+        }
+        if let Some(c) = &rec.current {
+            row.extend([c.speed_m_s[i], c.from_rad[i]]);
         }
         let cells: Vec<String> = row.into_iter().map(fmt_sig).collect();
         out.push_str(&cells.join(","));
@@ -198,6 +255,37 @@ pub fn write_dataset_with(
     files: &[(String, Vec<u8>)],
     inputs: &[PathBuf],
 ) -> Result<(), WriteError> {
+    write_all(
+        dir,
+        file,
+        recordings,
+        header_comments,
+        files,
+        inputs,
+        WindChannels::True,
+    )
+}
+
+/// [`write_dataset`] with the recordings' wind written as `wind` channels.
+pub fn write_dataset_channels(
+    dir: &Path,
+    file: &DatasetFile,
+    recordings: &[&Recording],
+    header_comments: &[String],
+    wind: WindChannels,
+) -> Result<(), WriteError> {
+    write_all(dir, file, recordings, header_comments, &[], &[], wind)
+}
+
+fn write_all(
+    dir: &Path,
+    file: &DatasetFile,
+    recordings: &[&Recording],
+    header_comments: &[String],
+    files: &[(String, Vec<u8>)],
+    inputs: &[PathBuf],
+    wind: WindChannels,
+) -> Result<(), WriteError> {
     if dir.exists() && !dir.is_dir() {
         return Err(WriteError::NotADirectory {
             dir: dir.to_path_buf(),
@@ -259,7 +347,7 @@ pub fn write_dataset_with(
         .map(|(entry, rec)| {
             (
                 entry.file.as_str(),
-                recording_csv(rec, header_comments).into_bytes(),
+                recording_csv_with(rec, header_comments, wind).into_bytes(),
             )
         })
         .chain(
