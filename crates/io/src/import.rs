@@ -14,7 +14,9 @@
 //! encoding = "windows-1252"                         # a WHATWG label; default "utf-8"
 //! [[column]]
 //! index = 1                                         # 1-based
-//! quantity = "t"                                    # t x0 y0 psi u v r delta n u_dot v_dot r_dot x0_dot y0_dot
+//! quantity = "t"                                    # t x0 y0 psi u v r delta n u_dot v_dot r_dot x0_dot y0_dot,
+//!                                                   # wind_speed wind_from (true wind) or relative_wind_speed
+//!                                                   # relative_wind_angle (on board), current_speed current_from
 //! unit = "s"
 //! [dataset]                                         # name, origin, [dataset.ship], [dataset.added_mass]
 //! [[recording]]                                     # source, file, kind, rudder, check, side

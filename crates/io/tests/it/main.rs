@@ -8,3 +8,4 @@ mod input_checks;
 mod prime_and_derivatives;
 mod propeller_rudder;
 mod readers_never_panic;
+mod relative_wind;
