@@ -35,6 +35,7 @@ use rand::SeedableRng;
 use rand::rngs::StdRng;
 use rand_distr::{Distribution, Normal};
 use shipid_io::dataset::{DatasetFile, Origin, entry_for};
+use shipid_io::write::WindChannels;
 use shipid_io::{FlowSeries, Manoeuvre, Recording, Ship, Side, Windage};
 use shipid_sim::effects::{Effect, simulate_with_effects};
 use shipid_sim::environment::{KnownEnvironment, WithEnvironment, assumed_windage};
@@ -697,6 +698,25 @@ pub fn default_windage() -> Windage {
                 .into(),
         ),
         ..assumed_windage(&kvlcc2_ship())
+    }
+}
+
+/// The comment line that says how the wind channels were written (`--wind-channels`): nothing for
+/// the true wind, which [`recorded_provenance`] describes; a bad-input error for relative channels
+/// without a recorded wind (nothing would be written as asked).
+pub fn wind_channels_provenance(
+    recorded: Option<&RecordedEnvironment>,
+    channels: WindChannels,
+) -> Result<Option<String>, PipelineError> {
+    let has_wind = recorded.is_some_and(|env| env.wind.is_some());
+    match channels {
+        WindChannels::True => Ok(None),
+        WindChannels::Relative if !has_wind => Err(crate::error::bad_input(
+            "--wind-channels relative needs --recorded-wind: without a recorded wind there are no wind channels to write",
+        )),
+        WindChannels::Relative => Ok(Some(
+            "The wind is written as measured on board: relative_wind_speed [m/s] and relative_wind_angle [rad] (off the bow it comes from, positive from starboard), computed from the recorded true wind with each sample's psi, u, v; reading them back gives the true wind above (docs/data-format.md).".into(),
+        )),
     }
 }
 

@@ -41,6 +41,10 @@ enum Command {
         /// A current felt and written as recorded channels (`speed=0.02,from=120`).
         #[arg(long, value_name = "KEY=VALUE,...")]
         recorded_current: Option<String>,
+        /// Write the recorded wind as the true wind (`wind_speed`, `wind_from`) or as measured on
+        /// board (`relative_wind_speed`, `relative_wind_angle`; docs/data-format.md).
+        #[arg(long, value_name = "true|relative", default_value = "true")]
+        wind_channels: shipid_io::write::WindChannels,
     },
     /// Import recordings of another layout through a mapping file.
     Import {
@@ -332,6 +336,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             manoeuvre,
             recorded_wind,
             recorded_current,
+            wind_channels,
         } => {
             let effects = shipid_pipeline::generate::parse_effects(&effect)?;
             let recorded = match (&recorded_wind, &recorded_current) {
@@ -342,6 +347,10 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                     windage: shipid_pipeline::generate::default_windage(),
                 }),
             };
+            let channels_comment = shipid_pipeline::generate::wind_channels_provenance(
+                recorded.as_ref(),
+                wind_channels,
+            )?;
             let manoeuvres = if manoeuvre.is_empty() {
                 shipid_pipeline::generate::default_manoeuvres()
             } else {
@@ -366,8 +375,15 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                     .iter()
                     .flat_map(shipid_pipeline::generate::recorded_provenance),
             );
-            shipid_io::write::write_dataset(&out, &g.dataset, &recs, &comments)
-                .map_err(|e| shipid::write_failed(&out, e))?;
+            comments.extend(channels_comment);
+            shipid_io::write::write_dataset_channels(
+                &out,
+                &g.dataset,
+                &recs,
+                &comments,
+                wind_channels,
+            )
+            .map_err(|e| shipid::write_failed(&out, e))?;
             eprintln!(
                 "wrote {} recordings and {}",
                 recs.len(),
