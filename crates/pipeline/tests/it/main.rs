@@ -7,4 +7,5 @@ mod family_calibration;
 mod generate_environment;
 mod mmg;
 mod refine;
+mod relative_wind;
 mod stored_calibration;
