@@ -14,11 +14,13 @@ use shipid_model::{AbkowitzModel, ModelFile};
 use shipid_sim::gp::{GP_KIND, GpDynamics, GpModelFile};
 use shipid_sim::metrics::metrics;
 use shipid_sim::{AbkowitzDynamics, Dynamics, Effect, SimStatus, WithEffects};
-use shipid_uncertainty::{Band, SplitMix64, UncertaintyError, percentile_band};
+use shipid_uncertainty::{
+    Band, SplitMix64, UncertaintyError, order_statistic_band, percentile_band,
+};
 
 use crate::bootstrap::replicate_rng;
 use crate::error::{PipelineError, bad_input};
-use crate::mmg::file::{MMG_KIND, MmgModelFile};
+use crate::mmg::file::{MMG_KIND, MmgModelFile, ReplicateKind};
 use crate::simulate::{SimGrid, simulate_manoeuvre, simulate_on_grid};
 use crate::validate::closed_loop_in;
 use shipid_sim::environment::KnownEnvironment;
@@ -93,10 +95,24 @@ pub enum BandRun<'a> {
 }
 
 /// Simulate `point` and every model of `replicates` through `m`, each as `how` says; the `level`
-/// bands of the metrics and of the track.
+/// bands of the metrics and of the track (percentiles of the replicates).
 pub fn manoeuvre_bands(
     point: &dyn Dynamics,
     replicates: &[Box<dyn Dynamics + Send + Sync>],
+    m: &Manoeuvre,
+    ship: &Ship,
+    level: f64,
+    how: BandRun,
+) -> Result<ManoeuvreBands, PipelineError> {
+    manoeuvre_bands_of(point, replicates, BandKind::Bootstrap, m, ship, level, how)
+}
+
+/// [`manoeuvre_bands`] for replicates of `kind`: an inverse ensemble's bands are its order
+/// statistics ([`order_statistic_band`]), the others' their percentiles.
+pub fn manoeuvre_bands_of(
+    point: &dyn Dynamics,
+    replicates: &[Box<dyn Dynamics + Send + Sync>],
+    kind: BandKind,
     m: &Manoeuvre,
     ship: &Ship,
     level: f64,
@@ -142,14 +158,14 @@ pub fn manoeuvre_bands(
         .map(|(i, &(name, value))| MetricBand {
             metric: name,
             point: value,
-            band: percentile_band(
+            band: kind.band(
                 replicate_metrics.iter().map(|e| e.and_then(|e| e[i].1)),
                 level,
             ),
         })
         .collect();
-    let track =
-        (!point_run.recording.t.is_empty()).then(|| track_band(&point_run.recording, &runs, level));
+    let track = (!point_run.recording.t.is_empty())
+        .then(|| track_band(&point_run.recording, &runs, kind, level));
     Ok(ManoeuvreBands {
         level,
         replicates: replicates.len(),
@@ -175,6 +191,7 @@ fn at_time(t: &[f64], y: &[f64], at: f64) -> Option<f64> {
 fn track_band(
     point: &shipid_io::Recording,
     runs: &[Option<shipid_sim::SimOutput>],
+    kind: BandKind,
     level: f64,
 ) -> TrackBand {
     let step = point.t.len().div_ceil(TRACK_SAMPLES).max(1);
@@ -188,7 +205,7 @@ fn track_band(
                         .and_then(|r| at_time(&r.recording.t, series(&r.recording), at))
                         .map(|v| v * scale)
                 });
-                percentile_band(values, level).ok().map(|b| (b.lo, b.hi))
+                kind.band(values, level).ok().map(|b| (b.lo, b.hi))
             })
             .collect::<Vec<_>>()
     };
@@ -208,14 +225,29 @@ pub enum BandKind {
     Bootstrap,
     /// Functions drawn from a sparse GP's posterior.
     PosteriorDraws,
+    /// The kept members of an inverse ensemble (`shipid inverse`), banded by order statistics.
+    Ensemble,
 }
 
 impl BandKind {
+    /// The `level` band of values of replicates of this kind.
+    pub fn band(
+        self,
+        values: impl IntoIterator<Item = Option<f64>>,
+        level: f64,
+    ) -> Result<Band, UncertaintyError> {
+        match self {
+            BandKind::Ensemble => order_statistic_band(values, level),
+            BandKind::Bootstrap | BandKind::PosteriorDraws => percentile_band(values, level),
+        }
+    }
+
     /// What the replicated models are called, in the plural.
     pub fn noun(self) -> &'static str {
         match self {
             BandKind::Bootstrap => "bootstrap replicates",
             BandKind::PosteriorDraws => "posterior draws",
+            BandKind::Ensemble => "ensemble members",
         }
     }
 
@@ -227,6 +259,9 @@ impl BandKind {
             }
             BandKind::PosteriorDraws => {
                 "posterior draws of the sparse GP, each simulated: the GP's own uncertainty given its kernel and sparse points; not calibrated (docs/uncertainty.md)"
+            }
+            BandKind::Ensemble => {
+                "inverse ensemble: the kept members (networks × refinement restarts that match the motion indexes), each simulated; order statistics that hold one more member with the level's probability (for a few tens of members, their range), so every member, the delivered one included, lies inside; what the indexes leave undetermined, not calibrated (docs/uncertainty.md)"
             }
         }
     }
@@ -260,7 +295,7 @@ pub fn replicated_models(
         .and_then(|t| t.get("kind").and_then(|k| k.as_str()).map(String::from));
     match kind.as_deref() {
         Some("abkowitz") => abkowitz_replicates(path, &text).map(|m| (m, BandKind::Bootstrap)),
-        Some(MMG_KIND) => mmg_replicates(path, &text).map(|m| (m, BandKind::Bootstrap)),
+        Some(MMG_KIND) => mmg_replicates(path, &text),
         Some(GP_KIND) => gp_posterior_draws(path, &text).map(|m| (m, BandKind::PosteriorDraws)),
         _ => Err(bad_input(format!(
             "{spec}: --bands needs the replicates of a polynomial or mmg model file (`shipid fit … \
@@ -318,9 +353,13 @@ fn abkowitz_replicates(
 fn mmg_replicates(
     path: &std::path::Path,
     text: &str,
-) -> Result<Vec<Box<dyn Dynamics + Send + Sync>>, PipelineError> {
+) -> Result<(Vec<Box<dyn Dynamics + Send + Sync>>, BandKind), PipelineError> {
     let file: MmgModelFile = toml::from_str(text).map_err(|e| InputError::toml(path, text, &e))?;
-    mmg_file_replicates(&file, path)
+    let kind = match file.bootstrap.as_ref().map(|b| b.replicate_kind) {
+        Some(ReplicateKind::InverseEnsemble) => BandKind::Ensemble,
+        _ => BandKind::Bootstrap,
+    };
+    mmg_file_replicates(&file, path).map(|m| (m, kind))
 }
 
 /// The `[bootstrap]` replicates of the mmg model file `file` (read from `path`) as simulation

@@ -23,7 +23,7 @@ use shipid_sim::{AbkowitzDynamics, Dynamics};
 use shipid_uncertainty::{BlockLength, SplitMix64, block_length, replicate_rows, spread};
 
 use crate::error::{PipelineError, bad_input};
-use crate::mmg::file::MmgBootstrapRecord;
+use crate::mmg::file::{MmgBootstrapRecord, ReplicateKind};
 use crate::mmg::identify::{EqSample, Problem};
 use crate::mmg::priors::{NONLINEAR_NAMES, ParamSpec, Role};
 use crate::mmg::{MmgEstimator, MmgFit, MmgFitOptions, training_samples};
@@ -314,6 +314,7 @@ impl MmgBootstrap {
     pub fn record(&self) -> MmgBootstrapRecord {
         let spread = spread(&self.replicates).ok();
         MmgBootstrapRecord {
+            replicate_kind: ReplicateKind::BlockBootstrap,
             method: MMG_METHOD.into(),
             seed: self.seed,
             block_rows: self.block.rows,

@@ -58,7 +58,7 @@ use shipid_sim::{Effect, WithEffects};
 
 use crate::bands::{
     BandKind, BandRun, ManoeuvreBands, gp_draws, gp_file_draws, manoeuvre_bands,
-    mmg_file_replicates, replicated_models,
+    manoeuvre_bands_of, mmg_file_replicates, replicated_models,
 };
 use crate::bootstrap::{MmgBootstrap, bootstrap_fit, bootstrap_mmg};
 use crate::error::{PipelineError, bad_input, failed};
@@ -1145,7 +1145,7 @@ impl ModelBands {
         Ok(ModelBands::Raw { kind, replicates })
     }
 
-    /// `calibrated`, `bootstrap` or `posterior-draws`.
+    /// `calibrated`, `bootstrap`, `posterior-draws` or `ensemble`.
     pub fn kind(&self) -> &'static str {
         match self {
             ModelBands::Calibrated(_) => "calibrated",
@@ -1157,6 +1157,10 @@ impl ModelBands {
                 kind: BandKind::PosteriorDraws,
                 ..
             } => "posterior-draws",
+            ModelBands::Raw {
+                kind: BandKind::Ensemble,
+                ..
+            } => "ensemble",
         }
     }
 
@@ -1209,8 +1213,8 @@ impl ModelBands {
                 bands: b.bands,
                 reach: Some(b.reach),
             }),
-            ModelBands::Raw { replicates, .. } => {
-                manoeuvre_bands(point, replicates, m, ship, level, how)
+            ModelBands::Raw { replicates, kind } => {
+                manoeuvre_bands_of(point, replicates, *kind, m, ship, level, how)
                     .map(|bands| RunBands { bands, reach: None })
             }
         }

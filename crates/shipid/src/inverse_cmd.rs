@@ -38,7 +38,7 @@ use shipid_inverse::target::{TargetShip, TargetsFile};
 use shipid_io::write::write_atomic;
 use shipid_pipeline::mmg::file::{
     MMG_KIND, MmgBootstrapRecord, MmgEstimatorEntry, MmgModelFile, ParamEntry, PropellerEntry,
-    RudderEntry, write_mmg_model_file,
+    ReplicateKind, RudderEntry, write_mmg_model_file,
 };
 use shipid_pipeline::mmg::geometry::MmgGeometry;
 use shipid_pipeline::mmg::identify::DETERMINED_SHARE;
@@ -360,6 +360,7 @@ fn model_file(
         })
         .collect();
     let bootstrap = d.members.as_ref().map(|(vectors, spread)| MmgBootstrapRecord {
+        replicate_kind: ReplicateKind::InverseEnsemble,
         method: format!(
             "not a bootstrap: an ensemble of {NETWORKS} inverse networks (seeds {seed}…{}) trained on one \
              simulated database, each refined by re-simulation from its own answer and {} starts \
@@ -604,6 +605,9 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
                     &modes,
                 );
             }
+            // The model file's own weights: the best-matching member inside the box, which need not
+            // be member 1 (the best-matching of all).
+            weights_csv_rows(&mut weights_csv, &m.name, "model", &d.weights, &modes);
             for (k, member) in e.map_or(&[][..], |e| &e.members[..]).iter().enumerate() {
                 weights_csv_rows(
                     &mut weights_csv,

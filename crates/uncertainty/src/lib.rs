@@ -16,7 +16,7 @@ pub mod coverage;
 pub mod resample;
 pub mod spread;
 
-pub use band::{Band, percentile_band};
+pub use band::{Band, order_statistic_band, percentile_band};
 pub use block::{BlockLength, block_length};
 pub use coverage::Coverage;
 pub use resample::{SplitMix64, replicate_rows};

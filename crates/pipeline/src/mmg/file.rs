@@ -115,10 +115,28 @@ pub struct MmgModelFile {
     pub calibration: Option<shipid_model::calibration::FactorCalibrationRecord>,
 }
 
-/// `[bootstrap]` of an mmg model file: the parameter uncertainty by a moving-block bootstrap.
+/// What the replicates of an mmg `[bootstrap]` are, which decides how a band is drawn from them.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ReplicateKind {
+    /// Re-identifications on moving-block resamples of the training data (`shipid fit --bootstrap`):
+    /// a sample of the estimator's distribution, banded by its percentiles.
+    #[default]
+    BlockBootstrap,
+    /// The kept members of an inverse ensemble (`shipid inverse`): a few tens of equally plausible
+    /// answers, banded by order statistics so that every member, the delivered one included, lies
+    /// inside.
+    InverseEnsemble,
+}
+
+/// `[bootstrap]` of an mmg model file: the parameter uncertainty by a moving-block bootstrap, or the
+/// members of an inverse ensemble (`replicate_kind`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MmgBootstrapRecord {
+    /// What the replicates are (absent in files written before 0.3.0: a block bootstrap).
+    #[serde(default)]
+    pub replicate_kind: ReplicateKind,
     /// How the replicates were drawn and re-identified, in words.
     pub method: String,
     /// Seed of the replicate draws (SplitMix64 per replicate).

@@ -12,7 +12,10 @@ use shipid_pipeline::calibration::{
 };
 use shipid_pipeline::fit::WindowSpec;
 use shipid_pipeline::fit_gp::{DEFAULT_SIMILARITY, fit_gp_dataset, model_text};
+use shipid_pipeline::mmg::file::ReplicateKind;
 use shipid_pipeline::mmg::{MmgFitOptions, MmgModelFile, fit_mmg_model_file, write_mmg_model_file};
+use shipid_pipeline::simulate::simulate_manoeuvre;
+use shipid_sim::metrics::metrics;
 use shipid_uncertainty::Band;
 
 fn default_data() -> Dataset {
@@ -215,5 +218,71 @@ fn sparse_gp_calibration_is_stored_and_widens_its_posterior_draws() {
         &metric_bands(&raw_bands(spec, point.as_ref(), &m)),
         &metric_bands(&calibrated.bands),
     );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn inverse_ensemble_bands_were_percentiles_that_left_out_the_delivered_member() {
+    // `shipid inverse` stores its ensemble's kept members as an mmg `[bootstrap]`; their 5–95 %
+    // percentiles over ~21 members cut the outermost ones, and the delivered model (a member) fell
+    // outside its own band. An ensemble's band is its order statistics: with so few members, their
+    // range, which holds every member.
+    let dir = scratch("inverse-ensemble-bands");
+    let ds = default_data();
+    let recordings = vec!["zz35_35_ps.csv".to_string()];
+    let opts = MmgFitOptions {
+        recordings: recordings.clone(),
+        ..MmgFitOptions::default()
+    };
+    let (fit, mut file) = fit_mmg_model_file(&ds, &opts, false).unwrap();
+    let family = MmgFamily {
+        opts,
+        geometry: fit.geometry,
+        refine: false,
+        replicates: 21,
+        seed: 3,
+    };
+    let (_, boot) = family.bands_of(&ds, &fit, &recordings).unwrap();
+    let mut record = boot.record();
+    record.replicate_kind = ReplicateKind::InverseEnsemble;
+    file.bootstrap = Some(record);
+    let path = dir.join("model.toml");
+    shipid_pipeline::model_file::anchor_training(&mut file.training, &path);
+    std::fs::write(&path, write_mmg_model_file(&file).unwrap()).unwrap();
+    let spec = path.to_str().unwrap();
+
+    let bands = ModelBands::of(spec, 0.9).unwrap();
+    assert_eq!(bands.kind(), "ensemble");
+    assert_eq!(bands.noun(), "ensemble members");
+    let point = shipid_pipeline::model_file::load_model(spec).unwrap();
+    let m = turning_35();
+    let ship = *point.ship();
+    let got = bands
+        .bands(point.as_ref(), &m, &ship, 0.9, BandRun::Standard)
+        .unwrap();
+    let members: Vec<[(&str, Option<f64>); 8]> = replicate_models(spec)
+        .unwrap()
+        .iter()
+        .map(|r| {
+            let run = simulate_manoeuvre(r.as_ref(), &m, None, None).unwrap();
+            metrics(&run.recording, &m, &ship).entries()
+        })
+        .collect();
+    let mut checked = 0;
+    for (name, band) in metric_bands(&got.bands) {
+        let values: Vec<f64> = members
+            .iter()
+            .filter_map(|e| e.iter().find(|(n, _)| *n == name).and_then(|(_, v)| *v))
+            .collect();
+        let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        assert_eq!(
+            (band.lo, band.hi),
+            (lo, hi),
+            "{name}: the band is the members' range"
+        );
+        checked += 1;
+    }
+    assert!(checked >= 4, "the turn's four lengths have bands");
     std::fs::remove_dir_all(&dir).ok();
 }

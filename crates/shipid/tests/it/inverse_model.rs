@@ -100,9 +100,9 @@ fn the_model_file_reproduces_the_inverse_re_simulation() {
     // weights.csv holds the model's weights at full precision: they parse back to the same f64.
     let csv = std::fs::read_to_string(out.join("kvlcc2/weights.csv")).expect("weights.csv");
     let weights = motion["weights"].as_array().expect("weights");
-    let member1: Vec<f64> = csv
+    let delivered: Vec<f64> = csv
         .lines()
-        .filter(|l| l.starts_with("Tab3,member 1,"))
+        .filter(|l| l.starts_with("Tab3,model,"))
         .map(|l| {
             l.split(',')
                 .nth(3)
@@ -111,8 +111,8 @@ fn the_model_file_reproduces_the_inverse_re_simulation() {
                 .expect("f64")
         })
         .collect();
-    assert_eq!(member1.len(), weights.len(), "{csv}");
-    for (got, want) in member1.iter().zip(weights) {
+    assert_eq!(delivered.len(), weights.len(), "{csv}");
+    for (got, want) in delivered.iter().zip(weights) {
         assert_eq!(*got, want.as_f64().expect("a number"), "full precision");
     }
 

@@ -1,7 +1,8 @@
 //! Tests of the uncertainty building blocks: one helper per concern.
 
 use shipid_uncertainty::{
-    Coverage, SplitMix64, UncertaintyError, block_length, percentile_band, replicate_rows, spread,
+    Coverage, SplitMix64, UncertaintyError, block_length, order_statistic_band, percentile_band,
+    replicate_rows, spread,
 };
 
 /// Standard normal deviates from the crate's generator (Box–Muller).
@@ -158,6 +159,42 @@ fn percentile_bands() {
         Err(UncertaintyError::TooFewReplicates {
             finite: 19,
             total: 20,
+            needed: 20,
+        }),
+    );
+}
+
+fn check_order_band(
+    values: Vec<Option<f64>>,
+    level: f64,
+    expected: Result<(f64, f64), UncertaintyError>,
+) {
+    let got = order_statistic_band(values, level).map(|b| (b.lo, b.hi));
+    assert_eq!(got, expected);
+}
+
+#[test]
+fn order_statistic_bands() {
+    let members = |n: usize| -> Vec<Option<f64>> { (1..=n).map(|v| Some(v as f64)).collect() };
+    // 21 members at 90 %: k = ⌊22 · 0.05⌋ = 1, the range (holds a new member with probability 20/22).
+    check_order_band(members(21), 0.9, Ok((1.0, 21.0)));
+    // 38 members still give the range (⌊39 · 0.05⌋ = 1); 39 the second smallest and largest.
+    check_order_band(members(38), 0.9, Ok((1.0, 38.0)));
+    check_order_band(members(39), 0.9, Ok((2.0, 38.0)));
+    // 199 at 90 %: k = 10, as the percentiles would give about.
+    check_order_band(members(199), 0.9, Ok((10.0, 190.0)));
+    // A low level on few members never crosses over: k ≤ ⌈n/2⌉.
+    check_order_band(members(20), 0.01, Ok((10.0, 11.0)));
+    let mut with_undefined = members(25);
+    with_undefined.extend([None, Some(f64::NAN)]);
+    check_order_band(with_undefined, 0.9, Ok((1.0, 25.0)));
+    check_order_band(members(25), 1.0, Err(UncertaintyError::Level(1.0)));
+    check_order_band(
+        members(19),
+        0.9,
+        Err(UncertaintyError::TooFewReplicates {
+            finite: 19,
+            total: 19,
             needed: 20,
         }),
     );
