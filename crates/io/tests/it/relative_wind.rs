@@ -215,6 +215,21 @@ fn motion() -> impl Strategy<Value = ShipMotion> {
 }
 
 proptest! {
+    /// A relative-wind recording cut and spliced anywhere reads or is refused naming the file, never
+    /// panics.
+    #[test]
+    fn mutated_relative_wind_recordings_never_panic(at in 0usize..1200, cut in 0usize..40,
+            insert in "[0-9a-z_,.\\[\\]\\n -]{0,12}") {
+        let mut text: Vec<char> = heading_east_beam_wind("").chars().collect();
+        let at = at % (text.len() + 1);
+        let end = (at + cut).min(text.len());
+        text.splice(at..end, insert.chars());
+        let text: String = text.into_iter().collect();
+        if let Err(e) = parse_recording(Path::new("fuzz.csv"), &text) {
+            prop_assert!(e.to_string().starts_with("fuzz.csv"), "{e}");
+        }
+    }
+
     /// relative → true → relative is the identity (speed to 1e-12 m/s, angle to 1e-12 rad where the
     /// relative wind is not near calm, where its angle means nothing).
     #[test]
