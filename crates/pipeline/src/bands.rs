@@ -261,7 +261,7 @@ impl BandKind {
                 "posterior draws of the sparse GP, each simulated: the GP's own uncertainty given its kernel and sparse points; not calibrated (docs/uncertainty.md)"
             }
             BandKind::Ensemble => {
-                "inverse ensemble: the kept members (networks × refinement restarts that match the motion indexes), each simulated; order statistics that hold one more member with the level's probability (for a few tens of members, their range), so every member, the delivered one included, lies inside; what the indexes leave undetermined, not calibrated (docs/uncertainty.md)"
+                "inverse ensemble: the kept members (networks × refinement restarts that match the motion indexes), each simulated; order statistics that hold one more member with the level's probability (at 90 % and up to 38 members: their range, which holds every member, the delivered one included); what the indexes leave undetermined, not calibrated (docs/uncertainty.md)"
             }
         }
     }
