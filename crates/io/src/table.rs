@@ -152,11 +152,18 @@ impl Columns {
                 ),
             ));
         }
-        let (psi, u, v) = (
-            &self.values[&Quantity::Psi],
-            &self.values[&Quantity::U],
-            &self.values[&Quantity::V],
-        );
+        // Required columns, checked before: a recording without them never gets here.
+        let (Some(psi), Some(u), Some(v)) = (
+            self.values.get(&Quantity::Psi),
+            self.values.get(&Quantity::U),
+            self.values.get(&Quantity::V),
+        ) else {
+            return Err(InputError::line(
+                path,
+                self.header_line(),
+                "a relative wind needs the columns `psi`, `u` and `v` to be turned into the true wind",
+            ));
+        };
         let mut wind = FlowSeries {
             speed_m_s: Vec::with_capacity(psi.len()),
             from_rad: Vec::with_capacity(psi.len()),
