@@ -157,6 +157,11 @@ pub struct BandError {
 }
 
 impl Calibration {
+    /// The factor of metric family `family` (1 when the calibration has none for it).
+    pub fn family_factor(&self, family: MetricFamily) -> f64 {
+        self.factors.get(&family).map_or(1.0, |f| f.factor())
+    }
+
     /// The factor of `metric`'s family (1 for a metric of no family).
     pub fn factor(&self, metric: &str) -> f64 {
         MetricFamily::of(metric).map_or(1.0, |f| self.factor_of(f))
@@ -844,8 +849,8 @@ impl CalibratedSource {
 
 /// Bands of one run widened by a stored calibration.
 pub struct CalibratedBands {
-    /// The pooled percentile bands, every metric's widened (the track band is not: it is the
-    /// ensemble's pointwise percentiles).
+    /// The pooled percentile bands, every metric's widened; the track band's positions by the
+    /// turning lengths' factor and its heading by the overshoots', times the reach.
     pub bands: ManoeuvreBands,
     /// The run's reach outside the identification range (1 when the range is unknown).
     pub reach: f64,
@@ -866,11 +871,14 @@ fn family_factor(f: &FactorRecord) -> FamilyFactor {
 }
 
 impl StoredCalibration {
+    /// The factor of metric family `family` (1 when the calibration has none for it).
+    pub fn family_factor(&self, family: MetricFamily) -> f64 {
+        self.factors.get(&family).map_or(1.0, |f| f.factor())
+    }
+
     /// The factor of `metric`'s family (1 for a metric of no family).
     pub fn factor(&self, metric: &str) -> f64 {
-        MetricFamily::of(metric)
-            .and_then(|f| self.factors.get(&f))
-            .map_or(1.0, |f| f.factor())
+        MetricFamily::of(metric).map_or(1.0, |f| self.family_factor(f))
     }
 
     /// Which band this is, in one line: "calibrated: ensemble of reduced32 (200 replicates), factor
@@ -947,6 +955,22 @@ impl StoredCalibration {
             if let Ok(band) = &b.band {
                 b.band = Ok(widen(band, self.factor(b.metric), reach));
             }
+        }
+        // The track is widened like the metrics that measure the same thing: positions like the
+        // turning lengths, the heading like the overshoots (a raw track band beside widened metric
+        // bands would show the figure's reader the narrower, untrusted one).
+        if let Some(track) = &mut bands.track {
+            let length = self.family_factor(MetricFamily::TurningLength) * reach;
+            let angle = self.family_factor(MetricFamily::Overshoot) * reach;
+            let widen_all = |series: &mut Vec<Option<(f64, f64)>>, k: f64| {
+                for (lo, hi) in series.iter_mut().flatten() {
+                    let (centre, half) = (0.5 * (*lo + *hi), 0.5 * (*hi - *lo));
+                    (*lo, *hi) = (centre - k * half, centre + k * half);
+                }
+            };
+            widen_all(&mut track.x0_m, length);
+            widen_all(&mut track.y0_m, length);
+            widen_all(&mut track.psi_deg, angle);
         }
         Ok(CalibratedBands { bands, reach })
     }

@@ -8,7 +8,8 @@ use std::path::{Path, PathBuf};
 use shipid_io::{Dataset, Manoeuvre, Side};
 use shipid_pipeline::bands::{BandRun, manoeuvre_bands, replicate_models};
 use shipid_pipeline::calibration::{
-    FamilyFit, GpFamily, MmgFamily, ModelBands, calibrate_fit, factor_calibration_record,
+    FamilyFit, GpFamily, MetricFamily, MmgFamily, ModelBands, calibrate_fit,
+    factor_calibration_record,
 };
 use shipid_pipeline::fit::WindowSpec;
 use shipid_pipeline::fit_gp::{DEFAULT_SIMILARITY, fit_gp_dataset, model_text};
@@ -284,5 +285,52 @@ fn inverse_ensemble_bands_were_percentiles_that_left_out_the_delivered_member() 
         checked += 1;
     }
     assert!(checked >= 4, "the turn's four lengths have bands");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn calibrated_track_band_was_the_raw_one() {
+    // The metric bands were widened by the calibration and the track band (the figures' shaded
+    // track, `--json` `bands.track`) was not: it now widens its positions by the turning lengths'
+    // factor and its heading by the overshoots', times the reach, about the same centre.
+    let dir = scratch("calibrated-track-band");
+    let path = write_calibrated_mmg(&dir);
+    let spec = path.to_str().unwrap();
+    let ModelBands::Calibrated(c) = ModelBands::of(spec, 0.9).unwrap() else {
+        panic!("a calibrated file")
+    };
+    let point = shipid_pipeline::model_file::load_model(spec).unwrap();
+    let m = turning_35();
+    let ship = *point.ship();
+    let calibrated = c
+        .bands(point.as_ref(), &m, &ship, BandRun::Standard)
+        .unwrap();
+    let raw = raw_bands(spec, point.as_ref(), &m);
+    let (raw_track, track) = (raw.track.unwrap(), calibrated.bands.track.unwrap());
+    let reach = calibrated.reach;
+    let length = c.family_factor(MetricFamily::TurningLength) * reach;
+    let angle = c.family_factor(MetricFamily::Overshoot) * reach;
+    assert!(
+        length > 1.0 && angle > 1.0,
+        "factors {length} {angle}: nothing to test"
+    );
+    let mut checked = 0;
+    for (raw_series, series, k) in [
+        (&raw_track.x0_m, &track.x0_m, length),
+        (&raw_track.y0_m, &track.y0_m, length),
+        (&raw_track.psi_deg, &track.psi_deg, angle),
+    ] {
+        for (r, w) in raw_series.iter().zip(series) {
+            let (Some((rlo, rhi)), Some((lo, hi))) = (r, w) else {
+                assert_eq!(r.is_some(), w.is_some());
+                continue;
+            };
+            let scale = 1e-9 * (1.0 + rhi.abs() + rlo.abs());
+            assert!(((hi - lo) - k * (rhi - rlo)).abs() <= scale, "width");
+            assert!(((hi + lo) - (rhi + rlo)).abs() <= scale, "centre");
+            checked += 1;
+        }
+    }
+    assert!(checked > 100, "{checked} track samples compared");
     std::fs::remove_dir_all(&dir).ok();
 }
