@@ -958,7 +958,7 @@ impl StoredCalibration {
         }
         // The track is widened like the metrics that measure the same thing: positions like the
         // turning lengths, the heading like the overshoots (a raw track band beside widened metric
-        // bands would show the figure's reader the narrower, untrusted one).
+        // bands would show its reader the narrower, untrusted one).
         if let Some(track) = &mut bands.track {
             let length = self.family_factor(MetricFamily::TurningLength) * reach;
             let angle = self.family_factor(MetricFamily::Overshoot) * reach;

@@ -290,8 +290,8 @@ fn inverse_ensemble_bands_were_percentiles_that_left_out_the_delivered_member() 
 
 #[test]
 fn calibrated_track_band_was_the_raw_one() {
-    // The metric bands were widened by the calibration and the track band (the figures' shaded
-    // track, `--json` `bands.track`) was not: it now widens its positions by the turning lengths'
+    // The metric bands were widened by the calibration and the track band (`simulate --bands
+    // --json`, `bands.track`) was not: it now widens its positions by the turning lengths'
     // factor and its heading by the overshoots', times the reach, about the same centre.
     let dir = scratch("calibrated-track-band");
     let path = write_calibrated_mmg(&dir);
