@@ -70,8 +70,9 @@ enum Command {
         #[arg(long, default_value = "reduced32")]
         set: String,
         /// lsq, bounded-lsq, ridge, lasso, svr, or sparse-gp (paper 001; --set does not apply).
-        #[arg(long, default_value = "lsq")]
-        estimator: String,
+        /// Default: lsq, and bounded-lsq for --set mmg.
+        #[arg(long)]
+        estimator: Option<String>,
         /// sparse-gp: similarity threshold d_gen in (0, 1] of the sparsification (default 0.96).
         #[arg(long, value_name = "D", allow_negative_numbers = true)]
         similarity: Option<f64>,
@@ -419,6 +420,14 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             calibrate,
             structures,
         } => {
+            // The mmg family has no unbounded least squares: its physical bounds are part of it.
+            let estimator = estimator.unwrap_or_else(|| {
+                if set == shipid_pipeline::mmg::SET_NAME {
+                    "bounded-lsq".into()
+                } else {
+                    "lsq".into()
+                }
+            });
             let bootstrap = match bootstrap {
                 None => None,
                 Some(n) if (2..=shipid_pipeline::bootstrap::MAX_REPLICATES as i64).contains(&n) => {
