@@ -221,7 +221,10 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     // The data set's path relative to the model file, so the model reads it from anywhere.
     let mut file = out.file.clone();
     if let Some((n, seed)) = a.bootstrap {
-        let boot = bootstrap_fit(&ds, &out, &a.estimator, a.solver, n, seed)?;
+        let bar = working(format!("bootstrap: {n} replicates re-identified"));
+        let boot = bootstrap_fit(&ds, &out, &a.estimator, a.solver, n, seed);
+        bar.finish_and_clear();
+        let boot = boot?;
         report_bootstrap(
             boot.replicates.len(),
             boot.rejected,
@@ -230,7 +233,12 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
         )?;
         file.bootstrap = Some(boot.record(&out.model));
         if let Some((level, others)) = &a.calibrate {
-            file.calibration = Some(calibrate(&a, &ds, &out, (n, seed), *level, others)?);
+            let bar = working(format!(
+                "calibration at {level}: training recordings re-simulated, each refit without it"
+            ));
+            let record = calibrate(&a, &ds, &out, (n, seed), *level, others);
+            bar.finish_and_clear();
+            file.calibration = Some(record?);
         }
     }
     shipid_pipeline::model_file::anchor_training(&mut file.training, a.out);
@@ -433,7 +441,10 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
             seed,
         };
         let recordings = calibration_recordings(&ds, &a.recordings);
-        let (fitted, boot) = family.bands_of(&ds, &fit, &recordings)?;
+        let bar = working(format!("bootstrap: {n} mmg replicates re-identified"));
+        let bands = family.bands_of(&ds, &fit, &recordings);
+        bar.finish_and_clear();
+        let (fitted, boot) = bands?;
         report_bootstrap(
             boot.replicates.len(),
             boot.rejected,
@@ -442,7 +453,12 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
         )?;
         file.bootstrap = Some(boot.record());
         if let Some((level, _)) = &a.calibrate {
-            let c = calibrate_fit(fitted.source(), &family, &ds, &recordings, *level)?;
+            let bar = working(format!(
+                "calibration at {level}: training recordings re-simulated, each refit without it"
+            ));
+            let c = calibrate_fit(fitted.source(), &family, &ds, &recordings, *level);
+            bar.finish_and_clear();
+            let c = c?;
             let record = factor_calibration_record(&c, n, seed);
             let what = format!(
                 "mmg block-bootstrap replicates ({n} per refit{})",
@@ -527,8 +543,14 @@ pub fn run_gp(
             seed: GP_DRAW_SEED,
         };
         let chosen = calibration_recordings(&ds, recordings);
-        let fitted = family.bands_of(&ds, model, &chosen)?;
-        let c = calibrate_fit(fitted.source(), &family, &ds, &chosen, level)?;
+        let bar = working(format!(
+            "calibration at {level}: training recordings re-simulated over posterior draws, each refit without it"
+        ));
+        let c = family
+            .bands_of(&ds, model, &chosen)
+            .and_then(|fitted| calibrate_fit(fitted.source(), &family, &ds, &chosen, level));
+        bar.finish_and_clear();
+        let c = c?;
         let record = factor_calibration_record(&c, GP_DRAWS, GP_DRAW_SEED);
         report_calibration(
             level,
@@ -576,4 +598,17 @@ pub fn run_gp(
         return Ok(crate::print::validation(model.as_ref(), &spec, &ds, json));
     }
     Ok(Outcome::Ok)
+}
+
+/// A spinner on stderr saying what runs and for how long (indicatif draws it only on a terminal):
+/// bootstraps and calibrations take from a second to a minute with no other output meanwhile.
+fn working(what: String) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new_spinner();
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{spinner} {msg}  elapsed {elapsed}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+    );
+    bar.set_message(what);
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    bar
 }
