@@ -44,11 +44,12 @@ fn quantile(sorted: &[f64], q: f64) -> f64 {
     sorted[lo] + (h - lo as f64) * (sorted[hi] - sorted[lo])
 }
 
-/// The central `level` band of `values` (None entries and non-finite values count as undefined).
-pub fn percentile_band(
+/// The finite values of `values`, sorted, and how many were undefined (None or not finite); refused
+/// for a `level` outside (0, 1) or fewer than [`MIN_FINITE_REPLICATES`] finite values.
+fn finite_sorted(
     values: impl IntoIterator<Item = Option<f64>>,
     level: f64,
-) -> Result<Band, UncertaintyError> {
+) -> Result<(Vec<f64>, usize), UncertaintyError> {
     if !(level > 0.0 && level < 1.0) {
         return Err(UncertaintyError::Level(level));
     }
@@ -68,6 +69,15 @@ pub fn percentile_band(
         });
     }
     finite.sort_by(f64::total_cmp);
+    Ok((finite, undefined))
+}
+
+/// The central `level` band of `values` (None entries and non-finite values count as undefined).
+pub fn percentile_band(
+    values: impl IntoIterator<Item = Option<f64>>,
+    level: f64,
+) -> Result<Band, UncertaintyError> {
+    let (finite, undefined) = finite_sorted(values, level)?;
     let tail = (1.0 - level) / 2.0;
     Ok(Band {
         lo: quantile(&finite, tail),
@@ -89,25 +99,7 @@ pub fn order_statistic_band(
     values: impl IntoIterator<Item = Option<f64>>,
     level: f64,
 ) -> Result<Band, UncertaintyError> {
-    if !(level > 0.0 && level < 1.0) {
-        return Err(UncertaintyError::Level(level));
-    }
-    let mut finite = Vec::new();
-    let mut undefined = 0;
-    for v in values {
-        match v {
-            Some(x) if x.is_finite() => finite.push(x),
-            _ => undefined += 1,
-        }
-    }
-    if finite.len() < MIN_FINITE_REPLICATES {
-        return Err(UncertaintyError::TooFewReplicates {
-            finite: finite.len(),
-            total: finite.len() + undefined,
-            needed: MIN_FINITE_REPLICATES,
-        });
-    }
-    finite.sort_by(f64::total_cmp);
+    let (finite, undefined) = finite_sorted(values, level)?;
     let n = finite.len();
     // 1e-9: (1 − 0.9)/2 · 40 is 1.999… in floating point, and 40 values do give k = 2.
     let k =
