@@ -229,13 +229,14 @@ pub fn standardised_error(band: &Band, value: f64, reach: f64) -> Option<f64> {
 
 /// The band widened about its centre by `factor · reach`.
 pub fn widen(band: &Band, factor: f64, reach: f64) -> Band {
-    let (centre, half) = (0.5 * (band.lo + band.hi), 0.5 * (band.hi - band.lo));
-    let k = factor * reach;
-    Band {
-        lo: centre - k * half,
-        hi: centre + k * half,
-        ..*band
-    }
+    let (lo, hi) = widen_interval((band.lo, band.hi), factor * reach);
+    Band { lo, hi, ..*band }
+}
+
+/// `(lo, hi)` with its half-width scaled by `k` about the same centre.
+fn widen_interval((lo, hi): (f64, f64), k: f64) -> (f64, f64) {
+    let (centre, half) = (0.5 * (lo + hi), 0.5 * (hi - lo));
+    (centre - k * half, centre + k * half)
 }
 
 /// √(mean over the run's samples of max(1, h/h_max)): 1 for a run inside the identification range,
@@ -963,9 +964,8 @@ impl StoredCalibration {
             let length = self.family_factor(MetricFamily::TurningLength) * reach;
             let angle = self.family_factor(MetricFamily::Overshoot) * reach;
             let widen_all = |series: &mut Vec<Option<(f64, f64)>>, k: f64| {
-                for (lo, hi) in series.iter_mut().flatten() {
-                    let (centre, half) = (0.5 * (*lo + *hi), 0.5 * (*hi - *lo));
-                    (*lo, *hi) = (centre - k * half, centre + k * half);
+                for interval in series.iter_mut().flatten() {
+                    *interval = widen_interval(*interval, k);
                 }
             };
             widen_all(&mut track.x0_m, length);

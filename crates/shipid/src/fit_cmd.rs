@@ -233,9 +233,7 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
         )?;
         file.bootstrap = Some(boot.record(&out.model));
         if let Some((level, others)) = &a.calibrate {
-            let bar = working(format!(
-                "calibration at {level}: training recordings re-simulated, each refit without it"
-            ));
+            let bar = calibrating(*level, "");
             let record = calibrate(&a, &ds, &out, (n, seed), *level, others);
             bar.finish_and_clear();
             file.calibration = Some(record?);
@@ -453,9 +451,7 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
         )?;
         file.bootstrap = Some(boot.record());
         if let Some((level, _)) = &a.calibrate {
-            let bar = working(format!(
-                "calibration at {level}: training recordings re-simulated, each refit without it"
-            ));
+            let bar = calibrating(*level, "");
             let c = calibrate_fit(fitted.source(), &family, &ds, &recordings, *level);
             bar.finish_and_clear();
             let c = c?;
@@ -543,9 +539,7 @@ pub fn run_gp(
             seed: GP_DRAW_SEED,
         };
         let chosen = calibration_recordings(&ds, recordings);
-        let bar = working(format!(
-            "calibration at {level}: training recordings re-simulated over posterior draws, each refit without it"
-        ));
+        let bar = calibrating(level, " over posterior draws");
         let c = family
             .bands_of(&ds, model, &chosen)
             .and_then(|fitted| calibrate_fit(fitted.source(), &family, &ds, &chosen, level));
@@ -611,4 +605,11 @@ fn working(what: String) -> indicatif::ProgressBar {
     bar.set_message(what);
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
     bar
+}
+
+/// The spinner of a calibration at `level` (`over`: over what the replicates are, or empty).
+fn calibrating(level: f64, over: &str) -> indicatif::ProgressBar {
+    working(format!(
+        "calibration at {level}: training recordings re-simulated{over}, each refit without it"
+    ))
 }
