@@ -7,8 +7,9 @@ use std::path::{Path, PathBuf};
 
 use shipid_io::{Dataset, Manoeuvre, Side};
 use shipid_pipeline::bands::{BandRun, manoeuvre_bands, replicate_models};
+use shipid_pipeline::bootstrap::MmgBootstrap;
 use shipid_pipeline::calibration::{
-    FamilyFit, GpFamily, MetricFamily, MmgFamily, ModelBands, calibrate_fit,
+    FamilyFit, FittedBands, GpFamily, MetricFamily, MmgFamily, ModelBands, calibrate_fit,
     factor_calibration_record,
 };
 use shipid_pipeline::fit::WindowSpec;
@@ -72,33 +73,68 @@ fn metric_bands(b: &shipid_pipeline::bands::ManoeuvreBands) -> Vec<(&'static str
         .collect()
 }
 
-/// The mmg fit of ZZ35 port with 30 bootstrap replicates, calibrated at 0.9, written as `model.toml`
-/// in `dir` as `shipid fit --set mmg --bootstrap 30 --calibrate` writes it.
-fn write_calibrated_mmg(dir: &Path) -> PathBuf {
+/// The mmg fit of ZZ35 port (the default data) with `replicates` bootstrap replicates: the data, the
+/// recordings, the model file without `[bootstrap]`, the family, and its fitted bands and bootstrap.
+struct Zz35Mmg {
+    ds: Dataset,
+    recordings: Vec<String>,
+    file: MmgModelFile,
+    family: MmgFamily,
+    fitted: FittedBands,
+    boot: MmgBootstrap,
+}
+
+fn zz35_mmg(replicates: usize, seed: u64) -> Zz35Mmg {
     let ds = default_data();
     let recordings = vec!["zz35_35_ps.csv".to_string()];
     let opts = MmgFitOptions {
         recordings: recordings.clone(),
         ..MmgFitOptions::default()
     };
-    let (fit, mut file) = fit_mmg_model_file(&ds, &opts, false).unwrap();
+    let (fit, file) = fit_mmg_model_file(&ds, &opts, false).unwrap();
     let family = MmgFamily {
         opts,
         geometry: fit.geometry,
         refine: false,
-        replicates: 30,
-        seed: 1,
+        replicates,
+        seed,
     };
     let (fitted, boot) = family.bands_of(&ds, &fit, &recordings).unwrap();
+    Zz35Mmg {
+        ds,
+        recordings,
+        file,
+        family,
+        fitted,
+        boot,
+    }
+}
+
+/// `file` written as `dir/model.toml`, its training data anchored there, as `shipid fit` writes it.
+fn write_model(dir: &Path, mut file: MmgModelFile) -> PathBuf {
+    let path = dir.join("model.toml");
+    shipid_pipeline::model_file::anchor_training(&mut file.training, &path);
+    std::fs::write(&path, write_mmg_model_file(&file).unwrap()).unwrap();
+    path
+}
+
+/// The mmg fit of ZZ35 port with 30 bootstrap replicates, calibrated at 0.9, written as `model.toml`
+/// in `dir` as `shipid fit --set mmg --bootstrap 30 --calibrate` writes it.
+fn write_calibrated_mmg(dir: &Path) -> PathBuf {
+    let Zz35Mmg {
+        ds,
+        recordings,
+        mut file,
+        family,
+        fitted,
+        boot,
+    } = zz35_mmg(30, 1);
     let c = calibrate_fit(fitted.source(), &family, &ds, &recordings, 0.9).unwrap();
     assert_eq!(c.folds, 0, "one recording: in-sample errors only");
     assert!(!c.errors.is_empty(), "ZZ35's own metrics are errors");
     file.bootstrap = Some(boot.record());
     file.calibration = Some(factor_calibration_record(&c, 30, 1));
-    let path = dir.join("model.toml");
-    shipid_pipeline::model_file::anchor_training(&mut file.training, &path);
-    std::fs::write(&path, write_mmg_model_file(&file).unwrap()).unwrap();
-    path
+    write_model(dir, file)
 }
 
 #[test]
@@ -229,27 +265,11 @@ fn inverse_ensemble_bands_were_percentiles_that_left_out_the_delivered_member() 
     // outside its own band. An ensemble's band is its order statistics: with so few members, their
     // range, which holds every member.
     let dir = scratch("inverse-ensemble-bands");
-    let ds = default_data();
-    let recordings = vec!["zz35_35_ps.csv".to_string()];
-    let opts = MmgFitOptions {
-        recordings: recordings.clone(),
-        ..MmgFitOptions::default()
-    };
-    let (fit, mut file) = fit_mmg_model_file(&ds, &opts, false).unwrap();
-    let family = MmgFamily {
-        opts,
-        geometry: fit.geometry,
-        refine: false,
-        replicates: 21,
-        seed: 3,
-    };
-    let (_, boot) = family.bands_of(&ds, &fit, &recordings).unwrap();
+    let Zz35Mmg { mut file, boot, .. } = zz35_mmg(21, 3);
     let mut record = boot.record();
     record.replicate_kind = ReplicateKind::InverseEnsemble;
     file.bootstrap = Some(record);
-    let path = dir.join("model.toml");
-    shipid_pipeline::model_file::anchor_training(&mut file.training, &path);
-    std::fs::write(&path, write_mmg_model_file(&file).unwrap()).unwrap();
+    let path = write_model(&dir, file);
     let spec = path.to_str().unwrap();
 
     let bands = ModelBands::of(spec, 0.9).unwrap();
