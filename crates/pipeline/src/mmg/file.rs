@@ -15,7 +15,6 @@ use shipid_sim::MmgModel;
 
 use super::geometry::MmgGeometry;
 use super::identify::{DETERMINED_SHARE, assemble};
-use super::priors::{HULL_NAMES, NONLINEAR_NAMES};
 use crate::error::{PipelineError, bad_input};
 
 /// The `kind` of an MMG model file.
@@ -284,13 +283,9 @@ impl MmgModelFile {
                 format!("expected \"{MMG_KIND}\", not \"{}\"", self.kind),
             ));
         }
-        let known: Vec<&str> = HULL_NAMES
-            .iter()
-            .flatten()
-            .copied()
-            .filter(|n| !n.is_empty())
-            .chain(NONLINEAR_NAMES)
-            .collect();
+        // The sim crate's list, which the identification's names are held equal to
+        // (`identified_parameter_names_are_the_model_file_names`).
+        let known = &shipid_sim::mmg::MODEL_FILE_NAMES;
         for (i, p) in self.parameters.iter().enumerate() {
             if !known.contains(&p.name.as_str()) {
                 return Err(at(
