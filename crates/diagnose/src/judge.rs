@@ -398,11 +398,7 @@ pub(crate) const MIN_SAMPLES_FOR_HALVES: usize = 4 * shipid_io::table::MIN_SAMPL
 /// out; `None` when one that remains is too short to be cut.
 pub(crate) fn time_halves(ds: &Dataset) -> Option<Dataset> {
     let mut recordings = Vec::new();
-    for r in ds
-        .recordings
-        .iter()
-        .filter(|r| r.recording.len() >= shipid_io::table::MIN_SAMPLES)
-    {
+    for r in halved_recordings(ds) {
         let n = r.recording.len();
         if n < MIN_SAMPLES_FOR_HALVES {
             return None;
@@ -427,6 +423,13 @@ pub(crate) fn time_halves(ds: &Dataset) -> Option<Dataset> {
         recordings,
         ..ds.clone()
     })
+}
+
+/// The recordings [`time_halves`] cuts, in its order: recording i of these is units 2i and 2i + 1.
+pub(crate) fn halved_recordings(ds: &Dataset) -> impl Iterator<Item = &DatasetRecording> {
+    ds.recordings
+        .iter()
+        .filter(|r| r.recording.len() >= shipid_io::table::MIN_SAMPLES)
 }
 
 /// The accepted candidate with the highest score.

@@ -16,7 +16,9 @@ use crate::environment::{
 use crate::error::DiagnoseError;
 use crate::families::{Family, FitResult, standard_errors};
 use crate::input::{BaseRange, DiagnoseInput, DiagnoseOptions};
-use crate::judge::{Judge, Judged, MIN_SAMPLES_FOR_HALVES, rival_of, time_halves};
+use crate::judge::{
+    Judge, Judged, MIN_SAMPLES_FOR_HALVES, halved_recordings, rival_of, time_halves,
+};
 use crate::locate::{Located, Regime, locate, regimes};
 use crate::verdict::Verdict;
 
@@ -539,10 +541,7 @@ fn own_winds(
             let before = pooled(&units.map(|u| halves.before_each[u]));
             let after = pooled(&units.map(|u| own.cross.0[u]));
             Some(RecordingWind {
-                recording: ds
-                    .recordings
-                    .iter()
-                    .filter(|r| r.recording.len() >= shipid_io::table::MIN_SAMPLES)
+                recording: halved_recordings(ds)
                     .nth(i)
                     .map_or_else(String::new, |r| r.file.clone()),
                 speed_m_s: w.speed_m_s,
