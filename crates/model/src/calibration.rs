@@ -31,6 +31,10 @@ pub struct CalibrationRecord {
     pub folds: usize,
     /// Inflation factor per metric family (`overshoot`, `zigzag-time`, `turning-length`).
     pub factors: BTreeMap<String, FactorRecord>,
+    /// The term of the manoeuvre kinds the training recordings did not hold (absent in files
+    /// calibrated before it existed: no such term).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub out_of_kind: Option<OutOfKindRecord>,
     /// The ensemble's structures; the first is the model file's own set (the point prediction).
     #[serde(rename = "structure")]
     pub structures: Vec<StructureRecord>,
@@ -50,6 +54,59 @@ pub struct FactorRecord {
     /// Of those errors: predicted by the ensemble fitted to them (in sample), and held out.
     pub in_sample: usize,
     pub held_out: usize,
+}
+
+/// The manoeuvre kinds a model can be said to have seen.
+pub const KINDS: [&str; 3] = ["zigzag", "turning", "free"];
+
+/// `[calibration.out_of_kind]`: how far a prediction of a manoeuvre kind the training recordings
+/// did not hold (a turning circle from zig-zags alone) lands from the truth, as a relative
+/// half-width per metric family, measured on other ships (`shipid_pipeline::calibration`'s
+/// population table). Added in quadrature to the calibrated half-width of that family's metrics.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutOfKindRecord {
+    /// The manoeuvre kinds of the training recordings (`zigzag`, `turning`, `free`).
+    pub trained_on: Vec<String>,
+    /// Where the relative half-widths come from.
+    pub source: String,
+    /// Relative half-width (fraction of the band's centre, ≥ 0; `inf`: unbounded) per metric
+    /// family of a kind not trained on.
+    pub relative: BTreeMap<String, f64>,
+}
+
+impl OutOfKindRecord {
+    /// Known kinds, known families, half-widths of at least 0 (infinite allowed); the error names
+    /// the key.
+    pub fn check(&self) -> Result<(), CalibrationDamage> {
+        if let Some(k) = self
+            .trained_on
+            .iter()
+            .find(|k| !KINDS.contains(&k.as_str()))
+        {
+            return Err(damaged(
+                "calibration.out_of_kind.trained_on",
+                format!("`{k}` is none of {}", KINDS.join(", ")),
+            ));
+        }
+        for (family, &value) in &self.relative {
+            let key = format!("calibration.out_of_kind.relative.{family}");
+            if !FAMILIES.contains(&family.as_str()) {
+                return Err(damaged(
+                    key,
+                    format!("not a metric family ({})", FAMILIES.join(", ")),
+                ));
+            }
+            // Infinite is meaningful: the population's predictions of that kind diverged.
+            if value.is_nan() || value < 0.0 {
+                return Err(damaged(
+                    key,
+                    format!("{value} is not a relative half-width of at least 0"),
+                ));
+            }
+        }
+        Ok(())
+    }
 }
 
 /// One structure of the ensemble: its set and its bootstrap replicates.
@@ -93,6 +150,9 @@ impl CalibrationRecord {
     pub fn check(&self, point_set: &str) -> Result<CheckedCalibration, CalibrationDamage> {
         check_level(self.level)?;
         check_factors(&self.factors)?;
+        if let Some(o) = &self.out_of_kind {
+            o.check()?;
+        }
         if self.structures.is_empty() {
             return Err(damaged("calibration.structure", "no structure"));
         }
@@ -189,14 +249,20 @@ pub struct FactorCalibrationRecord {
     pub replicates: usize,
     /// Inflation factor per metric family (`overshoot`, `zigzag-time`, `turning-length`).
     pub factors: BTreeMap<String, FactorRecord>,
+    /// As [`CalibrationRecord::out_of_kind`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub out_of_kind: Option<OutOfKindRecord>,
 }
 
 impl FactorCalibrationRecord {
-    /// Check every key as [`CalibrationRecord::check`] checks the level and the factors; the error
-    /// names the key.
+    /// Check every key as [`CalibrationRecord::check`] checks the level, the factors and the
+    /// out-of-kind term; the error names the key.
     pub fn check(&self) -> Result<(), CalibrationDamage> {
         check_level(self.level)?;
-        check_factors(&self.factors)
+        check_factors(&self.factors)?;
+        self.out_of_kind
+            .as_ref()
+            .map_or(Ok(()), OutOfKindRecord::check)
     }
 }
 

@@ -23,7 +23,8 @@ pub use abkowitz::{
     EstimatorInfo, ModelError, ModelFile, Refinement, TrainingWindow,
 };
 pub use calibration::{
-    CalibrationDamage, CalibrationRecord, CheckedCalibration, FactorRecord, StructureRecord,
+    CalibrationDamage, CalibrationRecord, CheckedCalibration, FactorRecord, OutOfKindRecord,
+    StructureRecord,
 };
 pub use design::{Design, PrimeInertia, Samples, design};
 pub use envelope::{IdentificationRange, RangeError};

@@ -51,6 +51,7 @@ use shipid_sim::metrics::metrics;
 use shipid_sim::{AbkowitzDynamics, Dynamics};
 use shipid_uncertainty::Band;
 
+use shipid_model::OutOfKindRecord;
 use shipid_model::calibration::FactorCalibrationRecord;
 use shipid_model::{CalibrationRecord, FactorRecord, ModelFile, StructureRecord, TrainingWindow};
 use shipid_sim::gp::{GP_KIND, GpDynamics, GpModelFile};
@@ -65,51 +66,14 @@ use crate::error::{PipelineError, bad_input, failed};
 use crate::fit::{EstimatorSpec, WindowSpec, fit_dataset};
 use crate::mmg::file::{MMG_KIND, MmgModelFile};
 use crate::mmg::{MmgFit, MmgFitOptions, MmgGeometry};
+use crate::out_of_kind::{ModelFamily, add_out_of_kind, out_of_kind};
 use crate::simulate::{simulate_manoeuvre, simulate_on_grid};
 use crate::validate::closed_loop_in;
 
 /// Fewest errors of a family for a factor of its own (below, the families' pooled one).
 pub const MIN_ERRORS: usize = 3;
 
-/// Metrics whose errors behave alike: the same unit and the same part of the manoeuvre.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum MetricFamily {
-    /// Zig-zag overshoot angles [deg].
-    Overshoot,
-    /// Zig-zag times (t_a, t_check) [× U0/L].
-    ZigzagTime,
-    /// Turning-circle lengths (advance, transfer, tactical and steady diameter) [÷ L].
-    TurningLength,
-}
-
-impl MetricFamily {
-    /// The family of a metric key as `Metrics::entries` names it.
-    pub fn of(metric: &str) -> Option<MetricFamily> {
-        match metric {
-            "overshoot_1" | "overshoot_2" => Some(MetricFamily::Overshoot),
-            "t_a" | "t_check" => Some(MetricFamily::ZigzagTime),
-            "advance" | "transfer" | "tactical_diameter" | "steady_diameter" => {
-                Some(MetricFamily::TurningLength)
-            }
-            _ => None,
-        }
-    }
-
-    pub const ALL: [MetricFamily; 3] = [
-        MetricFamily::Overshoot,
-        MetricFamily::ZigzagTime,
-        MetricFamily::TurningLength,
-    ];
-
-    pub fn as_str(self) -> &'static str {
-        match self {
-            MetricFamily::Overshoot => "overshoot",
-            MetricFamily::ZigzagTime => "zigzag-time",
-            MetricFamily::TurningLength => "turning-length",
-        }
-    }
-}
+pub use crate::metric_family::MetricFamily;
 
 /// The inflation factor of one family, or why it has none.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -142,6 +106,9 @@ pub struct Calibration {
     pub factors: BTreeMap<MetricFamily, FamilyFactor>,
     /// The errors the factors come from: in sample, then held out in fold order.
     pub errors: Vec<BandError>,
+    /// The term of the manoeuvre kinds the training recordings did not hold
+    /// ([`crate::out_of_kind`]; None: they held both, or only free manoeuvres).
+    pub out_of_kind: Option<OutOfKindRecord>,
 }
 
 /// One metric's error in units of its band ([`standardised_error`]).
@@ -171,6 +138,43 @@ impl Calibration {
     pub fn factor_of(&self, family: MetricFamily) -> f64 {
         self.factors.get(&family).map_or(1.0, |f| f.factor())
     }
+
+    /// `metric`'s band widened by this calibration at a run's `reach` ([`widen_metric`]).
+    pub fn widen(&self, band: &Band, metric: &str, reach: f64) -> Band {
+        widen_metric(
+            band,
+            metric,
+            self.factor(metric),
+            reach,
+            self.out_of_kind.as_ref(),
+        )
+    }
+}
+
+/// `metric`'s band widened about its centre by `factor · reach`, and by the out-of-kind term of
+/// its metric family when `out_of_kind` has one (added in quadrature,
+/// [`crate::out_of_kind::add_out_of_kind`]).
+pub fn widen_metric(
+    band: &Band,
+    metric: &str,
+    factor: f64,
+    reach: f64,
+    out_of_kind: Option<&OutOfKindRecord>,
+) -> Band {
+    let widened = widen(band, factor, reach);
+    match out_of_kind_of(out_of_kind, metric) {
+        Some(relative) => {
+            let (lo, hi) = add_out_of_kind((widened.lo, widened.hi), relative);
+            Band { lo, hi, ..widened }
+        }
+        None => widened,
+    }
+}
+
+/// The out-of-kind relative half-width of `metric`'s family, if the record has one.
+fn out_of_kind_of(out_of_kind: Option<&OutOfKindRecord>, metric: &str) -> Option<f64> {
+    let family = MetricFamily::of(metric)?;
+    out_of_kind?.relative.get(family.as_str()).copied()
 }
 
 /// Quantile `q` of sorted values (Hyndman & Fan type 7, as the bands).
@@ -218,6 +222,7 @@ pub fn calibrate(z: &[BandError], level: f64, folds: usize) -> Calibration {
         folds,
         factors,
         errors: finite,
+        out_of_kind: None,
     }
 }
 
@@ -367,9 +372,15 @@ pub struct BandSource<'a> {
 pub trait FamilyFit: Sync {
     /// Fit to `recordings` of `ds` (every recording when empty).
     fn fit(&self, ds: &Dataset, recordings: &[String]) -> Result<FittedBands, PipelineError>;
+    /// Which family this is (its out-of-kind term, [`crate::out_of_kind`]).
+    fn model_family(&self) -> ModelFamily;
 }
 
 impl FamilyFit for EnsembleSpec<'_> {
+    fn model_family(&self) -> ModelFamily {
+        ModelFamily::Polynomial
+    }
+
     fn fit(&self, ds: &Dataset, recordings: &[String]) -> Result<FittedBands, PipelineError> {
         let e = fit_ensemble(ds, self, recordings)?;
         Ok(FittedBands {
@@ -549,7 +560,14 @@ pub fn calibrate_fit(
     } else {
         recordings.len()
     };
-    Ok(calibrate(&z, level, folds))
+    let training: Vec<Manoeuvre> = crate::fit::chosen_recordings(ds, recordings)?
+        .iter()
+        .map(|r| r.manoeuvre)
+        .collect();
+    Ok(Calibration {
+        out_of_kind: out_of_kind(family.model_family(), &training, level),
+        ..calibrate(&z, level, folds)
+    })
 }
 
 /// The calibration of the ensemble `e`, fitted as `how` says to `recordings` of `ds`
@@ -681,6 +699,9 @@ impl MmgFamily {
 }
 
 impl FamilyFit for MmgFamily {
+    fn model_family(&self) -> ModelFamily {
+        ModelFamily::Mmg
+    }
     fn fit(&self, ds: &Dataset, recordings: &[String]) -> Result<FittedBands, PipelineError> {
         let fit = self.fit_mmg(ds, recordings)?;
         Ok(self.bands_of(ds, &fit, recordings)?.0)
@@ -718,6 +739,9 @@ impl GpFamily {
 }
 
 impl FamilyFit for GpFamily {
+    fn model_family(&self) -> ModelFamily {
+        ModelFamily::SparseGp
+    }
     fn fit(&self, ds: &Dataset, recordings: &[String]) -> Result<FittedBands, PipelineError> {
         let (_, model, _) =
             crate::fit_gp::fit_gp_dataset(ds, recordings, self.window, self.similarity)?;
@@ -745,6 +769,7 @@ pub fn calibration_record(
         seed: how.seed,
         folds: c.folds,
         factors: factor_records(c),
+        out_of_kind: c.out_of_kind.clone(),
         structures,
     }
 }
@@ -772,6 +797,7 @@ pub fn factor_calibration_record(
         folds: c.folds,
         replicates,
         factors: factor_records(c),
+        out_of_kind: c.out_of_kind.clone(),
     }
 }
 
@@ -822,6 +848,8 @@ pub struct StoredCalibration {
     /// family's name, for an mmg or sparse-GP file).
     pub structures: Vec<(String, usize)>,
     pub factors: BTreeMap<MetricFamily, FamilyFactor>,
+    /// The term of the manoeuvre kinds the training recordings did not hold.
+    pub out_of_kind: Option<OutOfKindRecord>,
     pub replicates: Vec<Box<dyn Dynamics + Send + Sync>>,
     pub range: Option<IdentificationRange>,
 }
@@ -929,8 +957,25 @@ impl StoredCalibration {
         } else {
             format!("in-sample and {} held-out folds", self.folds)
         };
+        let out_of_kind = match &self.out_of_kind {
+            Some(o) => format!(
+                "; trained on {} only, so the other kind's metrics add an out-of-kind term of {} \
+                 (relative half-width from a population of ships, docs/uncertainty.md)",
+                o.trained_on.join(" and "),
+                o.relative
+                    .iter()
+                    .map(|(fam, r)| if r.is_finite() {
+                        format!("{fam} ±{:.1} %", 100.0 * r)
+                    } else {
+                        format!("{fam} unbounded")
+                    })
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+            None => String::new(),
+        };
         format!(
-            "calibrated: {replicates}, factor {} from {held}, times the reach outside {range}{}",
+            "calibrated: {replicates}, factor {} from {held}, times the reach outside {range}{}{out_of_kind}",
             factors.join(", "),
             if self.range.is_none() {
                 " (unknown: the training data cannot be read; taken as 1)"
@@ -952,17 +997,39 @@ impl StoredCalibration {
     ) -> Result<CalibratedBands, PipelineError> {
         let mut bands = manoeuvre_bands(point, &self.replicates, m, ship, self.level, how)?;
         let reach = run_reach(point, self.range.as_ref(), m, ship, how);
+        // How much each family's bands widened in this run: the track follows it.
+        let mut widened_by: BTreeMap<MetricFamily, f64> = BTreeMap::new();
         for b in &mut bands.metrics {
             if let Ok(band) = &b.band {
-                b.band = Ok(widen(band, self.factor(b.metric), reach));
+                let w = widen_metric(
+                    band,
+                    b.metric,
+                    self.factor(b.metric),
+                    reach,
+                    self.out_of_kind.as_ref(),
+                );
+                if let Some(fam) = MetricFamily::of(b.metric)
+                    && band.hi > band.lo
+                {
+                    let k = (w.hi - w.lo) / (band.hi - band.lo);
+                    let e = widened_by.entry(fam).or_insert(k);
+                    *e = e.max(k);
+                }
+                b.band = Ok(w);
             }
         }
         // The track is widened like the metrics that measure the same thing: positions like the
         // turning lengths, the heading like the overshoots (a raw track band beside widened metric
-        // bands would show its reader the narrower, untrusted one).
+        // bands would show its reader the narrower, untrusted one). A metric family this run has no
+        // band of widens by its factor and the reach alone.
         if let Some(track) = &mut bands.track {
-            let length = self.family_factor(MetricFamily::TurningLength) * reach;
-            let angle = self.family_factor(MetricFamily::Overshoot) * reach;
+            let k = |fam| {
+                widened_by
+                    .get(&fam)
+                    .copied()
+                    .unwrap_or(self.family_factor(fam) * reach)
+            };
+            let (length, angle) = (k(MetricFamily::TurningLength), k(MetricFamily::Overshoot));
             let widen_all = |series: &mut Vec<Option<(f64, f64)>>, k: f64| {
                 for interval in series.iter_mut().flatten() {
                     *interval = widen_interval(*interval, k);
@@ -1083,6 +1150,7 @@ fn own_replicates<F: serde::de::DeserializeOwned>(
         source,
         structures: vec![(name.to_string(), replicates.len())],
         factors,
+        out_of_kind: record.out_of_kind.clone(),
         replicates,
         range: stored_state_range(spec, training),
     }))
@@ -1137,6 +1205,7 @@ fn polynomial_calibration(
         source: CalibratedSource::Ensemble,
         structures,
         factors,
+        out_of_kind: record.out_of_kind.clone(),
         replicates,
         range,
     }))
@@ -1220,6 +1289,15 @@ impl ModelBands {
                 .map(|(fam, f)| (fam.as_str(), f.factor()))
                 .collect(),
             ModelBands::Raw { .. } => BTreeMap::new(),
+        }
+    }
+
+    /// The out-of-kind term of a calibrated band (None otherwise, or when the training held every
+    /// kind).
+    pub fn out_of_kind(&self) -> Option<&OutOfKindRecord> {
+        match self {
+            ModelBands::Calibrated(c) => c.out_of_kind.as_ref(),
+            ModelBands::Raw { .. } => None,
         }
     }
 

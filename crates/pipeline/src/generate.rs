@@ -39,9 +39,7 @@ use shipid_io::write::WindChannels;
 use shipid_io::{FlowSeries, Manoeuvre, Recording, Ship, Side, Windage};
 use shipid_sim::effects::{Effect, simulate_with_effects};
 use shipid_sim::environment::{KnownEnvironment, WithEnvironment, assumed_windage};
-use shipid_sim::{
-    MmgModel, SimOptions, SimStatus, State, controller_for, kvlcc2_added_mass, kvlcc2_ship,
-};
+use shipid_sim::{Dynamics, MmgModel, SimOptions, SimStatus, State, controller_for, kvlcc2_ship};
 
 use crate::error::{PipelineError, failed};
 use crate::spec::manoeuvre_stem;
@@ -219,6 +217,36 @@ pub fn generate_recorded(
     manoeuvres: &[Manoeuvre],
     recorded: Option<&RecordedEnvironment>,
 ) -> Result<Generated, PipelineError> {
+    let name = "KVLCC2 model, deep water: MMG reference simulation";
+    generate_by(
+        &MmgModel::kvlcc2(),
+        name,
+        noise_seed,
+        effects,
+        manoeuvres,
+        recorded,
+    )
+}
+
+/// Simulate `manoeuvres` with `model` (an MMG ship other than the reference: harnesses that measure
+/// a method over a population of ships) in calm water, the data set named `name`.
+pub fn generate_model(
+    model: &MmgModel,
+    name: &str,
+    noise_seed: Option<u64>,
+    manoeuvres: &[Manoeuvre],
+) -> Result<Generated, PipelineError> {
+    generate_by(model, name, noise_seed, &[], manoeuvres, None)
+}
+
+fn generate_by(
+    model: &MmgModel,
+    name: &str,
+    noise_seed: Option<u64>,
+    effects: &[Effect],
+    manoeuvres: &[Manoeuvre],
+    recorded: Option<&RecordedEnvironment>,
+) -> Result<Generated, PipelineError> {
     if let Some(env) = recorded {
         for e in effects {
             let clash = match e {
@@ -236,8 +264,7 @@ pub fn generate_recorded(
             }
         }
     }
-    let model = MmgModel::kvlcc2();
-    let ship = kvlcc2_ship();
+    let ship = *model.ship();
     let mut entries = Vec::new();
     let mut recordings = Vec::new();
     for (k, m) in manoeuvres.iter().enumerate() {
@@ -259,9 +286,9 @@ pub fn generate_recorded(
             None => None,
         };
         let out = match &flows {
-            None => simulate_plain(&model, effects, controller.as_mut(), &options)?,
+            None => simulate_plain(model, effects, controller.as_mut(), &options)?,
             Some((_, environment)) => simulate_plain(
-                &WithEnvironment::new(&model, environment.clone()),
+                &WithEnvironment::new(model, environment.clone()),
                 effects,
                 controller.as_mut(),
                 &options,
@@ -285,13 +312,13 @@ pub fn generate_recorded(
         entries.push(entry_for(&file, &m));
         recordings.push(rec);
     }
-    let reference = shipid_sim::MmgParameters::kvlcc2();
+    let reference = model.parameters();
     let dataset = DatasetFile {
-        name: "KVLCC2 model, deep water: MMG reference simulation".into(),
+        name: name.into(),
         origin: Origin::Midship,
         rudder_sign: 1,
         ship,
-        added_mass: Some(kvlcc2_added_mass()),
+        added_mass: Some(*model.added_mass()),
         // The reference's propeller and rudder (Y&Y 2015 Tables 1 and 5): what an `mmg` fit needs.
         propeller: Some(shipid_io::PropellerTable {
             diameter_m: reference.propeller_diameter_m,

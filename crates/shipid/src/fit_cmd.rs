@@ -335,6 +335,7 @@ fn report_calibration(
     what: &str,
     folds: usize,
     factors: &std::collections::BTreeMap<String, shipid_model::FactorRecord>,
+    out_of_kind: Option<&shipid_model::OutOfKindRecord>,
 ) {
     let factors: Vec<String> = factors
         .iter()
@@ -344,6 +345,26 @@ fn report_calibration(
         "calibration at {level}: {what}, {folds} held-out folds; factors {}; in the model file's [calibration]",
         factors.join(", ")
     );
+    // Said at fit time: the band of the other kind rests on other ships, not on these data.
+    if let Some(o) = out_of_kind {
+        let terms: Vec<String> = o
+            .relative
+            .iter()
+            .map(|(fam, r)| {
+                if r.is_finite() {
+                    format!("{fam} ±{:.1} %", 100.0 * r)
+                } else {
+                    format!("{fam} unbounded")
+                }
+            })
+            .collect();
+        eprintln!(
+            "note: trained on {} only: bands of the other kind add an out-of-kind term measured on \
+             a population of ships, not on these data: {} (docs/uncertainty.md)",
+            o.trained_on.join(" and "),
+            terms.join(", ")
+        );
+    }
 }
 
 /// The model file's `[calibration]`: the ensemble of the fitted set and `others` (same windows,
@@ -387,7 +408,13 @@ fn calibrate(
             .join(" + "),
         (n / sets.len()).max(2)
     );
-    report_calibration(level, &what, c.folds, &record.factors);
+    report_calibration(
+        level,
+        &what,
+        c.folds,
+        &record.factors,
+        record.out_of_kind.as_ref(),
+    );
     Ok(record)
 }
 
@@ -464,7 +491,13 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
                     ""
                 }
             );
-            report_calibration(*level, &what, c.folds, &record.factors);
+            report_calibration(
+                *level,
+                &what,
+                c.folds,
+                &record.factors,
+                record.out_of_kind.as_ref(),
+            );
             file.calibration = Some(record);
         }
     }
@@ -551,6 +584,7 @@ pub fn run_gp(
             &format!("sparse-GP posterior draws ({GP_DRAWS} per refit)"),
             c.folds,
             &record.factors,
+            record.out_of_kind.as_ref(),
         );
         file.calibration = Some(record);
     }

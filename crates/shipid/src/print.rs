@@ -154,6 +154,9 @@ pub fn validation_with_bands(
         {
             a.insert("reach".into(), Value::Object(reaches.clone()));
             a.insert("factors".into(), json!(check.source.factors()));
+            if let Some(o) = check.source.out_of_kind() {
+                a.insert("out_of_kind".into(), json!(o));
+            }
         }
         o.insert("bands".into(), about);
     }

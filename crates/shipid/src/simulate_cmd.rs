@@ -300,6 +300,9 @@ fn add_bands(value: &mut Value, run: &RunBands, source: &ModelBands, with_track:
     if let Some(reach) = run.reach {
         about.insert("reach".into(), json!(reach));
         about.insert("factors".into(), json!(source.factors()));
+        if let Some(o) = source.out_of_kind() {
+            about.insert("out_of_kind".into(), json!(o));
+        }
     }
     if !without.is_empty() {
         about.insert("without_band".into(), Value::Object(without));

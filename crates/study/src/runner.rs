@@ -495,7 +495,7 @@ fn add_bands(
 ) -> Result<(), String> {
     use shipid_pipeline::bands::BandRun;
     use shipid_pipeline::calibration::{
-        Ensemble, EnsembleSpec, calibrate_ensemble, ensemble_bands, widen,
+        Ensemble, EnsembleSpec, calibrate_ensemble, ensemble_bands,
     };
     let boot = shipid_pipeline::bootstrap::bootstrap_fit(
         &study.dataset,
@@ -557,7 +557,7 @@ fn add_bands(
             let entry = match &m.band {
                 Ok(band) => {
                     let band = match &calibration {
-                        Some(c) => widen(band, c.factor(m.metric), reach),
+                        Some(c) => c.widen(band, m.metric, reach),
                         None => *band,
                     };
                     MetricBandRow::Band {

@@ -24,7 +24,7 @@ use shipid_io::Manoeuvre;
 use shipid_model::CoefficientSet;
 use shipid_pipeline::bands::BandRun;
 use shipid_pipeline::calibration::{
-    EnsembleSpec, FamilyFit, MetricFamily, calibrate_fit, source_bands, widen,
+    EnsembleSpec, FamilyFit, MetricFamily, calibrate_fit, source_bands,
 };
 use shipid_pipeline::fit::{EstimatorSpec, WindowSpec};
 use shipid_pipeline::generate::{default_manoeuvres, generate_manoeuvres};
@@ -176,7 +176,9 @@ pub(crate) fn measure(
                     let Some(family) = MetricFamily::of(b.metric) else {
                         continue;
                     };
-                    let calibrated = widen(band, factor(b.metric), reach);
+                    let calibrated = calibration
+                        .as_ref()
+                        .map_or(*band, |c| c.widen(band, b.metric, reach));
                     for &kind in kinds {
                         let inside = if kind == "raw" {
                             band.contains(t)

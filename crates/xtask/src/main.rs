@@ -15,6 +15,7 @@ mod coverage;
 mod coverage_family;
 mod fit_bench;
 mod inverse_bench;
+mod out_of_kind;
 mod paper001;
 mod refine_bench;
 
@@ -104,6 +105,17 @@ enum Task {
         #[arg(long)]
         refine: bool,
     },
+    /// Relative error of a manoeuvre kind the training data never showed (a turn from zig-zags,
+    /// zig-zags from turns), over the 20 ships of paper 003's database (docs/uncertainty.md).
+    OutOfKind {
+        #[arg(long, default_value = "results/out-of-kind")]
+        out: PathBuf,
+        #[arg(long, default_value_t = 2)]
+        seeds: u64,
+        /// The quantile reported as the out-of-kind term.
+        #[arg(long, default_value_t = 0.9)]
+        level: f64,
+    },
     /// List every crate's file import edges and fail on a circle (ARCHITECTURE.md's invariant).
     Circles,
     /// Wall time and results of `shipid fit --refine` on the default data, against a baseline binary
@@ -181,6 +193,9 @@ fn main() -> ExitCode {
             ..
         } => coverage_family::run(&out, family, seeds, replicates, level, calibrate, refine)
             .map(|()| ExitCode::SUCCESS),
+        Task::OutOfKind { out, seeds, level } => {
+            out_of_kind::run(&out, seeds, level).map(|()| ExitCode::SUCCESS)
+        }
         Task::Circles => {
             let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
             Ok(if circles::run(&root) {

@@ -6,6 +6,7 @@ mod environment;
 mod family_calibration;
 mod generate_environment;
 mod mmg;
+mod out_of_kind;
 mod refine;
 mod relative_wind;
 mod stored_calibration;

@@ -7,11 +7,13 @@ use std::path::{Path, PathBuf};
 
 use shipid_estimators::Solver;
 use shipid_io::{Dataset, Manoeuvre, Side};
-use shipid_model::{CalibrationRecord, CoefficientSet, Dof, FactorRecord, StructureRecord};
+use shipid_model::{
+    CalibrationRecord, CoefficientSet, Dof, FactorRecord, OutOfKindRecord, StructureRecord,
+};
 use shipid_pipeline::bands::{BandRun, manoeuvre_bands};
 use shipid_pipeline::calibration::{
     EnsembleSpec, ModelBands, calibrate_ensemble, calibration_record, fit_ensemble_stored,
-    stored_calibration, widen,
+    stored_calibration, widen_metric,
 };
 use shipid_pipeline::fit::{EstimatorSpec, WindowSpec, fit_dataset};
 use shipid_sim::AbkowitzDynamics;
@@ -123,17 +125,20 @@ fn a_stored_calibration_widens_the_pooled_band_by_its_family_factor_and_the_runs
     assert!(calibrated.reach > 1.0, "reach {}", calibrated.reach);
     let factor = record.factors["turning-length"].factor;
     let mut checked = 0;
-    for (c, r) in calibrated.bands.metrics.iter().zip(&raw.metrics) {
-        let (Ok(c), Ok(r)) = (&c.band, &r.band) else {
+    for (c, raw_metric) in calibrated.bands.metrics.iter().zip(&raw.metrics) {
+        let metric = raw_metric.metric;
+        let (Ok(c), Ok(r)) = (&c.band, &raw_metric.band) else {
             continue;
         };
-        let w = widen(r, factor, calibrated.reach);
-        assert_eq!(
-            (c.lo, c.hi),
-            (w.lo, w.hi),
-            "{}",
-            raw.metrics[checked].metric
+        // Zig-zag-trained: the turn's lengths also carry the out-of-kind term.
+        let w = widen_metric(
+            r,
+            metric,
+            factor,
+            calibrated.reach,
+            record.out_of_kind.as_ref(),
         );
+        assert_eq!((c.lo, c.hi), (w.lo, w.hi), "{metric}");
         assert!(c.lo < r.lo && c.hi > r.hi);
         checked += 1;
     }
@@ -187,6 +192,11 @@ fn sound_record() -> CalibrationRecord {
             ("zigzag-time".into(), factor("pooled", 1.5)),
             ("turning-length".into(), factor("too-few", 1.0)),
         ]),
+        out_of_kind: Some(OutOfKindRecord {
+            trained_on: vec!["zigzag".into()],
+            source: "test".into(),
+            relative: BTreeMap::from([("turning-length".into(), 0.1)]),
+        }),
         structures: vec![StructureRecord {
             set: set.file.clone(),
             block_rows: 10,
@@ -236,6 +246,37 @@ fn damaged_calibration_tables_are_refused_naming_the_key() {
             r.factors.insert("speed".into(), f);
         },
         "calibration.factors.speed",
+    );
+    check(
+        |r| {
+            r.out_of_kind
+                .as_mut()
+                .unwrap()
+                .trained_on
+                .push("spiral".into())
+        },
+        "calibration.out_of_kind.trained_on",
+    );
+    check(
+        |r| {
+            let o = r.out_of_kind.as_mut().unwrap();
+            o.relative.insert("speed".into(), 0.1);
+        },
+        "calibration.out_of_kind.relative.speed",
+    );
+    check(
+        |r| {
+            let o = r.out_of_kind.as_mut().unwrap();
+            o.relative.insert("turning-length".into(), -0.1);
+        },
+        "calibration.out_of_kind.relative.turning-length",
+    );
+    check(
+        |r| {
+            let o = r.out_of_kind.as_mut().unwrap();
+            o.relative.insert("turning-length".into(), f64::NAN);
+        },
+        "calibration.out_of_kind.relative.turning-length",
     );
     check(|r| r.structures.clear(), "calibration.structure");
     check(
