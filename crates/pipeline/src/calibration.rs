@@ -151,9 +151,12 @@ impl Calibration {
     }
 }
 
-/// `metric`'s band widened about its centre by `factor · reach`, and by the out-of-kind term of
-/// its metric family when `out_of_kind` has one (added in quadrature,
-/// [`crate::out_of_kind::add_out_of_kind`]).
+/// `metric`'s calibrated band: widened about its centre by `factor · reach`, or — for a metric of a
+/// kind the training recordings did not hold, when `out_of_kind` has a term for its family — the
+/// raw band with that term added in quadrature ([`crate::out_of_kind::add_out_of_kind`]). One
+/// source of model-form error per kind: the factor of such a family can only be borrowed from the
+/// other kind's errors (in units of the other kind's bands; on the HSVA zig-zags that turned a
+/// ±0.11 L turning band into ±16 L), while the term is measured on that kind itself.
 pub fn widen_metric(
     band: &Band,
     metric: &str,
@@ -161,13 +164,12 @@ pub fn widen_metric(
     reach: f64,
     out_of_kind: Option<&OutOfKindRecord>,
 ) -> Band {
-    let widened = widen(band, factor, reach);
     match out_of_kind_of(out_of_kind, metric) {
         Some(relative) => {
-            let (lo, hi) = add_out_of_kind((widened.lo, widened.hi), relative);
-            Band { lo, hi, ..widened }
+            let (lo, hi) = add_out_of_kind((band.lo, band.hi), relative);
+            Band { lo, hi, ..*band }
         }
-        None => widened,
+        None => widen(band, factor, reach),
     }
 }
 
@@ -959,8 +961,9 @@ impl StoredCalibration {
         };
         let out_of_kind = match &self.out_of_kind {
             Some(o) => format!(
-                "; trained on {} only, so the other kind's metrics add an out-of-kind term of {} \
-                 (relative half-width from a population of ships, docs/uncertainty.md)",
+                "; trained on {} only, so the other kind's metrics take, instead of their factor \
+                 and reach, an out-of-kind term of {} (relative half-width measured on a \
+                 population of ships, docs/uncertainty.md)",
                 o.trained_on.join(" and "),
                 o.relative
                     .iter()
