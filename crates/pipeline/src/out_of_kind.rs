@@ -111,74 +111,20 @@ const INF: f64 = f64::INFINITY;
 /// Relative-error quantiles at [`OUT_OF_KIND_LEVELS`] per family, training kinds and predicted
 /// metric family ([`OUT_OF_KIND_SOURCE`]). Infinite: at that level the population's predictions
 /// diverged or defined no metric, so the band is unbounded.
+#[rustfmt::skip]
 pub const OUT_OF_KIND: [(ModelFamily, TrainedKinds, MetricFamily, [f64; 5]); 12] = [
-    (
-        Polynomial,
-        ZigzagsOneAngle,
-        TurningLength,
-        [0.065, 0.126, 0.196, 0.354, 0.592],
-    ),
-    (
-        Polynomial,
-        ZigzagsSeveralAngles,
-        TurningLength,
-        [0.041, 0.066, 0.103, 0.225, 0.315],
-    ),
-    (
-        Polynomial,
-        TurningOnly,
-        Overshoot,
-        [0.684, 0.773, 0.832, 0.900, 2.705],
-    ),
-    (
-        Polynomial,
-        TurningOnly,
-        ZigzagTime,
-        [0.439, 0.573, 0.705, 2.551, 6.057],
-    ),
-    (
-        Mmg,
-        ZigzagsOneAngle,
-        TurningLength,
-        [0.020, 0.036, 0.056, 0.083, 0.137],
-    ),
-    (
-        Mmg,
-        ZigzagsSeveralAngles,
-        TurningLength,
-        [0.007, 0.010, 0.015, 0.023, 0.031],
-    ),
-    (
-        Mmg,
-        TurningOnly,
-        Overshoot,
-        [0.651, 0.780, 0.869, 0.940, 37.236],
-    ),
-    (
-        Mmg,
-        TurningOnly,
-        ZigzagTime,
-        [0.256, 0.506, 0.648, 0.757, 2.848],
-    ),
-    (
-        SparseGp,
-        ZigzagsOneAngle,
-        TurningLength,
-        [0.092, 0.162, 0.257, 0.380, 0.572],
-    ),
-    (
-        SparseGp,
-        ZigzagsSeveralAngles,
-        TurningLength,
-        [0.033, 0.053, 0.079, 0.111, 0.151],
-    ),
+    (Polynomial, ZigzagsOneAngle, TurningLength, [0.065, 0.126, 0.196, 0.354, 0.592]),
+    (Polynomial, ZigzagsSeveralAngles, TurningLength, [0.041, 0.066, 0.103, 0.225, 0.315]),
+    (Polynomial, TurningOnly, Overshoot, [0.684, 0.773, 0.832, 0.900, 2.705]),
+    (Polynomial, TurningOnly, ZigzagTime, [0.439, 0.573, 0.705, 2.551, 6.057]),
+    (Mmg, ZigzagsOneAngle, TurningLength, [0.020, 0.036, 0.056, 0.083, 0.137]),
+    (Mmg, ZigzagsSeveralAngles, TurningLength, [0.007, 0.010, 0.015, 0.023, 0.031]),
+    (Mmg, TurningOnly, Overshoot, [0.651, 0.780, 0.869, 0.940, 37.236]),
+    (Mmg, TurningOnly, ZigzagTime, [0.256, 0.506, 0.648, 0.757, 2.848]),
+    (SparseGp, ZigzagsOneAngle, TurningLength, [0.092, 0.162, 0.257, 0.380, 0.572]),
+    (SparseGp, ZigzagsSeveralAngles, TurningLength, [0.033, 0.053, 0.079, 0.111, 0.151]),
     (SparseGp, TurningOnly, Overshoot, [INF; 5]),
-    (
-        SparseGp,
-        TurningOnly,
-        ZigzagTime,
-        [0.395, 0.907, INF, INF, INF],
-    ),
+    (SparseGp, TurningOnly, ZigzagTime, [0.395, 0.907, INF, INF, INF]),
 ];
 
 /// The quantile at `level` of one row: linear between the table's levels, the first below them,

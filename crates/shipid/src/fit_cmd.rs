@@ -359,8 +359,8 @@ fn report_calibration(
             })
             .collect();
         eprintln!(
-            "note: trained on {} only: bands of the other kind add an out-of-kind term measured on \
-             a population of ships, not on these data: {} (docs/uncertainty.md)",
+            "note: trained on {} only: the other kind's bands take an out-of-kind term measured \
+             on a population of ships, not on these data: {} (docs/uncertainty.md)",
             o.trained_on.join(" and "),
             terms.join(", ")
         );

@@ -80,6 +80,18 @@ const CASES: [(&str, &[&str], &[&str]); 5] = [
     ),
 ];
 
+/// Training kinds as the product's table tells them apart: label, `TrainedKinds` variant, and the
+/// [`CASES`] that count as it.
+const CATEGORIES: [(&str, &str, std::ops::Range<usize>); 3] = [
+    ("zig-zags of one rudder angle", "ZigzagsOneAngle", 0..2),
+    (
+        "zig-zags of several rudder angles",
+        "ZigzagsSeveralAngles",
+        2..3,
+    ),
+    ("turning circles of one rudder angle", "TurningOnly", 3..5),
+];
+
 /// The families measured, as `shipid fit` makes them by default.
 const FAMILIES: [&str; 3] = ["polynomial", "mmg", "sparse-gp"];
 
@@ -290,39 +302,39 @@ pub fn run(out: &Path, seeds: u64, level: f64) -> Result<()> {
     )?;
     writeln!(md, "| family | training | metric family | relative error |")?;
     writeln!(md, "|---|---|---|---|")?;
+    // Sorted relative errors of `family` trained as `cases` on the metrics of `mf`.
+    let sorted_errors = |family: &str, cases: &std::ops::Range<usize>, mf: MetricFamily| {
+        let mut v: Vec<f64> = errors
+            .iter()
+            .filter(|e| {
+                e.family == family
+                    && e.metric_family == mf
+                    && CASES[cases.clone()].iter().any(|c| c.0 == e.case)
+            })
+            .map(rel)
+            .collect();
+        v.sort_by(f64::total_cmp);
+        v
+    };
     let mut summary = BTreeMap::new();
     for family in FAMILIES {
-        for kinds in [
-            ("zig-zags of one rudder angle", 0..2),
-            ("zig-zags of several rudder angles", 2..3),
-            ("turning circles of one rudder angle", 3..5),
-        ] {
+        for (label, _, cases) in &CATEGORIES {
             for mf in MetricFamily::ALL {
-                let mut v: Vec<f64> = errors
-                    .iter()
-                    .filter(|e| {
-                        e.family == family
-                            && e.metric_family == mf
-                            && CASES[kinds.1.clone()].iter().any(|c| c.0 == e.case)
-                    })
-                    .map(rel)
-                    .collect();
+                let v = sorted_errors(family, cases, mf);
                 if v.is_empty() {
                     continue;
                 }
-                v.sort_by(f64::total_cmp);
                 let q = quantile(&v, level);
                 writeln!(
                     md,
-                    "| {family} | {} | {} | {:.3} / {:.3} / {:.3} ({}) |",
-                    kinds.0,
+                    "| {family} | {label} | {} | {:.3} / {:.3} / {:.3} ({}) |",
                     mf.as_str(),
                     quantile(&v, 0.5),
                     q,
                     v[v.len() - 1],
                     v.len()
                 )?;
-                summary.insert(format!("{family} {} {}", kinds.0, mf.as_str()), q);
+                summary.insert(format!("{family} {label} {}", mf.as_str()), q);
             }
         }
     }
@@ -370,25 +382,12 @@ pub fn run(out: &Path, seeds: u64, level: f64) -> Result<()> {
          ({OUT_OF_KIND_LEVELS:?}), as its table holds them:\n\n```text"
     )?;
     for family in FAMILIES {
-        for (trained, cases) in [
-            ("ZigzagsOneAngle", 0..2),
-            ("ZigzagsSeveralAngles", 2..3),
-            ("TurningOnly", 3..5),
-        ] {
+        for (_, trained, cases) in &CATEGORIES {
             for mf in MetricFamily::ALL {
-                let mut v: Vec<f64> = errors
-                    .iter()
-                    .filter(|e| {
-                        e.family == family
-                            && e.metric_family == mf
-                            && CASES[cases.clone()].iter().any(|c| c.0 == e.case)
-                    })
-                    .map(rel)
-                    .collect();
+                let v = sorted_errors(family, cases, mf);
                 if v.is_empty() {
                     continue;
                 }
-                v.sort_by(f64::total_cmp);
                 let qs: Vec<String> = OUT_OF_KIND_LEVELS
                     .iter()
                     .map(|&l| {
