@@ -965,15 +965,7 @@ impl StoredCalibration {
                  and reach, an out-of-kind term of {} (relative half-width measured on a \
                  population of ships, docs/uncertainty.md)",
                 o.trained_on.join(" and "),
-                o.relative
-                    .iter()
-                    .map(|(fam, r)| if r.is_finite() {
-                        format!("{fam} ±{:.1} %", 100.0 * r)
-                    } else {
-                        format!("{fam} unbounded")
-                    })
-                    .collect::<Vec<_>>()
-                    .join(", ")
+                crate::out_of_kind::terms_in_words(o)
             ),
             None => String::new(),
         };

@@ -177,3 +177,18 @@ pub fn add_out_of_kind((lo, hi): (f64, f64), relative: f64) -> (f64, f64) {
     let h = half.hypot(extra);
     (centre - h, centre + h)
 }
+
+/// The record's terms in words: "turning-length ±35.4 %", "overshoot unbounded", ….
+pub fn terms_in_words(o: &OutOfKindRecord) -> String {
+    o.relative
+        .iter()
+        .map(|(family, r)| {
+            if r.is_finite() {
+                format!("{family} ±{:.1} %", 100.0 * r)
+            } else {
+                format!("{family} unbounded")
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}

@@ -347,22 +347,11 @@ fn report_calibration(
     );
     // Said at fit time: the band of the other kind rests on other ships, not on these data.
     if let Some(o) = out_of_kind {
-        let terms: Vec<String> = o
-            .relative
-            .iter()
-            .map(|(fam, r)| {
-                if r.is_finite() {
-                    format!("{fam} ±{:.1} %", 100.0 * r)
-                } else {
-                    format!("{fam} unbounded")
-                }
-            })
-            .collect();
         eprintln!(
             "note: trained on {} only: the other kind's bands take an out-of-kind term measured \
              on a population of ships, not on these data: {} (docs/uncertainty.md)",
             o.trained_on.join(" and "),
-            terms.join(", ")
+            shipid_pipeline::out_of_kind::terms_in_words(o)
         );
     }
 }
