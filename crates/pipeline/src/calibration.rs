@@ -960,13 +960,15 @@ impl StoredCalibration {
             format!("in-sample and {} held-out folds", self.folds)
         };
         let out_of_kind = match &self.out_of_kind {
-            Some(o) => format!(
-                "; trained on {} only, so the other kind's metrics take, instead of their factor \
+            Some(o) => {
+                format!(
+                    "; trained on {} only, so the other kind's metrics take, instead of their factor \
                  and reach, an out-of-kind term of {} (relative half-width measured on a \
                  population of ships, docs/uncertainty.md)",
-                o.trained_on.join(" and "),
-                crate::out_of_kind::terms_in_words(o)
-            ),
+                    o.trained_on.join(" and "),
+                    crate::out_of_kind::terms_in_words(o)
+                ) + &crate::out_of_kind::level_note(self.level)
+            }
             None => String::new(),
         };
         format!(

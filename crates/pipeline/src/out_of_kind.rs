@@ -161,9 +161,30 @@ pub fn out_of_kind(
         .collect();
     (!relative.is_empty()).then(|| OutOfKindRecord {
         trained_on: trained.names(training),
-        source: OUT_OF_KIND_SOURCE.to_string(),
+        source: format!("{OUT_OF_KIND_SOURCE}{}", level_note(level)),
         relative,
     })
+}
+
+/// "" inside the levels of [`OUT_OF_KIND`]; beyond them, what the term at `level` then is.
+pub fn level_note(level: f64) -> String {
+    let (first, last) = (
+        OUT_OF_KIND_LEVELS[0],
+        OUT_OF_KIND_LEVELS[OUT_OF_KIND_LEVELS.len() - 1],
+    );
+    if level > last {
+        format!(
+            "; at the level {level}, above the study's largest ({last}), the term is its {last} \
+             quantile: a lower bound"
+        )
+    } else if level < first {
+        format!(
+            "; at the level {level}, below the study's smallest ({first}), the term is its \
+             {first} quantile: an upper bound"
+        )
+    } else {
+        String::new()
+    }
 }
 
 /// `(lo, hi)` with the relative half-width `relative` × |centre| added in quadrature to its own

@@ -135,3 +135,22 @@ fn the_term_is_added_in_quadrature_about_the_centre() {
         (f64::NEG_INFINITY, f64::INFINITY)
     );
 }
+
+#[test]
+fn a_level_beyond_the_study_says_its_term_is_a_bound() {
+    let zigzags = [zz(35.0, Side::Port)];
+    let at = |level| out_of_kind(ModelFamily::Polynomial, &zigzags, level).unwrap();
+    assert!(!at(0.9).source.contains("bound"), "{}", at(0.9).source);
+    let high = at(0.99);
+    assert_eq!(
+        high.relative["turning-length"],
+        at(0.95).relative["turning-length"]
+    );
+    assert!(high.source.contains("a lower bound"), "{}", high.source);
+    let low = at(0.3);
+    assert_eq!(
+        low.relative["turning-length"],
+        at(0.5).relative["turning-length"]
+    );
+    assert!(low.source.contains("an upper bound"), "{}", low.source);
+}
