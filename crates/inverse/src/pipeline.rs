@@ -364,6 +364,17 @@ pub struct Refined {
     pub evaluations: usize,
 }
 
+/// The [`mismatch`] of indexes that miss `given` by the relative errors `relative` (each index
+/// moved away from `given` by that fraction): how well a match within those errors scores.
+pub fn mismatch_of_relative_errors(
+    model: &InverseModel,
+    given: &MotionIndexes,
+    relative: &[f64; N_INDEXES],
+) -> f64 {
+    let moved = MotionIndexes(std::array::from_fn(|i| given.0[i] * (1.0 + relative[i])));
+    mismatch(model, &moved, given)
+}
+
 /// Mean squared mismatch of the network features of `q` and `given`, each in units of the training
 /// standard deviation of that feature.
 pub fn mismatch(model: &InverseModel, q: &MotionIndexes, given: &MotionIndexes) -> f64 {

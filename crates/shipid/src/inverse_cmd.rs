@@ -518,7 +518,7 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
         match a.modes {
             Some(n) => format!("using {n} modes (--modes)"),
             None => format!(
-                "modes grown from {n95} by {MODE_STEP} up to {max_modes} until every refined weight is inside the trained box"
+                "modes grown from {n95} by {MODE_STEP} up to {max_modes} until every network answer and refined weight is inside the trained box"
             ),
         }
     );

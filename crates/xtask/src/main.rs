@@ -15,6 +15,7 @@ mod coverage;
 mod coverage_family;
 mod fit_bench;
 mod inverse_bench;
+mod inverse_indexes;
 mod out_of_kind;
 mod paper001;
 mod refine_bench;
@@ -116,6 +117,12 @@ enum Task {
         #[arg(long, default_value_t = 0.9)]
         level: f64,
     },
+    /// The nine motion indexes of paper 003 of model files, as `[[target.motion]]` tables (a hidden
+    /// check's targets from a model whose truth is known).
+    InverseIndexes {
+        /// Model files (or `mmg:kvlcc2`).
+        models: Vec<String>,
+    },
     /// List every crate's file import edges and fail on a circle (ARCHITECTURE.md's invariant).
     Circles,
     /// Wall time and results of `shipid fit --refine` on the default data, against a baseline binary
@@ -195,6 +202,9 @@ fn main() -> ExitCode {
             .map(|()| ExitCode::SUCCESS),
         Task::OutOfKind { out, seeds, level } => {
             out_of_kind::run(&out, seeds, level).map(|()| ExitCode::SUCCESS)
+        }
+        Task::InverseIndexes { models } => {
+            inverse_indexes::run(&models).map(|()| ExitCode::SUCCESS)
         }
         Task::Circles => {
             let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
