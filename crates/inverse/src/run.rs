@@ -230,14 +230,17 @@ fn attempt_of(modes: &VariationModes, n: usize, st: &Stage) -> Attempt {
     }
 }
 
-fn describe(a: &Attempt) -> String {
-    let mut parts: Vec<String> = a
-        .on_edge
+/// "`name`: `what` in mode(s) 2, 4" for every motion with modes in `per_motion`.
+fn modes_of<'a>(
+    per_motion: &'a [(String, Vec<usize>)],
+    what: &'a str,
+) -> impl Iterator<Item = String> + 'a {
+    per_motion
         .iter()
         .filter(|(_, m)| !m.is_empty())
-        .map(|(name, m)| {
+        .map(move |(name, m)| {
             format!(
-                "{name} on the ±{WEIGHT_RANGE_STD}σ edge in mode{} {}",
+                "{name} {what} in mode{} {}",
                 if m.len() > 1 { "s" } else { "" },
                 m.iter()
                     .map(|i| i.to_string())
@@ -245,22 +248,13 @@ fn describe(a: &Attempt) -> String {
                     .join(", ")
             )
         })
-        .collect();
-    parts.extend(
-        a.network_outside
-            .iter()
-            .filter(|(_, m)| !m.is_empty())
-            .map(|(name, m)| {
-                format!(
-                    "{name}: the network's answer outside the ±{WEIGHT_RANGE_STD}σ box in mode{} {}",
-                    if m.len() > 1 { "s" } else { "" },
-                    m.iter()
-                        .map(|i| i.to_string())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                )
-            }),
-    );
+}
+
+fn describe(a: &Attempt) -> String {
+    let edge = format!("on the ±{WEIGHT_RANGE_STD}σ edge");
+    let outside = format!("(the network's answer) outside the ±{WEIGHT_RANGE_STD}σ box");
+    let mut parts: Vec<String> = modes_of(&a.on_edge, &edge).collect();
+    parts.extend(modes_of(&a.network_outside, &outside));
     parts.extend(a.failed.iter().map(|n| format!("{n}: refinement failed")));
     parts.join("; ")
 }
@@ -414,7 +408,8 @@ pub const RESTART_JITTER_SIGMA: f64 = 1.0;
 /// The ensemble of each motion: the other networks, trained on the same database with their own seeds
 /// (their own initialisation, split and batches), and per network [`RESTARTS_PER_NETWORK`]
 /// refinements (from its answer and from seeded starts jittered by ±[`RESTART_JITTER_SIGMA`] σ around
-/// it), all with the first network's mismatch (so that members are compared on one scale), together
+/// it), and [`BEST_RESTARTS_PER_ROUND`] refinements from starts jittered around the best match so
+/// far, all with the first network's mismatch (so that members are compared on one scale), together
 /// with the first network's own refinement; members ranked by mismatch. Networks see the indexes
 /// differently; restarts find the other weights that match them about as well: the spread of both is
 /// what the indexes leave undetermined.
@@ -445,8 +440,8 @@ fn ensembles(
         .enumerate()
         .map(|(motion, ((_, q), m))| {
             // A ship whose indexes miss the target by the network's own held-out errors matches it
-            // as well as the method can tell (a best member far better than that is luck, not
-            // information: 4 × a very small best kept a single member of a KVLCC2 variant).
+            // as well as the method can tell: a best member far better than that is luck, not
+            // information, and 4 × its mismatch would keep too few.
             let precision = if held.index_mare.iter().all(|e| e.is_finite()) {
                 mismatch_of_relative_errors(&st.model, q, &held.index_mare)
             } else {
@@ -473,14 +468,7 @@ fn ensembles(
                         starts.push(answer.clone());
                     }
                     for _ in 1..RESTARTS_PER_NETWORK {
-                        let jittered: Vec<f64> = answer
-                            .iter()
-                            .zip(&modes.weight_std)
-                            .map(|(x, s)| {
-                                x + RESTART_JITTER_SIGMA * s * rng.random_range(-1.0..=1.0)
-                            })
-                            .collect();
-                        starts.push(clip_weights(modes, &jittered).0);
+                        starts.push(jittered(modes, &answer, &mut rng));
                     }
                 }
                 // Jittered around the best match so far too: a target outside the trained box
@@ -498,15 +486,7 @@ fn ensembles(
                             .wrapping_add(1_000_000 * round as u64),
                     );
                     for _ in 0..BEST_RESTARTS_PER_ROUND {
-                        let jittered: Vec<f64> = best
-                            .weights
-                            .iter()
-                            .zip(&modes.weight_std)
-                            .map(|(x, s)| {
-                                x + RESTART_JITTER_SIGMA * s * rng.random_range(-1.0..=1.0)
-                            })
-                            .collect();
-                        starts.push(clip_weights(modes, &jittered).0);
+                        starts.push(jittered(modes, &best.weights, &mut rng));
                     }
                 }
                 tried += starts.len();
@@ -537,6 +517,17 @@ fn ensembles(
             }
         })
         .collect())
+}
+
+/// A restart's start: `around` moved by a uniform ±[`RESTART_JITTER_SIGMA`] σ per mode, clipped to
+/// the box.
+fn jittered(modes: &VariationModes, around: &[f64], rng: &mut ChaCha8Rng) -> Vec<f64> {
+    let moved: Vec<f64> = around
+        .iter()
+        .zip(&modes.weight_std)
+        .map(|(x, s)| x + RESTART_JITTER_SIGMA * s * rng.random_range(-1.0..=1.0))
+        .collect();
+    clip_weights(modes, &moved).0
 }
 
 /// The largest mismatch of a kept member: [`MEMBER_MISMATCH_FACTOR`] × the best one's, and never
