@@ -50,6 +50,7 @@ use shipid_model::{AbkowitzModel, CoefficientSet, IdentificationRange};
 use shipid_sim::metrics::metrics;
 use shipid_sim::{AbkowitzDynamics, Dynamics};
 use shipid_uncertainty::Band;
+use shipid_uncertainty::band::quantile;
 
 use shipid_model::OutOfKindRecord;
 use shipid_model::calibration::FactorCalibrationRecord;
@@ -124,11 +125,6 @@ pub struct BandError {
 }
 
 impl Calibration {
-    /// The factor of metric family `family` (1 when the calibration has none for it).
-    pub fn family_factor(&self, family: MetricFamily) -> f64 {
-        self.factors.get(&family).map_or(1.0, |f| f.factor())
-    }
-
     /// The factor of `metric`'s family (1 for a metric of no family).
     pub fn factor(&self, metric: &str) -> f64 {
         MetricFamily::of(metric).map_or(1.0, |f| self.factor_of(f))
@@ -177,13 +173,6 @@ pub fn widen_metric(
 fn out_of_kind_of(out_of_kind: Option<&OutOfKindRecord>, metric: &str) -> Option<f64> {
     let family = MetricFamily::of(metric)?;
     out_of_kind?.relative.get(family.as_str()).copied()
-}
-
-/// Quantile `q` of sorted values (Hyndman & Fan type 7, as the bands).
-fn quantile(sorted: &[f64], q: f64) -> f64 {
-    let h = (sorted.len() - 1) as f64 * q;
-    let (lo, hi) = (h.floor() as usize, h.ceil() as usize);
-    sorted[lo] + (h - lo as f64) * (sorted[hi] - sorted[lo])
 }
 
 fn factor_of(mut z: Vec<f64>, level: f64) -> f64 {

@@ -37,11 +37,17 @@ impl Band {
 }
 
 /// Quantile `q` of sorted values (linear interpolation between order statistics, Hyndman & Fan type 7).
-fn quantile(sorted: &[f64], q: f64) -> f64 {
+/// Values may end in +∞ (a diverged prediction counted as an infinite error): the quantile is then
+/// +∞ once it reaches them, never the NaN that ∞ − ∞ would give.
+pub fn quantile(sorted: &[f64], q: f64) -> f64 {
     let h = (sorted.len() - 1) as f64 * q;
     let lo = h.floor() as usize;
     let hi = h.ceil() as usize;
-    sorted[lo] + (h - lo as f64) * (sorted[hi] - sorted[lo])
+    let w = h - lo as f64;
+    if sorted[lo].is_infinite() || (w > 0.0 && sorted[hi].is_infinite()) {
+        return if w > 0.0 { sorted[hi] } else { sorted[lo] };
+    }
+    sorted[lo] + w * (sorted[hi] - sorted[lo])
 }
 
 /// The finite values of `values`, sorted, and how many were undefined (None or not finite); refused

@@ -38,6 +38,7 @@ use shipid_pipeline::out_of_kind::OUT_OF_KIND_LEVELS;
 use shipid_pipeline::spec::parse_manoeuvre;
 use shipid_sim::metrics::metrics;
 use shipid_sim::{AbkowitzDynamics, Dynamics, MmgModel, MmgParameters, kvlcc2_ship};
+use shipid_uncertainty::band::quantile;
 
 /// Every manoeuvre generated for a ship: the training ones and the predicted ones.
 const MANOEUVRES: [&str; 8] = [
@@ -172,18 +173,6 @@ struct Error {
     metric_family: MetricFamily,
     truth: f64,
     predicted: Option<f64>,
-}
-
-/// Quantile `q` of sorted values (type 7, as the bands); infinite once it reaches an infinite value
-/// (a diverged prediction).
-fn quantile(sorted: &[f64], q: f64) -> f64 {
-    let h = (sorted.len() - 1) as f64 * q;
-    let (lo, hi) = (h.floor() as usize, h.ceil() as usize);
-    let w = h - lo as f64;
-    if sorted[hi].is_infinite() && w > 0.0 || sorted[lo].is_infinite() {
-        return f64::INFINITY;
-    }
-    sorted[lo] + w * (sorted[hi] - sorted[lo])
 }
 
 pub fn run(out: &Path, seeds: u64, level: f64) -> Result<()> {

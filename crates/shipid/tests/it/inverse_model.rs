@@ -23,6 +23,22 @@ fn json_of(stdout: &[u8]) -> Value {
     serde_json::from_slice(stdout).expect("JSON on stdout")
 }
 
+/// `shipid inverse TARGETS --out OUT` with `extra` flags (exit 0, or 1 for a model flagged on the
+/// box's edge) and its `summary.json`.
+fn run_inverse(targets: &std::path::Path, out: &std::path::Path, extra: &[&str]) -> Value {
+    let mut args = vec!["inverse", targets.to_str().expect("utf-8")];
+    args.extend_from_slice(extra);
+    args.extend(["--out", out.to_str().expect("utf-8")]);
+    let run = common::shipid(&args);
+    assert!(
+        matches!(run.status.code(), Some(0 | 1)),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).expect("summary.json"))
+        .expect("summary JSON")
+}
+
 /// `got` against `want`, relative to |want| (the same model simulated twice: solver tolerance).
 fn check_same(what: &str, got: f64, want: f64) {
     assert!(
@@ -37,27 +53,18 @@ fn the_model_file_reproduces_the_inverse_re_simulation() {
     let targets = dir.path().join("kvlcc2.toml");
     std::fs::write(&targets, kvlcc2_targets()).expect("write targets");
     let out = dir.path().join("out");
-    let run = common::shipid(&[
-        "inverse",
-        targets.to_str().expect("utf-8"),
-        "--samples",
-        "150",
-        "--resimulate",
-        "2",
-        "--refine-evals",
-        "20",
-        "--out",
-        out.to_str().expect("utf-8"),
-    ]);
-    assert!(
-        matches!(run.status.code(), Some(0 | 1)),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
+    let summary = run_inverse(
+        &targets,
+        &out,
+        &[
+            "--samples",
+            "150",
+            "--resimulate",
+            "2",
+            "--refine-evals",
+            "20",
+        ],
     );
-    let summary: Value = serde_json::from_str(
-        &std::fs::read_to_string(out.join("summary.json")).expect("summary.json"),
-    )
-    .expect("summary JSON");
     let motion = &summary["targets"][0]["motions"][0];
     assert_eq!(motion["model_file"], "model.toml", "{motion}");
     let model_path = out.join("kvlcc2/model.toml");
@@ -183,21 +190,7 @@ fn variant_outside_the_trained_box_kept_six_modes_and_had_no_band() {
     let targets = dir.path().join("variant-targets.toml");
     std::fs::write(&targets, kvlcc2_target_with(&q.0)).expect("write targets");
     let out = dir.path().join("out");
-    let run = common::shipid(&[
-        "inverse",
-        targets.to_str().expect("utf-8"),
-        "--out",
-        out.to_str().expect("utf-8"),
-    ]);
-    assert!(
-        matches!(run.status.code(), Some(0 | 1)),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let summary: Value = serde_json::from_str(
-        &std::fs::read_to_string(out.join("summary.json")).expect("summary.json"),
-    )
-    .expect("summary JSON");
+    let summary = run_inverse(&targets, &out, &[]);
     let target = &summary["targets"][0];
     assert!(
         target["modes"].as_u64().expect("modes") > 6,

@@ -231,3 +231,24 @@ fn coverage_and_its_interval() {
         "{lo} {hi}"
     );
 }
+
+/// One concern: the type-7 quantile, where the values may end in +∞.
+fn check_quantile(sorted: &[f64], q: f64, expected: f64) {
+    let got = shipid_uncertainty::band::quantile(sorted, q);
+    assert!(
+        got == expected || (got - expected).abs() < 1e-12,
+        "quantile {q} of {sorted:?}: {got}, expected {expected}"
+    );
+}
+
+#[test]
+fn quantiles_interpolate_and_reach_infinity_without_nan() {
+    let inf = f64::INFINITY;
+    check_quantile(&[1.0, 2.0, 3.0, 4.0, 5.0], 0.5, 3.0);
+    check_quantile(&[1.0, 2.0, 3.0, 4.0, 5.0], 0.9, 4.6);
+    // An infinite value beyond the quantile changes nothing; reached, it gives +∞ (not ∞ − ∞).
+    check_quantile(&[1.0, 2.0, 3.0, 4.0, inf], 0.5, 3.0);
+    check_quantile(&[1.0, 2.0, 3.0, 4.0, inf], 0.9, inf);
+    check_quantile(&[1.0, 2.0, inf, inf, inf], 0.9, inf);
+    check_quantile(&[1.0, inf, inf], 0.5, inf);
+}
