@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 use shipid_io::Dataset;
 use shipid_pipeline::range::share;
-use shipid_pipeline::validate::propeller_rate_variations;
+use shipid_pipeline::validate::{propeller_rate_variations, recorded_rate_notes};
 use shipid_sim::Effect;
 
 use crate::compare::{Baseline, ReplayScore, outside_counts, pooled};
@@ -190,10 +190,16 @@ pub fn diagnose(
             report.per_recording_wind = o.winds.clone();
         }
     }
-    report.warnings = propeller_rate_variations(&whole.recordings)
-        .iter()
-        .map(ToString::to_string)
-        .collect();
+    // A model that takes the propeller rate replays every recording at its recorded rate; any other
+    // runs at one rate and is warned about recordings whose rate varies.
+    report.warnings = if input.base.takes_propeller_rate() {
+        recorded_rate_notes(input.base.propeller_rate_hz(), &whole.recordings)
+    } else {
+        propeller_rate_variations(&whole.recordings)
+            .iter()
+            .map(ToString::to_string)
+            .collect()
+    };
     let found: Vec<Effect> = report
         .effects
         .iter()

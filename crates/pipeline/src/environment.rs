@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 use shipid_io::deriv::accelerations_or_estimate;
 use shipid_io::{Accelerations, AddedMass, Dataset, DatasetRecording, Recording, Ship, Windage};
 use shipid_sim::environment::{ASSUMED_WINDAGE_SOURCE, assumed_windage};
-use shipid_sim::{Dynamics, KnownEnvironment, MassMatrix};
+use shipid_sim::{Dynamics, KnownEnvironment, MassMatrix, RecordedRate};
 
 use crate::error::{PipelineError, bad_input};
 
@@ -200,6 +200,33 @@ pub fn with_environment<'a>(
     match env {
         Some(env) => Box::new(shipid_sim::WithEnvironment::new(model, env)),
         None => Box::new(model),
+    }
+}
+
+/// `model` replaying `rec` with every input the recording gives it: the recorded propeller rate when
+/// the model takes one (the mmg family; [`shipid_sim::WithPropellerRate`]) and the recorded wind and
+/// current `env`. `t_start_s`: the recording time the simulation starts at (a segment's start; the
+/// first sample for a whole replay).
+pub fn with_recorded_inputs<'a>(
+    model: &'a dyn Dynamics,
+    rec: &Recording,
+    t_start_s: f64,
+    env: Option<KnownEnvironment>,
+) -> Box<dyn Dynamics + 'a> {
+    let rate = model
+        .takes_propeller_rate()
+        .then(|| RecordedRate::of_recording(rec))
+        .flatten();
+    let env = env.map(|e| e.replay_from(t_start_s));
+    match (rate, env) {
+        (Some(rate), env) => {
+            let driven = shipid_sim::WithPropellerRate::new(model, rate.replay_from(t_start_s));
+            match env {
+                Some(env) => Box::new(shipid_sim::WithEnvironment::new(driven, env)),
+                None => Box::new(driven),
+            }
+        }
+        (None, env) => with_environment(model, env),
     }
 }
 

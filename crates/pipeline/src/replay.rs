@@ -6,9 +6,9 @@ use shipid_io::Recording;
 use shipid_sim::dynamics::{FiniteDifferences, MassMatrix, NoFilter, Parametric, RudderFilter};
 use shipid_sim::{
     DivergenceBounds, Dynamics, KnownEnvironment, Replay, SimOptions, SimStatus, State,
-    WithEnvironment,
 };
 
+use crate::environment::with_recorded_inputs;
 use crate::lm::solve_small;
 use crate::validate::DT_OVER_L_OVER_U0;
 
@@ -138,9 +138,9 @@ pub fn replay_segment(
     }
 }
 
-/// [`replay_segment`] of a recording with a recorded environment `env` (built from `rec`, see
-/// [`crate::environment`]): the model feels the recording's wind and current from the segment's start
-/// on. `None` is [`replay_segment`] itself.
+/// [`replay_segment`] of a recording with its recorded inputs: the model feels the recorded wind and
+/// current `env` (built from `rec`, see [`crate::environment`]) and, when it takes one, the recorded
+/// propeller rate from the segment's start on. Without either it is [`replay_segment`] itself.
 pub fn replay_segment_in(
     model: &dyn Dynamics,
     env: Option<&KnownEnvironment>,
@@ -148,15 +148,8 @@ pub fn replay_segment_in(
     a: usize,
     b: usize,
 ) -> (Recording, bool) {
-    match env {
-        Some(env) => replay_segment(
-            &WithEnvironment::new(model, env.replay_from(rec.t[a])),
-            rec,
-            a,
-            b,
-        ),
-        None => replay_segment(model, rec, a, b),
-    }
+    let model = with_recorded_inputs(model, rec, rec.t[a], env.cloned());
+    replay_segment(model.as_ref(), rec, a, b)
 }
 
 /// A segment replay with the derivatives of its pose with respect to chosen parameter directions.

@@ -20,7 +20,7 @@ use shipid_sim::{
     controller_for, metrics,
 };
 
-use crate::environment::{ChosenWindage, WindageSource, environment_with, with_environment};
+use crate::environment::{ChosenWindage, WindageSource, environment_with, with_recorded_inputs};
 
 /// Root mean square of `x` (0 for no samples).
 pub fn rms(x: &[f64]) -> f64 {
@@ -114,9 +114,11 @@ pub fn replay_in(
     rec: &Recording,
     env: Option<KnownEnvironment>,
 ) -> SimOutput {
-    let model = with_environment(model, env);
+    let Some(&t0) = rec.t.first() else {
+        return failed_output("cannot replay: the recording is empty".into());
+    };
+    let model = with_recorded_inputs(model, rec, t0, env);
     let model = model.as_ref();
-    let t0 = rec.t[0];
     let t_rel: Vec<f64> = rec.t.iter().map(|t| t - t0).collect();
     let duration = *t_rel.last().unwrap_or(&0.0);
     let mut ctrl = match Replay::new(t_rel, rec.delta.clone()) {
@@ -179,9 +181,9 @@ pub fn closed_loop_in(
     ship: &Ship,
     env: Option<KnownEnvironment>,
 ) -> Option<SimOutput> {
-    let model = with_environment(model, env);
-    let model = model.as_ref();
     let rec = &r.recording;
+    let model = with_recorded_inputs(model, rec, rec.t.first().copied().unwrap_or(0.0), env);
+    let model = model.as_ref();
     let (rudder, side) = match r.manoeuvre {
         Manoeuvre::ZigZag {
             rudder_deg, side, ..
@@ -315,15 +317,26 @@ pub fn validation_windage(model_spec: &str, ds: &shipid_io::Dataset) -> ChosenWi
     )
 }
 
-/// What a validation of `model_spec` on `ds` warns about (stderr and the JSON's `warnings`): a
-/// recording whose propeller rate varies though the model runs at one rate, a recorded wind or current
-/// the validation applies (and with which windage; an assumed one named as such), and a model
-/// identified in a recorded environment applied to recordings without one.
-pub fn validation_warnings(model_spec: &str, ds: &shipid_io::Dataset) -> Vec<String> {
-    let mut warnings: Vec<String> = propeller_rate_variations(&ds.recordings)
-        .iter()
-        .map(ToString::to_string)
-        .collect();
+/// What a validation of `model_spec` (loaded as `model`; `None` for a study's several models) on `ds`
+/// warns about (stderr and the JSON's `warnings`): a recording whose propeller rate varies though the
+/// model runs at one rate, or, for a model that takes the rate, the recordings it replays at a rate
+/// other than its own; a recorded wind or current the validation applies (and with which windage; an
+/// assumed one named as such), and a model identified in a recorded environment applied to recordings
+/// without one.
+pub fn validation_warnings(
+    model_spec: &str,
+    model: Option<&dyn Dynamics>,
+    ds: &shipid_io::Dataset,
+) -> Vec<String> {
+    let mut warnings: Vec<String> = match model {
+        Some(m) if m.takes_propeller_rate() => {
+            recorded_rate_notes(m.propeller_rate_hz(), &ds.recordings)
+        }
+        _ => propeller_rate_variations(&ds.recordings)
+            .iter()
+            .map(ToString::to_string)
+            .collect(),
+    };
     let windage = validation_windage(model_spec, ds);
     let any_wind = ds.recordings.iter().any(|r| r.recording.wind.is_some());
     if any_wind && windage.is_assumed() {
@@ -438,13 +451,70 @@ impl std::fmt::Display for PropellerRateVariation {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "{}: the propeller rate n varies by {:.0} % ({:.3}–{:.3} 1/s) but the model runs at one constant rate: where n departs from it, the model's forces are not the recording's",
+            "{}: the propeller rate n varies by {:.0} % ({:.3}–{:.3} 1/s) but a model without a propeller-rate input (polynomial sets, sparse GP; an mmg model takes the recorded n) runs at one constant rate: where n departs from it, the model's forces are not the recording's",
             self.recording,
             100.0 * self.relative_spread,
             self.n_low_hz,
             self.n_high_hz
         )
     }
+}
+
+/// Relative difference between a recording's propeller rate and a model's own above which a
+/// validation of a model that takes the rate says that it replays at the recorded one.
+pub const PROPELLER_RATE_DIFFERENCE_NOTE: f64 = 0.01;
+
+/// For a model that takes the propeller rate (holding `model_rate_hz`): one note naming the recordings
+/// it replays at a recorded rate that is not its own (median differing by more than
+/// [`PROPELLER_RATE_DIFFERENCE_NOTE`], or spreading by more than [`PROPELLER_RATE_SPREAD_WARNING`]).
+pub fn recorded_rate_notes<'a>(
+    model_rate_hz: Option<f64>,
+    recordings: impl IntoIterator<Item = &'a DatasetRecording>,
+) -> Vec<String> {
+    let Some(own) = model_rate_hz else {
+        return Vec::new();
+    };
+    let differing: Vec<String> = recordings
+        .into_iter()
+        .filter_map(|r| {
+            let (low, median, high) = rate_percentiles(r)?;
+            let off = (median - own).abs() > PROPELLER_RATE_DIFFERENCE_NOTE * own.abs()
+                || (high - low) > PROPELLER_RATE_SPREAD_WARNING * median.abs();
+            off.then(|| {
+                if high - low > PROPELLER_RATE_SPREAD_WARNING * median.abs() {
+                    format!("{} ({low:.3}–{high:.3} 1/s)", r.file)
+                } else {
+                    format!("{} ({median:.3} 1/s)", r.file)
+                }
+            })
+        })
+        .collect();
+    if differing.is_empty() {
+        return Vec::new();
+    }
+    vec![format!(
+        "the model takes the propeller rate: it replays {} at the recorded rate n, not at its own {own:.3} 1/s",
+        differing.join(", ")
+    )]
+}
+
+/// 2nd, 50th and 98th percentiles of the recorded propeller rate [1/s] of `r` (robust to single
+/// spikes); `None` without an `n` column of at least three finite values.
+fn rate_percentiles(r: &DatasetRecording) -> Option<(f64, f64, f64)> {
+    let mut n: Vec<f64> = r
+        .recording
+        .n
+        .as_ref()?
+        .iter()
+        .copied()
+        .filter(|x| x.is_finite())
+        .collect();
+    if n.len() < 3 {
+        return None;
+    }
+    n.sort_by(f64::total_cmp);
+    let at = |q: f64| n[((n.len() - 1) as f64 * q).round() as usize];
+    Some((at(0.02), at(0.5), at(0.98)))
 }
 
 /// The recordings of `recordings` whose recorded propeller rate spreads by more than
@@ -455,20 +525,7 @@ pub fn propeller_rate_variations<'a>(
     recordings
         .into_iter()
         .filter_map(|r| {
-            let mut n: Vec<f64> = r
-                .recording
-                .n
-                .as_ref()?
-                .iter()
-                .copied()
-                .filter(|x| x.is_finite())
-                .collect();
-            if n.len() < 3 {
-                return None;
-            }
-            n.sort_by(f64::total_cmp);
-            let at = |q: f64| n[((n.len() - 1) as f64 * q).round() as usize];
-            let (low, median, high) = (at(0.02), at(0.5), at(0.98));
+            let (low, median, high) = rate_percentiles(r)?;
             let spread = (high - low) / median.abs();
             (median != 0.0 && spread > PROPELLER_RATE_SPREAD_WARNING).then(|| {
                 PropellerRateVariation {

@@ -104,7 +104,7 @@ pub fn validation_with_bands(
         "method": "replay: recorded rudder from the recorded initial state (RMSEs); manoeuvre: the recording's standard manoeuvre re-simulated in closed loop (metrics)",
         "recordings": recs,
     });
-    let warnings = shipid_pipeline::validate::validation_warnings(model_spec, ds);
+    let warnings = shipid_pipeline::validate::validation_warnings(model_spec, Some(model), ds);
     for w in &warnings {
         eprintln!("warning: {w}");
     }

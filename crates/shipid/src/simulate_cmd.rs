@@ -46,7 +46,8 @@ pub fn run_replay(model_spec: &str, dataset: &Path, as_json: bool) -> Result<Out
     let model = load_model(model_spec)?;
     let ds = shipid_io::Dataset::load(dataset)?;
     let windage = shipid_pipeline::validate::validation_windage(model_spec, &ds);
-    let warnings = shipid_pipeline::validate::validation_warnings(model_spec, &ds);
+    let warnings =
+        shipid_pipeline::validate::validation_warnings(model_spec, Some(model.as_ref()), &ds);
     for w in &warnings {
         eprintln!("warning: {w}");
     }

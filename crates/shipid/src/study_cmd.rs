@@ -51,7 +51,7 @@ pub fn run_and_write(
     write_tables(study, &results, out)?;
     // What the data carry that the models may not: a varying propeller rate, a recorded wind or
     // current (removed before each fit and applied in each test's replays), and the windage used.
-    let mut warnings = shipid_pipeline::validate::validation_warnings("", &study.dataset);
+    let mut warnings = shipid_pipeline::validate::validation_warnings("", None, &study.dataset);
     warnings.extend(shipid_figures::write_figures(study, out).warnings);
     RunRecord::new(
         env!("CARGO_PKG_VERSION"),

@@ -134,6 +134,28 @@ pub trait Dynamics {
         self.accelerations(state, delta_rad)
     }
 
+    /// Whether the model's forces take the propeller rate as an input (the MMG model's thrust and
+    /// rudder slipstream): a recorded rate then drives it through [`Dynamics::accelerations_at_rate`]
+    /// ([`crate::WithPropellerRate`]). Models without that input were identified at one rate and
+    /// keep it.
+    fn takes_propeller_rate(&self) -> bool {
+        false
+    }
+
+    /// [`Dynamics::accelerations_at`] with the propeller turning at `n_hz` [1/s] instead of the
+    /// model's own rate. Models that do not take the rate ([`Dynamics::takes_propeller_rate`]) ignore
+    /// it; wrappers pass it on to the model they wrap.
+    fn accelerations_at_rate(
+        &self,
+        t_s: f64,
+        state: &State,
+        delta_rad: f64,
+        n_hz: f64,
+    ) -> Result<[f64; 3], DynamicsError> {
+        let _ = n_hz;
+        self.accelerations_at(t_s, state, delta_rad)
+    }
+
     /// The ship the model describes.
     fn ship(&self) -> &Ship;
 
@@ -212,6 +234,18 @@ impl<T: Dynamics + ?Sized> Dynamics for &T {
     ) -> Result<[f64; 3], DynamicsError> {
         (**self).accelerations_at(t_s, state, delta_rad)
     }
+    fn takes_propeller_rate(&self) -> bool {
+        (**self).takes_propeller_rate()
+    }
+    fn accelerations_at_rate(
+        &self,
+        t_s: f64,
+        state: &State,
+        delta_rad: f64,
+        n_hz: f64,
+    ) -> Result<[f64; 3], DynamicsError> {
+        (**self).accelerations_at_rate(t_s, state, delta_rad, n_hz)
+    }
     fn own_range(&self) -> Option<&dyn OwnRange> {
         (**self).own_range()
     }
@@ -246,6 +280,18 @@ impl<T: Dynamics + ?Sized> Dynamics for Box<T> {
         delta_rad: f64,
     ) -> Result<[f64; 3], DynamicsError> {
         (**self).accelerations_at(t_s, state, delta_rad)
+    }
+    fn takes_propeller_rate(&self) -> bool {
+        (**self).takes_propeller_rate()
+    }
+    fn accelerations_at_rate(
+        &self,
+        t_s: f64,
+        state: &State,
+        delta_rad: f64,
+        n_hz: f64,
+    ) -> Result<[f64; 3], DynamicsError> {
+        (**self).accelerations_at_rate(t_s, state, delta_rad, n_hz)
     }
     fn own_range(&self) -> Option<&dyn OwnRange> {
         (**self).own_range()

@@ -683,19 +683,23 @@ impl<D: Dynamics> WithEffects<D> {
     }
 }
 
-impl<D: Dynamics> Dynamics for WithEffects<D> {
-    fn accelerations(&self, s: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
-        self.accelerations_at(0.0, s, delta_rad)
-    }
-
-    fn accelerations_at(
+impl<D: Dynamics> WithEffects<D> {
+    /// The accelerations at `t_s`, the wrapped model's at the propeller rate `n_hz` when one is given
+    /// (a recorded rate, [`crate::WithPropellerRate`]), else at its own.
+    fn accelerations_with_rate(
         &self,
         t_s: f64,
         s: &State,
         delta_rad: f64,
+        n_hz: Option<f64>,
     ) -> Result<[f64; 3], DynamicsError> {
         let water = self.through_water(s);
-        let mut acc = self.inner.accelerations_at(t_s, &water, delta_rad)?;
+        let mut acc = match n_hz {
+            Some(n_hz) => self
+                .inner
+                .accelerations_at_rate(t_s, &water, delta_rad, n_hz)?,
+            None => self.inner.accelerations_at(t_s, &water, delta_rad)?,
+        };
         let ship = self.inner.ship();
         let mut force = self.constant_force;
         if let Some((wind, aero)) = &self.wind {
@@ -726,6 +730,35 @@ impl<D: Dynamics> Dynamics for WithEffects<D> {
             acc[1] -= s.r * uc;
         }
         Ok(acc)
+    }
+}
+
+impl<D: Dynamics> Dynamics for WithEffects<D> {
+    fn accelerations(&self, s: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
+        self.accelerations_at(0.0, s, delta_rad)
+    }
+
+    fn accelerations_at(
+        &self,
+        t_s: f64,
+        s: &State,
+        delta_rad: f64,
+    ) -> Result<[f64; 3], DynamicsError> {
+        self.accelerations_with_rate(t_s, s, delta_rad, None)
+    }
+
+    fn takes_propeller_rate(&self) -> bool {
+        self.inner.takes_propeller_rate()
+    }
+
+    fn accelerations_at_rate(
+        &self,
+        t_s: f64,
+        s: &State,
+        delta_rad: f64,
+        n_hz: f64,
+    ) -> Result<[f64; 3], DynamicsError> {
+        self.accelerations_with_rate(t_s, s, delta_rad, Some(n_hz))
     }
 
     fn ship(&self) -> &Ship {

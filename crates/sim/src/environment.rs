@@ -509,20 +509,24 @@ impl<D: Dynamics> WithEnvironment<D> {
     }
 }
 
-impl<D: Dynamics> Dynamics for WithEnvironment<D> {
-    fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
-        self.accelerations_at(0.0, state, delta_rad)
-    }
-
-    fn accelerations_at(
+impl<D: Dynamics> WithEnvironment<D> {
+    /// The accelerations at `t_s`, the wrapped model's at the propeller rate `n_hz` when one is given
+    /// (a recorded rate, [`crate::WithPropellerRate`]), else at its own.
+    fn accelerations_with_rate(
         &self,
         t_s: f64,
         s: &State,
         delta_rad: f64,
+        n_hz: Option<f64>,
     ) -> Result<[f64; 3], DynamicsError> {
         let env = &self.environment;
         let water = env.through_water(t_s, s);
-        let mut acc = self.inner.accelerations_at(t_s, &water, delta_rad)?;
+        let mut acc = match n_hz {
+            Some(n_hz) => self
+                .inner
+                .accelerations_at_rate(t_s, &water, delta_rad, n_hz)?,
+            None => self.inner.accelerations_at(t_s, &water, delta_rad)?,
+        };
         if env.has_wind() {
             let f = env.wind_force(t_s, s);
             let da = self
@@ -535,6 +539,35 @@ impl<D: Dynamics> Dynamics for WithEnvironment<D> {
         acc[0] += tu;
         acc[1] += tv;
         Ok(acc)
+    }
+}
+
+impl<D: Dynamics> Dynamics for WithEnvironment<D> {
+    fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
+        self.accelerations_at(0.0, state, delta_rad)
+    }
+
+    fn accelerations_at(
+        &self,
+        t_s: f64,
+        s: &State,
+        delta_rad: f64,
+    ) -> Result<[f64; 3], DynamicsError> {
+        self.accelerations_with_rate(t_s, s, delta_rad, None)
+    }
+
+    fn takes_propeller_rate(&self) -> bool {
+        self.inner.takes_propeller_rate()
+    }
+
+    fn accelerations_at_rate(
+        &self,
+        t_s: f64,
+        s: &State,
+        delta_rad: f64,
+        n_hz: f64,
+    ) -> Result<[f64; 3], DynamicsError> {
+        self.accelerations_with_rate(t_s, s, delta_rad, Some(n_hz))
     }
 
     fn ship(&self) -> &Ship {

@@ -13,6 +13,8 @@
 //! - [`gp`]: a sparse Gaussian-process acceleration model (paper 001) as a [`Dynamics`], and its model file.
 //! - [`effects`]: physical effects left out of a model (current, wind, rudder lag, asymmetry, shallow
 //!   water), applied around any [`Dynamics`] without changing the simulation loop.
+//! - [`environment`], [`propeller_rate`]: a recording's wind, current and propeller rate as known
+//!   inputs of a replay.
 //!
 //! Conventions (`docs/conventions.md`): SI units, midship reference point, body axes x forward / y
 //! starboard, earth axes x0 north / y0 east, heading and yaw rate positive to starboard, rudder angle
@@ -45,6 +47,7 @@ pub mod environment;
 pub mod gp;
 pub mod metrics;
 pub mod mmg;
+pub mod propeller_rate;
 pub mod sim;
 
 pub use abkowitz::AbkowitzDynamics;
@@ -64,6 +67,7 @@ pub use gp::{
 };
 pub use metrics::{Metrics, metrics};
 pub use mmg::{MmgError, MmgModel, MmgParameters, kvlcc2_added_mass, kvlcc2_ship};
+pub use propeller_rate::{RecordedRate, WithPropellerRate};
 pub use sim::{
     DivergenceBounds, SimError, SimOptions, SimOutput, SimStatus, simulate, simulate_filtered,
 };

@@ -634,13 +634,12 @@ impl MmgModel {
     }
 }
 
-impl Dynamics for MmgModel {
-    /// Y&Y 2015 eq. (4) about midship:
+impl MmgModel {
+    /// The accelerations under the total forces `[X, Y, N]`, Y&Y 2015 eq. (4) about midship:
     /// (m + m_x)u̇ − (m + m_y)v r − x_G m r² = X;
     /// (m + m_y)v̇ + (m + m_x)u r + x_G m ṙ = Y;
     /// (I_zG + x_G² m + J_z)ṙ + x_G m(v̇ + u r) = N.
-    fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
-        let [x, y, n] = self.forces(state, delta_rad)?.total();
+    fn accelerations_of(&self, [x, y, n]: [f64; 3], state: &State) -> [f64; 3] {
         let m = self.mass_kg;
         let xg = self.ship.xg;
         let (u, v, r) = (state.u, state.v, state.r);
@@ -650,7 +649,28 @@ impl Dynamics for MmgModel {
         let inv = &self.inv_sway_yaw;
         let v_dot = inv[0][0] * rhs_y + inv[0][1] * rhs_n;
         let r_dot = inv[1][0] * rhs_y + inv[1][1] * rhs_n;
-        Ok([u_dot, v_dot, r_dot])
+        [u_dot, v_dot, r_dot]
+    }
+}
+
+impl Dynamics for MmgModel {
+    fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
+        Ok(self.accelerations_of(self.forces(state, delta_rad)?.total(), state))
+    }
+
+    fn takes_propeller_rate(&self) -> bool {
+        true
+    }
+
+    fn accelerations_at_rate(
+        &self,
+        _t_s: f64,
+        state: &State,
+        delta_rad: f64,
+        n_hz: f64,
+    ) -> Result<[f64; 3], DynamicsError> {
+        let forces = self.forces_at_rate(state, delta_rad, n_hz)?.total();
+        Ok(self.accelerations_of(forces, state))
     }
 
     fn ship(&self) -> &Ship {

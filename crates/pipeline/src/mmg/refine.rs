@@ -53,6 +53,19 @@ impl Dynamics for ParametricMmg {
     fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
         self.model.accelerations(state, delta_rad)
     }
+    fn takes_propeller_rate(&self) -> bool {
+        true
+    }
+    fn accelerations_at_rate(
+        &self,
+        t_s: f64,
+        state: &State,
+        delta_rad: f64,
+        n_hz: f64,
+    ) -> Result<[f64; 3], DynamicsError> {
+        self.model
+            .accelerations_at_rate(t_s, state, delta_rad, n_hz)
+    }
     fn ship(&self) -> &Ship {
         self.model.ship()
     }

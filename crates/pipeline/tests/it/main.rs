@@ -7,6 +7,7 @@ mod family_calibration;
 mod generate_environment;
 mod mmg;
 mod out_of_kind;
+mod propeller_rate;
 mod refine;
 mod relative_wind;
 mod stored_calibration;

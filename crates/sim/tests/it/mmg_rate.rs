@@ -1,6 +1,11 @@
-//! The MMG model at a given propeller rate (the recorded one) instead of its self-propulsion rate.
+//! The MMG model at a given propeller rate (the recorded one) instead of its self-propulsion rate, and
+//! driven by a recorded rate.
 
-use shipid_sim::{Dynamics, MmgError, MmgModel, MmgParameters, State, kvlcc2_ship};
+use shipid_io::Recording;
+use shipid_sim::{
+    Dynamics, MmgError, MmgModel, MmgParameters, RecordedRate, State, WithPropellerRate,
+    kvlcc2_ship,
+};
 
 fn turning_state() -> State {
     State {
@@ -59,5 +64,50 @@ fn a_rate_that_is_not_a_finite_non_negative_number_is_refused() {
                 ..
             })
         ));
+    }
+}
+
+/// The MMG model driven by `rate` against the same model built at the rate it gives at each time.
+fn check_driven(rate: &RecordedRate, times_s: &[f64]) {
+    let model = MmgModel::kvlcc2();
+    let driven = WithPropellerRate::new(&model, rate.clone());
+    let s = turning_state();
+    for &t in times_s {
+        let built = MmgModel::at_rate(kvlcc2_ship(), MmgParameters::kvlcc2(), rate.at(t)).unwrap();
+        assert_eq!(
+            driven.accelerations_at(t, &s, 0.4).unwrap(),
+            built.accelerations(&s, 0.4).unwrap(),
+            "t = {t} s"
+        );
+    }
+}
+
+#[test]
+fn a_recorded_rate_drives_the_model_at_every_time() {
+    let own = MmgModel::kvlcc2().propeller_rate();
+    check_driven(&RecordedRate::constant(own), &[0.0, 10.0]);
+    // A rate that drops from 12 to 9 1/s over 20 s of a recording that starts at t = 5 s; held at
+    // the ends.
+    let rec = Recording {
+        t: vec![5.0, 15.0, 25.0],
+        n: Some(vec![12.0, 10.5, 9.0]),
+        ..Recording::default()
+    };
+    let rate = RecordedRate::of_recording(&rec).unwrap();
+    assert_eq!(rate.at(5.0), 11.25);
+    check_driven(&rate, &[-1.0, 0.0, 5.0, 20.0, 40.0]);
+    check_driven(&rate.replay_from(15.0), &[0.0, 5.0, 10.0]);
+}
+
+#[test]
+fn a_recording_without_a_usable_rate_drives_nothing() {
+    let t = vec![0.0, 1.0];
+    for n in [None, Some(vec![10.0]), Some(vec![10.0, f64::NAN])] {
+        let rec = Recording {
+            t: t.clone(),
+            n: n.clone(),
+            ..Recording::default()
+        };
+        assert_eq!(RecordedRate::of_recording(&rec), None, "n = {n:?}");
     }
 }

@@ -1,0 +1,140 @@
+//! The recorded propeller rate as a known input of a replay: a model that takes the rate (the mmg
+//! family) replays a recording at the rate it recorded, not at the one it holds.
+
+use shipid_io::{DatasetRecording, Manoeuvre, Recording, Side};
+use shipid_pipeline::generate::T_EXECUTE_S;
+use shipid_pipeline::replay::{replay_segment_in, segments};
+use shipid_pipeline::validate::{recorded_rate_notes, validate_recording};
+use shipid_sim::{
+    Dynamics, MmgModel, RecordedRate, SimOptions, State, Turning, WithPropellerRate, simulate,
+};
+
+/// A 35° starboard turn of the MMG reference from U0, its propeller at `rate` (written to `n`).
+fn turn_at(rate: RecordedRate) -> DatasetRecording {
+    let model = MmgModel::kvlcc2();
+    let ship = *model.ship();
+    let mut turning = Turning::new(35.0, Side::Starboard, T_EXECUTE_S).unwrap();
+    let driven = WithPropellerRate::new(&model, rate);
+    let out = simulate(
+        &driven,
+        &mut turning,
+        State::approach(ship.u0),
+        &SimOptions::new(150.0).with_step(0.01, 0.05),
+    )
+    .unwrap();
+    DatasetRecording {
+        file: "tc35_sb.csv".into(),
+        manoeuvre: Manoeuvre::Turning {
+            rudder_deg: 35.0,
+            side: Side::Starboard,
+        },
+        recording: out.recording,
+    }
+}
+
+#[test]
+fn validation_of_an_mmg_model_ignored_the_recorded_propeller_rate() {
+    // The model holds its self-propulsion rate; the run was made 15 % faster. Before the recorded
+    // rate drove the replay, validation ran the model at its own rate and blamed the model.
+    let model = MmgModel::kvlcc2();
+    let ship = *model.ship();
+    let fast = 1.15 * model.propeller_rate();
+    let r = turn_at(RecordedRate::constant(fast));
+    assert_eq!(r.recording.n.as_ref().unwrap()[0], fast);
+    let at_recorded = validate_recording(&model, &r, &ship);
+    assert!(
+        at_recorded.replay.heading_rmse_deg < 0.05,
+        "{:?}",
+        at_recorded.replay
+    );
+    let mrae = at_recorded.manoeuvre.as_ref().unwrap().mrae.unwrap();
+    assert!(mrae < 2e-3, "closed-loop MRAE {mrae}");
+    // The same run without its `n` column is replayed at the model's rate: far off.
+    let mut without_n = r.clone();
+    without_n.recording.n = None;
+    let at_own = validate_recording(&model, &without_n, &ship);
+    assert!(at_own.replay.heading_rmse_deg > 1.0, "{:?}", at_own.replay);
+}
+
+#[test]
+fn a_segment_replay_follows_a_rate_that_drops_in_the_turn() {
+    // A sea trial's rate falls as the ship slows in the turn: 11.85 to 9 1/s over the first 60 s.
+    let model = MmgModel::kvlcc2();
+    let own = model.propeller_rate();
+    let schedule = Recording {
+        t: vec![0.0, 10.0, 70.0],
+        n: Some(vec![own, own, 0.76 * own]),
+        ..Recording::default()
+    };
+    let mut r = turn_at(RecordedRate::of_recording(&schedule).unwrap());
+    // The simulation writes the rate at its start; the recording carries the whole schedule.
+    let rate = RecordedRate::of_recording(&schedule).unwrap();
+    r.recording.n = Some(r.recording.t.iter().map(|&t| rate.at(t)).collect());
+    let ship = *model.ship();
+    let horizon_s = 10.0 * ship.lpp / ship.u0;
+    let segs = segments(&r.recording, horizon_s);
+    assert!(segs.len() >= 3);
+    let mut without_n = r.recording.clone();
+    without_n.n = None;
+    // Heading error [°] at the end of each segment replayed from `rec`.
+    let end_errors = |rec: &Recording| -> Vec<f64> {
+        segs.iter()
+            .map(|&(a, b)| {
+                let (sim, ok) = replay_segment_in(&model, None, rec, a, b);
+                assert!(ok, "segment {a}..{b} diverged");
+                (sim.psi[sim.len() - 1] - rec.psi[b - 1]).abs().to_degrees()
+            })
+            .collect()
+    };
+    let (driven, own_rate) = (end_errors(&r.recording), end_errors(&without_n));
+    // Where the rate has dropped (every segment after the first) the recorded rate is what replays
+    // the run; the first segment's error is the replay's own (its smoothed start, its coarser step).
+    for (k, (d, o)) in driven.iter().zip(&own_rate).enumerate().skip(1) {
+        assert!(
+            *d < 0.2 && *d < 0.1 * o,
+            "segment {k}: {d}° driven, {o}° at the model's rate"
+        );
+    }
+}
+
+/// The notes a validation of a model that takes the rate (holding `own` 1/s) gives recordings of
+/// the rates `rates` (one recording each, constant over 10 samples unless a pair is given).
+fn check_notes(own: f64, rates: &[(f64, f64)], expected: &[&str]) {
+    let recordings: Vec<DatasetRecording> = rates
+        .iter()
+        .enumerate()
+        .map(|(k, &(from, to))| DatasetRecording {
+            file: format!("run{k}.csv"),
+            manoeuvre: Manoeuvre::Free,
+            recording: Recording {
+                t: (0..10).map(f64::from).collect(),
+                n: Some(
+                    (0..10)
+                        .map(|i| from + (to - from) * i as f64 / 9.0)
+                        .collect(),
+                ),
+                ..Recording::default()
+            },
+        })
+        .collect();
+    let notes = recorded_rate_notes(Some(own), &recordings);
+    assert_eq!(notes.len(), usize::from(!expected.is_empty()), "{notes:?}");
+    for e in expected {
+        assert!(notes[0].contains(e), "{notes:?} lacks {e}");
+    }
+}
+
+#[test]
+fn a_validation_says_which_recordings_run_at_another_rate() {
+    check_notes(10.0, &[(10.0, 10.0), (10.05, 10.05)], &[]);
+    check_notes(
+        10.0,
+        &[(10.0, 10.0), (11.0, 11.0)],
+        &["run1.csv (11.000 1/s)"],
+    );
+    check_notes(
+        10.0,
+        &[(10.0, 8.0)],
+        &["run0.csv (8.000–10.000 1/s)", "own 10.000"],
+    );
+}
