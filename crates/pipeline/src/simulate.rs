@@ -1,4 +1,5 @@
-//! Standard manoeuvres simulated with a model from a steady approach at U0 (`shipid simulate`).
+//! Standard manoeuvres simulated with a model from a steady approach at U0, or at the straight-run
+//! speed of another propeller rate (`shipid simulate`).
 
 use shipid_io::{FlowSeries, Manoeuvre, Recording};
 use shipid_sim::{
@@ -126,13 +127,23 @@ pub fn simulate_on_grid(
     m: &Manoeuvre,
     grid: &SimGrid,
 ) -> Result<SimOutput, PipelineError> {
-    let ship = *model.ship();
+    simulate_on_grid_from(model, m, grid, model.ship().u0)
+}
+
+/// [`simulate_on_grid`] from a straight approach at `approach_m_s` [m/s] instead of U0 (a propeller
+/// rate other than the model's own: [`straight_run_speed`]).
+pub fn simulate_on_grid_from(
+    model: &dyn Dynamics,
+    m: &Manoeuvre,
+    grid: &SimGrid,
+    approach_m_s: f64,
+) -> Result<SimOutput, PipelineError> {
     let mut controller = controller_for(m, T_EXECUTE_S).map_err(bad_input)?;
     let options = SimOptions::new(grid.duration_s).with_step(grid.dt_s, grid.sample_interval_s);
     shipid_sim::simulate(
         model,
         controller.as_mut(),
-        model.over_ground(&State::approach(ship.u0)),
+        model.over_ground(&State::approach(approach_m_s)),
         &options,
     )
     .map_err(bad_input)
@@ -227,16 +238,49 @@ pub fn constant_environment(
     crate::environment::environment_with(&rec, windage, ship, "--wind/--current")
 }
 
-/// [`simulate_on_grid`] in a known environment (`None`: calm water and air). The approach is steady
-/// at U0 through the water.
+/// [`simulate_on_grid_from`] in a known environment (`None`: calm water and air). The approach is
+/// straight at `approach_m_s` through the water.
 pub fn simulate_on_grid_in(
     model: &dyn Dynamics,
     m: &Manoeuvre,
     grid: &SimGrid,
     env: Option<KnownEnvironment>,
+    approach_m_s: f64,
 ) -> Result<SimOutput, PipelineError> {
     match env {
-        Some(env) => simulate_on_grid(&WithEnvironment::new(model, env), m, grid),
-        None => simulate_on_grid(model, m, grid),
+        Some(env) => {
+            simulate_on_grid_from(&WithEnvironment::new(model, env), m, grid, approach_m_s)
+        }
+        None => simulate_on_grid_from(model, m, grid, approach_m_s),
     }
+}
+
+/// The speed [m/s] at which `model` runs straight with the rudder amidships (its surge acceleration
+/// vanishes), searched from 2 % to three times U0; `None` when it does not vanish there or the model
+/// cannot be evaluated. With the propeller at a rate other than the model's own
+/// ([`shipid_sim::WithPropellerRate`]), the approach speed of a manoeuvre at that rate.
+pub fn straight_run_speed(model: &dyn Dynamics) -> Option<f64> {
+    let u0 = model.ship().u0;
+    let surge = |u: f64| {
+        model
+            .accelerations(&State::approach(u), 0.0)
+            .ok()
+            .map(|a| a[0])
+            .filter(|a| a.is_finite())
+    };
+    // Scan for the first sign change from accelerating to decelerating, then bisect it.
+    let grid: Vec<f64> = (1..=150).map(|k| 0.02 * u0 * f64::from(k)).collect();
+    let (mut lo, mut hi) = grid.windows(2).find_map(|w| {
+        let (a, b) = (surge(w[0])?, surge(w[1])?);
+        (a > 0.0 && b <= 0.0).then_some((w[0], w[1]))
+    })?;
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if surge(mid)? > 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Some(0.5 * (lo + hi))
 }

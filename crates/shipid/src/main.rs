@@ -298,6 +298,15 @@ enum Command {
             allow_hyphen_values = true
         )]
         current: Option<String>,
+        /// The propeller at this rate [1/s] instead of the model's own, from the model's straight-run
+        /// speed at that rate (an mmg model: the polynomial sets and the sparse GP have no rate input).
+        #[arg(
+            long,
+            value_name = "N_PER_S",
+            conflicts_with = "replay",
+            allow_negative_numbers = true
+        )]
+        propeller_rate: Option<f64>,
     },
     /// Paper 003: hydrodynamics of a ship from its motion indexes (SVD modes, simulated database, MLP).
     Inverse {
@@ -514,6 +523,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             bands,
             wind,
             current,
+            propeller_rate,
         } => match (manoeuvre, replay) {
             (_, Some(ds)) => {
                 // A replay follows each recording's own time base: these would be silently ignored.
@@ -542,6 +552,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                 bands,
                 wind: wind.as_deref(),
                 current: current.as_deref(),
+                propeller_rate_hz: propeller_rate,
             }),
             (None, None) => Err(shipid::bad_input("give --manoeuvre or --replay")),
         },

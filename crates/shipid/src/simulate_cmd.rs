@@ -12,10 +12,10 @@ use shipid_pipeline::calibration::{ModelBands, RunBands};
 use shipid_pipeline::model_file::load_model;
 use shipid_pipeline::simulate::{
     MAX_STORED_SAMPLES, SimRequest, constant_environment, parse_flow, sim_grid,
-    simulate_on_grid_in, simulation_windage,
+    simulate_on_grid_in, simulation_windage, straight_run_speed,
 };
 use shipid_pipeline::spec::parse_manoeuvre;
-use shipid_sim::{Dynamics, SimOutput, SimStatus, metrics};
+use shipid_sim::{Dynamics, RecordedRate, SimOutput, SimStatus, WithPropellerRate, metrics};
 
 use crate::{CliError, Outcome, bad_input};
 
@@ -120,6 +120,36 @@ pub struct SimulateArgs<'a> {
     pub wind: Option<&'a str>,
     /// `--current SPEED_M_S,FROM_DEG`: a constant current.
     pub current: Option<&'a str>,
+    /// `--propeller-rate N`: the propeller at `N` [1/s] instead of the model's own rate.
+    pub propeller_rate_hz: Option<f64>,
+}
+
+/// `--propeller-rate`: the model at that constant rate and its straight-run speed there, checked
+/// before any simulation (a model without a rate input, a rate that is not a positive number, a rate
+/// at which the model runs straight at no speed between 2 % and three times U0 are bad input).
+fn at_propeller_rate<'m>(
+    model: &'m dyn Dynamics,
+    model_spec: &str,
+    n_hz: f64,
+) -> Result<(WithPropellerRate<&'m dyn Dynamics>, f64), CliError> {
+    if !(n_hz.is_finite() && n_hz > 0.0) {
+        return Err(bad_input(format!(
+            "--propeller-rate must be a positive number of revolutions per second, got {n_hz}"
+        )));
+    }
+    if !model.takes_propeller_rate() {
+        return Err(bad_input(format!(
+            "--propeller-rate: {model_spec} has no propeller-rate input (a polynomial set or a sparse GP holds the rate its training runs had; fit --set mmg for a model that takes it)"
+        )));
+    }
+    let driven = WithPropellerRate::new(model, RecordedRate::constant(n_hz));
+    let u = straight_run_speed(&driven).ok_or_else(|| {
+        bad_input(format!(
+            "--propeller-rate {n_hz}: {model_spec} runs straight at no speed between 2 % and 3 times U0 = {} m/s at that rate",
+            model.ship().u0
+        ))
+    })?;
+    Ok((driven, u))
 }
 
 pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
@@ -138,7 +168,30 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
             "--bands does not apply with --wind or --current: the bootstrap replicates run in calm water",
         ));
     }
-    let model = load_model(a.model)?;
+    if a.bands.is_some() && a.propeller_rate_hz.is_some() {
+        return Err(bad_input(
+            "--bands does not apply with --propeller-rate: the bootstrap replicates run at the model's own rate",
+        ));
+    }
+    let loaded = load_model(a.model)?;
+    let rate = a
+        .propeller_rate_hz
+        .map(|n| at_propeller_rate(loaded.as_ref(), a.model, n))
+        .transpose()?;
+    if let (Some((_, u)), Some(n)) = (&rate, a.propeller_rate_hz) {
+        eprintln!(
+            "note: --propeller-rate {n} 1/s (the model's own: {}): approach at {u:.4} m/s, the model's straight-run speed at that rate (U0 = {} m/s)",
+            loaded
+                .propeller_rate_hz()
+                .map_or("none".into(), |own| format!("{own:.4} 1/s")),
+            loaded.ship().u0
+        );
+    }
+    let approach_m_s = rate.as_ref().map_or(loaded.ship().u0, |(_, u)| *u);
+    let model: &dyn Dynamics = match &rate {
+        Some((driven, _)) => driven,
+        None => loaded.as_ref(),
+    };
     let mut warnings = Vec::new();
     let windage = simulation_windage(a.model, model.ship());
     if wind.is_some() {
@@ -166,7 +219,7 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
         duration_s: a.duration_s,
         allow_large: a.allow_large,
     };
-    let grid = sim_grid(model.as_ref(), &m, &request)?;
+    let grid = sim_grid(model, &m, &request)?;
     if grid.decimated {
         eprintln!(
             "note: {:.3e} RK4 steps of {} s; the stored history keeps one sample every {} s (at most {:.0e} samples) to bound memory",
@@ -174,10 +227,13 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
         );
     }
     let env = constant_environment(wind, current, &windage, model.ship(), grid.duration_s)?;
-    let out = simulate_on_grid_in(model.as_ref(), &m, &grid, env)?;
+    let out = simulate_on_grid_in(model, &m, &grid, env, approach_m_s)?;
     if let Some(path) = a.out_csv {
+        let rate_note = a
+            .propeller_rate_hz
+            .map_or(String::new(), |n| format!(" --propeller-rate {n}"));
         let comments = vec![format!(
-            "shipid {} simulate {} --manoeuvre {}; midship, SI, rudder positive to starboard",
+            "shipid {} simulate {} --manoeuvre {}{rate_note}; midship, SI, rudder positive to starboard",
             env!("CARGO_PKG_VERSION"),
             a.model,
             a.manoeuvre
@@ -185,7 +241,7 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
         write_atomic(path, recording_csv(&out.recording, &comments).as_bytes())
             .map_err(|e| crate::write_failed(path, e))?;
     }
-    let mut value = outcome_json(&out, &m, model.as_ref());
+    let mut value = outcome_json(&out, &m, model);
     if let Value::Object(o) = &mut value {
         if let Some(w) = wind {
             o.insert(
@@ -199,18 +255,18 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
                 json!({ "speed_m_s": c.speed_m_s, "from_deg": c.from_deg }),
             );
         }
+        if let (Some(n), Some((_, u))) = (a.propeller_rate_hz, &rate) {
+            o.insert(
+                "propeller_rate".into(),
+                json!({ "n_hz": n, "model_own_n_hz": loaded.propeller_rate_hz(), "approach_m_s": u }),
+            );
+        }
         if !warnings.is_empty() {
             o.insert("warnings".into(), json!(warnings));
         }
     }
     if let (Some(level), Some(replicates)) = (a.bands, &replicates) {
-        let bands = replicates.bands(
-            model.as_ref(),
-            &m,
-            model.ship(),
-            level,
-            BandRun::Grid(&grid),
-        )?;
+        let bands = replicates.bands(model, &m, model.ship(), level, BandRun::Grid(&grid))?;
         add_bands(&mut value, &bands, replicates, a.json);
     }
     if matches!(out.status, SimStatus::Ok) {

@@ -4,6 +4,7 @@
 use shipid_io::{DatasetRecording, Manoeuvre, Recording, Side};
 use shipid_pipeline::generate::T_EXECUTE_S;
 use shipid_pipeline::replay::{replay_segment_in, segments};
+use shipid_pipeline::simulate::straight_run_speed;
 use shipid_pipeline::validate::{recorded_rate_notes, validate_recording};
 use shipid_sim::{
     Dynamics, MmgModel, RecordedRate, SimOptions, State, Turning, WithPropellerRate, simulate,
@@ -137,4 +138,21 @@ fn a_validation_says_which_recordings_run_at_another_rate() {
         &[(10.0, 8.0)],
         &["run0.csv (8.000–10.000 1/s)", "own 10.000"],
     );
+}
+
+#[test]
+fn at_another_rate_the_reference_approaches_at_the_speed_of_its_advance_ratio() {
+    // The MMG forces of a straight run are homogeneous of degree two in (u, n): the straight-run
+    // speed scales with the rate, and at its own rate (solved for U0) it is U0.
+    let model = MmgModel::kvlcc2();
+    let u0 = model.ship().u0;
+    for factor in [0.6, 0.8633, 1.0, 1.2] {
+        let n = factor * model.propeller_rate();
+        let driven = WithPropellerRate::new(&model, RecordedRate::constant(n));
+        let u = straight_run_speed(&driven).unwrap();
+        assert!((u / u0 - factor).abs() < 1e-9, "n = {n}: {u} m/s");
+    }
+    // No propeller: no straight run at any speed.
+    let stopped = WithPropellerRate::new(&model, RecordedRate::constant(0.0));
+    assert_eq!(straight_run_speed(&stopped), None);
 }
