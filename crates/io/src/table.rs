@@ -118,6 +118,7 @@ impl Columns {
             r: take(Quantity::R).unwrap_or_default(),
             delta: take(Quantity::Delta).unwrap_or_default(),
             n: take(Quantity::N),
+            thrust: take(Quantity::Thrust),
             accelerations,
             wind,
             current,

@@ -29,6 +29,9 @@ pub struct Recording {
     pub delta: Vec<f64>,
     /// Propeller rate [1/s], when recorded.
     pub n: Option<Vec<f64>>,
+    /// Propeller thrust [N], when recorded (a free-running model's dynamometer): the mmg family
+    /// identifies the propeller's inflow from it (docs/mmg.md).
+    pub thrust: Option<Vec<f64>>,
     /// Recorded accelerations of midship, when the source has them.
     pub accelerations: Option<Accelerations>,
     /// Recorded true wind, when the recording has `wind_speed` and `wind_from` columns.
@@ -104,6 +107,7 @@ impl Recording {
             r: s(&self.r),
             delta: s(&self.delta),
             n: self.n.as_ref().map(s),
+            thrust: self.thrust.as_ref().map(s),
             accelerations: self.accelerations.as_ref().map(|a| Accelerations {
                 u_dot: s(&a.u_dot),
                 v_dot: s(&a.v_dot),

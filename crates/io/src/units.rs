@@ -12,6 +12,7 @@ pub enum Dimension {
     Acceleration,
     AngularAcceleration,
     Frequency,
+    Force,
 }
 
 impl Dimension {
@@ -39,6 +40,8 @@ impl Dimension {
             (Dimension::AngularAcceleration, "deg/s^2" | "deg/s2" | "deg/s²") => deg,
             (Dimension::Frequency, "1/s" | "rps" | "Hz") => 1.0,
             (Dimension::Frequency, "rpm") => 1.0 / 60.0,
+            (Dimension::Force, "N") => 1.0,
+            (Dimension::Force, "kN") => 1e3,
             _ => return None,
         };
         Some(f)
@@ -55,6 +58,7 @@ impl Dimension {
             Dimension::Acceleration => "m/s^2",
             Dimension::AngularAcceleration => "rad/s^2, deg/s^2",
             Dimension::Frequency => "1/s, rps, Hz, rpm",
+            Dimension::Force => "N, kN",
         }
     }
 }
@@ -89,6 +93,8 @@ pub enum Quantity {
     /// Direction the current comes from [rad], earth-fixed, clockwise from north (`current_from`;
     /// note: the direction it comes FROM, like the wind, not the oceanographic "sets towards").
     CurrentFrom,
+    /// Propeller thrust [N] (optional column `thrust`).
+    Thrust,
     /// Earth-fixed velocity north [m/s]; only in import mappings (converted to body u, v).
     X0Dot,
     /// Earth-fixed velocity east [m/s]; only in import mappings.
@@ -97,7 +103,7 @@ pub enum Quantity {
 
 impl Quantity {
     /// Columns of a recording file (`docs/data-format.md`), in the order the project writes them.
-    pub const RECORDING: [Quantity; 18] = [
+    pub const RECORDING: [Quantity; 19] = [
         Quantity::T,
         Quantity::X0,
         Quantity::Y0,
@@ -116,6 +122,7 @@ impl Quantity {
         Quantity::RelativeWindAngle,
         Quantity::CurrentSpeed,
         Quantity::CurrentFrom,
+        Quantity::Thrust,
     ];
 
     pub fn name(self) -> &'static str {
@@ -138,6 +145,7 @@ impl Quantity {
             Quantity::RelativeWindAngle => "relative_wind_angle",
             Quantity::CurrentSpeed => "current_speed",
             Quantity::CurrentFrom => "current_from",
+            Quantity::Thrust => "thrust",
             Quantity::X0Dot => "x0_dot",
             Quantity::Y0Dot => "y0_dot",
         }
@@ -168,6 +176,7 @@ impl Quantity {
             | Quantity::CurrentSpeed => Dimension::Velocity,
             Quantity::R => Dimension::AngularRate,
             Quantity::N => Dimension::Frequency,
+            Quantity::Thrust => Dimension::Force,
             Quantity::UDot | Quantity::VDot => Dimension::Acceleration,
             Quantity::RDot => Dimension::AngularAcceleration,
         }
@@ -184,6 +193,7 @@ impl Quantity {
             Dimension::Acceleration => "m/s^2",
             Dimension::AngularAcceleration => "rad/s^2",
             Dimension::Frequency => "1/s",
+            Dimension::Force => "N",
         }
     }
 
@@ -207,6 +217,8 @@ impl Quantity {
             // Beyond any ocean current (the fastest tidal races run near 8 m/s).
             Quantity::CurrentSpeed => 50.0,
             Quantity::WindFrom | Quantity::RelativeWindAngle | Quantity::CurrentFrom => 1e5,
+            // Ten times the largest marine propeller's thrust (some 5 MN on a 20 m, 100 MW one).
+            Quantity::Thrust => 5e7,
         }
     }
 

@@ -76,6 +76,9 @@ pub fn recording_csv_with(rec: &Recording, comments: &[String], wind: WindChanne
     if rec.n.is_some() {
         header.push("n");
     }
+    if rec.thrust.is_some() {
+        header.push("thrust");
+    }
     if rec.accelerations.is_some() {
         header.extend(["u_dot", "v_dot", "r_dot"]);
     }
@@ -104,6 +107,9 @@ pub fn recording_csv_with(rec: &Recording, comments: &[String], wind: WindChanne
         ];
         if let Some(n) = &rec.n {
             row.push(n[i]);
+        }
+        if let Some(thrust) = &rec.thrust {
+            row.push(thrust[i]);
         }
         if let Some(a) = &rec.accelerations {
             row.extend([a.u_dot[i], a.v_dot[i], a.r_dot[i]]);

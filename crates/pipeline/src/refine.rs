@@ -452,10 +452,14 @@ fn problem<'a, P: Parametric>(
             states.push((State::of_recording(rec, i), rec.delta[i]));
         }
     }
+    // A parameter whose bounds collapse onto one value is known (the mmg family's inflow held at the
+    // recorded thrust's): not refined.
+    let bounds = start.parameter_bounds();
     let free: Vec<(usize, f64)> = start
         .parameter_units(&states)
         .into_iter()
         .enumerate()
+        .filter(|&(j, _)| bounds.get(j).is_none_or(|(lo, hi)| lo < hi))
         .filter_map(|(j, unit)| Some((j, unit?)))
         .collect();
     let mut ee = Vec::new();

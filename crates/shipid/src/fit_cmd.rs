@@ -32,6 +32,8 @@ pub struct FitArgs<'a> {
     /// `--calibrate [LEVEL] [--structures a,b]`: the level and the ensemble's other sets (empty: the
     /// fitted set alone).
     pub calibrate: Option<(f64, Vec<String>)>,
+    /// `--inflow-from-thrust` (mmg only).
+    pub inflow_from_thrust: bool,
 }
 
 /// How many of the largest VIFs the report lists per DOF.
@@ -435,7 +437,10 @@ fn report_bootstrap(
 fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     use shipid_pipeline::calibration::{MmgFamily, calibrate_fit, factor_calibration_record};
     use shipid_pipeline::mmg::{MmgFitOptions, fit_mmg_model_file, write_mmg_model_file};
-    let opts = MmgFitOptions::from_spec(&a.estimator, &a.recordings, a.window)?;
+    let opts = MmgFitOptions {
+        inflow_from_thrust: a.inflow_from_thrust,
+        ..MmgFitOptions::from_spec(&a.estimator, &a.recordings, a.window)?
+    };
     let ds = Dataset::load(a.dataset)?;
     let mut warnings = training_warnings(&ds, &a.recordings, a.validate);
     if let Some(source) = ds.propeller.as_ref().and_then(|p| p.k_t_default.as_ref()) {

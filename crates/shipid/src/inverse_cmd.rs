@@ -430,6 +430,7 @@ fn model_file(
             residual_rms: [f64::NAN; 3],
             cv: Vec::new(),
             refinement: None,
+            thrust_inflow: None,
         },
         training: Vec::new(),
         parameters,

@@ -143,6 +143,10 @@ enum Command {
             value_delimiter = ','
         )]
         structures: Option<Vec<String>>,
+        /// --set mmg: hold the propeller's wake parameters (w_P0, C₁, C₂) at what the training
+        /// recordings' `thrust` column measures instead of identifying them from the motion.
+        #[arg(long)]
+        inflow_from_thrust: bool,
     },
     /// Run a study: its grid of cases in parallel, result tables under results/<study>/.
     Run {
@@ -428,7 +432,13 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             bootstrap_seed,
             calibrate,
             structures,
+            inflow_from_thrust,
         } => {
+            if inflow_from_thrust && set != shipid_pipeline::mmg::SET_NAME {
+                return Err(shipid::bad_input(
+                    "--inflow-from-thrust applies to --set mmg (the other families have no propeller model)",
+                ));
+            }
             // The mmg family has no unbounded least squares: its physical bounds are part of it.
             let estimator = estimator.unwrap_or_else(|| {
                 if set == shipid_pipeline::mmg::SET_NAME {
@@ -508,6 +518,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                 validate,
                 bootstrap: bootstrap.map(|n| (n, bootstrap_seed)),
                 calibrate: calibrate.map(|level| (level, structures.unwrap_or_default())),
+                inflow_from_thrust,
             })
         }
         Command::Metrics { dataset, json } => shipid::metrics_cmd::run(&dataset, json),

@@ -57,12 +57,13 @@ proptest! {
             r: (0..n).map(|i| f(i, 5) * 1e-2).collect(),
             delta: (0..n).map(|i| f(i, 6) * 0.5).collect(),
             n: None,
+            thrust: Some((0..n).map(|i| f(i, 7) * 40.0).collect()),
             accelerations: None,
             wind: None,
             current: None,
         };
         let back = parse_recording(Path::new("rt.csv"), &recording_csv(&rec, &["round trip".into()])).unwrap();
-        let cols = |r: &Recording| [r.t.clone(), r.x0.clone(), r.y0.clone(), r.psi.clone(), r.u.clone(), r.v.clone(), r.r.clone(), r.delta.clone()];
+        let cols = |r: &Recording| [r.t.clone(), r.x0.clone(), r.y0.clone(), r.psi.clone(), r.u.clone(), r.v.clone(), r.r.clone(), r.delta.clone(), r.thrust.clone().unwrap_or_default()];
         for (a, b) in cols(&rec).iter().zip(cols(&back).iter()) {
             for (x, y) in a.iter().zip(b) {
                 prop_assert!((x - y).abs() <= 1e-8 * x.abs().max(1e-30));

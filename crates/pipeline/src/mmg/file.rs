@@ -15,6 +15,7 @@ use shipid_sim::MmgModel;
 
 use super::geometry::MmgGeometry;
 use super::identify::{DETERMINED_SHARE, assemble};
+use super::thrust::INFLOW_NAMES;
 use crate::error::{PipelineError, bad_input};
 
 /// The `kind` of an MMG model file.
@@ -70,6 +71,26 @@ pub struct MmgEstimatorEntry {
     /// and data shares are then those of the equation-error estimate.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub refinement: Option<Refinement>,
+    /// The propeller inflow the training windows' recorded thrust measures.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub thrust_inflow: Option<ThrustInflowEntry>,
+}
+
+/// `[estimator.thrust_inflow]`: the propeller's wake parameters as the recorded thrust measures them
+/// (the open-water curve inverted at K_T = T/(ρn²D⁴), 1 − w_P of the MMG wake model fitted to it).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ThrustInflowEntry {
+    /// Whether the fit held its parameters there (`fit --inflow-from-thrust`); otherwise they were
+    /// identified from the motion and this is the measurement beside them.
+    pub held: bool,
+    pub samples: usize,
+    pub recordings: Vec<String>,
+    /// RMS of the measured 1 − w_P about the fitted wake model [-].
+    pub residual_rms: f64,
+    /// w_p0, c1, c2_pos, c2_neg.
+    pub values: BTreeMap<String, f64>,
+    pub standard_errors: BTreeMap<String, f64>,
 }
 
 /// `[[parameter]]` of the model file.
@@ -234,6 +255,30 @@ impl MmgModelFile {
                 r.before_heading_rmse_deg,
                 r.after_heading_rmse_deg,
                 r.iterations
+            ));
+        }
+        if let Some(t) = &e.thrust_inflow {
+            let measured = |name: &String, v: &f64| {
+                let se = t.standard_errors.get(name).copied().unwrap_or(f64::NAN);
+                match (t.held, self.parameters.iter().find(|p| &p.name == name)) {
+                    (false, Some(p)) => format!("{name} {v:.3} ± {se:.3} (fit {:.3})", p.value),
+                    _ => format!("{name} {v:.3} ± {se:.3}"),
+                }
+            };
+            lines.push(format!(
+                "  the recorded thrust ({} samples) measures {}{}",
+                t.samples,
+                INFLOW_NAMES
+                    .iter()
+                    .filter_map(|n| t.values.get_key_value(*n))
+                    .map(|(n, v)| measured(n, v))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                if t.held {
+                    ": held there"
+                } else {
+                    "; --inflow-from-thrust holds them there"
+                }
             ));
         }
         let (data, prior): (Vec<&ParamEntry>, Vec<&ParamEntry>) =

@@ -348,6 +348,10 @@ impl Problem {
             iterations += 1;
             let mut jac = Vec::with_capacity(at.p.len());
             for k in 0..at.p.len() {
+                if self.specs[self.nl_idx[k]].is_held() {
+                    jac.push(vec![0.0; at.r.len()]);
+                    continue;
+                }
                 let h = self.fd_step(&at.p, k);
                 let mut q = at.p.clone();
                 q[k] += h;
@@ -433,6 +437,9 @@ impl Problem {
             }
         }
         for (k, &i) in self.nl_idx.iter().enumerate() {
+            if self.specs[i].is_held() {
+                continue;
+            }
             let h = self.fd_step(phi, k);
             let mut q = phi.to_vec();
             q[k] += h;
@@ -448,7 +455,12 @@ impl Problem {
             .collect();
         let mut precision = info.clone();
         for (k, row) in precision.iter_mut().enumerate() {
-            row[k] += m as f64 * lambda / self.specs[k].prior_sd.powi(2);
+            // A held parameter has no row in the data's information: known, it is decoupled.
+            row[k] += if self.specs[k].is_held() {
+                1.0
+            } else {
+                m as f64 * lambda / self.specs[k].prior_sd.powi(2)
+            };
         }
         // Columns of the inverse precision, one small solve each.
         let mut inverse = vec![vec![0.0; p]; p];
@@ -477,13 +489,25 @@ impl Problem {
             .specs
             .iter()
             .enumerate()
-            .map(|(k, spec)| ParamEstimate {
-                spec: spec.clone(),
-                value: theta[k],
-                standard_error: (tau2 * inverse[k][k]).max(0.0).sqrt(),
-                data_share: share[k],
-                determined_by_data: share[k] > DETERMINED_SHARE,
-                at_bound: theta[k] <= spec.lower || theta[k] >= spec.upper,
+            .map(|(k, spec)| match spec.is_held() {
+                // Determined by other data (the recorded thrust), whose standard error its prior
+                // width carries.
+                true => ParamEstimate {
+                    spec: spec.clone(),
+                    value: theta[k],
+                    standard_error: spec.prior_sd,
+                    data_share: 1.0,
+                    determined_by_data: true,
+                    at_bound: false,
+                },
+                false => ParamEstimate {
+                    spec: spec.clone(),
+                    value: theta[k],
+                    standard_error: (tau2 * inverse[k][k]).max(0.0).sqrt(),
+                    data_share: share[k],
+                    determined_by_data: share[k] > DETERMINED_SHARE,
+                    at_bound: theta[k] <= spec.lower || theta[k] >= spec.upper,
+                },
             })
             .collect();
         Ok(Estimate {

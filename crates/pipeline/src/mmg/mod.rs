@@ -21,6 +21,7 @@ pub mod geometry;
 pub mod identify;
 pub mod priors;
 pub mod refine;
+pub mod thrust;
 
 use std::time::Instant;
 
@@ -32,7 +33,7 @@ use shipid_sim::{Dynamics, MmgModel, State};
 
 pub use file::{
     CvEntry, MMG_KIND, MmgEstimatorEntry, MmgModelFile, ParamEntry, PropellerEntry, RudderEntry,
-    load_mmg_model, load_mmg_model_if_kind, write_mmg_model_file,
+    ThrustInflowEntry, load_mmg_model, load_mmg_model_if_kind, write_mmg_model_file,
 };
 pub use geometry::MmgGeometry;
 pub use identify::{DETERMINED_SHARE, EqSample, Estimate, ParamEstimate, Problem};
@@ -112,6 +113,10 @@ pub struct MmgFitOptions {
     pub prior_weight: PriorWeight,
     /// Propeller rate [1/s] for recordings without an `n` column.
     pub propeller_rate_hz: Option<f64>,
+    /// Hold the propeller's wake parameters (w_P0, C₁, C₂) at what the recorded thrust measures
+    /// (`fit --inflow-from-thrust`) instead of identifying them from the motion; without it a recorded
+    /// thrust is only reported beside the fit's values.
+    pub inflow_from_thrust: bool,
 }
 
 impl Default for MmgFitOptions {
@@ -122,6 +127,7 @@ impl Default for MmgFitOptions {
             estimator: MmgEstimator::BoundedLsq,
             prior_weight: PriorWeight::Fixed(DEFAULT_PRIOR_WEIGHT),
             propeller_rate_hz: None,
+            inflow_from_thrust: false,
         }
     }
 }
@@ -147,6 +153,8 @@ pub struct MmgFit {
     pub propeller_rate_hz: f64,
     pub samples: usize,
     pub fit_time_s: f64,
+    /// The propeller inflow the recorded thrust gave, when the training windows record one.
+    pub inflow: Option<thrust::InflowEstimate>,
 }
 
 /// The equation-error samples of the chosen recordings and window, the windows used and their
@@ -157,6 +165,10 @@ pub struct TrainingData {
     pub recordings: Vec<Recording>,
     /// Each training recording's recorded wind and current (`None`: calm), which its replays feel.
     pub environments: Vec<Option<KnownEnvironment>>,
+    /// The propeller inflow the recorded thrust measures, over every training window that records
+    /// one, and those recordings.
+    pub inflow: Vec<thrust::InflowSample>,
+    pub thrust_recordings: Vec<String>,
 }
 
 /// The [`TrainingData`] of `opts` on `ds`.
@@ -185,6 +197,9 @@ pub fn training_samples(ds: &Dataset, opts: &MmgFitOptions) -> Result<TrainingDa
     let mut windows = Vec::new();
     let mut recordings = Vec::new();
     let mut environments = Vec::new();
+    let mut inflow = Vec::new();
+    let mut thrust_recordings = Vec::new();
+    let geometry = MmgGeometry::of_dataset(ds).ok();
     for (g, r) in chosen.iter().enumerate() {
         let range = window_range(r, ds, opts.window)?;
         recordings.push(r.recording.slice(range.clone()));
@@ -192,6 +207,27 @@ pub fn training_samples(ds: &Dataset, opts: &MmgFitOptions) -> Result<TrainingDa
         // The recorded wind and current are known inputs: identify from what is left.
         let hydro = crate::environment::hydrodynamic_recording(ds, r, &added)?;
         let (rec, acc, estimated) = (&hydro.recording, &hydro.accelerations, hydro.estimated);
+        if let (Some(thrust_n), Some(geometry)) = (&rec.thrust, &geometry) {
+            let n_hz: Vec<f64> = match (&rec.n, opts.propeller_rate_hz) {
+                (Some(n), _) => n.clone(),
+                (None, Some(n)) => vec![n; rec.len()],
+                (None, None) => Vec::new(),
+            };
+            if n_hz.len() == rec.len() {
+                let before = inflow.len();
+                inflow.extend(thrust::inflow_samples(
+                    rec,
+                    thrust_n,
+                    &n_hz,
+                    range.clone(),
+                    ship,
+                    geometry,
+                ));
+                if inflow.len() > before {
+                    thrust_recordings.push(r.file.clone());
+                }
+            }
+        }
         for i in range.clone() {
             let n_hz = match (&rec.n, opts.propeller_rate_hz) {
                 (Some(n), _) => n[i],
@@ -255,6 +291,8 @@ pub fn training_samples(ds: &Dataset, opts: &MmgFitOptions) -> Result<TrainingDa
         windows,
         recordings,
         environments,
+        inflow,
+        thrust_recordings,
     })
 }
 
@@ -304,7 +342,29 @@ pub fn fit_mmg_with_priors(
         windows,
         recordings,
         environments,
+        inflow,
+        thrust_recordings,
     } = training_samples(ds, opts)?;
+    // A recorded thrust measures the propeller's inflow. Held there (on request), its four parameters
+    // no longer trade against the rudder's inflow in the equation error; otherwise the measurement
+    // is reported beside what the motion gave them.
+    let mut specs = specs;
+    let mut inflow = thrust::estimate_inflow(&inflow, &specs, thrust_recordings);
+    match (&mut inflow, opts.inflow_from_thrust) {
+        (Some(estimate), true) => {
+            thrust::hold_inflow(&mut specs, estimate);
+            estimate.held = true;
+        }
+        (None, true) => {
+            return Err(bad_input(format!(
+                "--inflow-from-thrust: no training window of {} records a usable propeller thrust (a `thrust` column with the propeller turning and the ship above {:.0} % of U0, at least {} samples)",
+                ds.path.display(),
+                100.0 * thrust::SLOW_SHARE,
+                thrust::MIN_SAMPLES
+            )));
+        }
+        _ => {}
+    }
     let added = ds.added_mass.unwrap_or_default();
     let rate = samples.iter().map(|s| s.n_hz).sum::<f64>() / samples.len() as f64;
     let problem = Problem::new(
@@ -340,6 +400,7 @@ pub fn fit_mmg_with_priors(
         propeller_rate_hz: rate,
         samples: problem.samples.len(),
         fit_time_s,
+        inflow,
     })
 }
 
@@ -578,6 +639,7 @@ impl MmgFitOptions {
             estimator,
             prior_weight,
             propeller_rate_hz: None,
+            inflow_from_thrust: false,
         })
     }
 }
@@ -668,6 +730,23 @@ pub fn model_file(fit: &MmgFit, added: AddedMass) -> MmgModelFile {
                 })
                 .collect(),
             refinement: None,
+            thrust_inflow: fit.inflow.as_ref().map(|t| {
+                let named = |x: &[f64; 4]| {
+                    thrust::INFLOW_NAMES
+                        .iter()
+                        .zip(x)
+                        .map(|(n, v)| (n.to_string(), *v))
+                        .collect()
+                };
+                ThrustInflowEntry {
+                    held: t.held,
+                    samples: t.samples,
+                    recordings: t.recordings.clone(),
+                    residual_rms: t.residual_rms,
+                    values: named(&t.values),
+                    standard_errors: named(&t.standard_errors),
+                }
+            }),
         },
         training: fit.windows.clone(),
         parameters: fit

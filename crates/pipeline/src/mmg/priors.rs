@@ -40,6 +40,14 @@ pub struct ParamSpec {
     pub source: String,
 }
 
+impl ParamSpec {
+    /// Whether the parameter is known rather than identified (its bounds collapsed onto one value, as
+    /// the recorded thrust holds the propeller's inflow: [`super::thrust::hold_inflow`]).
+    pub fn is_held(&self) -> bool {
+        self.lower == self.upper
+    }
+}
+
 /// The 17 hull parameters in the order of the regressors of [`super::identify`]: X (R'_0 and four),
 /// Y (six) and N (six).
 pub const HULL_NAMES: [[&str; 6]; 3] = [

@@ -132,10 +132,11 @@ pub fn refine_mmg(
         propeller_rate_hz: fit.propeller_rate_hz,
         samples: fit.samples,
         fit_time_s: fit.fit_time_s,
+        inflow: fit.inflow.clone(),
     };
     for (p, v) in out.estimate.params.iter_mut().zip(&refined.model.theta) {
         p.value = *v;
-        p.at_bound = *v <= p.spec.lower || *v >= p.spec.upper;
+        p.at_bound = !p.spec.is_held() && (*v <= p.spec.lower || *v >= p.spec.upper);
     }
     Ok((out, refined.refinement))
 }

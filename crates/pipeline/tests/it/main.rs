@@ -11,3 +11,4 @@ mod propeller_rate;
 mod refine;
 mod relative_wind;
 mod stored_calibration;
+mod thrust;
