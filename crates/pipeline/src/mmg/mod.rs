@@ -165,10 +165,6 @@ pub struct TrainingData {
     pub recordings: Vec<Recording>,
     /// Each training recording's recorded wind and current (`None`: calm), which its replays feel.
     pub environments: Vec<Option<KnownEnvironment>>,
-    /// The propeller inflow the recorded thrust measures, over every training window that records
-    /// one, and those recordings.
-    pub inflow: Vec<thrust::InflowSample>,
-    pub thrust_recordings: Vec<String>,
 }
 
 /// The [`TrainingData`] of `opts` on `ds`.
@@ -197,9 +193,6 @@ pub fn training_samples(ds: &Dataset, opts: &MmgFitOptions) -> Result<TrainingDa
     let mut windows = Vec::new();
     let mut recordings = Vec::new();
     let mut environments = Vec::new();
-    let mut inflow = Vec::new();
-    let mut thrust_recordings = Vec::new();
-    let geometry = MmgGeometry::of_dataset(ds).ok();
     for (g, r) in chosen.iter().enumerate() {
         let range = window_range(r, ds, opts.window)?;
         recordings.push(r.recording.slice(range.clone()));
@@ -207,27 +200,6 @@ pub fn training_samples(ds: &Dataset, opts: &MmgFitOptions) -> Result<TrainingDa
         // The recorded wind and current are known inputs: identify from what is left.
         let hydro = crate::environment::hydrodynamic_recording(ds, r, &added)?;
         let (rec, acc, estimated) = (&hydro.recording, &hydro.accelerations, hydro.estimated);
-        if let (Some(thrust_n), Some(geometry)) = (&rec.thrust, &geometry) {
-            let n_hz: Vec<f64> = match (&rec.n, opts.propeller_rate_hz) {
-                (Some(n), _) => n.clone(),
-                (None, Some(n)) => vec![n; rec.len()],
-                (None, None) => Vec::new(),
-            };
-            if n_hz.len() == rec.len() {
-                let before = inflow.len();
-                inflow.extend(thrust::inflow_samples(
-                    rec,
-                    thrust_n,
-                    &n_hz,
-                    range.clone(),
-                    ship,
-                    geometry,
-                ));
-                if inflow.len() > before {
-                    thrust_recordings.push(r.file.clone());
-                }
-            }
-        }
         for i in range.clone() {
             let n_hz = match (&rec.n, opts.propeller_rate_hz) {
                 (Some(n), _) => n[i],
@@ -291,8 +263,6 @@ pub fn training_samples(ds: &Dataset, opts: &MmgFitOptions) -> Result<TrainingDa
         windows,
         recordings,
         environments,
-        inflow,
-        thrust_recordings,
     })
 }
 
@@ -342,14 +312,20 @@ pub fn fit_mmg_with_priors(
         windows,
         recordings,
         environments,
-        inflow,
-        thrust_recordings,
     } = training_samples(ds, opts)?;
     // A recorded thrust measures the propeller's inflow. Held there (on request), its four parameters
     // no longer trade against the rudder's inflow in the equation error; otherwise the measurement
     // is reported beside what the motion gave them.
     let mut specs = specs;
-    let mut inflow = thrust::estimate_inflow(&inflow, &specs, thrust_recordings);
+    let (samples_of_thrust, thrust_recordings) = thrust::inflow_of_windows(
+        &recordings,
+        &environments,
+        windows.iter().map(|w| w.recording.as_str()),
+        opts.propeller_rate_hz,
+        &ds.ship,
+        geometry,
+    );
+    let mut inflow = thrust::estimate_inflow(&samples_of_thrust, &specs, thrust_recordings);
     match (&mut inflow, opts.inflow_from_thrust) {
         (Some(estimate), true) => {
             thrust::hold_inflow(&mut specs, estimate);

@@ -8,6 +8,7 @@
 //! the rudder's inflow and the resistance, then holds them at the thrust's values.
 
 use shipid_io::{Recording, Ship};
+use shipid_sim::KnownEnvironment;
 
 use super::geometry::MmgGeometry;
 use super::priors::ParamSpec;
@@ -105,6 +106,41 @@ pub fn inflow_samples(
             })
         })
         .collect()
+}
+
+/// The inflow samples of training windows `recordings` (each in its recorded environment, through
+/// the water, and named by `names`) that record a thrust, with their rate `n` or `default_rate_hz`;
+/// and the names of the windows that gave some.
+pub fn inflow_of_windows<'a>(
+    recordings: &[Recording],
+    environments: &[Option<KnownEnvironment>],
+    names: impl Iterator<Item = &'a str>,
+    default_rate_hz: Option<f64>,
+    ship: &Ship,
+    geometry: &MmgGeometry,
+) -> (Vec<InflowSample>, Vec<String>) {
+    let mut samples = Vec::new();
+    let mut named = Vec::new();
+    for ((rec, env), name) in recordings.iter().zip(environments).zip(names) {
+        let Some(thrust_n) = rec.thrust.as_ref().filter(|t| t.len() == rec.len()) else {
+            continue;
+        };
+        let n_hz: Vec<f64> = match (&rec.n, default_rate_hz) {
+            (Some(n), _) if n.len() == rec.len() => n.clone(),
+            (Some(_), _) => continue,
+            (None, Some(n)) => vec![n; rec.len()],
+            (None, None) => continue,
+        };
+        let water = env
+            .as_ref()
+            .map_or_else(|| rec.clone(), |e| e.water_relative(rec));
+        let found = inflow_samples(&water, thrust_n, &n_hz, 0..rec.len(), ship, geometry);
+        if !found.is_empty() {
+            samples.extend(found);
+            named.push(name.to_string());
+        }
+    }
+    (samples, named)
 }
 
 /// 1 − w_P of the MMG wake model at `beta_p_rad` with p = [w_P0, C₁, C₂+, C₂−].
