@@ -474,8 +474,21 @@ pub fn recorded_rate_notes<'a>(
     let Some(own) = model_rate_hz else {
         return Vec::new();
     };
+    let recordings: Vec<&DatasetRecording> = recordings.into_iter().collect();
+    let mut notes: Vec<String> = recordings
+        .iter()
+        .filter_map(|r| {
+            let astern = r.recording.n.as_ref()?.iter().filter(|x| **x < 0.0).count();
+            (astern > 0).then(|| {
+                format!(
+                    "{}: the propeller turns astern (n < 0) in {astern} samples; the MMG propeller model is for ahead, so its forces there are an extrapolation",
+                    r.file
+                )
+            })
+        })
+        .collect();
     let differing: Vec<String> = recordings
-        .into_iter()
+        .iter()
         .filter_map(|r| {
             let (low, median, high) = rate_percentiles(r)?;
             let off = (median - own).abs() > PROPELLER_RATE_DIFFERENCE_NOTE * own.abs()
@@ -489,13 +502,16 @@ pub fn recorded_rate_notes<'a>(
             })
         })
         .collect();
-    if differing.is_empty() {
-        return Vec::new();
+    if !differing.is_empty() {
+        notes.insert(
+            0,
+            format!(
+                "the model takes the propeller rate: it replays {} at the recorded rate n, not at its own {own:.3} 1/s",
+                differing.join(", ")
+            ),
+        );
     }
-    vec![format!(
-        "the model takes the propeller rate: it replays {} at the recorded rate n, not at its own {own:.3} 1/s",
-        differing.join(", ")
-    )]
+    notes
 }
 
 /// 2nd, 50th and 98th percentiles of the recorded propeller rate [1/s] of `r` (robust to single

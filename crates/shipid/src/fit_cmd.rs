@@ -108,16 +108,22 @@ pub fn report_json(out: &FitOutput, warnings: &[String]) -> Value {
 }
 
 /// Warnings about the training recordings (printed on stderr and kept in the JSON report): a
-/// propeller rate that varies although the fitted model runs at one constant rate. With `--validate`
-/// the validation warns about every recording instead.
-fn training_warnings(ds: &Dataset, recordings: &[String], validate: bool) -> Vec<String> {
+/// propeller rate that varies although the fitted model runs at one constant rate (not for a model
+/// that `takes_rate`, the mmg family: its fit and replays take every sample's rate). With
+/// `--validate` the validation warns about every recording instead.
+fn training_warnings(
+    ds: &Dataset,
+    recordings: &[String],
+    validate: bool,
+    takes_rate: bool,
+) -> Vec<String> {
     // What the fit does with a recorded wind or current is said whether or not it validates after.
     let mut warnings =
         shipid_pipeline::fit::fit_environment_notes(ds, recordings).unwrap_or_default();
     for w in &warnings {
         eprintln!("warning: {w}");
     }
-    if validate {
+    if validate || takes_rate {
         return warnings;
     }
     let rates: Vec<String> = propeller_rate_variations(
@@ -213,7 +219,7 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     let set = load_set(a.set)?;
     let ds = Dataset::load(a.dataset)?;
     let out = fit_dataset(&ds, set, &a.estimator, &a.recordings, a.window, a.solver)?;
-    let warnings = training_warnings(&ds, &a.recordings, a.validate);
+    let warnings = training_warnings(&ds, &a.recordings, a.validate, false);
     if let Some(none) = out.no_information() {
         // No model file: a model whose coefficients the data never saw would validate as if it
         // were one.
@@ -442,7 +448,26 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
         ..MmgFitOptions::from_spec(&a.estimator, &a.recordings, a.window)?
     };
     let ds = Dataset::load(a.dataset)?;
-    let mut warnings = training_warnings(&ds, &a.recordings, a.validate);
+    let mut warnings = training_warnings(&ds, &a.recordings, a.validate, true);
+    for r in ds
+        .recordings
+        .iter()
+        .filter(|r| a.recordings.is_empty() || a.recordings.contains(&r.file))
+    {
+        let astern = r
+            .recording
+            .n
+            .as_ref()
+            .map_or(0, |n| n.iter().filter(|x| **x < 0.0).count());
+        if astern > 0 {
+            let w = format!(
+                "{}: {astern} samples with the propeller astern (n < 0) are left out of the fit: the MMG propeller model is for ahead",
+                r.file
+            );
+            eprintln!("warning: {w}");
+            warnings.push(w);
+        }
+    }
     if let Some(source) = ds.propeller.as_ref().and_then(|p| p.k_t_default.as_ref()) {
         let w = format!(
             "{}: [propeller] {source}; the thrust, and with it the rudder inflow, assumes that curve",
@@ -585,7 +610,7 @@ pub fn run_gp(
     }
     report
         .warnings
-        .extend(training_warnings(&ds, recordings, validate));
+        .extend(training_warnings(&ds, recordings, validate, false));
     shipid_pipeline::model_file::anchor_training(&mut file.training, out);
     let text = with_environment_table(model_text(&file).map_err(failed)?, &ds, recordings)?;
     write_atomic(out, text.as_bytes()).map_err(|e| crate::write_failed(out, e))?;
