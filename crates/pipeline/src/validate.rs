@@ -332,7 +332,12 @@ pub fn validation_warnings(
         Some(m) if m.takes_propeller_rate() => {
             recorded_rate_notes(m.propeller_rate_hz(), &ds.recordings)
         }
-        _ => propeller_rate_variations(&ds.recordings)
+        Some(_) => propeller_rate_variations(&ds.recordings)
+            .iter()
+            .map(ToString::to_string)
+            .chain(training_rate_mismatches(model_spec, &ds.recordings))
+            .collect(),
+        None => propeller_rate_variations(&ds.recordings)
             .iter()
             .map(ToString::to_string)
             .collect(),
@@ -512,6 +517,65 @@ pub fn recorded_rate_notes<'a>(
         );
     }
     notes
+}
+
+/// For a model without a propeller-rate input (`model_spec`, a polynomial or sparse-GP file whose
+/// training data can be read): one warning per recording of `recordings` whose median rate differs
+/// from the median rate of the model's training windows by more than
+/// [`PROPELLER_RATE_DIFFERENCE_NOTE`]: the model's forces are those of the rate it was identified at.
+pub fn training_rate_mismatches<'a>(
+    model_spec: &str,
+    recordings: impl IntoIterator<Item = &'a DatasetRecording>,
+) -> Vec<String> {
+    let Some((file, ds, _)) = crate::range::training_data(model_spec) else {
+        return Vec::new();
+    };
+    let windows = file.map(|f| f.training).unwrap_or_default();
+    let trained: Vec<f64> = ds
+        .recordings
+        .iter()
+        .flat_map(|r| {
+            let rec = &r.recording;
+            let n = rec.n.as_deref().unwrap_or(&[]);
+            let spans: Vec<(f64, f64)> = windows
+                .iter()
+                .filter(|w| w.recording == r.file)
+                .map(|w| (w.t_start_s, w.t_end_s))
+                .collect();
+            // A file whose windows are not parsed here (a sparse GP's) trained on its recordings.
+            n.iter()
+                .zip(&rec.t)
+                .filter(move |(_, t)| {
+                    spans.is_empty() || spans.iter().any(|(a, b)| *t >= a && *t <= b)
+                })
+                .map(|(x, _)| *x)
+                .collect::<Vec<f64>>()
+        })
+        .filter(|x| x.is_finite())
+        .collect();
+    let Some(trained_hz) = median(trained) else {
+        return Vec::new();
+    };
+    recordings
+        .into_iter()
+        .filter_map(|r| {
+            let (_, median, _) = rate_percentiles(r)?;
+            ((median - trained_hz).abs() > PROPELLER_RATE_DIFFERENCE_NOTE * trained_hz.abs()).then(|| {
+                format!(
+                    "{}: recorded at a propeller rate of {median:.3} 1/s, but the model was identified at {trained_hz:.3} 1/s and has no propeller-rate input (polynomial sets, sparse GP): its forces are those of the rate it was identified at (an mmg model takes the recorded rate)",
+                    r.file
+                )
+            })
+        })
+        .collect()
+}
+
+fn median(mut x: Vec<f64>) -> Option<f64> {
+    if x.is_empty() {
+        return None;
+    }
+    x.sort_by(f64::total_cmp);
+    Some(x[x.len() / 2])
 }
 
 /// 2nd, 50th and 98th percentiles of the recorded propeller rate [1/s] of `r` (robust to single
