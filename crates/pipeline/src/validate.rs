@@ -496,15 +496,13 @@ pub fn recorded_rate_notes<'a>(
         .iter()
         .filter_map(|r| {
             let (low, median, high) = rate_percentiles(r)?;
-            let off = (median - own).abs() > PROPELLER_RATE_DIFFERENCE_NOTE * own.abs()
-                || (high - low) > PROPELLER_RATE_SPREAD_WARNING * median.abs();
-            off.then(|| {
-                if high - low > PROPELLER_RATE_SPREAD_WARNING * median.abs() {
-                    format!("{} ({low:.3}–{high:.3} 1/s)", r.file)
-                } else {
-                    format!("{} ({median:.3} 1/s)", r.file)
-                }
-            })
+            let spreads = high - low > PROPELLER_RATE_SPREAD_WARNING * median.abs();
+            let differs = (median - own).abs() > PROPELLER_RATE_DIFFERENCE_NOTE * own.abs();
+            match (spreads, differs) {
+                (true, _) => Some(format!("{} ({low:.3}–{high:.3} 1/s)", r.file)),
+                (false, true) => Some(format!("{} ({median:.3} 1/s)", r.file)),
+                (false, false) => None,
+            }
         })
         .collect();
     if !differing.is_empty() {
@@ -553,9 +551,12 @@ pub fn training_rate_mismatches<'a>(
         })
         .filter(|x| x.is_finite())
         .collect();
-    let Some(trained_hz) = median(trained) else {
+    if trained.is_empty() {
         return Vec::new();
-    };
+    }
+    let mut trained = trained;
+    trained.sort_by(f64::total_cmp);
+    let trained_hz = shipid_uncertainty::band::quantile(&trained, 0.5);
     recordings
         .into_iter()
         .filter_map(|r| {
@@ -568,14 +569,6 @@ pub fn training_rate_mismatches<'a>(
             })
         })
         .collect()
-}
-
-fn median(mut x: Vec<f64>) -> Option<f64> {
-    if x.is_empty() {
-        return None;
-    }
-    x.sort_by(f64::total_cmp);
-    Some(x[x.len() / 2])
 }
 
 /// 2nd, 50th and 98th percentiles of the recorded propeller rate [1/s] of `r` (robust to single
