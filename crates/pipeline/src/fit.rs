@@ -63,6 +63,11 @@ pub struct EstimatorSpec {
     /// absent, so the ids of the polynomial estimators' study cases stay as they were.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub similarity: Option<f64>,
+    /// The mmg family holds the propeller's wake at what the recorded thrust measures
+    /// (`--inflow-from-thrust`; mmg only). Not serialised when off, so the ids of study cases stay as
+    /// they were.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub inflow_from_thrust: bool,
 }
 
 /// ε of the SVR when it is neither given nor tuned (`--c` without `--tune`): 1 % of the RMS of the
@@ -84,6 +89,7 @@ impl EstimatorSpec {
             tune: false,
             refine: false,
             similarity: None,
+            inflow_from_thrust: false,
         }
     }
 

@@ -32,8 +32,6 @@ pub struct FitArgs<'a> {
     /// `--calibrate [LEVEL] [--structures a,b]`: the level and the ensemble's other sets (empty: the
     /// fitted set alone).
     pub calibrate: Option<(f64, Vec<String>)>,
-    /// `--inflow-from-thrust` (mmg only).
-    pub inflow_from_thrust: bool,
 }
 
 /// How many of the largest VIFs the report lists per DOF.
@@ -443,10 +441,7 @@ fn report_bootstrap(
 fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     use shipid_pipeline::calibration::{MmgFamily, calibrate_fit, factor_calibration_record};
     use shipid_pipeline::mmg::{MmgFitOptions, fit_mmg_model_file, write_mmg_model_file};
-    let opts = MmgFitOptions {
-        inflow_from_thrust: a.inflow_from_thrust,
-        ..MmgFitOptions::from_spec(&a.estimator, &a.recordings, a.window)?
-    };
+    let opts = MmgFitOptions::from_spec(&a.estimator, &a.recordings, a.window)?;
     let ds = Dataset::load(a.dataset)?;
     let mut warnings = training_warnings(&ds, &a.recordings, a.validate, true);
     for r in ds

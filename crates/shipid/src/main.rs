@@ -481,6 +481,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                 tune,
                 refine,
                 similarity,
+                inflow_from_thrust,
             };
             // --set mmg reads the estimator's flags its own way (fit_cmd::run_mmg).
             if set != shipid_pipeline::mmg::SET_NAME {
@@ -518,7 +519,6 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                 validate,
                 bootstrap: bootstrap.map(|n| (n, bootstrap_seed)),
                 calibrate: calibrate.map(|level| (level, structures.unwrap_or_default())),
-                inflow_from_thrust,
             })
         }
         Command::Metrics { dataset, json } => shipid::metrics_cmd::run(&dataset, json),

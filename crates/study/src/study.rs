@@ -106,6 +106,10 @@ pub struct RawEstimator {
     /// [`shipid_pipeline::fit_gp::DEFAULT_SIMILARITY`]).
     #[serde(default)]
     pub similarity: Option<OneOrMany>,
+    /// The mmg family holds the propeller's wake at what the recorded thrust measures (`shipid fit
+    /// --inflow-from-thrust`); a study whose sets are all `mmg` only.
+    #[serde(default)]
+    pub inflow_from_thrust: bool,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -529,7 +533,19 @@ fn check_mmg_estimators(
     sets: &[String],
     estimators: &[CheckedEstimator],
 ) -> Result<(), InputError> {
-    if !sets.iter().any(|s| s == shipid_pipeline::mmg::SET_NAME) {
+    let mmg = shipid_pipeline::mmg::SET_NAME;
+    if let Some(i) = estimators.iter().position(|e| e.spec.inflow_from_thrust)
+        && let Some(other) = sets.iter().find(|s| *s != mmg)
+    {
+        return Err(InputError::key(
+            path,
+            format!("estimator[{i}].inflow_from_thrust"),
+            format!(
+                "applies to the mmg set only (the grid crosses it with `{other}`, which has no propeller model; put the mmg cases in a study of their own)"
+            ),
+        ));
+    }
+    if !sets.iter().any(|s| s == mmg) {
         return Ok(());
     }
     for (i, e) in estimators.iter().enumerate() {
@@ -789,6 +805,7 @@ fn reject_polynomial_keys(path: &Path, i: usize, e: &RawEstimator) -> Result<(),
         (e.tune, "tune"),
         (e.refine, "refine"),
         (e.solver.is_some(), "solver"),
+        (e.inflow_from_thrust, "inflow_from_thrust"),
     ] {
         if given {
             return Err(InputError::key(
@@ -905,6 +922,7 @@ fn hyper_grid(path: &Path, i: usize, e: &RawEstimator) -> Result<Vec<EstimatorSp
         epsilon: e.epsilon,
         tune: e.tune,
         refine: e.refine,
+        inflow_from_thrust: e.inflow_from_thrust,
         ..EstimatorSpec::named(&e.name)
     };
     let grid = |v: &Option<OneOrMany>| v.as_ref().map(OneOrMany::values).unwrap_or_default();

@@ -616,7 +616,7 @@ impl MmgFitOptions {
             estimator,
             prior_weight,
             propeller_rate_hz: None,
-            inflow_from_thrust: false,
+            inflow_from_thrust: spec.inflow_from_thrust,
         })
     }
 }
