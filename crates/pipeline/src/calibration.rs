@@ -957,6 +957,7 @@ impl StoredCalibration {
                     o.trained_on.join(" and "),
                     crate::out_of_kind::terms_in_words(o)
                 ) + &crate::out_of_kind::level_note(self.level)
+                    + &crate::out_of_kind::caveat(o)
             }
             None => String::new(),
         };

@@ -102,6 +102,10 @@ pub const OUT_OF_KIND_SOURCE: &str = "population study `cargo xtask out-of-kind 
 family's default fit from noisy training runs of the 20 ships of paper 003's hydrodynamic database \
 on the KVLCC2 model, quantile at the band's level";
 
+/// What the mmg family's term does not hold, said wherever the term is (its source in the model file,
+/// the fit's note, the band's description).
+pub const MMG_STRUCTURE_CAVEAT: &str = "the population's ships follow the MMG structure exactly, so on a real ship's recordings the term is a lower bound (docs/mmg.md: hull-force shapes the HSVA zig-zags cannot tell apart spread the 35° turn by ±10 % tactical and ±20 % steady diameter)";
+
 use MetricFamily::{Overshoot, TurningLength, ZigzagTime};
 use ModelFamily::{Mmg, Polynomial, SparseGp};
 use TrainedKinds::{TurningOnly, ZigzagsOneAngle, ZigzagsSeveralAngles};
@@ -161,9 +165,26 @@ pub fn out_of_kind(
         .collect();
     (!relative.is_empty()).then(|| OutOfKindRecord {
         trained_on: trained.names(training),
-        source: format!("{OUT_OF_KIND_SOURCE}{}", level_note(level)),
+        source: format!(
+            "{OUT_OF_KIND_SOURCE}{}{}",
+            level_note(level),
+            if family == Mmg {
+                format!("; {MMG_STRUCTURE_CAVEAT}")
+            } else {
+                String::new()
+            }
+        ),
         relative,
     })
+}
+
+/// "; " and [`MMG_STRUCTURE_CAVEAT`] when the record's source carries it (an mmg model's), else "".
+pub fn caveat(o: &OutOfKindRecord) -> String {
+    if o.source.contains(MMG_STRUCTURE_CAVEAT) {
+        format!("; {MMG_STRUCTURE_CAVEAT}")
+    } else {
+        String::new()
+    }
 }
 
 /// "" inside the levels of [`OUT_OF_KIND`]; beyond them, what the term at `level` then is.

@@ -355,10 +355,11 @@ fn report_calibration(
     if let Some(o) = out_of_kind {
         eprintln!(
             "note: trained on {} only: the other kind's bands take an out-of-kind term measured \
-             on a population of ships, not on these data: {}{} (docs/uncertainty.md)",
+             on a population of ships, not on these data: {}{}{} (docs/uncertainty.md)",
             o.trained_on.join(" and "),
             shipid_pipeline::out_of_kind::terms_in_words(o),
-            shipid_pipeline::out_of_kind::level_note(level)
+            shipid_pipeline::out_of_kind::level_note(level),
+            shipid_pipeline::out_of_kind::caveat(o)
         );
     }
 }
