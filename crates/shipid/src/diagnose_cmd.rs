@@ -169,6 +169,16 @@ pub fn run(args: &DiagnoseArgs) -> Result<Outcome, CliError> {
     input.model_level_over_l = level.as_ref().map(|l| l.0);
     input.identification_range = BaseRange::of(range.as_ref(), base.own_range());
     let mut report = diagnose(&input, &ds, &opts).map_err(|e| refused(dataset, e))?;
+    // A base without a propeller-rate input replays every recording at the rate it was identified
+    // at: a recording made at another rate is a mismatch the diagnosis should not be blamed for.
+    if !base.takes_propeller_rate() {
+        report
+            .warnings
+            .extend(shipid_pipeline::validate::training_rate_mismatches(
+                model_spec,
+                &ds.recordings,
+            ));
+    }
     if let Some(c) = &concealed {
         let found: Vec<Effect> = report
             .effects
