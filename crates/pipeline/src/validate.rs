@@ -89,18 +89,8 @@ fn options(ship: &Ship, duration_s: f64) -> SimOptions {
     SimOptions::new(duration_s).with_step(dt, dt)
 }
 
-/// Linear interpolation of (t, y) at `at` (held at the ends).
-pub fn interp(t: &[f64], y: &[f64], at: f64) -> f64 {
-    let i = t.partition_point(|&x| x <= at);
-    if i == 0 {
-        return y[0];
-    }
-    if i >= t.len() {
-        return y[t.len() - 1];
-    }
-    let w = (at - t[i - 1]) / (t[i] - t[i - 1]);
-    y[i - 1] + w * (y[i] - y[i - 1])
-}
+/// Linear interpolation held at the ends: the simulation crate's one.
+pub use shipid_sim::metrics::interp;
 
 /// Replay the recorded rudder from the recorded initial state. Times are shifted so the record starts at 0.
 /// In calm water: [`replay_in`] replays a recording in its recorded environment.
@@ -332,16 +322,16 @@ pub fn validation_warnings(
         Some(m) if m.takes_propeller_rate() => {
             recorded_rate_notes(m.propeller_rate_hz(), &ds.recordings)
         }
-        Some(_) => propeller_rate_variations(&ds.recordings)
-            .iter()
-            .map(ToString::to_string)
-            .chain(training_rate_mismatches(model_spec, &ds.recordings))
-            .collect(),
-        None => propeller_rate_variations(&ds.recordings)
+        _ => propeller_rate_variations(&ds.recordings)
             .iter()
             .map(ToString::to_string)
             .collect(),
     };
+    // A model without a rate input, against the rate it was trained at (a study, `None`, trains on
+    // the data set it tests on).
+    if model.is_some_and(|m| !m.takes_propeller_rate()) {
+        warnings.extend(training_rate_mismatches(model_spec, &ds.recordings));
+    }
     let windage = validation_windage(model_spec, ds);
     let any_wind = ds.recordings.iter().any(|r| r.recording.wind.is_some());
     if any_wind && windage.is_assumed() {

@@ -249,17 +249,7 @@ impl Replay {
 
     /// Rudder angle [rad] at `t_s`.
     pub fn at(&self, t_s: f64) -> f64 {
-        let n = self.t_s.len();
-        let i = self.t_s.partition_point(|&t| t <= t_s);
-        if i == 0 {
-            self.delta_rad[0]
-        } else if i == n {
-            self.delta_rad[n - 1]
-        } else {
-            let (t0, t1) = (self.t_s[i - 1], self.t_s[i]);
-            let w = (t_s - t0) / (t1 - t0);
-            self.delta_rad[i - 1] + w * (self.delta_rad[i] - self.delta_rad[i - 1])
-        }
+        crate::metrics::interp(&self.t_s, &self.delta_rad, t_s)
     }
 }
 

@@ -161,8 +161,10 @@ fn usable(rec: &Recording) -> bool {
         && rec.t.windows(2).all(|w| w[1] > w[0])
 }
 
-/// Linear interpolation of `y(t)` at `tq` (clamped to the ends).
-fn interp(t: &[f64], y: &[f64], tq: f64) -> f64 {
+/// Linear interpolation of `y(t)` at `tq` (held at the ends; `t` increasing, not empty): the one
+/// every sampled series is read with (a recorded rudder, a recorded propeller rate, a simulation
+/// against its recording).
+pub fn interp(t: &[f64], y: &[f64], tq: f64) -> f64 {
     let i = t.partition_point(|&x| x <= tq);
     if i == 0 {
         y[0]

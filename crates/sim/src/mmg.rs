@@ -578,10 +578,7 @@ impl MmgModel {
                 + p.n_rrr * rp * rp * rp);
 
         // Propeller: (1 − w_P) = (1 − w_P0)[1 + {1 − exp(−C1|β_P|)}(C2 − 1)], β_P = β − x'_P r'.
-        let beta_p = beta - p.x_p * rp;
-        let c2 = if beta_p > 0.0 { p.c2_pos } else { p.c2_neg };
-        let one_minus_wp =
-            (1.0 - p.w_p0) * (1.0 + (1.0 - (-p.c1 * beta_p.abs()).exp()) * (c2 - 1.0));
+        let one_minus_wp = one_minus_wake(p.w_p0, p.c1, [p.c2_pos, p.c2_neg], beta - p.x_p * rp);
         let n = n_hz;
         let dp = p.propeller_diameter_m;
         let u_p = u * one_minus_wp;
@@ -632,6 +629,13 @@ impl MmgModel {
             advance_ratio: j,
         })
     }
+}
+
+/// 1 − w_P of the MMG wake model, (1 − w_P0)[1 + {1 − exp(−C₁|β_P|)}(C₂ − 1)], at the propeller's
+/// drift angle β_P = β − x′_P r′ [rad], C₂ = `c2[0]` for β_P > 0 and `c2[1]` otherwise.
+pub fn one_minus_wake(w_p0: f64, c1: f64, c2: [f64; 2], beta_p_rad: f64) -> f64 {
+    let c2 = if beta_p_rad > 0.0 { c2[0] } else { c2[1] };
+    (1.0 - w_p0) * (1.0 + (1.0 - (-c1 * beta_p_rad.abs()).exp()) * (c2 - 1.0))
 }
 
 impl MmgModel {

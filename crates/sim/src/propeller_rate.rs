@@ -58,18 +58,7 @@ impl RecordedRate {
 
     /// The rate [1/s] at simulation time `t_s`.
     pub fn at(&self, t_s: f64) -> f64 {
-        let t = t_s + self.origin_s;
-        let (ts, ns) = (&self.t_s, &self.n_hz);
-        let last = ts.len() - 1;
-        if t <= ts[0] {
-            return ns[0];
-        }
-        if t >= ts[last] {
-            return ns[last];
-        }
-        let k = ts.partition_point(|&x| x <= t) - 1;
-        let w = (t - ts[k]) / (ts[k + 1] - ts[k]);
-        ns[k] + w * (ns[k + 1] - ns[k])
+        crate::metrics::interp(&self.t_s, &self.n_hz, t_s + self.origin_s)
     }
 }
 

@@ -9,6 +9,7 @@
 
 use shipid_io::{Recording, Ship};
 use shipid_sim::KnownEnvironment;
+use shipid_sim::mmg::one_minus_wake;
 
 use super::geometry::MmgGeometry;
 use super::priors::ParamSpec;
@@ -76,21 +77,23 @@ pub fn advance_ratio(k: [f64; 3], k_t: f64) -> Option<f64> {
 }
 
 /// The inflow samples of `rec` (water-relative, so that the inflow is the water's) with recorded
-/// `thrust` [N] and propeller rates `n_hz` [1/s] per sample, for the samples `range`.
-pub fn inflow_samples(
+/// `thrust` [N] and propeller rates `n_hz` [1/s] per sample.
+fn inflow_samples(
     rec: &Recording,
     thrust_n: &[f64],
     n_hz: &[f64],
-    range: std::ops::Range<usize>,
     ship: &Ship,
     geometry: &MmgGeometry,
 ) -> Vec<InflowSample> {
     let d = geometry.propeller_diameter_m;
     let x_p = geometry.propeller_x_m / ship.lpp;
     let mut rates: Vec<f64> = n_hz.iter().copied().filter(|x| x.is_finite()).collect();
+    if rates.is_empty() {
+        return Vec::new();
+    }
     rates.sort_by(f64::total_cmp);
-    let median_rate = rates.get(rates.len() / 2).copied().unwrap_or(f64::NAN);
-    range
+    let median_rate = shipid_uncertainty::band::quantile(&rates, 0.5);
+    (0..rec.len())
         .filter_map(|i| {
             let (u, v, r, n, t) = (rec.u[i], rec.v[i], rec.r[i], n_hz[i], thrust_n[i]);
             let speed = u.hypot(v);
@@ -134,19 +137,13 @@ pub fn inflow_of_windows<'a>(
         let water = env
             .as_ref()
             .map_or_else(|| rec.clone(), |e| e.water_relative(rec));
-        let found = inflow_samples(&water, thrust_n, &n_hz, 0..rec.len(), ship, geometry);
+        let found = inflow_samples(&water, thrust_n, &n_hz, ship, geometry);
         if !found.is_empty() {
             samples.extend(found);
             named.push(name.to_string());
         }
     }
     (samples, named)
-}
-
-/// 1 − w_P of the MMG wake model at `beta_p_rad` with p = [w_P0, C₁, C₂+, C₂−].
-fn one_minus_w(p: &[f64], beta_p_rad: f64) -> f64 {
-    let c2 = if beta_p_rad > 0.0 { p[2] } else { p[3] };
-    (1.0 - p[0]) * (1.0 + (1.0 - (-p[1] * beta_p_rad.abs()).exp()) * (c2 - 1.0))
 }
 
 /// w_P0, C₁, C₂ by bounded least squares on `samples`, within the bounds of `specs` (their entries
@@ -173,7 +170,7 @@ pub fn estimate_inflow(
     let residuals = |p: &[f64]| -> Vec<f64> {
         samples
             .iter()
-            .map(|s| one_minus_w(p, s.beta_p_rad) - s.one_minus_w)
+            .map(|s| one_minus_wake(p[0], p[1], [p[2], p[3]], s.beta_p_rad) - s.one_minus_w)
             .collect()
     };
     let mut p: Vec<f64> = INFLOW_NAMES
