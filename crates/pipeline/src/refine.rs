@@ -152,17 +152,16 @@ struct Problem<'a, P> {
     lpp: f64,
     /// (parameter index, its step per unit of p) of each free parameter.
     free: Vec<(usize, f64)>,
+    /// Every parameter's bounds ([`Parametric::parameter_bounds`]).
+    bounds: Vec<(f64, f64)>,
     /// Replay position (÷ L) and heading \[deg\] RMSE of the start.
     before_rmse: (f64, f64),
 }
 
 impl<P: Parametric> Problem<'_, P> {
     fn model(&self, p: &[f64]) -> Option<P> {
-        let mut theta = self.theta0.clone();
-        for (&(j, unit), &x) in self.free.iter().zip(p) {
-            theta[j] += x * unit;
-        }
-        self.start.with_parameters(&theta)
+        self.start
+            .with_parameters(&theta_at(&self.theta0, &self.free, p, &self.bounds))
     }
 
     /// The compared samples of a segment: indices into its recording.
@@ -502,6 +501,7 @@ fn problem<'a, P: Parametric>(
         stride,
         lpp: ship.lpp,
         free,
+        bounds,
         before_rmse: (0.0, 0.0),
     };
     let oe0 = problem.replay_residuals(Some(start));
@@ -515,6 +515,27 @@ fn problem<'a, P: Parametric>(
         problem.w_ee[d] = (EQUATION_ERROR_WEIGHT / 3.0 / c).sqrt();
     }
     Ok(problem)
+}
+
+/// θ at the step `p` of the refinement: `theta0` moved by `p` in the units of `free` (parameter index,
+/// its step per unit of p), each parameter within `bounds` (missing: free). The projection of p onto the
+/// bounds in those units is not enough on its own: θ0 + ((hi − θ0) / unit) · unit can round to just past
+/// hi, and a model file holding such a value is refused when it is read.
+pub fn theta_at(
+    theta0: &[f64],
+    free: &[(usize, f64)],
+    p: &[f64],
+    bounds: &[(f64, f64)],
+) -> Vec<f64> {
+    let mut theta = theta0.to_vec();
+    for (&(j, unit), &x) in free.iter().zip(p) {
+        let (lo, hi) = bounds
+            .get(j)
+            .copied()
+            .unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
+        theta[j] = (theta[j] + x * unit).max(lo).min(hi);
+    }
+    theta
 }
 
 /// The refinement's cost (as in [`Refined::cost_after`]) of `candidate` on the problem of refining

@@ -9,7 +9,7 @@ use shipid_estimators::Solver;
 use shipid_io::{AddedMass, Dataset, Recording, Ship};
 use shipid_model::AbkowitzModel;
 use shipid_pipeline::fit::{EstimatorSpec, WindowSpec, fit_dataset, load_set};
-use shipid_pipeline::refine::{RefineOptions, refine, refinement_cost};
+use shipid_pipeline::refine::{RefineOptions, refine, refinement_cost, theta_at};
 use shipid_pipeline::replay::{replay_segment, replay_segment_sensitivities, segments};
 use shipid_sim::AbkowitzDynamics;
 use shipid_sim::dynamics::{Dynamics, DynamicsError, FiniteDifferences, Parametric, State};
@@ -286,4 +286,22 @@ fn finite_differences_step_backwards_at_a_refused_bound() {
         dt_a[0],
         dt_f[0]
     );
+}
+
+/// Regression (an mmg fit with `--refine` wrote N'_vvv = 0.3350000000000001 beside its bound 0.335,
+/// and the model file was refused when read): from N'_vvv = −0.0888… a step projected onto the bound
+/// in the refinement's units came back to θ one rounding past it, whatever the unit.
+#[test]
+fn a_parameter_refined_onto_its_bound_stays_within_it() {
+    let check = |theta0: f64, bounds: (f64, f64), unit: f64| {
+        let p = (bounds.1 - theta0) / unit;
+        let theta = theta_at(&[theta0], &[(0, unit)], &[p], &[bounds])[0];
+        assert!(
+            bounds.0 <= theta && theta <= bounds.1,
+            "{theta0} + {p} × {unit} = {theta:e} outside {bounds:?}"
+        );
+    };
+    for unit in [1e-3, 0.0123, 0.1, 0.7, 3.3] {
+        check(-0.08882716337798482, (f64::NEG_INFINITY, 0.335), unit);
+    }
 }
