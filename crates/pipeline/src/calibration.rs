@@ -654,6 +654,9 @@ impl MmgFamily {
         if opts.propeller_rate_hz.is_none() {
             opts.propeller_rate_hz = ds.propeller.as_ref().and_then(|p| p.rate_rps);
         }
+        if self.refine {
+            opts.refine_folds = Some(crate::refine::RefineOptions::for_dataset(ds));
+        }
         opts
     }
 

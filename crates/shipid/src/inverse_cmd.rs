@@ -429,6 +429,7 @@ fn model_file(
             samples: run.db.samples.len(),
             residual_rms: [f64::NAN; 3],
             cv: Vec::new(),
+            cv_folds_refined: false,
             refinement: None,
             thrust_inflow: None,
         },

@@ -67,6 +67,10 @@ pub struct MmgEstimatorEntry {
     pub residual_rms: [f64; 3],
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub cv: Vec<CvEntry>,
+    /// The cross-validation refined each fold's fit before scoring it, as the final fit was
+    /// (`--tune --refine`).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub cv_folds_refined: bool,
     /// The output-error refinement after the equation error (`fit --refine`); the standard errors
     /// and data shares are then those of the equation-error estimate.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -242,7 +246,11 @@ impl MmgModelFile {
         let mut lines = vec![format!(
             "  prior weight λ = {:e}{}; equation-error residual RMS X' {:.3e}, Y' {:.3e}, N' {:.3e}",
             e.prior_weight,
-            if e.tuned { " (cross-validated)" } else { "" },
+            match (e.tuned, e.cv_folds_refined) {
+                (true, true) => " (cross-validated, every fold's fit refined as this one)",
+                (true, false) => " (cross-validated)",
+                _ => "",
+            },
             e.residual_rms[0],
             e.residual_rms[1],
             e.residual_rms[2]

@@ -203,7 +203,8 @@ impl Problem {
         .map_err(|e| failed(format!("the identified MMG model is unusable: {e}")))
     }
 
-    fn theta_of(&self, phi: &[f64], beta: &[Vec<f64>; 3]) -> Vec<f64> {
+    /// θ (hull derivatives, then the others, in the order of `specs`) from φ and β.
+    pub fn theta_of(&self, phi: &[f64], beta: &[Vec<f64>; 3]) -> Vec<f64> {
         let mut theta: Vec<f64> = self.specs.iter().map(|s| s.prior).collect();
         for (k, &i) in self.nl_idx.iter().enumerate() {
             theta[i] = phi[k];

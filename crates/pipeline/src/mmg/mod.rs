@@ -117,6 +117,10 @@ pub struct MmgFitOptions {
     /// (`fit --inflow-from-thrust`) instead of identifying them from the motion; without it a recorded
     /// thrust is only reported beside the fit's values.
     pub inflow_from_thrust: bool,
+    /// The output-error refinement that follows the fit (`--refine`), when it does. With a
+    /// cross-validated prior weight each fold's fit is refined alike before it is scored: λ is chosen
+    /// for the procedure that makes the model, not for its first step.
+    pub refine_folds: Option<RefineOptions>,
 }
 
 impl Default for MmgFitOptions {
@@ -128,6 +132,7 @@ impl Default for MmgFitOptions {
             prior_weight: PriorWeight::Fixed(DEFAULT_PRIOR_WEIGHT),
             propeller_rate_hz: None,
             inflow_from_thrust: false,
+            refine_folds: None,
         }
     }
 }
@@ -148,6 +153,8 @@ pub struct MmgFit {
     pub estimator: MmgEstimator,
     /// The cross-validation scores when λ was tuned.
     pub cv: Vec<CvScore>,
+    /// Each fold's fit was refined before it was scored ([`MmgFitOptions::refine_folds`]).
+    pub cv_folds_refined: bool,
     pub windows: Vec<TrainingWindow>,
     /// Propeller rate of the model: the mean recorded rate of the training samples [1/s].
     pub propeller_rate_hz: f64,
@@ -357,7 +364,14 @@ pub fn fit_mmg_with_priors(
     let (lambda, cv, start) = match opts.prior_weight {
         PriorWeight::Fixed(l) => (l, Vec::new(), problem.prior_phi()),
         PriorWeight::CrossValidated(criterion) => {
-            cross_validate(&problem, &all, &recordings, &environments, criterion, rate)?
+            let folds = Folds {
+                recordings: &recordings,
+                environments: &environments,
+                criterion,
+                rate_hz: rate,
+                refine: opts.refine_folds.as_ref(),
+            };
+            cross_validate(&problem, &all, &folds)?
         }
     };
     let (phi, beta, iterations) = problem.solve(&start, &all, lambda)?;
@@ -372,6 +386,7 @@ pub fn fit_mmg_with_priors(
         estimate,
         lambda,
         estimator: opts.estimator,
+        cv_folds_refined: !cv.is_empty() && opts.refine_folds.is_some(),
         cv,
         windows,
         propeller_rate_hz: rate,
@@ -387,10 +402,7 @@ pub fn fit_mmg_with_priors(
 fn cross_validate(
     problem: &Problem,
     all: &[usize],
-    recordings: &[Recording],
-    environments: &[Option<KnownEnvironment>],
-    criterion: CvCriterion,
-    rate_hz: f64,
+    how: &Folds,
 ) -> Result<(f64, Vec<CvScore>, Vec<f64>), PipelineError> {
     let groups = problem.samples.iter().map(|s| s.group).max().unwrap_or(0) + 1;
     let folds: Vec<(Vec<usize>, Vec<usize>)> = if groups >= EXTRAPOLATION_MIN_RECORDINGS {
@@ -426,16 +438,22 @@ fn cross_validate(
             .par_iter()
             .map(|(train, held)| {
                 let (phi_k, beta_k, _) = problem.solve(&phi, train, lambda)?;
-                match criterion {
+                match how.criterion {
                     CvCriterion::EquationError => problem.data_cost(&phi_k, &beta_k, held),
                     CvCriterion::Replay => {
-                        let model = problem.model_of(&phi_k, &beta_k, rate_hz)?;
+                        let model = problem.model_of(&phi_k, &beta_k, how.rate_hz)?;
+                        let model = match how.refine {
+                            Some(opts) => {
+                                refine_fold(problem, model, &phi_k, &beta_k, train, how, opts)?
+                            }
+                            None => model,
+                        };
                         Ok(replay_score(
                             &model,
                             problem,
                             held,
-                            recordings,
-                            environments,
+                            how.recordings,
+                            how.environments,
                         ))
                     }
                 }
@@ -453,6 +471,67 @@ fn cross_validate(
     }
     let (lambda, _, phi) = best.ok_or_else(|| failed("mmg: empty cross-validation grid"))?;
     Ok((lambda, scores, phi))
+}
+
+/// How the cross-validation scores a prior weight.
+struct Folds<'a> {
+    /// The training windows, by sample group.
+    recordings: &'a [Recording],
+    environments: &'a [Option<KnownEnvironment>],
+    criterion: CvCriterion,
+    rate_hz: f64,
+    /// Refine each fold's fit on its training part before scoring it (as `--refine` does the final fit).
+    refine: Option<&'a RefineOptions>,
+}
+
+/// A fold's fit refined in the output-error sense on its training part: the stretches of consecutive
+/// training samples, each a slice of its recording (a held-out block inside a recording splits it).
+fn refine_fold(
+    problem: &Problem,
+    model: MmgModel,
+    phi: &[f64],
+    beta: &[Vec<f64>; 3],
+    train: &[usize],
+    how: &Folds,
+    opts: &RefineOptions,
+) -> Result<MmgModel, PipelineError> {
+    let mut parts: Vec<Recording> = Vec::new();
+    let mut run: Option<(usize, f64, f64, usize)> = None;
+    let close = |run: Option<(usize, f64, f64, usize)>, parts: &mut Vec<Recording>| {
+        if let Some((g, t0, t1, _)) = run
+            && let Some(rec) = how.recordings.get(g)
+        {
+            let lo = rec.t.partition_point(|&t| t < t0);
+            let hi = rec.t.partition_point(|&t| t <= t1);
+            if hi > lo + 10 {
+                parts.push(rec.slice(lo..hi));
+            }
+        }
+    };
+    for &i in train {
+        let s = &problem.samples[i];
+        run = match run {
+            Some((g, t0, _, last)) if g == s.group && i == last + 1 => Some((g, t0, s.t_s, i)),
+            other => {
+                close(other, &mut parts);
+                Some((s.group, s.t_s, s.t_s, i))
+            }
+        };
+    }
+    close(run, &mut parts);
+    let specs: Vec<&ParamSpec> = problem.specs.iter().collect();
+    let theta = problem.theta_of(phi, beta);
+    let start = ParametricMmg::new(
+        model,
+        problem.added,
+        problem.geometry,
+        how.rate_hz,
+        &specs,
+        &theta,
+    );
+    let refined = crate::refine::refine(&start, &parts, opts)
+        .map_err(|e| failed(format!("--refine in a cross-validation fold: {e}")))?;
+    Ok(refined.model.model().clone())
 }
 
 /// From this many training recordings on, the cross-validation holds out the largest-amplitude ones
@@ -617,6 +696,7 @@ impl MmgFitOptions {
             prior_weight,
             propeller_rate_hz: None,
             inflow_from_thrust: spec.inflow_from_thrust,
+            refine_folds: None,
         })
     }
 }
@@ -635,7 +715,11 @@ pub fn fit_mmg_model_file(
             ds.path.display()
         ))
     })?;
-    let fit = fit_mmg_dataset(ds, opts)?;
+    let mut opts = opts.clone();
+    if refine_after {
+        opts.refine_folds = Some(RefineOptions::for_dataset(ds));
+    }
+    let fit = fit_mmg_dataset(ds, &opts)?;
     let (fit, refinement) = if refine_after {
         let started = Instant::now();
         let (mut refined, how) = refine_mmg(
@@ -706,6 +790,7 @@ pub fn model_file(fit: &MmgFit, added: AddedMass) -> MmgModelFile {
                     held_out_cost: c.held_out_cost,
                 })
                 .collect(),
+            cv_folds_refined: fit.cv_folds_refined,
             refinement: None,
             thrust_inflow: fit.inflow.as_ref().map(|t| {
                 let named = |x: &[f64; 4]| {

@@ -9,6 +9,7 @@ use shipid_sim::{Dynamics, DynamicsError, LinearHullDerivatives, MmgModel, State
 use super::MmgFit;
 use super::geometry::MmgGeometry;
 use super::identify::assemble;
+use super::priors::ParamSpec;
 use crate::error::{PipelineError, bad_input};
 use crate::refine::{RefineOptions, refine};
 
@@ -29,17 +30,35 @@ impl ParametricMmg {
     /// The parameterised model of a fit.
     pub fn of_fit(fit: &MmgFit, added: AddedMass) -> ParametricMmg {
         let params = &fit.estimate.params;
-        ParametricMmg {
-            model: fit.model.clone(),
+        let specs: Vec<&ParamSpec> = params.iter().map(|p| &p.spec).collect();
+        let theta: Vec<f64> = params.iter().map(|p| p.value).collect();
+        ParametricMmg::new(
+            fit.model.clone(),
             added,
-            geometry: fit.geometry,
-            rate_hz: fit.propeller_rate_hz,
-            names: params.iter().map(|p| p.spec.name).collect(),
-            theta: params.iter().map(|p| p.value).collect(),
-            bounds: params
-                .iter()
-                .map(|p| (p.spec.lower, p.spec.upper))
-                .collect(),
+            fit.geometry,
+            fit.propeller_rate_hz,
+            &specs,
+            &theta,
+        )
+    }
+
+    /// The parameterised `model` whose identified parameters `specs` have the values `theta`.
+    pub fn new(
+        model: MmgModel,
+        added: AddedMass,
+        geometry: MmgGeometry,
+        rate_hz: f64,
+        specs: &[&ParamSpec],
+        theta: &[f64],
+    ) -> ParametricMmg {
+        ParametricMmg {
+            model,
+            added,
+            geometry,
+            rate_hz,
+            names: specs.iter().map(|p| p.name).collect(),
+            theta: theta.to_vec(),
+            bounds: specs.iter().map(|p| (p.lower, p.upper)).collect(),
         }
     }
 
@@ -128,6 +147,7 @@ pub fn refine_mmg(
         lambda: fit.lambda,
         estimator: fit.estimator,
         cv: fit.cv.clone(),
+        cv_folds_refined: fit.cv_folds_refined,
         windows: fit.windows.clone(),
         propeller_rate_hz: fit.propeller_rate_hz,
         samples: fit.samples,

@@ -630,3 +630,36 @@ fn identified_parameter_names_are_the_model_file_names() {
         .collect();
     assert_eq!(identified, shipid_sim::mmg::MODEL_FILE_NAMES);
 }
+
+/// With the refinement to follow (`--tune --refine`), the cross-validation scores each fold's fit
+/// refined on its training part (for one recording: the two stretches either side of the held-out
+/// block), not its equation-error fit: the held-out costs change and the fit says it was done.
+#[test]
+fn tuning_before_a_refinement_scores_refined_folds() {
+    let ds = default_data();
+    let tuned = |refine_folds| {
+        let opts = MmgFitOptions {
+            prior_weight: PriorWeight::CrossValidated(CvCriterion::Replay),
+            refine_folds,
+            ..options(&["zz35_35_ps.csv"])
+        };
+        fit_mmg(&ds, &MmgGeometry::kvlcc2_model_scale(), &opts).unwrap()
+    };
+    let plain = tuned(None);
+    let refined = tuned(Some(shipid_pipeline::refine::RefineOptions {
+        max_iterations: 2,
+        ..Default::default()
+    }));
+    assert!(!plain.cv_folds_refined && refined.cv_folds_refined);
+    assert_eq!(plain.cv.len(), refined.cv.len());
+    for (a, b) in plain.cv.iter().zip(&refined.cv) {
+        assert_eq!(a.lambda, b.lambda);
+        assert!(
+            b.held_out_cost.is_finite() && (a.held_out_cost - b.held_out_cost).abs() > 1e-9,
+            "λ {}: {} vs {}",
+            a.lambda,
+            a.held_out_cost,
+            b.held_out_cost
+        );
+    }
+}
