@@ -472,6 +472,13 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
         eprintln!("warning: {w}");
         warnings.push(w);
     }
+    if a.estimator.tune && a.estimator.refine {
+        // The one slow combination (tens of seconds): say what it is doing before it starts.
+        eprintln!(
+            "cross-validating the prior weight over {} candidates, every fold's fit refined (output error)…",
+            shipid_pipeline::mmg::CV_GRID.len()
+        );
+    }
     let (fit, mut file) = fit_mmg_model_file(&ds, &opts, a.estimator.refine)?;
     if let Some((n, seed)) = a.bootstrap {
         let family = MmgFamily {
