@@ -574,17 +574,7 @@ pub fn calibrate_ensemble(
     calibrate_fit(e.source(&point), how, ds, recordings, level)
 }
 
-/// The coefficient set whose leverage gives the reach of a family without a regression of its own
-/// (mmg, sparse GP): a third-order polynomial in Δu′, v′, r′, δ, the states' own ellipsoid of
-/// where the training data were. The same for every such family, so their reaches compare.
-pub const STATE_RANGE_SET: &str = "reduced32";
-
-/// The identification range of [`STATE_RANGE_SET`] over primed states; None when it cannot be
-/// formed (too few or degenerate states: the reach is then 1).
-fn state_range_of(states: &[[f64; 4]]) -> Option<IdentificationRange> {
-    let set = CoefficientSet::builtin(STATE_RANGE_SET)?;
-    IdentificationRange::new(&set, states).ok()
-}
+pub use crate::range::{STATE_RANGE_SET, state_range_of};
 
 /// The [`STATE_RANGE_SET`] range of the training windows `window` of `recordings` of `ds`.
 pub fn state_range(
@@ -605,17 +595,7 @@ pub fn state_range(
 /// cannot be read).
 fn stored_state_range(spec: &str, windows: &[TrainingWindow]) -> Option<IdentificationRange> {
     let (_, ds, _) = crate::range::training_data(spec)?;
-    let scale = PrimeScale::of(&ds.ship);
-    let mut states = Vec::new();
-    for w in windows {
-        let rec = &ds.recording(&w.recording)?.recording;
-        states.extend(
-            (0..rec.len())
-                .filter(|&i| rec.t[i] >= w.t_start_s && rec.t[i] <= w.t_end_s)
-                .map(|i| primed_state(rec, &scale, i)),
-        );
-    }
-    state_range_of(&states)
+    state_range_of(&crate::range::window_states(&ds, windows))
 }
 
 /// The mmg family as the calibration refits it: the options of the fit (its recordings are

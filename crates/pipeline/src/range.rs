@@ -260,3 +260,299 @@ pub fn gp_outside_fraction(gp: &dyn shipid_sim::OwnRange, rec: &Recording) -> f6
         .count();
     share((outside, rec.len()))
 }
+
+/// How a model's identification range is formed, for the explanation of "outside".
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum RangeSource {
+    /// A polynomial's leverage over the states of its training windows (their data could be read).
+    Leverage,
+    /// A family without a regression of its own (mmg): the leverage of [`STATE_RANGE_SET`]'s
+    /// monomials over the states of its training windows, the ellipsoid those states fill.
+    StateEllipsoid,
+    /// A sparse GP's coverage by its sparse points.
+    Coverage,
+    /// Not known (the model's training data cannot be read, or the reference model).
+    Unknown,
+}
+
+impl RangeSource {
+    /// The range in a few words.
+    pub fn short(self) -> &'static str {
+        match self {
+            RangeSource::Leverage => "its regression's leverage",
+            RangeSource::StateEllipsoid => "the ellipsoid of its training states",
+            RangeSource::Coverage => "its sparse points' coverage",
+            RangeSource::Unknown => "unknown",
+        }
+    }
+
+    /// What "outside" means under this range, in words.
+    pub fn describe(self) -> &'static str {
+        match self {
+            RangeSource::Leverage => {
+                "leverage of the model's own regression above every training state's: there its forces are extrapolated"
+            }
+            RangeSource::StateEllipsoid => {
+                "outside the ellipsoid the training states fill (leverage of a cubic polynomial in Δu′, v′, r′, δ): the parameters were identified on other states"
+            }
+            RangeSource::Coverage => {
+                "no sparse point d_gen-similar (paper 001's test that every training state passes): there the GP's mean reverts towards its constant"
+            }
+            RangeSource::Unknown => "not available",
+        }
+    }
+}
+
+/// The coefficient set whose leverage gives the range of a family without a regression of its own
+/// (mmg, and the reach of a sparse GP's calibration): a third-order polynomial in Δu′, v′, r′, δ, the
+/// states' own ellipsoid. The same for every such family, so that their reaches compare.
+pub const STATE_RANGE_SET: &str = "reduced32";
+
+/// The [`STATE_RANGE_SET`] range over primed states; `None` when it cannot be formed (too few or
+/// degenerate states).
+pub fn state_range_of(states: &[[f64; 4]]) -> Option<IdentificationRange> {
+    let set = CoefficientSet::builtin(STATE_RANGE_SET)?;
+    IdentificationRange::new(&set, states).ok()
+}
+
+/// The primed states of `windows` in `ds` (a window whose recording `ds` lacks adds none).
+pub fn window_states(ds: &Dataset, windows: &[TrainingWindow]) -> Vec<[f64; 4]> {
+    let scale = PrimeScale::of(&ds.ship);
+    let mut states = Vec::new();
+    for w in windows {
+        let Some(r) = ds.recording(&w.recording) else {
+            continue;
+        };
+        let rec = &r.recording;
+        states.extend(
+            (0..rec.len())
+                .filter(|&i| rec.t[i] >= w.t_start_s && rec.t[i] <= w.t_end_s)
+                .map(|i| primed_state(rec, &scale, i)),
+        );
+    }
+    states
+}
+
+/// The extent of a set of states, as a user reads it first: the largest drift angle, non-dimensional
+/// yaw rate and rudder angle, and the lowest speed.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct StateExtent {
+    /// Largest |β| = |atan2(−v, u)| [deg].
+    pub max_drift_deg: f64,
+    /// Largest |r′| = |r| L / U.
+    pub max_yaw_rate_prime: f64,
+    /// Largest |δ| [deg].
+    pub max_rudder_deg: f64,
+    /// Lowest U / U0.
+    pub min_speed_over_u0: f64,
+}
+
+impl StateExtent {
+    /// The extent of the samples `idx` of `rec` (`None` without samples).
+    pub fn of(
+        rec: &Recording,
+        ship: &shipid_io::Ship,
+        idx: impl Iterator<Item = usize>,
+    ) -> Option<StateExtent> {
+        let mut e = StateExtent {
+            max_drift_deg: 0.0,
+            max_yaw_rate_prime: 0.0,
+            max_rudder_deg: 0.0,
+            min_speed_over_u0: f64::INFINITY,
+        };
+        let mut any = false;
+        for i in idx {
+            let speed = rec.u[i].hypot(rec.v[i]);
+            if !speed.is_finite() {
+                continue;
+            }
+            any = true;
+            if speed > 0.0 {
+                e.max_drift_deg = e
+                    .max_drift_deg
+                    .max((-rec.v[i]).atan2(rec.u[i]).to_degrees().abs());
+                e.max_yaw_rate_prime = e
+                    .max_yaw_rate_prime
+                    .max((rec.r[i] * ship.lpp / speed).abs());
+            }
+            e.max_rudder_deg = e.max_rudder_deg.max(rec.delta[i].to_degrees().abs());
+            e.min_speed_over_u0 = e.min_speed_over_u0.min(speed / ship.u0);
+        }
+        any.then_some(e)
+    }
+
+    /// The extent of `windows` in `ds`.
+    pub fn of_windows(ds: &Dataset, windows: &[TrainingWindow]) -> Option<StateExtent> {
+        let extents: Vec<StateExtent> = windows
+            .iter()
+            .filter_map(|w| {
+                let rec = &ds.recording(&w.recording)?.recording;
+                StateExtent::of(
+                    rec,
+                    &ds.ship,
+                    (0..rec.len()).filter(|&i| rec.t[i] >= w.t_start_s && rec.t[i] <= w.t_end_s),
+                )
+            })
+            .collect();
+        extents.into_iter().reduce(|a, b| StateExtent {
+            max_drift_deg: a.max_drift_deg.max(b.max_drift_deg),
+            max_yaw_rate_prime: a.max_yaw_rate_prime.max(b.max_yaw_rate_prime),
+            max_rudder_deg: a.max_rudder_deg.max(b.max_rudder_deg),
+            min_speed_over_u0: a.min_speed_over_u0.min(b.min_speed_over_u0),
+        })
+    }
+}
+
+/// Where a model was identified: the range its kind calls for and the extent of its training states.
+pub struct Envelope {
+    pub source: RangeSource,
+    /// The leverage range (polynomial, mmg); `None` for a sparse GP, which carries its own.
+    range: Option<IdentificationRange>,
+    /// The training states' extent (`None` when the training data cannot be read).
+    pub training: Option<StateExtent>,
+}
+
+/// The training windows a model file records (following nothing: `path` is the file that holds them).
+fn recorded_windows(path: &Path) -> Option<Vec<TrainingWindow>> {
+    #[derive(serde::Deserialize)]
+    struct Windows {
+        #[serde(default)]
+        training: Vec<TrainingWindow>,
+    }
+    let text = std::fs::read_to_string(path).ok()?;
+    toml::from_str::<Windows>(&text).ok().map(|w| w.training)
+}
+
+/// The envelope of the model loaded from `model_spec`: `None` when it has no range (the reference
+/// model; a polynomial or mmg file whose training data cannot be read or changed since the fit). A
+/// sparse GP carries its range; the extent of its training states needs its data all the same.
+pub fn model_envelope(model_spec: &str, model: &dyn shipid_sim::Dynamics) -> Option<Envelope> {
+    let read = match training_source(model_spec) {
+        TrainingSource::Read {
+            data, model: path, ..
+        } => recorded_windows(&path).map(|windows| (data, windows)),
+        _ => None,
+    };
+    let training = read
+        .as_ref()
+        .and_then(|(data, windows)| StateExtent::of_windows(&data.1, windows));
+    if model.own_range().is_some() {
+        return Some(Envelope {
+            source: RangeSource::Coverage,
+            range: None,
+            training,
+        });
+    }
+    let (data, windows) = read?;
+    let (source, range) = match data.0 {
+        Some(_) => (RangeSource::Leverage, identification_range(&data)),
+        None => (
+            RangeSource::StateEllipsoid,
+            state_range_of(&window_states(&data.1, &windows)),
+        ),
+    };
+    Some(Envelope {
+        source,
+        range: Some(range?),
+        training,
+    })
+}
+
+/// How far a run of a model goes beyond where the model was identified.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct RunReach {
+    pub source: RangeSource,
+    /// Share of the run's samples outside the identification range.
+    pub outside: f64,
+    /// The run's extent.
+    pub run: StateExtent,
+    /// The training states' extent (`None` when the training data cannot be read).
+    pub training: Option<StateExtent>,
+}
+
+/// Share of a simulated run outside the model's identification range above which `simulate` warns
+/// that the run is an extrapolation (a run inside it still grazes the edge of the training states).
+pub const EXTRAPOLATION_WARNING_SHARE: f64 = 0.05;
+
+impl RunReach {
+    /// The warning for a run that lies outside the range in more than
+    /// [`EXTRAPOLATION_WARNING_SHARE`] of its samples (`None` otherwise).
+    pub fn warning(&self, model_spec: &str) -> Option<String> {
+        if self.outside <= EXTRAPOLATION_WARNING_SHARE {
+            return None;
+        }
+        let beyond = self.beyond();
+        Some(format!(
+            "{model_spec}: {:.0} % of this run lies outside where the model was identified ({}; {}): its metrics are an extrapolation",
+            100.0 * self.outside,
+            self.source.short(),
+            match (beyond.is_empty(), self.training.is_some()) {
+                (false, _) => beyond.join(", "),
+                (true, true) => "each quantity within its training extent, in combinations the training did not visit".into(),
+                (true, false) => "the training data cannot be read for their extent".into(),
+            }
+        ))
+    }
+
+    /// The quantities of the run beyond the training states' extent, in words (empty when none is).
+    pub fn beyond(&self) -> Vec<String> {
+        let run = &self.run;
+        let mut out = Vec::new();
+        let Some(tr) = &self.training else {
+            return out;
+        };
+        if run.max_drift_deg > tr.max_drift_deg {
+            out.push(format!(
+                "drift up to {:.1}° (training ≤ {:.1}°)",
+                run.max_drift_deg, tr.max_drift_deg
+            ));
+        }
+        if run.max_yaw_rate_prime > tr.max_yaw_rate_prime {
+            out.push(format!(
+                "r′ up to {:.2} (training ≤ {:.2})",
+                run.max_yaw_rate_prime, tr.max_yaw_rate_prime
+            ));
+        }
+        if run.max_rudder_deg > tr.max_rudder_deg + 0.5 {
+            out.push(format!(
+                "rudder up to {:.1}° (training ≤ {:.1}°)",
+                run.max_rudder_deg, tr.max_rudder_deg
+            ));
+        }
+        if run.min_speed_over_u0 < tr.min_speed_over_u0 {
+            out.push(format!(
+                "speed down to {:.2} U0 (training ≥ {:.2} U0)",
+                run.min_speed_over_u0, tr.min_speed_over_u0
+            ));
+        }
+        out
+    }
+}
+
+impl Envelope {
+    /// Share of the samples of `rec` outside the identification range (`None` when the model, which
+    /// should carry it, does not).
+    pub fn outside_share(&self, model: &dyn shipid_sim::Dynamics, rec: &Recording) -> Option<f64> {
+        match (&self.range, model.own_range()) {
+            (Some(range), _) => Some(outside_fraction(
+                range,
+                rec,
+                &PrimeScale::of(model.ship()),
+                0..rec.len(),
+            )),
+            (None, Some(gp)) => Some(gp_outside_fraction(gp, rec)),
+            (None, None) => None,
+        }
+    }
+
+    /// The reach of `run` (a simulation of `model`) beyond this envelope.
+    pub fn reach(&self, model: &dyn shipid_sim::Dynamics, run: &Recording) -> Option<RunReach> {
+        Some(RunReach {
+            source: self.source,
+            outside: self.outside_share(model, run)?,
+            run: StateExtent::of(run, model.ship(), 0..run.len())?,
+            training: self.training,
+        })
+    }
+}

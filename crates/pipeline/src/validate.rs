@@ -350,17 +350,7 @@ pub fn validation_warnings(
     warnings
 }
 
-/// Where a validated model's identification range came from, for the explanation of `outside`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum RangeSource {
-    /// A polynomial's leverage over the states of its training windows (their data could be read).
-    Leverage,
-    /// A sparse GP's coverage by its sparse points.
-    Coverage,
-    /// Not known (a polynomial whose training data cannot be read, or the reference model).
-    Unknown,
-}
+pub use crate::range::RangeSource;
 
 /// One recording's validation and the share of its states outside the model's identification range.
 #[derive(Debug, Clone, Serialize)]
@@ -381,47 +371,23 @@ pub fn validate_dataset(
     model_spec: &str,
     ds: &shipid_io::Dataset,
 ) -> (Vec<ValidatedRecording>, RangeSource) {
-    use crate::range::{
-        gp_outside_fraction, identification_range, outside_fraction, training_data,
-    };
     // A recording mostly outside the identification range tests the model's extrapolation, not its
-    // fit. A sparse GP carries its range; a polynomial's needs the training data its file names.
-    let gp = model.own_range();
-    let range = if gp.is_some() {
-        None
-    } else {
-        training_data(model_spec)
-            .as_ref()
-            .and_then(identification_range)
-    };
-    let scale = shipid_io::PrimeScale::of(&ds.ship);
+    // fit. A sparse GP carries its range; a polynomial's and an mmg model's need the training data
+    // their file names.
+    let envelope = crate::range::model_envelope(model_spec, model);
     let windage = validation_windage(model_spec, ds);
     let rows = ds
         .recordings
         .iter()
-        .map(|r| {
-            let outside = match (&range, &gp) {
-                (Some(range), _) => Some(outside_fraction(
-                    range,
-                    &r.recording,
-                    &scale,
-                    0..r.recording.len(),
-                )),
-                (None, Some(gp)) => Some(gp_outside_fraction(*gp, &r.recording)),
-                (None, None) => None,
-            };
-            ValidatedRecording {
-                file: r.file.clone(),
-                validation: validate_recording_with(model, r, &ds.ship, &windage),
-                outside_identification_range: outside,
-            }
+        .map(|r| ValidatedRecording {
+            file: r.file.clone(),
+            validation: validate_recording_with(model, r, &ds.ship, &windage),
+            outside_identification_range: envelope
+                .as_ref()
+                .and_then(|e| e.outside_share(model, &r.recording)),
         })
         .collect();
-    let source = match (&range, &gp) {
-        (Some(_), _) => RangeSource::Leverage,
-        (None, Some(_)) => RangeSource::Coverage,
-        (None, None) => RangeSource::Unknown,
-    };
+    let source = envelope.map_or(RangeSource::Unknown, |e| e.source);
     (rows, source)
 }
 

@@ -199,19 +199,15 @@ pub fn validation_with_bands(
                 }
             );
         }
-        if source == RangeSource::Leverage {
-            println!(
-                "outside: share of the recording's states outside the model's identification range (leverage above every training state's; there its forces are extrapolated)"
-            );
-        } else if source == RangeSource::Coverage {
-            println!(
-                "outside: share of the recording's states outside the sparse GP's identification range (no sparse point d_gen-similar, paper 001's test that every training state passes; there its mean reverts towards its constant)"
-            );
-        } else {
+        match source {
             // Said, not left as a bare "-": a user would otherwise read it as "nothing outside".
-            println!(
-                "outside: not available for this model (the mmg family and the reference carry no identification range; a polynomial's needs its training data, see the warnings above)"
-            );
+            RangeSource::Unknown => println!(
+                "outside: not available for this model (the reference carries no identification range; a fitted model's needs its training data, see the warnings above)"
+            ),
+            known => println!(
+                "outside: share of the recording's states outside the model's identification range ({})",
+                known.describe()
+            ),
         }
     }
     if !as_json && let Some((check, (band_rows, diverged, reaches))) = &band_check {

@@ -228,6 +228,12 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
     }
     let env = constant_environment(wind, current, &windage, model.ship(), grid.duration_s)?;
     let out = simulate_on_grid_in(model, &m, &grid, env, approach_m_s)?;
+    let reach = shipid_pipeline::range::model_envelope(a.model, model)
+        .and_then(|e| e.reach(model, &out.recording));
+    if let Some(w) = reach.as_ref().and_then(|r| r.warning(a.model)) {
+        eprintln!("warning: {w}");
+        warnings.push(w);
+    }
     if let Some(path) = a.out_csv {
         let rate_note = a
             .propeller_rate_hz
@@ -259,6 +265,12 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
             o.insert(
                 "propeller_rate".into(),
                 json!({ "n_hz": n, "model_own_n_hz": loaded.propeller_rate_hz(), "approach_m_s": u }),
+            );
+        }
+        if let Some(r) = &reach {
+            o.insert(
+                "identification_range".into(),
+                serde_json::to_value(r).unwrap_or_default(),
             );
         }
         if !warnings.is_empty() {
@@ -300,13 +312,21 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
         );
     } else if let Value::Object(o) = &value {
         for (k, v) in o {
-            if k == "bands" || k.ends_with("_band") {
+            if k == "bands" || k.ends_with("_band") || k == "identification_range" {
                 continue;
             }
             match o.get(&format!("{k}_band")) {
                 Some(band) => println!("{k:>18}: {v}  band {band}"),
                 None => println!("{k:>18}: {v}"),
             }
+        }
+        if let Some(r) = &reach {
+            println!(
+                "{:>18}: {:.1} % of the run ({})",
+                "outside",
+                100.0 * r.outside,
+                r.source.describe()
+            );
         }
         if let Some(about) = o.get("bands") {
             println!(

@@ -630,7 +630,8 @@ fn run_gp_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
 
 /// An `mmg` case (docs/mmg.md): the MMG family's fit, then validation on every test recording. Its
 /// `dofs` are the equation error's X, Y, N (prime forces): `objective` is each one's term of the data
-/// part of J ((residual RMS ÷ force RMS)²), `hyper_parameter` the prior weight λ.
+/// part of J ((residual RMS ÷ force RMS)²), `hyper_parameter` the prior weight λ; its identification
+/// range is the ellipsoid of its training states ([`shipid_pipeline::range::state_range_of`]).
 fn run_mmg_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
     use shipid_pipeline::mmg::{MmgFitOptions, fit_mmg_model_file, write_mmg_model_file};
     let fitted = MmgFitOptions::from_spec(&case.estimator, &case.training, case.window)
@@ -639,7 +640,17 @@ fn run_mmg_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
         Ok(x) => x,
         Err(e) => return (CaseResult::failed_fit(case, e.to_string()), None),
     };
-    let tests = test_rows(study, &fit.model, &|_| None);
+    // No regression of its own: the ellipsoid its training states fill (as `validate` gives it).
+    let range = shipid_pipeline::range::state_range_of(&shipid_pipeline::range::window_states(
+        &study.dataset,
+        &fit.windows,
+    ));
+    let scale = PrimeScale::of(&study.dataset.ship);
+    let tests = test_rows(study, &fit.model, &|rec| {
+        range
+            .as_ref()
+            .map(|g| outside_fraction(g, rec, &scale, 0..rec.len()))
+    });
     let prior_held: Vec<&str> = file
         .parameters
         .iter()

@@ -2,6 +2,7 @@
 
 mod bands;
 mod calibration;
+mod envelope;
 mod environment;
 mod family_calibration;
 mod generate_environment;

@@ -46,6 +46,64 @@ fn fit_set_mmg_writes_a_model_file_that_simulate_and_validate_take() {
     shipid_ok(&["validate", model, "data/kvlcc2-mmg/dataset.toml"]);
 }
 
+/// A simulated manoeuvre says how far it lies outside where the model was identified: an mmg model
+/// fitted on ZZ35/35 port runs its own zig-zag inside the ellipsoid of its training states and the
+/// 35° turn outside it, with the quantities beyond the training extent named; `validate` gives the
+/// `outside` column for the mmg family too.
+#[test]
+fn a_turn_simulated_from_a_zigzag_fit_is_flagged_as_an_extrapolation() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("mmg.toml");
+    let model = model.to_str().unwrap();
+    shipid_ok(&[
+        "fit",
+        "data/kvlcc2-mmg/dataset.toml",
+        "--set",
+        "mmg",
+        "--recordings",
+        "zz35_35_ps.csv",
+        "--out",
+        model,
+    ]);
+    let run = |manoeuvre: &str| {
+        let out = shipid_ok(&["simulate", model, "--manoeuvre", manoeuvre, "--json"]);
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        (v, String::from_utf8_lossy(&out.stderr).to_string())
+    };
+    let (zigzag, stderr) = run("zigzag:35/35:port");
+    let range = &zigzag["identification_range"];
+    assert_eq!(range["source"], "state-ellipsoid", "{zigzag}");
+    assert!(range["outside"].as_f64().unwrap() < 0.05, "{zigzag}");
+    assert!(!stderr.contains("extrapolation"), "{stderr}");
+    let (turn, stderr) = run("turning:35:port");
+    let range = &turn["identification_range"];
+    assert!(range["outside"].as_f64().unwrap() > 0.5, "{turn}");
+    assert!(
+        range["run"]["max_yaw_rate_prime"].as_f64().unwrap()
+            > range["training"]["max_yaw_rate_prime"].as_f64().unwrap(),
+        "{turn}"
+    );
+    assert!(
+        stderr.contains("of this run lies outside where the model was identified")
+            && stderr.contains("r′ up to")
+            && stderr.contains("its metrics are an extrapolation"),
+        "{stderr}"
+    );
+    assert!(
+        turn["warnings"].to_string().contains("extrapolation"),
+        "{turn}"
+    );
+    let out = shipid_ok(&["validate", model, "data/kvlcc2-mmg/dataset.toml", "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let tc = v["recordings"]["tc35_ps.csv"]["outside_identification_range"]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{v}"));
+    let zz = v["recordings"]["zz35_35_ps.csv"]["outside_identification_range"]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{v}"));
+    assert!(tc > 0.5 && zz < 0.05, "{tc} {zz}");
+}
+
 #[test]
 fn set_mmg_refuses_an_estimator_it_has_not() {
     let dir = tempfile::tempdir().unwrap();
@@ -136,4 +194,12 @@ fn a_study_names_set_mmg_beside_a_polynomial_set() {
         .unwrap();
     let model = std::fs::read_to_string(case.path().join("model.toml")).unwrap();
     assert!(model.contains("kind = \"mmg\""));
+    // The turn lies outside the ellipsoid of the zig-zag's states, for the mmg case as for reduced32.
+    let result: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(case.path().join("result.json")).unwrap())
+            .unwrap();
+    let outside = result["tests"][0]["outside_identification_range"]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{result}"));
+    assert!(outside > 0.5, "{outside}");
 }

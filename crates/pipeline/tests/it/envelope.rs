@@ -1,0 +1,86 @@
+//! What `simulate` says about a run outside where its model was identified: the warning's threshold
+//! and the quantities named beyond the training states' extent.
+
+use shipid_pipeline::range::{EXTRAPOLATION_WARNING_SHARE, RangeSource, RunReach, StateExtent};
+
+fn extent(drift_deg: f64, r_prime: f64, rudder_deg: f64, speed: f64) -> StateExtent {
+    StateExtent {
+        max_drift_deg: drift_deg,
+        max_yaw_rate_prime: r_prime,
+        max_rudder_deg: rudder_deg,
+        min_speed_over_u0: speed,
+    }
+}
+
+/// `expected`: `None` for no warning, else the fragments the warning must hold.
+fn check(outside: f64, run: StateExtent, training: Option<StateExtent>, expected: Option<&[&str]>) {
+    let reach = RunReach {
+        source: RangeSource::StateEllipsoid,
+        outside,
+        run,
+        training,
+    };
+    match (reach.warning("m.toml"), expected) {
+        (None, None) => {}
+        (Some(w), Some(fragments)) => {
+            for f in fragments {
+                assert!(w.contains(f), "`{f}` not in: {w}");
+            }
+        }
+        (got, want) => panic!("{got:?} where {want:?} was expected"),
+    }
+}
+
+#[test]
+fn a_run_outside_the_training_states_is_warned_about_with_what_lies_beyond() {
+    let training = extent(13.2, 0.61, 35.0, 0.58);
+    // A turn from zig-zags: wider drift, faster yaw, slower.
+    check(
+        0.99,
+        extent(21.9, 0.89, 35.0, 0.32),
+        Some(training),
+        Some(&[
+            "99 % of this run",
+            "the ellipsoid of its training states",
+            "drift up to 21.9° (training ≤ 13.2°)",
+            "r′ up to 0.89 (training ≤ 0.61)",
+            "speed down to 0.32 U0 (training ≥ 0.58 U0)",
+            "its metrics are an extrapolation",
+        ]),
+    );
+    // A small zig-zag from a large one: every quantity within its extent, the combination not.
+    check(
+        0.5,
+        extent(5.0, 0.3, 10.0, 0.9),
+        Some(training),
+        Some(&["in combinations the training did not visit"]),
+    );
+    // A rudder angle above the training's by more than half a degree is named; at it, not.
+    check(
+        0.2,
+        extent(10.0, 0.5, 35.4, 0.7),
+        Some(training),
+        Some(&["in combinations"]),
+    );
+    check(
+        0.2,
+        extent(10.0, 0.5, 40.0, 0.7),
+        Some(training),
+        Some(&["rudder up to 40.0° (training ≤ 35.0°)"]),
+    );
+    // No training extent (its data unreadable): the share alone.
+    check(
+        0.3,
+        extent(10.0, 0.5, 35.0, 0.7),
+        None,
+        Some(&["30 %", "cannot be read"]),
+    );
+    // At or below the threshold: no warning, whatever the extent says.
+    check(
+        EXTRAPOLATION_WARNING_SHARE,
+        extent(21.9, 0.89, 35.0, 0.32),
+        Some(training),
+        None,
+    );
+    check(0.0, extent(5.0, 0.2, 10.0, 0.9), Some(training), None);
+}
