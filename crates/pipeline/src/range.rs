@@ -531,6 +531,12 @@ impl RunReach {
 }
 
 impl Envelope {
+    /// The leverage range (a polynomial's own, or the ellipsoid of an mmg model's training states);
+    /// `None` for a sparse GP, whose coverage the model carries.
+    pub fn leverage(&self) -> Option<&IdentificationRange> {
+        self.range.as_ref()
+    }
+
     /// Share of the samples of `rec` outside the identification range (`None` when the model, which
     /// should carry it, does not).
     pub fn outside_share(&self, model: &dyn shipid_sim::Dynamics, rec: &Recording) -> Option<f64> {

@@ -16,7 +16,7 @@ use shipid_pipeline::environment::ChosenWindage;
 use shipid_pipeline::model_file::{
     files_hash, load_model_parts, reanchor_training, ship_mismatch, stored_path,
 };
-use shipid_pipeline::range::{TrainingData, TrainingSource, identification_range, training_source};
+use shipid_pipeline::range::{TrainingData, TrainingSource, model_envelope, training_source};
 use shipid_sim::{Effect, WithEffects};
 
 use crate::{CliError, Outcome, bad_input, failed};
@@ -164,10 +164,17 @@ pub fn run(args: &DiagnoseArgs) -> Result<Outcome, CliError> {
         model_level_over_l: None,
         identification_range: None,
     };
-    let range = training.as_ref().and_then(identification_range);
+    // A polynomial's own leverage, or the ellipsoid of an mmg model's training states.
+    let envelope = training
+        .is_some()
+        .then(|| model_envelope(model_spec, base.as_ref()))
+        .flatten();
     let level = training.as_ref().and_then(|t| own_level(t, &input, &opts));
     input.model_level_over_l = level.as_ref().map(|l| l.0);
-    input.identification_range = BaseRange::of(range.as_ref(), base.own_range());
+    input.identification_range = BaseRange::of(
+        envelope.as_ref().and_then(|e| e.leverage()),
+        base.own_range(),
+    );
     let mut report = diagnose(&input, &ds, &opts).map_err(|e| refused(dataset, e))?;
     // A base without a propeller-rate input replays every recording at the rate it was identified
     // at: a recording made at another rate is a mismatch the diagnosis should not be blamed for.

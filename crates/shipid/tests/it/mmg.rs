@@ -48,8 +48,8 @@ fn fit_set_mmg_writes_a_model_file_that_simulate_and_validate_take() {
 
 /// A simulated manoeuvre says how far it lies outside where the model was identified: an mmg model
 /// fitted on ZZ35/35 port runs its own zig-zag inside the ellipsoid of its training states and the
-/// 35° turn outside it, with the quantities beyond the training extent named; `validate` gives the
-/// `outside` column for the mmg family too.
+/// 35° turn outside it, with the quantities beyond the training extent named; `validate` and
+/// `diagnose` give the share outside for the mmg family too.
 #[test]
 fn a_turn_simulated_from_a_zigzag_fit_is_flagged_as_an_extrapolation() {
     let dir = tempfile::tempdir().unwrap();
@@ -102,6 +102,12 @@ fn a_turn_simulated_from_a_zigzag_fit_is_flagged_as_an_extrapolation() {
         .as_f64()
         .unwrap_or_else(|| panic!("{v}"));
     assert!(tc > 0.5 && zz < 0.05, "{tc} {zz}");
+    let out = shipid_ok(&["diagnose", model, "data/kvlcc2-mmg/dataset.toml"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("recorded states outside the model's identification range"),
+        "{stdout}"
+    );
 }
 
 #[test]
