@@ -205,18 +205,7 @@ pub fn identification_range((file, ds, _): &TrainingData) -> Option<Identificati
         return None;
     }
     let set = CoefficientSet::from_file(file.set.clone()).ok()?;
-    let scale = PrimeScale::of(&ds.ship);
-    let mut states = Vec::new();
-    for w in &file.training {
-        let r = ds.recordings.iter().find(|r| r.file == w.recording)?;
-        let rec = &r.recording;
-        states.extend(
-            (0..rec.len())
-                .filter(|&i| rec.t[i] >= w.t_start_s && rec.t[i] <= w.t_end_s)
-                .map(|i| primed_state(rec, &scale, i)),
-        );
-    }
-    IdentificationRange::new(&set, &states).ok()
+    IdentificationRange::new(&set, &window_states(ds, &file.training)).ok()
 }
 
 /// How many of the samples `idx` of `rec` lie outside `range`, and how many there are.
@@ -316,22 +305,30 @@ pub fn state_range_of(states: &[[f64; 4]]) -> Option<IdentificationRange> {
     IdentificationRange::new(&set, states).ok()
 }
 
+/// Each window of `windows` whose recording `ds` has, with the indices of its samples.
+fn window_samples<'a>(
+    ds: &'a Dataset,
+    windows: &'a [TrainingWindow],
+) -> impl Iterator<Item = (&'a Recording, Vec<usize>)> + 'a {
+    windows.iter().filter_map(|w| {
+        let rec = &ds.recording(&w.recording)?.recording;
+        let idx = (0..rec.len())
+            .filter(|&i| rec.t[i] >= w.t_start_s && rec.t[i] <= w.t_end_s)
+            .collect();
+        Some((rec, idx))
+    })
+}
+
 /// The primed states of `windows` in `ds` (a window whose recording `ds` lacks adds none).
 pub fn window_states(ds: &Dataset, windows: &[TrainingWindow]) -> Vec<[f64; 4]> {
     let scale = PrimeScale::of(&ds.ship);
-    let mut states = Vec::new();
-    for w in windows {
-        let Some(r) = ds.recording(&w.recording) else {
-            continue;
-        };
-        let rec = &r.recording;
-        states.extend(
-            (0..rec.len())
-                .filter(|&i| rec.t[i] >= w.t_start_s && rec.t[i] <= w.t_end_s)
-                .map(|i| primed_state(rec, &scale, i)),
-        );
-    }
-    states
+    window_samples(ds, windows)
+        .flat_map(|(rec, idx)| {
+            idx.into_iter()
+                .map(|i| primed_state(rec, &scale, i))
+                .collect::<Vec<_>>()
+        })
+        .collect()
 }
 
 /// The extent of a set of states, as a user reads it first: the largest drift angle, non-dimensional
@@ -384,23 +381,14 @@ impl StateExtent {
 
     /// The extent of `windows` in `ds`.
     pub fn of_windows(ds: &Dataset, windows: &[TrainingWindow]) -> Option<StateExtent> {
-        let extents: Vec<StateExtent> = windows
-            .iter()
-            .filter_map(|w| {
-                let rec = &ds.recording(&w.recording)?.recording;
-                StateExtent::of(
-                    rec,
-                    &ds.ship,
-                    (0..rec.len()).filter(|&i| rec.t[i] >= w.t_start_s && rec.t[i] <= w.t_end_s),
-                )
+        window_samples(ds, windows)
+            .filter_map(|(rec, idx)| StateExtent::of(rec, &ds.ship, idx.into_iter()))
+            .reduce(|a, b| StateExtent {
+                max_drift_deg: a.max_drift_deg.max(b.max_drift_deg),
+                max_yaw_rate_prime: a.max_yaw_rate_prime.max(b.max_yaw_rate_prime),
+                max_rudder_deg: a.max_rudder_deg.max(b.max_rudder_deg),
+                min_speed_over_u0: a.min_speed_over_u0.min(b.min_speed_over_u0),
             })
-            .collect();
-        extents.into_iter().reduce(|a, b| StateExtent {
-            max_drift_deg: a.max_drift_deg.max(b.max_drift_deg),
-            max_yaw_rate_prime: a.max_yaw_rate_prime.max(b.max_yaw_rate_prime),
-            max_rudder_deg: a.max_rudder_deg.max(b.max_rudder_deg),
-            min_speed_over_u0: a.min_speed_over_u0.min(b.min_speed_over_u0),
-        })
     }
 }
 
