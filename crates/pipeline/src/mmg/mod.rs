@@ -386,7 +386,10 @@ pub fn fit_mmg_with_priors(
         estimate,
         lambda,
         estimator: opts.estimator,
-        cv_folds_refined: !cv.is_empty() && opts.refine_folds.is_some(),
+        // The equation-error criterion scores the folds' equation error, which a refinement does
+        // not change: only replayed folds are refined.
+        cv_folds_refined: opts.refine_folds.is_some()
+            && opts.prior_weight == PriorWeight::CrossValidated(CvCriterion::Replay),
         cv,
         windows,
         propeller_rate_hz: rate,
