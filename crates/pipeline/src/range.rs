@@ -465,20 +465,26 @@ pub const EXTRAPOLATION_WARNING_SHARE: f64 = 0.05;
 
 impl RunReach {
     /// The warning for a run that lies outside the range in more than
-    /// [`EXTRAPOLATION_WARNING_SHARE`] of its samples (`None` otherwise).
-    pub fn warning(&self, model_spec: &str) -> Option<String> {
+    /// [`EXTRAPOLATION_WARNING_SHARE`] of its samples (`None` otherwise); `diverged`: the run ended
+    /// in a divergence, and has no metrics to qualify.
+    pub fn warning(&self, model_spec: &str, diverged: bool) -> Option<String> {
         if self.outside <= EXTRAPOLATION_WARNING_SHARE {
             return None;
         }
         let beyond = self.beyond();
         Some(format!(
-            "{model_spec}: {:.0} % of this run lies outside where the model was identified ({}; {}): its metrics are an extrapolation",
+            "{model_spec}: {:.0} % of this run lies outside where the model was identified ({}; {}): {}",
             100.0 * self.outside,
             self.source.short(),
             match (beyond.is_empty(), self.training.is_some()) {
                 (false, _) => beyond.join(", "),
                 (true, true) => "each quantity within its training extent, in combinations the training did not visit".into(),
                 (true, false) => "the training data cannot be read for their extent".into(),
+            },
+            if diverged {
+                "it diverged out there"
+            } else {
+                "its metrics are an extrapolation"
             }
         ))
     }

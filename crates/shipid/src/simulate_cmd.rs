@@ -230,7 +230,10 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
     let out = simulate_on_grid_in(model, &m, &grid, env, approach_m_s)?;
     let reach = shipid_pipeline::range::model_envelope(a.model, model)
         .and_then(|e| e.reach(model, &out.recording));
-    if let Some(w) = reach.as_ref().and_then(|r| r.warning(a.model)) {
+    if let Some(w) = reach
+        .as_ref()
+        .and_then(|r| r.warning(a.model, !matches!(out.status, SimStatus::Ok)))
+    {
         eprintln!("warning: {w}");
         warnings.push(w);
     }

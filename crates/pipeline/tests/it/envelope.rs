@@ -20,7 +20,7 @@ fn check(outside: f64, run: StateExtent, training: Option<StateExtent>, expected
         run,
         training,
     };
-    match (reach.warning("m.toml"), expected) {
+    match (reach.warning("m.toml", false), expected) {
         (None, None) => {}
         (Some(w), Some(fragments)) => {
             for f in fragments {
@@ -83,4 +83,16 @@ fn a_run_outside_the_training_states_is_warned_about_with_what_lies_beyond() {
         None,
     );
     check(0.0, extent(5.0, 0.2, 10.0, 0.9), Some(training), None);
+    // A run that diverged has no metrics: the warning says where it went instead.
+    let diverged = RunReach {
+        source: RangeSource::Leverage,
+        outside: 0.7,
+        run: extent(170.0, 1.5, 35.0, 0.2),
+        training: Some(training),
+    };
+    let w = diverged.warning("m.toml", true).unwrap();
+    assert!(
+        w.contains("it diverged out there") && !w.contains("metrics"),
+        "{w}"
+    );
 }
