@@ -102,6 +102,7 @@ pub fn validation_with_bands(
         "model": model_spec,
         "dataset": dataset.display().to_string(),
         "method": "replay: recorded rudder from the recorded initial state (RMSEs); manoeuvre: the recording's standard manoeuvre re-simulated in closed loop (metrics)",
+        "identification_range": { "source": source, "outside_means": source.describe() },
         "recordings": recs,
     });
     let warnings = shipid_pipeline::validate::validation_warnings(model_spec, Some(model), ds);

@@ -95,6 +95,10 @@ fn a_turn_simulated_from_a_zigzag_fit_is_flagged_as_an_extrapolation() {
     );
     let out = shipid_ok(&["validate", model, "data/kvlcc2-mmg/dataset.toml", "--json"]);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        v["identification_range"]["source"], "state-ellipsoid",
+        "{v}"
+    );
     let tc = v["recordings"]["tc35_ps.csv"]["outside_identification_range"]
         .as_f64()
         .unwrap_or_else(|| panic!("{v}"));
