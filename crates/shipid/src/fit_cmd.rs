@@ -475,8 +475,13 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     if a.estimator.tune && a.estimator.refine {
         // The one slow combination (tens of seconds): say what it is doing before it starts.
         eprintln!(
-            "cross-validating the prior weight over {} candidates, every fold's fit refined (output error)…",
-            shipid_pipeline::mmg::CV_GRID.len()
+            "cross-validating the prior weight over {} candidates, every fold's fit refined (output error){}…",
+            shipid_pipeline::mmg::CV_GRID.len(),
+            if a.calibrate.is_some() {
+                ", and again in every refit of the calibration (minutes)"
+            } else {
+                ""
+            }
         );
     }
     let (fit, mut file) = fit_mmg_model_file(&ds, &opts, a.estimator.refine)?;
