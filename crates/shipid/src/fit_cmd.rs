@@ -257,6 +257,9 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
         .map_err(|e| crate::write_failed(a.out, e))?;
     let all_solved = out.dofs.iter().all(|d| d.fit.status.is_solved());
     print_summary(&out, Some(a.out), a.json, &warnings);
+    if !a.json {
+        print_training_extent(&ds, &out.file.training);
+    }
     let mut outcome = if all_solved {
         Outcome::Ok
     } else {
@@ -554,6 +557,7 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
             a.out.display()
         );
         file.summary().iter().for_each(|l| println!("{l}"));
+        print_training_extent(&ds, &fit.windows);
     }
     if a.validate {
         let spec = a.out.to_string_lossy();
@@ -647,6 +651,7 @@ pub fn run_gp(
                 o.target_rms
             );
         }
+        print_training_extent(&ds, &file.training);
     }
     if validate {
         let spec = out.to_string_lossy();
@@ -654,6 +659,17 @@ pub fn run_gp(
         return Ok(crate::print::validation(model.as_ref(), &spec, &ds, json));
     }
     Ok(Outcome::Ok)
+}
+
+/// The extent of the states the model was identified on, below a fit's summary: what a manoeuvre must
+/// stay within not to be an extrapolation (`simulate` says how far one goes beyond).
+fn print_training_extent(ds: &Dataset, windows: &[shipid_model::TrainingWindow]) {
+    if let Some(e) = shipid_pipeline::range::StateExtent::of_windows(ds, windows) {
+        println!(
+            "  identified on: drift ≤ {:.1}°, r′ ≤ {:.2}, rudder ≤ {:.1}°, speed ≥ {:.2} U0 (beyond these, or in combinations the training did not visit, a prediction extrapolates: simulate says how much)",
+            e.max_drift_deg, e.max_yaw_rate_prime, e.max_rudder_deg, e.min_speed_over_u0
+        );
+    }
 }
 
 /// A spinner on stderr saying what runs and for how long (indicatif draws it only on a terminal):

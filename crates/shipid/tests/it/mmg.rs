@@ -55,7 +55,7 @@ fn a_turn_simulated_from_a_zigzag_fit_is_flagged_as_an_extrapolation() {
     let dir = tempfile::tempdir().unwrap();
     let model = dir.path().join("mmg.toml");
     let model = model.to_str().unwrap();
-    shipid_ok(&[
+    let fitted = shipid_ok(&[
         "fit",
         "data/kvlcc2-mmg/dataset.toml",
         "--set",
@@ -65,6 +65,11 @@ fn a_turn_simulated_from_a_zigzag_fit_is_flagged_as_an_extrapolation() {
         "--out",
         model,
     ]);
+    let stdout = String::from_utf8_lossy(&fitted.stdout);
+    assert!(
+        stdout.contains("identified on: drift ≤ 17.") && stdout.contains("rudder ≤ 35.0°"),
+        "{stdout}"
+    );
     let run = |manoeuvre: &str| {
         let out = shipid_ok(&["simulate", model, "--manoeuvre", manoeuvre, "--json"]);
         let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
