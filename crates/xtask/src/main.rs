@@ -6,7 +6,9 @@
 //! - `circles`: every crate's file import edges, failing on a circle;
 //! - `coverage`: measured coverage of the bootstrap bands on generated noisy data;
 //! - `fit-bench`: fit times of the estimators for the side-by-side comparison in `bench/`;
-//! - `refine-bench`: wall time and results of `shipid fit --refine` (`bench/refine.md`).
+//! - `refine-bench`: wall time and results of `shipid fit --refine` (`bench/refine.md`);
+//! - `mmg-valley`: the mmg refinements from every prior weight of the cross-validation grid, on one
+//!   objective, with the turns they predict (docs/mmg.md).
 
 mod bench_diagnose;
 mod bench_known_wind;
@@ -16,6 +18,7 @@ mod coverage_family;
 mod fit_bench;
 mod inverse_bench;
 mod inverse_indexes;
+mod mmg_valley;
 mod out_of_kind;
 mod paper001;
 mod refine_bench;
@@ -123,6 +126,12 @@ enum Task {
         /// Model files (or `mmg:kvlcc2`).
         models: Vec<String>,
     },
+    /// The mmg refinements from every prior weight of the cross-validation grid on one objective,
+    /// with the 35° turns they predict (docs/mmg.md, "The refinement's valley").
+    MmgValley {
+        #[arg(default_value = "data/kvlcc2-hsva/imported/dataset.toml")]
+        dataset: PathBuf,
+    },
     /// List every crate's file import edges and fail on a circle (ARCHITECTURE.md's invariant).
     Circles,
     /// Wall time and results of `shipid fit --refine` on the default data, against a baseline binary
@@ -206,6 +215,10 @@ fn main() -> ExitCode {
         Task::InverseIndexes { models } => {
             inverse_indexes::run(&models).map(|()| ExitCode::SUCCESS)
         }
+        Task::MmgValley { dataset } => mmg_valley::run(&dataset).map(|md| {
+            print!("{md}");
+            ExitCode::SUCCESS
+        }),
         Task::Circles => {
             let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
             Ok(if circles::run(&root) {
