@@ -6,6 +6,7 @@ use serde_json::{Value, json};
 use shipid_estimators::Solver;
 use shipid_io::Dataset;
 use shipid_io::write::write_atomic;
+use shipid_pipeline::range::StateExtent;
 
 use shipid_pipeline::bootstrap::bootstrap_fit;
 use shipid_pipeline::fit::{EstimatorSpec, FitOutput, WindowSpec, fit_dataset, load_set};
@@ -178,11 +179,21 @@ fn status_words(d: &shipid_pipeline::fit::DofReport) -> String {
 
 /// The fit's summary on stdout: the JSON report, or one line per DOF; `out` is the model file
 /// written, if any.
-fn print_summary(out: &FitOutput, written: Option<&Path>, as_json: bool, warnings: &[String]) {
+fn print_summary(
+    out: &FitOutput,
+    written: Option<&Path>,
+    as_json: bool,
+    warnings: &[String],
+    extent: Option<&StateExtent>,
+) {
     if as_json {
+        let mut report = report_json(out, warnings);
+        if let (Value::Object(o), Some(e)) = (&mut report, extent) {
+            o.insert("training_extent".into(), json!(e));
+        }
         println!(
             "{}",
-            serde_json::to_string_pretty(&report_json(out, warnings)).unwrap_or_default()
+            serde_json::to_string_pretty(&report).unwrap_or_default()
         );
         return;
     }
@@ -221,7 +232,7 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     if let Some(none) = out.no_information() {
         // No model file: a model whose coefficients the data never saw would validate as if it
         // were one.
-        print_summary(&out, None, a.json, &warnings);
+        print_summary(&out, None, a.json, &warnings, None);
         return Err(crate::failed_msg(none));
     }
     // The data set's path relative to the model file, so the model reads it from anywhere.
@@ -256,9 +267,10 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     write_atomic(a.out, format!("{header}{text}").as_bytes())
         .map_err(|e| crate::write_failed(a.out, e))?;
     let all_solved = out.dofs.iter().all(|d| d.fit.status.is_solved());
-    print_summary(&out, Some(a.out), a.json, &warnings);
+    let extent = StateExtent::of_windows(&ds, &out.file.training);
+    print_summary(&out, Some(a.out), a.json, &warnings, extent.as_ref());
     if !a.json {
-        print_training_extent(&ds, &out.file.training);
+        print_training_extent(extent.as_ref());
     }
     let mut outcome = if all_solved {
         Outcome::Ok
@@ -539,6 +551,7 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
         let report = json!({
             "fit_time_s": fit.fit_time_s,
             "samples": fit.samples,
+            "training_extent": StateExtent::of_windows(&ds, &fit.windows),
             "set": "mmg",
             "estimator": file.estimator,
             "parameters": file.parameters,
@@ -557,7 +570,7 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
             a.out.display()
         );
         file.summary().iter().for_each(|l| println!("{l}"));
-        print_training_extent(&ds, &fit.windows);
+        print_training_extent(StateExtent::of_windows(&ds, &fit.windows).as_ref());
     }
     if a.validate {
         let spec = a.out.to_string_lossy();
@@ -626,10 +639,15 @@ pub fn run_gp(
     shipid_pipeline::model_file::anchor_training(&mut file.training, out);
     let text = with_environment_table(model_text(&file).map_err(failed)?, &ds, recordings)?;
     write_atomic(out, text.as_bytes()).map_err(|e| crate::write_failed(out, e))?;
+    let extent = StateExtent::of_windows(&ds, &file.training);
     if json {
+        let mut value = serde_json::to_value(&report).unwrap_or_default();
+        if let (Value::Object(o), Some(e)) = (&mut value, &extent) {
+            o.insert("training_extent".into(), json!(e));
+        }
         println!(
             "{}",
-            serde_json::to_string_pretty(&report).unwrap_or_default()
+            serde_json::to_string_pretty(&value).unwrap_or_default()
         );
     } else {
         println!(
@@ -651,7 +669,7 @@ pub fn run_gp(
                 o.target_rms
             );
         }
-        print_training_extent(&ds, &file.training);
+        print_training_extent(extent.as_ref());
     }
     if validate {
         let spec = out.to_string_lossy();
@@ -663,8 +681,8 @@ pub fn run_gp(
 
 /// The extent of the states the model was identified on, below a fit's summary: what a manoeuvre must
 /// stay within not to be an extrapolation (`simulate` says how far one goes beyond).
-fn print_training_extent(ds: &Dataset, windows: &[shipid_model::TrainingWindow]) {
-    if let Some(e) = shipid_pipeline::range::StateExtent::of_windows(ds, windows) {
+fn print_training_extent(extent: Option<&StateExtent>) {
+    if let Some(e) = extent {
         println!(
             "  identified on: drift ≤ {:.1}°, r′ ≤ {:.2}, rudder ≤ {:.1}°, speed ≥ {:.2} U0 (beyond these, or in combinations the training did not visit, a prediction extrapolates: simulate says how much)",
             e.max_drift_deg, e.max_yaw_rate_prime, e.max_rudder_deg, e.min_speed_over_u0

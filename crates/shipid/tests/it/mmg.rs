@@ -70,6 +70,25 @@ fn a_turn_simulated_from_a_zigzag_fit_is_flagged_as_an_extrapolation() {
         stdout.contains("identified on: drift ≤ 17.") && stdout.contains("rudder ≤ 35.0°"),
         "{stdout}"
     );
+    let again = dir.path().join("again.toml");
+    let fitted = shipid_ok(&[
+        "fit",
+        "data/kvlcc2-mmg/dataset.toml",
+        "--set",
+        "mmg",
+        "--recordings",
+        "zz35_35_ps.csv",
+        "--json",
+        "--out",
+        again.to_str().unwrap(),
+    ]);
+    let report: serde_json::Value = serde_json::from_slice(&fitted.stdout).unwrap();
+    let extent = &report["training_extent"];
+    assert!(
+        extent["max_drift_deg"].as_f64().unwrap() > 17.0
+            && extent["max_rudder_deg"].as_f64().unwrap() > 34.9,
+        "{report}"
+    );
     let run = |manoeuvre: &str| {
         let out = shipid_ok(&["simulate", model, "--manoeuvre", manoeuvre, "--json"]);
         let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
