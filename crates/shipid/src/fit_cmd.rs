@@ -6,12 +6,12 @@ use serde_json::{Value, json};
 use shipid_estimators::Solver;
 use shipid_io::Dataset;
 use shipid_io::write::write_atomic;
-use shipid_pipeline::range::StateExtent;
 
 use shipid_pipeline::bootstrap::bootstrap_fit;
 use shipid_pipeline::fit::{EstimatorSpec, FitOutput, WindowSpec, fit_dataset, load_set};
 use shipid_pipeline::fit_gp::{DEFAULT_SIMILARITY, fit_gp_dataset, model_text};
 use shipid_pipeline::model_file::load_model;
+use shipid_pipeline::range::StateExtent;
 use shipid_pipeline::validate::propeller_rate_variations;
 
 use crate::{CliError, Outcome, failed};
