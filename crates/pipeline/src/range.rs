@@ -306,7 +306,7 @@ pub fn state_range_of(states: &[[f64; 4]]) -> Option<IdentificationRange> {
 }
 
 /// Each window of `windows` whose recording `ds` has, with the indices of its samples.
-fn window_samples<'a>(
+pub fn window_samples<'a>(
     ds: &'a Dataset,
     windows: &'a [TrainingWindow],
 ) -> impl Iterator<Item = (&'a Recording, Vec<usize>)> + 'a {
@@ -412,16 +412,22 @@ fn recorded_windows(path: &Path) -> Option<Vec<TrainingWindow>> {
     toml::from_str::<Windows>(&text).ok().map(|w| w.training)
 }
 
-/// The envelope of the model loaded from `model_spec`: `None` when it has no range (the reference
-/// model; a polynomial or mmg file whose training data cannot be read or changed since the fit). A
-/// sparse GP carries its range; the extent of its training states needs its data all the same.
-pub fn model_envelope(model_spec: &str, model: &dyn shipid_sim::Dynamics) -> Option<Envelope> {
-    let read = match training_source(model_spec) {
+/// The training data a model names with its training windows, whatever its kind (`None` when it
+/// names none, or they cannot be read unchanged: [`training_source`]).
+pub fn training_windows(model_spec: &str) -> Option<(Box<TrainingData>, Vec<TrainingWindow>)> {
+    match training_source(model_spec) {
         TrainingSource::Read {
             data, model: path, ..
         } => recorded_windows(&path).map(|windows| (data, windows)),
         _ => None,
-    };
+    }
+}
+
+/// The envelope of the model loaded from `model_spec`: `None` when it has no range (the reference
+/// model; a polynomial or mmg file whose training data cannot be read or changed since the fit). A
+/// sparse GP carries its range; the extent of its training states needs its data all the same.
+pub fn model_envelope(model_spec: &str, model: &dyn shipid_sim::Dynamics) -> Option<Envelope> {
+    let read = training_windows(model_spec);
     let training = read
         .as_ref()
         .and_then(|(data, windows)| StateExtent::of_windows(&data.1, windows));

@@ -481,28 +481,14 @@ pub fn training_rate_mismatches<'a>(
     model_spec: &str,
     recordings: impl IntoIterator<Item = &'a DatasetRecording>,
 ) -> Vec<String> {
-    let Some((file, ds, _)) = crate::range::training_data(model_spec) else {
+    let Some((data, windows)) = crate::range::training_windows(model_spec) else {
         return Vec::new();
     };
-    let windows = file.map(|f| f.training).unwrap_or_default();
-    let trained: Vec<f64> = ds
-        .recordings
-        .iter()
-        .flat_map(|r| {
-            let rec = &r.recording;
+    let mut trained: Vec<f64> = crate::range::window_samples(&data.1, &windows)
+        .flat_map(|(rec, idx)| {
             let n = rec.n.as_deref().unwrap_or(&[]);
-            let spans: Vec<(f64, f64)> = windows
-                .iter()
-                .filter(|w| w.recording == r.file)
-                .map(|w| (w.t_start_s, w.t_end_s))
-                .collect();
-            // A file whose windows are not parsed here (a sparse GP's) trained on its recordings.
-            n.iter()
-                .zip(&rec.t)
-                .filter(move |(_, t)| {
-                    spans.is_empty() || spans.iter().any(|(a, b)| *t >= a && *t <= b)
-                })
-                .map(|(x, _)| *x)
+            idx.into_iter()
+                .filter_map(|i| n.get(i).copied())
                 .collect::<Vec<f64>>()
         })
         .filter(|x| x.is_finite())
@@ -510,7 +496,6 @@ pub fn training_rate_mismatches<'a>(
     if trained.is_empty() {
         return Vec::new();
     }
-    let mut trained = trained;
     trained.sort_by(f64::total_cmp);
     let trained_hz = shipid_uncertainty::band::quantile(&trained, 0.5);
     recordings
