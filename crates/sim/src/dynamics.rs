@@ -222,99 +222,60 @@ impl RudderFilter for NoFilter {
     }
 }
 
-impl<T: Dynamics + ?Sized> Dynamics for &T {
-    fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
-        (**self).accelerations(state, delta_rad)
-    }
-    fn accelerations_at(
-        &self,
-        t_s: f64,
-        state: &State,
-        delta_rad: f64,
-    ) -> Result<[f64; 3], DynamicsError> {
-        (**self).accelerations_at(t_s, state, delta_rad)
-    }
-    fn takes_propeller_rate(&self) -> bool {
-        (**self).takes_propeller_rate()
-    }
-    fn accelerations_at_rate(
-        &self,
-        t_s: f64,
-        state: &State,
-        delta_rad: f64,
-        n_hz: f64,
-    ) -> Result<[f64; 3], DynamicsError> {
-        (**self).accelerations_at_rate(t_s, state, delta_rad, n_hz)
-    }
-    fn own_range(&self) -> Option<&dyn OwnRange> {
-        (**self).own_range()
-    }
-    fn ship(&self) -> &Ship {
-        (**self).ship()
-    }
-    fn added_mass(&self) -> &AddedMass {
-        (**self).added_mass()
-    }
-    fn propeller_rate_hz(&self) -> Option<f64> {
-        (**self).propeller_rate_hz()
-    }
-    fn linear_hull_derivatives(&self) -> Option<LinearHullDerivatives> {
-        (**self).linear_hull_derivatives()
-    }
-    fn model_rudder_filter(&self) -> Option<Box<dyn RudderFilter>> {
-        (**self).model_rudder_filter()
-    }
-    fn over_ground(&self, through_water: &State) -> State {
-        (**self).over_ground(through_water)
-    }
+/// A pointer to a model is the model: every method passes through, so that wrappers and boxes keep the
+/// time, the propeller rate and the range of what they point to.
+macro_rules! forward_dynamics {
+    ($($pointer:ty),*) => {$(
+        impl<T: Dynamics + ?Sized> Dynamics for $pointer {
+            fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
+                (**self).accelerations(state, delta_rad)
+            }
+            fn accelerations_at(
+                &self,
+                t_s: f64,
+                state: &State,
+                delta_rad: f64,
+            ) -> Result<[f64; 3], DynamicsError> {
+                (**self).accelerations_at(t_s, state, delta_rad)
+            }
+            fn takes_propeller_rate(&self) -> bool {
+                (**self).takes_propeller_rate()
+            }
+            fn accelerations_at_rate(
+                &self,
+                t_s: f64,
+                state: &State,
+                delta_rad: f64,
+                n_hz: f64,
+            ) -> Result<[f64; 3], DynamicsError> {
+                (**self).accelerations_at_rate(t_s, state, delta_rad, n_hz)
+            }
+            fn own_range(&self) -> Option<&dyn OwnRange> {
+                (**self).own_range()
+            }
+            fn ship(&self) -> &Ship {
+                (**self).ship()
+            }
+            fn added_mass(&self) -> &AddedMass {
+                (**self).added_mass()
+            }
+            fn propeller_rate_hz(&self) -> Option<f64> {
+                (**self).propeller_rate_hz()
+            }
+            fn linear_hull_derivatives(&self) -> Option<LinearHullDerivatives> {
+                (**self).linear_hull_derivatives()
+            }
+            fn model_rudder_filter(&self) -> Option<Box<dyn RudderFilter>> {
+                (**self).model_rudder_filter()
+            }
+            fn over_ground(&self, through_water: &State) -> State {
+                (**self).over_ground(through_water)
+            }
+        }
+    )*};
 }
 
-impl<T: Dynamics + ?Sized> Dynamics for Box<T> {
-    fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
-        (**self).accelerations(state, delta_rad)
-    }
-    fn accelerations_at(
-        &self,
-        t_s: f64,
-        state: &State,
-        delta_rad: f64,
-    ) -> Result<[f64; 3], DynamicsError> {
-        (**self).accelerations_at(t_s, state, delta_rad)
-    }
-    fn takes_propeller_rate(&self) -> bool {
-        (**self).takes_propeller_rate()
-    }
-    fn accelerations_at_rate(
-        &self,
-        t_s: f64,
-        state: &State,
-        delta_rad: f64,
-        n_hz: f64,
-    ) -> Result<[f64; 3], DynamicsError> {
-        (**self).accelerations_at_rate(t_s, state, delta_rad, n_hz)
-    }
-    fn own_range(&self) -> Option<&dyn OwnRange> {
-        (**self).own_range()
-    }
-    fn ship(&self) -> &Ship {
-        (**self).ship()
-    }
-    fn added_mass(&self) -> &AddedMass {
-        (**self).added_mass()
-    }
-    fn propeller_rate_hz(&self) -> Option<f64> {
-        (**self).propeller_rate_hz()
-    }
-    fn linear_hull_derivatives(&self) -> Option<LinearHullDerivatives> {
-        (**self).linear_hull_derivatives()
-    }
-    fn model_rudder_filter(&self) -> Option<Box<dyn RudderFilter>> {
-        (**self).model_rudder_filter()
-    }
-    fn over_ground(&self, through_water: &State) -> State {
-        (**self).over_ground(through_water)
-    }
-}
+forward_dynamics!(&T, Box<T>);
 
 /// Rigid-body plus added-mass matrix about midship (the left-hand side of the equations of motion in
 /// `docs/conventions.md`, with X_v̇ = X_ṙ = Y_u̇ = N_u̇ = 0):
