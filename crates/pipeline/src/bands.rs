@@ -376,6 +376,46 @@ pub fn mmg_file_replicates(
         .collect())
 }
 
+/// The refinements of an mmg model file's `[valley]` that ended within its tolerance of the file's
+/// own (`fit --set mmg --refine`), which a prediction runs beside the point model.
+pub struct Valley {
+    /// Cost ratio at or below which a start is in the valley is 1 + this.
+    pub cost_tolerance: f64,
+    /// Starts the fit tried (the valley's members, those that ended higher and those that failed).
+    pub starts: usize,
+    /// (λ of the start, cost ratio, model) of every start in the valley.
+    pub members: Vec<(f64, f64, shipid_sim::MmgModel)>,
+}
+
+/// The `[valley]` of the model file `spec`: `None` for a built-in model, a file of another kind or an
+/// mmg file without one (fitted without `--refine`). A damaged `[valley]` names its key.
+pub fn valley_of(spec: &str) -> Result<Option<Valley>, PipelineError> {
+    let path = std::path::Path::new(spec);
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let text = std::fs::read_to_string(path)
+        .map(|t| crate::environment::without_environment_table(&t))
+        .map_err(|e| InputError::read(path, &e))?;
+    let is_mmg = toml::from_str::<toml::Table>(&text)
+        .ok()
+        .is_some_and(|t| t.get("kind").and_then(|k| k.as_str()) == Some(MMG_KIND));
+    if !is_mmg {
+        return Ok(None);
+    }
+    let file: MmgModelFile =
+        toml::from_str(&text).map_err(|e| InputError::toml(path, &text, &e))?;
+    let Some(record) = &file.valley else {
+        return Ok(None);
+    };
+    file.to_model(path)?;
+    Ok(Some(Valley {
+        cost_tolerance: record.cost_tolerance,
+        starts: record.starts.len(),
+        members: file.valley_models(path)?,
+    }))
+}
+
 /// Posterior functions drawn per sparse-GP band, and the seed of their draws: the posterior is in the
 /// model file, so its bands need no replicates stored; a fixed seed makes them reproducible.
 pub const GP_DRAWS: usize = 200;

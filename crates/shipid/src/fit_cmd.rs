@@ -490,7 +490,7 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     if a.estimator.tune && a.estimator.refine {
         // The one slow combination (tens of seconds): say what it is doing before it starts.
         eprintln!(
-            "cross-validating the prior weight over {} candidates, every fold's fit refined (output error){}…",
+            "cross-validating the prior weight over {} candidates, every fold's fit refined (output error), then refining from every candidate (the valley){}…",
             shipid_pipeline::mmg::CV_GRID.len(),
             if a.calibrate.is_some() {
                 ", and again in every refit of the calibration (minutes)"
@@ -555,6 +555,7 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
             "set": "mmg",
             "estimator": file.estimator,
             "parameters": file.parameters,
+            "valley": file.valley,
             "warnings": warnings,
         });
         println!(

@@ -437,6 +437,7 @@ fn model_file(
         parameters,
         bootstrap,
         calibration: None,
+        valley: None,
     }
 }
 

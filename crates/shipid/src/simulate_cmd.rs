@@ -227,7 +227,7 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
         );
     }
     let env = constant_environment(wind, current, &windage, model.ship(), grid.duration_s)?;
-    let out = simulate_on_grid_in(model, &m, &grid, env, approach_m_s)?;
+    let out = simulate_on_grid_in(model, &m, &grid, env.clone(), approach_m_s)?;
     let reach = shipid_pipeline::range::model_envelope(a.model, model)
         .and_then(|e| e.reach(model, &out.recording));
     if let Some(w) = reach
@@ -280,6 +280,25 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
             o.insert("warnings".into(), json!(warnings));
         }
     }
+    let valley = shipid_pipeline::bands::valley_of(a.model)?;
+    if let Some(v) = &valley {
+        let runs: Vec<(f64, f64, Option<SimOutput>)> = v
+            .members
+            .iter()
+            .map(|(lambda, ratio, member)| {
+                // Each member runs as the point model does: the same grid and environment, at the
+                // asked propeller rate from its own straight-run speed there.
+                let out = match a.propeller_rate_hz {
+                    Some(n) => at_propeller_rate(member, a.model, n)
+                        .ok()
+                        .and_then(|(d, u)| simulate_on_grid_in(&d, &m, &grid, env.clone(), u).ok()),
+                    None => simulate_on_grid_in(member, &m, &grid, env.clone(), approach_m_s).ok(),
+                };
+                (*lambda, *ratio, out)
+            })
+            .collect();
+        add_valley(&mut value, v, &runs, &m, model);
+    }
     if let (Some(level), Some(replicates)) = (a.bands, &replicates) {
         let bands = replicates.bands(model, &m, model.ship(), level, BandRun::Grid(&grid))?;
         add_bands(&mut value, &bands, replicates, a.json);
@@ -315,13 +334,27 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
         );
     } else if let Value::Object(o) = &value {
         for (k, v) in o {
-            if k == "bands" || k.ends_with("_band") || k == "identification_range" {
+            if k == "bands"
+                || k == "valley"
+                || k.ends_with("_band")
+                || k.ends_with("_valley")
+                || k == "identification_range"
+            {
                 continue;
             }
-            match o.get(&format!("{k}_band")) {
-                Some(band) => println!("{k:>18}: {v}  band {band}"),
-                None => println!("{k:>18}: {v}"),
-            }
+            let range = |suffix: &str| {
+                o.get(&format!("{k}_{suffix}"))
+                    .and_then(Value::as_array)
+                    .map_or(String::new(), |r| {
+                        let f = |x: Option<&Value>| {
+                            x.and_then(Value::as_f64)
+                                .map_or("–".into(), |x| format!("{x:.4}"))
+                        };
+                        format!("  {suffix} [{}, {}]", f(r.first()), f(r.get(1)))
+                    })
+            };
+            let (band, valley) = (range("band"), range("valley"));
+            println!("{k:>18}: {v}{band}{valley}");
         }
         if let Some(r) = &reach {
             println!(
@@ -329,6 +362,20 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
                 "outside",
                 100.0 * r.outside,
                 r.source.describe()
+            );
+        }
+        if let (Some(about), Some(v)) = (o.get("valley"), &valley) {
+            println!(
+                "{:>18}: {} of the {} refinements from the other prior weights end within {:.0} % of this model's cost{}: {}",
+                "valley",
+                v.members.len(),
+                v.starts,
+                100.0 * v.cost_tolerance,
+                about["diverged"]
+                    .as_u64()
+                    .filter(|d| *d > 0)
+                    .map_or(String::new(), |d| format!(" ({d} of their runs diverged)")),
+                about["what"].as_str().unwrap_or_default()
             );
         }
         if let Some(about) = o.get("bands") {
@@ -400,6 +447,79 @@ fn add_bands(value: &mut Value, run: &RunBands, source: &ModelBands, with_track:
             bands.diverged,
             bands.replicates,
             source.noun()
+        );
+    }
+}
+
+/// The valley into the output: `<metric>_valley: [lo, hi]`, the range of the metric over this model
+/// and the valley's members whose runs define it, and a `valley` object (the members, their cost
+/// ratios and metrics, diverged runs, what it means).
+fn add_valley(
+    value: &mut Value,
+    valley: &shipid_pipeline::bands::Valley,
+    runs: &[(f64, f64, Option<SimOutput>)],
+    m: &Manoeuvre,
+    model: &dyn Dynamics,
+) {
+    let Value::Object(o) = value else { return };
+    let mut members = Vec::new();
+    let mut diverged = 0;
+    let mut ranges: Vec<(&'static str, f64, f64)> = Vec::new();
+    for (key, _) in shipid_sim::Metrics::default().entries() {
+        if let Some(v) = o.get(key).and_then(Value::as_f64) {
+            ranges.push((key, v, v));
+        }
+    }
+    for (lambda, ratio, out) in runs {
+        let mut member = Map::new();
+        member.insert("prior_weight".into(), json!(lambda));
+        member.insert("cost_ratio".into(), json!(ratio));
+        match out {
+            Some(out) if matches!(out.status, SimStatus::Ok) => {
+                member.insert("status".into(), json!("ok"));
+                for (key, v) in metrics(&out.recording, m, model.ship()).entries() {
+                    let Some(v) = v else { continue };
+                    member.insert(key.into(), json!(v));
+                    if let Some(r) = ranges.iter_mut().find(|r| r.0 == key) {
+                        r.1 = r.1.min(v);
+                        r.2 = r.2.max(v);
+                    }
+                }
+            }
+            _ => {
+                diverged += 1;
+                member.insert("status".into(), json!("diverged"));
+            }
+        }
+        members.push(Value::Object(member));
+    }
+    if !valley.members.is_empty() {
+        for (key, lo, hi) in &ranges {
+            o.insert(format!("{key}_valley"), json!([lo, hi]));
+        }
+    }
+    let what = if valley.members.is_empty() {
+        "no other start ends as low: the recordings choose this minimum".to_string()
+    } else {
+        "models the training recordings do not tell apart; where their predictions differ, the \
+         recordings do not determine this manoeuvre (the valley ranges include this model)"
+            .to_string()
+    };
+    o.insert(
+        "valley".into(),
+        json!({
+            "starts": valley.starts,
+            "in_valley": valley.members.len(),
+            "cost_tolerance": valley.cost_tolerance,
+            "diverged": diverged,
+            "members": members,
+            "what": what,
+        }),
+    );
+    if diverged > 0 {
+        eprintln!(
+            "warning: {diverged} of the valley's {} refinements diverged in this manoeuvre (the valley ranges are over the others)",
+            valley.members.len()
         );
     }
 }

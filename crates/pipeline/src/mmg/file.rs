@@ -137,6 +137,46 @@ pub struct MmgModelFile {
     /// mmg --bootstrap N --calibrate`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub calibration: Option<shipid_model::calibration::FactorCalibrationRecord>,
+    /// The refinements from the other prior weights of the cross-validation grid (`fit --set mmg
+    /// --refine`), which `simulate` runs beside this model.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub valley: Option<MmgValleyRecord>,
+}
+
+/// `[valley]` of an mmg model file: the fit at every other prior weight of the cross-validation grid,
+/// each refined like this model, with its cost on this model's refinement objective.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MmgValleyRecord {
+    /// What the starts are, in words.
+    pub method: String,
+    /// A start is in the valley when its cost ratio is at most 1 + this.
+    pub cost_tolerance: f64,
+    #[serde(rename = "start")]
+    pub starts: Vec<ValleyStartEntry>,
+}
+
+/// `[[valley.start]]`: one start, refined (its cost ratio and parameter values) or failed (why).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ValleyStartEntry {
+    /// λ of the equation-error fit it was refined from.
+    pub prior_weight: f64,
+    /// Its refinement's cost ÷ this model's, both on this model's refinement objective.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cost_ratio: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub failed: Option<String>,
+    /// The refined parameters by name (every `[[parameter]]`).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub values: BTreeMap<String, f64>,
+}
+
+impl ValleyStartEntry {
+    /// Whether it ended within the record's tolerance of this model's cost.
+    pub fn in_valley(&self, tolerance: f64) -> bool {
+        self.failed.is_none() && self.cost_ratio.is_some_and(|c| c <= 1.0 + tolerance)
+    }
 }
 
 /// What the replicates of an mmg `[bootstrap]` are, which decides how a band is drawn from them.
@@ -263,6 +303,38 @@ impl MmgModelFile {
                 r.before_heading_rmse_deg,
                 r.after_heading_rmse_deg,
                 r.iterations
+            ));
+        }
+        if let Some(v) = &self.valley {
+            let kept: Vec<&ValleyStartEntry> = v
+                .starts
+                .iter()
+                .filter(|s| s.in_valley(v.cost_tolerance))
+                .collect();
+            let ratios = |s: &[&ValleyStartEntry]| {
+                s.iter()
+                    .map(|s| {
+                        format!(
+                            "λ = {:e}: {}",
+                            s.prior_weight,
+                            s.cost_ratio.map_or("failed".into(), |c| format!("{c:.3}"))
+                        )
+                    })
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            };
+            let all: Vec<&ValleyStartEntry> = v.starts.iter().collect();
+            lines.push(format!(
+                "  valley: {} of {} refinements from the other prior weights end within {:.0} % of this cost ({}){}",
+                kept.len(),
+                v.starts.len(),
+                100.0 * v.cost_tolerance,
+                ratios(&all),
+                if kept.is_empty() {
+                    ": one minimum"
+                } else {
+                    "; `simulate` runs them beside this model"
+                }
             ));
         }
         if let Some(t) = &e.thrust_inflow {
@@ -436,6 +508,89 @@ impl MmgModelFile {
 }
 
 impl MmgModelFile {
+    /// The model of this file's ship, added masses, propeller and rudder with the parameter values
+    /// `values` (in the order of `[[parameter]]`); `key` names them in a fault.
+    fn model_with(
+        &self,
+        values: &[f64],
+        path: &Path,
+        key: &str,
+    ) -> Result<MmgModel, PipelineError> {
+        let get = |name: &str| {
+            self.parameters
+                .iter()
+                .position(|p| p.name == name)
+                .map_or(f64::NAN, |k| values[k])
+        };
+        let params = assemble(&self.ship, &self.added_mass, &self.geometry(), &get);
+        MmgModel::at_rate(self.ship, params, self.propeller.rate_rps)
+            .map_err(|e| bad_input(format!("{}: key `{key}`: {e}", path.display())))
+    }
+
+    /// The starts of `[valley]` within its tolerance, as (λ of the start, cost ratio, model); none
+    /// without a `[valley]`. The file's point model must load (check it with
+    /// [`MmgModelFile::to_model`] first); a fault names the file and the key.
+    pub fn valley_models(&self, path: &Path) -> Result<Vec<(f64, f64, MmgModel)>, PipelineError> {
+        let Some(record) = &self.valley else {
+            return Ok(Vec::new());
+        };
+        let at =
+            |key: String, msg: String| bad_input(format!("{}: key `{key}`: {msg}", path.display()));
+        if !(record.cost_tolerance.is_finite() && record.cost_tolerance >= 0.0) {
+            return Err(at(
+                "valley.cost_tolerance".into(),
+                format!("must be a finite number ≥ 0, not {}", record.cost_tolerance),
+            ));
+        }
+        let mut models = Vec::new();
+        for (i, start) in record.starts.iter().enumerate() {
+            let key = |field: &str| format!("valley.start[{i}].{field}");
+            if let Some(c) = start.cost_ratio
+                && !(c.is_finite() && c > 0.0)
+            {
+                return Err(at(
+                    key("cost_ratio"),
+                    format!("must be a positive number, not {c}"),
+                ));
+            }
+            if !start.in_valley(record.cost_tolerance) {
+                continue;
+            }
+            if let Some(extra) = start
+                .values
+                .keys()
+                .find(|k| !self.parameters.iter().any(|p| &p.name == *k))
+            {
+                return Err(at(
+                    key(&format!("values.{extra}")),
+                    "is not a parameter of the model".into(),
+                ));
+            }
+            let mut values = Vec::with_capacity(self.parameters.len());
+            for p in &self.parameters {
+                let v = *start.values.get(&p.name).ok_or_else(|| {
+                    at(
+                        key(&format!("values.{}", p.name)),
+                        "missing: a start in the valley gives every parameter".into(),
+                    )
+                })?;
+                if !(v.is_finite() && (p.lower..=p.upper).contains(&v)) {
+                    return Err(at(
+                        key(&format!("values.{}", p.name)),
+                        format!(
+                            "{v} is not a finite number within the bounds [{}, {}]",
+                            p.lower, p.upper
+                        ),
+                    ));
+                }
+                values.push(v);
+            }
+            let model = self.model_with(&values, path, &key("values"))?;
+            models.push((start.prior_weight, start.cost_ratio.unwrap_or(1.0), model));
+        }
+        Ok(models)
+    }
+
     /// The models of the `[bootstrap]` replicates (the file's point model must load: check it with
     /// [`MmgModelFile::to_model`] first); a fault names the file and the key.
     pub fn replicate_models(&self, path: &Path) -> Result<Vec<MmgModel>, PipelineError> {
@@ -449,24 +604,9 @@ impl MmgModelFile {
         let vectors = record
             .parameter_vectors(&self.parameters)
             .map_err(|(key, msg)| bad_input(format!("{}: key `{key}`: {msg}", path.display())))?;
-        let geometry = self.geometry();
         vectors
             .iter()
-            .map(|values| {
-                let get = |name: &str| {
-                    self.parameters
-                        .iter()
-                        .position(|p| p.name == name)
-                        .map_or(f64::NAN, |k| values[k])
-                };
-                let params = assemble(&self.ship, &self.added_mass, &geometry, &get);
-                MmgModel::at_rate(self.ship, params, self.propeller.rate_rps).map_err(|e| {
-                    bad_input(format!(
-                        "{}: key `bootstrap.replicates`: {e}",
-                        path.display()
-                    ))
-                })
-            })
+            .map(|values| self.model_with(values, path, "bootstrap.replicates"))
             .collect()
     }
 }

@@ -9,12 +9,14 @@
 //!   outside), the posterior and the data's share of each parameter's precision.
 //! - `file`: the model file `kind = "mmg"` and its loader.
 //! - `refine`: the output-error refinement of [`crate::refine`] over the identified parameters.
+//! - `valley`: the refinements from the cross-validation grid's other prior weights, which the
+//!   recordings may not tell apart from the delivered one.
 //!
 //! The identified model is a [`shipid_sim::MmgModel`] (a `Dynamics`) with its propeller at the mean
 //! recorded rate of the training windows: the identification uses each sample's recorded `n`, a
 //! simulation holds the rate constant, as free-running manoeuvring tests do.
 //!
-//! Module imports: `geometry` ← `priors` ← `identify` ← this file → `file`, `refine`.
+//! Module imports: `geometry` ← `priors` ← `identify` ← this file → `file`, `refine` ← `valley`.
 
 pub mod file;
 pub mod geometry;
@@ -22,6 +24,7 @@ pub mod identify;
 pub mod priors;
 pub mod refine;
 pub mod thrust;
+pub mod valley;
 
 use std::time::Instant;
 
@@ -32,8 +35,9 @@ use shipid_model::TrainingWindow;
 use shipid_sim::{Dynamics, MmgModel, State};
 
 pub use file::{
-    CvEntry, MMG_KIND, MmgEstimatorEntry, MmgModelFile, ParamEntry, PropellerEntry, RudderEntry,
-    ThrustInflowEntry, load_mmg_model, load_mmg_model_if_kind, write_mmg_model_file,
+    CvEntry, MMG_KIND, MmgEstimatorEntry, MmgModelFile, MmgValleyRecord, ParamEntry,
+    PropellerEntry, RudderEntry, ThrustInflowEntry, ValleyStartEntry, load_mmg_model,
+    load_mmg_model_if_kind, write_mmg_model_file,
 };
 pub use geometry::MmgGeometry;
 pub use identify::{DETERMINED_SHARE, EqSample, Estimate, ParamEstimate, Problem};
@@ -723,22 +727,61 @@ pub fn fit_mmg_model_file(
         opts.refine_folds = Some(RefineOptions::for_dataset(ds));
     }
     let fit = fit_mmg_dataset(ds, &opts)?;
-    let (fit, refinement) = if refine_after {
-        let started = Instant::now();
-        let (mut refined, how) = refine_mmg(
+    if !refine_after {
+        let file = model_file(&fit, added);
+        return Ok((fit, file));
+    }
+    let started = Instant::now();
+    let recordings = fit_recordings(&fit, ds);
+    let refine = RefineOptions::for_dataset(ds);
+    let (mut refined, how) = refine_mmg(&fit, added, &recordings, &refine)?;
+    // The valley comes with the thorough path (a cross-validated λ): the other candidates are
+    // refined too, which costs as many refinements again as there are; a fixed λ stays one.
+    let starts = match opts.prior_weight {
+        PriorWeight::CrossValidated(_) => Some(valley::refine_valley(
+            ds,
+            &opts,
             &fit,
+            &refined,
             added,
-            &fit_recordings(&fit, ds),
-            &RefineOptions::for_dataset(ds),
-        )?;
-        refined.fit_time_s += started.elapsed().as_secs_f64();
-        (refined, Some(how))
-    } else {
-        (fit, None)
+            &recordings,
+            &refine,
+        )?),
+        PriorWeight::Fixed(_) => None,
     };
-    let mut file = model_file(&fit, added);
-    file.estimator.refinement = refinement;
-    Ok((fit, file))
+    refined.fit_time_s += started.elapsed().as_secs_f64();
+    let mut file = model_file(&refined, added);
+    file.estimator.refinement = Some(how);
+    file.valley = starts.as_deref().map(valley_record);
+    Ok((refined, file))
+}
+
+/// The `[valley]` of a model file from its starts.
+fn valley_record(starts: &[valley::ValleyStart]) -> MmgValleyRecord {
+    MmgValleyRecord {
+        method: "the equation-error fit at every other prior weight of the cross-validation grid, \
+                 refined like this model on the same training windows; cost_ratio: its refinement \
+                 cost ÷ this model's, on this model's refinement objective"
+            .into(),
+        cost_tolerance: valley::VALLEY_COST_TOLERANCE,
+        starts: starts
+            .iter()
+            .map(|s| match &s.outcome {
+                valley::ValleyOutcome::Refined { cost_ratio, values } => ValleyStartEntry {
+                    prior_weight: s.prior_weight,
+                    cost_ratio: Some(*cost_ratio),
+                    failed: None,
+                    values: values.clone(),
+                },
+                valley::ValleyOutcome::Failed(why) => ValleyStartEntry {
+                    prior_weight: s.prior_weight,
+                    cost_ratio: None,
+                    failed: Some(why.clone()),
+                    values: Default::default(),
+                },
+            })
+            .collect(),
+    }
 }
 
 /// The training windows of a fit as recordings (for the refinement).
@@ -833,6 +876,7 @@ pub fn model_file(fit: &MmgFit, added: AddedMass) -> MmgModelFile {
             .collect(),
         bootstrap: None,
         calibration: None,
+        valley: None,
     }
 }
 

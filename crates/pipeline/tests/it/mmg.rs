@@ -663,3 +663,127 @@ fn tuning_before_a_refinement_scores_refined_folds() {
         );
     }
 }
+
+#[test]
+fn the_valley_refines_every_other_prior_weight_on_the_delivered_objective() {
+    use shipid_pipeline::mmg::CV_GRID;
+    use shipid_pipeline::mmg::valley::{ValleyOutcome, refine_valley};
+    let ds = default_data();
+    let opts = options(&["zz35_35_ps.csv"]);
+    let start = fit(&["zz35_35_ps.csv"]);
+    let recs = [ds.recording("zz35_35_ps.csv").unwrap().recording.clone()];
+    let refine = shipid_pipeline::refine::RefineOptions {
+        max_iterations: 3,
+        ..Default::default()
+    };
+    let added = ds.added_mass.unwrap();
+    let (delivered, _) = refine_mmg(&start, added, &recs, &refine).unwrap();
+    let starts = refine_valley(&ds, &opts, &start, &delivered, added, &recs, &refine).unwrap();
+    let weights: Vec<f64> = starts.iter().map(|s| s.prior_weight).collect();
+    let others: Vec<f64> = CV_GRID
+        .iter()
+        .copied()
+        .filter(|&l| l != start.lambda)
+        .collect();
+    assert_eq!(weights, others);
+    for s in &starts {
+        let ValleyOutcome::Refined { cost_ratio, values } = &s.outcome else {
+            panic!("λ {}: {:?}", s.prior_weight, s.outcome);
+        };
+        assert!(cost_ratio.is_finite() && *cost_ratio > 0.0, "{cost_ratio}");
+        assert_eq!(values.len(), delivered.estimate.params.len());
+        for p in &delivered.estimate.params {
+            let v = values[p.spec.name];
+            assert!(
+                v >= p.spec.lower && v <= p.spec.upper,
+                "{} = {v}",
+                p.spec.name
+            );
+        }
+    }
+    // The λ = 1 start is held near the prior; its refinement still moves it toward the data, and
+    // it is a different model from the delivered one.
+    let ValleyOutcome::Refined { values, .. } = &starts.last().unwrap().outcome else {
+        unreachable!()
+    };
+    assert!(
+        delivered
+            .estimate
+            .params
+            .iter()
+            .any(|p| (values[p.spec.name] - p.value).abs() > 1e-6 * p.value.abs().max(1e-6)),
+        "the λ = 1 start refined onto the delivered model exactly"
+    );
+}
+
+#[test]
+fn a_damaged_valley_in_a_model_file_names_its_key() {
+    use shipid_pipeline::mmg::{MmgModelFile, MmgValleyRecord, ValleyStartEntry};
+    let f = fit(&["zz35_35_ps.csv"]);
+    let text = write_mmg_model(&f, default_data().added_mass.unwrap()).unwrap();
+    let file: MmgModelFile = toml::from_str(&text).unwrap();
+    let point: std::collections::BTreeMap<String, f64> = file
+        .parameters
+        .iter()
+        .map(|p| (p.name.clone(), p.value))
+        .collect();
+    let path = Path::new("fixture.toml");
+    let check = |edit: &dyn Fn(&mut ValleyStartEntry), expected: Result<usize, &str>| {
+        let mut start = ValleyStartEntry {
+            prior_weight: 1e-4,
+            cost_ratio: Some(1.01),
+            failed: None,
+            values: point.clone(),
+        };
+        edit(&mut start);
+        let mut damaged = file.clone();
+        damaged.valley = Some(MmgValleyRecord {
+            method: "test".into(),
+            cost_tolerance: 0.2,
+            starts: vec![start],
+        });
+        // Through the text, as a file on disk is read.
+        let text = shipid_pipeline::mmg::write_mmg_model_file(&damaged).unwrap();
+        let read: MmgModelFile = toml::from_str(&text).unwrap();
+        match (read.valley_models(path), expected) {
+            (Ok(models), Ok(n)) => assert_eq!(models.len(), n),
+            (Err(e), Err(key)) => assert!(
+                e.is_bad_input() && e.to_string().contains(key),
+                "{e} lacks {key}"
+            ),
+            (got, want) => panic!("got {:?}, want {want:?}", got.map(|m| m.len())),
+        }
+    };
+    check(&|_| {}, Ok(1));
+    check(&|s| s.cost_ratio = Some(1.5), Ok(0));
+    check(
+        &|s| {
+            s.failed = Some("diverged".into());
+            s.cost_ratio = None;
+            s.values.clear();
+        },
+        Ok(0),
+    );
+    check(
+        &|s| {
+            s.values.insert("n_r".into(), 1e9);
+        },
+        Err("`valley.start[0].values.n_r`: 1000000000 is not a finite number within the bounds"),
+    );
+    check(
+        &|s| {
+            s.values.remove("y_v");
+        },
+        Err("`valley.start[0].values.y_v`: missing"),
+    );
+    check(
+        &|s| {
+            s.values.insert("nonsense".into(), 0.0);
+        },
+        Err("`valley.start[0].values.nonsense`: is not a parameter"),
+    );
+    check(
+        &|s| s.cost_ratio = Some(-1.0),
+        Err("`valley.start[0].cost_ratio`: must be a positive number"),
+    );
+}

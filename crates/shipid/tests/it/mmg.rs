@@ -237,3 +237,92 @@ fn a_study_names_set_mmg_beside_a_polynomial_set() {
         .unwrap_or_else(|| panic!("{result}"));
     assert!(outside > 0.5, "{outside}");
 }
+
+#[test]
+fn simulate_runs_the_valley_of_a_refined_mmg_fit_beside_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("mmg.toml");
+    let model = model.to_str().unwrap();
+    shipid_ok(&[
+        "fit",
+        "data/kvlcc2-mmg/dataset.toml",
+        "--set",
+        "mmg",
+        "--recordings",
+        "zz35_35_ps.csv",
+        "--out",
+        model,
+    ]);
+    // A [valley] as `fit --tune --refine` writes it, made by hand so that the test stays fast: one
+    // start in the valley with a weaker yaw damping (its turn is tighter), one above the tolerance.
+    let text = std::fs::read_to_string(model).unwrap();
+    let mut file: toml::Table = toml::from_str(&text).unwrap();
+    let values: toml::Table = file["parameter"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| {
+            let name = p["name"].as_str().unwrap();
+            let v = p["value"].as_float().unwrap();
+            let v = if name == "n_r" { 0.95 * v } else { v };
+            (name.to_string(), toml::Value::Float(v))
+        })
+        .collect();
+    let start = |ratio: f64| {
+        toml::Value::Table(toml::Table::from_iter([
+            ("prior_weight".into(), toml::Value::Float(1e-4)),
+            ("cost_ratio".into(), toml::Value::Float(ratio)),
+            ("values".into(), toml::Value::Table(values.clone())),
+        ]))
+    };
+    file.insert(
+        "valley".into(),
+        toml::Value::Table(toml::Table::from_iter([
+            ("method".into(), toml::Value::String("by hand".into())),
+            ("cost_tolerance".into(), toml::Value::Float(0.2)),
+            (
+                "start".into(),
+                toml::Value::Array(vec![start(1.05), start(3.0)]),
+            ),
+        ])),
+    );
+    std::fs::write(model, toml::to_string(&file).unwrap()).unwrap();
+    let out = shipid_ok(&[
+        "simulate",
+        model,
+        "--manoeuvre",
+        "turning:35:port",
+        "--json",
+    ]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let point = v["tactical_diameter"].as_f64().unwrap();
+    let range = &v["tactical_diameter_valley"];
+    let (lo, hi) = (range[0].as_f64().unwrap(), range[1].as_f64().unwrap());
+    assert!(lo < point - 0.01 && (hi - point).abs() < 1e-12, "{v}");
+    assert_eq!(v["valley"]["starts"], 2, "{v}");
+    assert_eq!(v["valley"]["in_valley"], 1, "{v}");
+    assert_eq!(v["valley"]["members"][0]["cost_ratio"], 1.05, "{v}");
+    let text = shipid_ok(&["simulate", model, "--manoeuvre", "turning:35:port"]);
+    let stdout = String::from_utf8_lossy(&text.stdout);
+    assert!(
+        stdout.contains("valley [")
+            && stdout
+                .contains("1 of the 2 refinements from the other prior weights end within 20 %"),
+        "{stdout}"
+    );
+    // A damaged start is named before anything runs.
+    let damaged = dir.path().join("damaged.toml");
+    let mut bad = file.clone();
+    bad["valley"]["start"][0]["values"]["n_r"] = toml::Value::Float(f64::NAN);
+    std::fs::write(&damaged, toml::to_string(&bad).unwrap()).unwrap();
+    check_exit(
+        &[
+            "simulate",
+            damaged.to_str().unwrap(),
+            "--manoeuvre",
+            "turning:35:port",
+        ],
+        2,
+        "key `valley.start[0].values.n_r`",
+    );
+}
