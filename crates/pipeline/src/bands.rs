@@ -387,6 +387,18 @@ pub struct Valley {
     pub members: Vec<(f64, f64, shipid_sim::MmgModel)>,
 }
 
+impl Valley {
+    /// What the valley's ranges mean, in words.
+    pub fn what(&self) -> &'static str {
+        if self.members.is_empty() {
+            "no other start ends as low: the recordings choose this minimum"
+        } else {
+            "models the training recordings do not tell apart; where their predictions differ, the \
+             recordings do not determine this manoeuvre (the valley ranges include this model)"
+        }
+    }
+}
+
 /// The `[valley]` of the model file `spec`: `None` for a built-in model, a file of another kind or an
 /// mmg file without one (fitted without `--refine`). A damaged `[valley]` names its key.
 pub fn valley_of(spec: &str) -> Result<Option<Valley>, PipelineError> {
@@ -414,6 +426,74 @@ pub fn valley_of(spec: &str) -> Result<Option<Valley>, PipelineError> {
         starts: record.starts.len(),
         members: file.valley_models(path)?,
     }))
+}
+
+/// One member of a valley through one manoeuvre: its start, cost ratio and metrics (`None`: its run
+/// diverged or could not be made).
+#[derive(Debug, Clone, Serialize)]
+pub struct ValleyMemberRun {
+    pub prior_weight: f64,
+    pub cost_ratio: f64,
+    pub metrics: Option<shipid_sim::Metrics>,
+}
+
+/// A valley through one manoeuvre: every member's run, and each metric's range over the point model
+/// and the members whose runs define it (metric key, lo, hi; only metrics the point run defines).
+#[derive(Debug, Clone)]
+pub struct ValleyRun {
+    pub members: Vec<ValleyMemberRun>,
+    pub ranges: Vec<(&'static str, f64, f64)>,
+}
+
+impl ValleyRun {
+    /// Members whose run diverged.
+    pub fn diverged(&self) -> usize {
+        self.members.iter().filter(|m| m.metrics.is_none()).count()
+    }
+
+    /// The range of `metric`, when the point run defines it.
+    pub fn range(&self, metric: &str) -> Option<(f64, f64)> {
+        self.ranges
+            .iter()
+            .find(|r| r.0 == metric)
+            .map(|r| (r.1, r.2))
+    }
+}
+
+/// Run every member of `valley` through `m` as `run` runs a model (the same way as the point
+/// prediction whose metrics are `point`), and the metrics' ranges.
+pub fn valley_run(
+    valley: &Valley,
+    point: &shipid_sim::Metrics,
+    m: &Manoeuvre,
+    ship: &Ship,
+    run: impl Fn(&dyn Dynamics) -> Option<shipid_sim::SimOutput> + Sync,
+) -> ValleyRun {
+    let members: Vec<ValleyMemberRun> = valley
+        .members
+        .par_iter()
+        .map(|(lambda, ratio, model)| ValleyMemberRun {
+            prior_weight: *lambda,
+            cost_ratio: *ratio,
+            metrics: run(model)
+                .filter(|out| matches!(out.status, SimStatus::Ok))
+                .map(|out| metrics(&out.recording, m, ship)),
+        })
+        .collect();
+    let mut ranges: Vec<(&'static str, f64, f64)> = point
+        .entries()
+        .iter()
+        .filter_map(|(key, v)| v.map(|v| (*key, v, v)))
+        .collect();
+    for k in members.iter().filter_map(|m| m.metrics.as_ref()) {
+        for (key, v) in k.entries() {
+            if let (Some(v), Some(r)) = (v, ranges.iter_mut().find(|r| r.0 == key)) {
+                r.1 = r.1.min(v);
+                r.2 = r.2.max(v);
+            }
+        }
+    }
+    ValleyRun { members, ranges }
 }
 
 /// Posterior functions drawn per sparse-GP band, and the seed of their draws: the posterior is in the

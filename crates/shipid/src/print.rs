@@ -10,7 +10,55 @@ use crate::Outcome;
 /// Validates `model` on every recording of `ds` and prints the table (or the JSON with `as_json`);
 /// `SomeFailed` when a simulation diverged.
 pub fn validation(model: &dyn Dynamics, model_spec: &str, ds: &Dataset, as_json: bool) -> Outcome {
-    validation_with_bands(model, model_spec, ds, as_json, None)
+    validation_with_bands(model, model_spec, ds, as_json, None, None)
+}
+
+/// Each recorded metric against the valley's range: `(recording, metric, recorded, predicted, (lo,
+/// hi), inside)`.
+type ValleyRow = (String, &'static str, f64, f64, (f64, f64), bool);
+
+/// The valley rows of every recording with a standard manoeuvre (each member re-simulated as validate
+/// re-simulates the model), and the members' runs that diverged.
+fn valley_rows(
+    model: &dyn Dynamics,
+    model_spec: &str,
+    ds: &Dataset,
+    valley: &shipid_pipeline::bands::Valley,
+) -> (Vec<ValleyRow>, usize) {
+    let windage = shipid_pipeline::validate::validation_windage(model_spec, ds);
+    let mut rows = Vec::new();
+    let mut diverged = 0;
+    for r in &ds.recordings {
+        let env = shipid_pipeline::validate::validation_environment(&windage, ds, r);
+        let run = |m: &dyn Dynamics| {
+            shipid_pipeline::validate::closed_loop_in(m, r, &ds.ship, env.clone())
+        };
+        let Some(point) = run(model).filter(|o| matches!(o.status, shipid_sim::SimStatus::Ok))
+        else {
+            continue;
+        };
+        let point = shipid_sim::metrics(&point.recording, &r.manoeuvre, &ds.ship);
+        let members =
+            shipid_pipeline::bands::valley_run(valley, &point, &r.manoeuvre, &ds.ship, run);
+        diverged += members.diverged();
+        let recorded = shipid_sim::metrics(&r.recording, &r.manoeuvre, &ds.ship);
+        for ((key, value), (_, predicted)) in recorded.entries().iter().zip(point.entries()) {
+            let (Some(value), Some(predicted), Some((lo, hi))) =
+                (*value, predicted, members.range(key))
+            else {
+                continue;
+            };
+            rows.push((
+                r.file.clone(),
+                *key,
+                value,
+                predicted,
+                (lo, hi),
+                lo <= value && value <= hi,
+            ));
+        }
+    }
+    (rows, diverged)
 }
 
 /// The bands `validate --bands LEVEL` checks the recorded metrics against: calibrated when the
@@ -90,6 +138,7 @@ pub fn validation_with_bands(
     ds: &Dataset,
     as_json: bool,
     bands: Option<BandCheck>,
+    valley: Option<&shipid_pipeline::bands::Valley>,
 ) -> Outcome {
     let (rows, source) = validate_dataset(model, model_spec, ds);
     let dataset = &ds.path;
@@ -160,6 +209,34 @@ pub fn validation_with_bands(
             }
         }
         o.insert("bands".into(), about);
+    }
+    let valley_check = valley
+        .filter(|v| !v.members.is_empty())
+        .map(|v| (v, valley_rows(model, model_spec, ds, v)));
+    if let (Some((v, (rows, diverged))), Value::Object(o)) = (&valley_check, &mut value) {
+        let mut per: Map<String, Value> = Map::new();
+        for (file, metric, recorded, predicted, (lo, hi), inside) in rows {
+            if let Value::Object(m) = per
+                .entry(file.clone())
+                .or_insert_with(|| Value::Object(Map::new()))
+            {
+                m.insert(
+                    (*metric).into(),
+                    json!({ "recorded": recorded, "predicted": predicted, "valley": [lo, hi], "inside": inside }),
+                );
+            }
+        }
+        o.insert(
+            "valley".into(),
+            json!({
+                "starts": v.starts,
+                "in_valley": v.members.len(),
+                "cost_tolerance": v.cost_tolerance,
+                "diverged_runs": diverged,
+                "what": v.what(),
+                "recordings": per,
+            }),
+        );
     }
     if as_json {
         println!(
@@ -251,6 +328,32 @@ pub fn validation_with_bands(
         println!(
             "inside: {inside} of {checked} recorded metrics lie in their {:.0} % band",
             check.level * 100.0
+        );
+    }
+    if !as_json && let Some((v, (rows, diverged))) = &valley_check {
+        println!(
+            "\nvalley: {} of the {} refinements from the other prior weights end within {:.0} % of this model's cost ({} of their runs diverged): {}",
+            v.members.len(),
+            v.starts,
+            100.0 * v.cost_tolerance,
+            diverged,
+            v.what()
+        );
+        println!(
+            "{:<16} {:<18} {:>10} {:>10} {:>22} {:>7}",
+            "recording", "metric", "recorded", "predicted", "valley", "inside"
+        );
+        for (file, metric, recorded, predicted, (lo, hi), inside) in rows {
+            println!(
+                "{file:<16} {metric:<18} {recorded:>10.4} {predicted:>10.4} {:>22} {:>7}",
+                format!("[{lo:.4}, {hi:.4}]"),
+                if *inside { "yes" } else { "no" }
+            );
+        }
+        let inside = rows.iter().filter(|r| r.5).count();
+        println!(
+            "inside: {inside} of {} recorded metrics lie in the valley's range",
+            rows.len()
         );
     }
     if any_failed {

@@ -281,23 +281,19 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
         }
     }
     let valley = shipid_pipeline::bands::valley_of(a.model)?;
-    if let Some(v) = &valley {
-        let runs: Vec<(f64, f64, Option<SimOutput>)> = v
-            .members
-            .iter()
-            .map(|(lambda, ratio, member)| {
-                // Each member runs as the point model does: the same grid and environment, at the
-                // asked propeller rate from its own straight-run speed there.
-                let out = match a.propeller_rate_hz {
-                    Some(n) => at_propeller_rate(member, a.model, n)
-                        .ok()
-                        .and_then(|(d, u)| simulate_on_grid_in(&d, &m, &grid, env.clone(), u).ok()),
-                    None => simulate_on_grid_in(member, &m, &grid, env.clone(), approach_m_s).ok(),
-                };
-                (*lambda, *ratio, out)
-            })
-            .collect();
-        add_valley(&mut value, v, &runs, &m, model);
+    if let (Some(v), SimStatus::Ok) = (&valley, &out.status) {
+        let point = metrics(&out.recording, &m, model.ship());
+        // Each member runs as the point model does: the same grid and environment, at the asked
+        // propeller rate from its own straight-run speed there.
+        let run = shipid_pipeline::bands::valley_run(v, &point, &m, model.ship(), |member| {
+            match a.propeller_rate_hz {
+                Some(n) => at_propeller_rate(member, a.model, n)
+                    .ok()
+                    .and_then(|(d, u)| simulate_on_grid_in(&d, &m, &grid, env.clone(), u).ok()),
+                None => simulate_on_grid_in(member, &m, &grid, env.clone(), approach_m_s).ok(),
+            }
+        });
+        add_valley(&mut value, v, &run);
     }
     if let (Some(level), Some(replicates)) = (a.bands, &replicates) {
         let bands = replicates.bands(model, &m, model.ship(), level, BandRun::Grid(&grid))?;
@@ -457,68 +453,46 @@ fn add_bands(value: &mut Value, run: &RunBands, source: &ModelBands, with_track:
 fn add_valley(
     value: &mut Value,
     valley: &shipid_pipeline::bands::Valley,
-    runs: &[(f64, f64, Option<SimOutput>)],
-    m: &Manoeuvre,
-    model: &dyn Dynamics,
+    run: &shipid_pipeline::bands::ValleyRun,
 ) {
     let Value::Object(o) = value else { return };
-    let mut members = Vec::new();
-    let mut diverged = 0;
-    let mut ranges: Vec<(&'static str, f64, f64)> = Vec::new();
-    for (key, _) in shipid_sim::Metrics::default().entries() {
-        if let Some(v) = o.get(key).and_then(Value::as_f64) {
-            ranges.push((key, v, v));
-        }
-    }
-    for (lambda, ratio, out) in runs {
-        let mut member = Map::new();
-        member.insert("prior_weight".into(), json!(lambda));
-        member.insert("cost_ratio".into(), json!(ratio));
-        match out {
-            Some(out) if matches!(out.status, SimStatus::Ok) => {
-                member.insert("status".into(), json!("ok"));
-                for (key, v) in metrics(&out.recording, m, model.ship()).entries() {
-                    let Some(v) = v else { continue };
-                    member.insert(key.into(), json!(v));
-                    if let Some(r) = ranges.iter_mut().find(|r| r.0 == key) {
-                        r.1 = r.1.min(v);
-                        r.2 = r.2.max(v);
-                    }
-                }
-            }
-            _ => {
-                diverged += 1;
-                member.insert("status".into(), json!("diverged"));
-            }
-        }
-        members.push(Value::Object(member));
-    }
     if !valley.members.is_empty() {
-        for (key, lo, hi) in &ranges {
+        for (key, lo, hi) in &run.ranges {
             o.insert(format!("{key}_valley"), json!([lo, hi]));
         }
     }
-    let what = if valley.members.is_empty() {
-        "no other start ends as low: the recordings choose this minimum".to_string()
-    } else {
-        "models the training recordings do not tell apart; where their predictions differ, the \
-         recordings do not determine this manoeuvre (the valley ranges include this model)"
-            .to_string()
-    };
+    let members: Vec<Value> = run
+        .members
+        .iter()
+        .map(|m| {
+            let mut member = match m.metrics.as_ref().map(serde_json::to_value) {
+                Some(Ok(Value::Object(k))) => k,
+                _ => Map::new(),
+            };
+            member.insert("prior_weight".into(), json!(m.prior_weight));
+            member.insert("cost_ratio".into(), json!(m.cost_ratio));
+            member.insert(
+                "status".into(),
+                json!(if m.metrics.is_some() { "ok" } else { "diverged" }),
+            );
+            Value::Object(member)
+        })
+        .collect();
     o.insert(
         "valley".into(),
         json!({
             "starts": valley.starts,
             "in_valley": valley.members.len(),
             "cost_tolerance": valley.cost_tolerance,
-            "diverged": diverged,
+            "diverged": run.diverged(),
             "members": members,
-            "what": what,
+            "what": valley.what(),
         }),
     );
-    if diverged > 0 {
+    if run.diverged() > 0 {
         eprintln!(
-            "warning: {diverged} of the valley's {} refinements diverged in this manoeuvre (the valley ranges are over the others)",
+            "warning: {} of the valley's {} refinements diverged in this manoeuvre (the valley ranges are over the others)",
+            run.diverged(),
             valley.members.len()
         );
     }

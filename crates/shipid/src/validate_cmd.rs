@@ -27,6 +27,7 @@ pub fn run(
     let replicates = bands
         .map(|level| shipid_pipeline::calibration::ModelBands::of(model_spec, level))
         .transpose()?;
+    let valley = shipid_pipeline::bands::valley_of(model_spec)?;
     let ds = Dataset::load(dataset)?;
     // Validation still runs: its errors are what the user asked for; the warnings say what they
     // cannot mean.
@@ -48,6 +49,7 @@ pub fn run(
         bands
             .zip(replicates.as_ref())
             .map(|(level, source)| crate::print::BandCheck { level, source }),
+        valley.as_ref(),
     ))
 }
 
