@@ -285,13 +285,13 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
         let point = metrics(&out.recording, &m, model.ship());
         // Each member runs as the point model does: the same grid and environment, at the asked
         // propeller rate from its own straight-run speed there.
-        let run = shipid_pipeline::bands::valley_run(v, &point, &m, model.ship(), |member| {
-            match a.propeller_rate_hz {
-                Some(n) => at_propeller_rate(member, a.model, n)
-                    .ok()
-                    .and_then(|(d, u)| simulate_on_grid_in(&d, &m, &grid, env.clone(), u).ok()),
-                None => simulate_on_grid_in(member, &m, &grid, env.clone(), approach_m_s).ok(),
-            }
+        let run = shipid_pipeline::bands::valley_run(v, &point, &m, model.ship(), |member| match a
+            .propeller_rate_hz
+        {
+            Some(n) => at_propeller_rate(member, a.model, n)
+                .ok()
+                .and_then(|(d, u)| simulate_on_grid_in(&d, &m, &grid, env.clone(), u).ok()),
+            None => simulate_on_grid_in(member, &m, &grid, env.clone(), approach_m_s).ok(),
         });
         add_valley(&mut value, v, &run);
     }
@@ -473,7 +473,11 @@ fn add_valley(
             member.insert("cost_ratio".into(), json!(m.cost_ratio));
             member.insert(
                 "status".into(),
-                json!(if m.metrics.is_some() { "ok" } else { "diverged" }),
+                json!(if m.metrics.is_some() {
+                    "ok"
+                } else {
+                    "diverged"
+                }),
             );
             Value::Object(member)
         })

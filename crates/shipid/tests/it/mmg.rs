@@ -239,7 +239,7 @@ fn a_study_names_set_mmg_beside_a_polynomial_set() {
 }
 
 #[test]
-fn simulate_runs_the_valley_of_a_refined_mmg_fit_beside_it() {
+fn simulate_and_validate_run_the_valley_of_a_refined_mmg_fit_beside_it() {
     let dir = tempfile::tempdir().unwrap();
     let model = dir.path().join("mmg.toml");
     let model = model.to_str().unwrap();
@@ -310,6 +310,32 @@ fn simulate_runs_the_valley_of_a_refined_mmg_fit_beside_it() {
                 .contains("1 of the 2 refinements from the other prior weights end within 20 %"),
         "{stdout}"
     );
+    // validate: every recorded metric against the valley's range, the members re-simulated as the
+    // model is.
+    let out = shipid_ok(&["validate", model, "data/kvlcc2-mmg/dataset.toml", "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let cell = &v["valley"]["recordings"]["tc35_ps.csv"]["tactical_diameter"];
+    let (lo, hi) = (
+        cell["valley"][0].as_f64().unwrap(),
+        cell["valley"][1].as_f64().unwrap(),
+    );
+    let predicted = cell["predicted"].as_f64().unwrap();
+    let recorded = cell["recorded"].as_f64().unwrap();
+    assert!(
+        lo < predicted - 0.01 && (hi - predicted).abs() < 1e-12,
+        "{cell}"
+    );
+    assert_eq!(cell["inside"], lo <= recorded && recorded <= hi, "{cell}");
+    assert_eq!(v["valley"]["in_valley"], 1, "{v}");
+    let out = shipid_ok(&["validate", model, "data/kvlcc2-mmg/dataset.toml"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("lie in the valley's range")
+            && stdout
+                .lines()
+                .any(|l| l.starts_with("tc35_ps.csv") && l.contains("tactical_diameter")),
+        "{stdout}"
+    );
     // A damaged start is named before anything runs.
     let damaged = dir.path().join("damaged.toml");
     let mut bad = file.clone();
@@ -321,6 +347,15 @@ fn simulate_runs_the_valley_of_a_refined_mmg_fit_beside_it() {
             damaged.to_str().unwrap(),
             "--manoeuvre",
             "turning:35:port",
+        ],
+        2,
+        "key `valley.start[0].values.n_r`",
+    );
+    check_exit(
+        &[
+            "validate",
+            damaged.to_str().unwrap(),
+            "data/kvlcc2-mmg/dataset.toml",
         ],
         2,
         "key `valley.start[0].values.n_r`",
