@@ -14,10 +14,10 @@
 
 use serde::Serialize;
 use shipid_io::{DatasetRecording, Manoeuvre, Recording, Ship};
-use shipid_sim::metrics::first_execute;
+use shipid_sim::metrics::{check_reaction_delay_s, first_execute};
 use shipid_sim::{
     Dynamics, KnownEnvironment, Metrics, Replay, SimOptions, SimOutput, SimStatus, State,
-    controller_for, metrics,
+    controller_with_reaction_delay, metrics,
 };
 
 use crate::environment::{ChosenWindage, WindageSource, environment_with, with_recorded_inputs};
@@ -59,6 +59,10 @@ pub struct MetricComparison {
     /// Mean of |relative error| over those metrics.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mrae: Option<f64>,
+    /// A zig-zag's reaction delay at its checks [s], measured on the recording, with which the
+    /// re-simulation reversed the rudder.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reaction_delay_s: Option<f64>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -186,16 +190,32 @@ pub fn closed_loop_in(
     }
     let t0 = rec.t[0];
     let t_exec = first_execute(rec, rudder, side, ship).map_or(0.0, |f| (f.t_s - t0).max(0.0));
-    Some(match controller_for(&r.manoeuvre, t_exec) {
-        Ok(mut c) => shipid_sim::simulate(
-            model,
-            c.as_mut(),
-            initial_state(rec),
-            &options(ship, rec.t[rec.len() - 1] - t0),
-        )
-        .unwrap_or_else(|e| failed_output(format!("cannot simulate: {e}"))),
-        Err(e) => failed_output(format!("no controller: {e}")),
-    })
+    let delay_s = recorded_reaction_delay_s(r, ship).unwrap_or(0.0);
+    Some(
+        match controller_with_reaction_delay(&r.manoeuvre, t_exec, delay_s) {
+            Ok(mut c) => shipid_sim::simulate(
+                model,
+                c.as_mut(),
+                initial_state(rec),
+                &options(ship, rec.t[rec.len() - 1] - t0),
+            )
+            .unwrap_or_else(|e| failed_output(format!("cannot simulate: {e}"))),
+            Err(e) => failed_output(format!("no controller: {e}")),
+        },
+    )
+}
+
+/// A recorded zig-zag's reaction delay at its checks ([`check_reaction_delay_s`]), with which
+/// [`closed_loop_in`] reverses the rudder; `None` for other manoeuvres.
+pub fn recorded_reaction_delay_s(r: &DatasetRecording, ship: &Ship) -> Option<f64> {
+    match r.manoeuvre {
+        Manoeuvre::ZigZag {
+            rudder_deg,
+            check_deg,
+            side,
+        } => check_reaction_delay_s(&r.recording, rudder_deg, check_deg, side, ship),
+        _ => None,
+    }
 }
 
 /// Re-simulate the recording's standard manoeuvre in closed loop and compare its metrics.
@@ -239,6 +259,7 @@ pub fn compare_manoeuvre_in(
         predicted,
         relative_error,
         mrae,
+        reaction_delay_s: recorded_reaction_delay_s(r, ship),
     })
 }
 

@@ -277,6 +277,20 @@ pub fn validation_with_bands(
                 }
             );
         }
+        let delays: Vec<f64> = recs
+            .values()
+            .filter_map(|v| v["manoeuvre"]["reaction_delay_s"].as_f64())
+            .collect();
+        if delays.iter().any(|d| *d > 1e-3) {
+            let (lo, hi) = delays
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| {
+                    (lo.min(*d), hi.max(*d))
+                });
+            println!(
+                "MRAE: each zig-zag re-simulated with its recording's reaction delay at the checks ({lo:.2}–{hi:.2} s; `reaction_delay_s` in --json)"
+            );
+        }
         match source {
             // Said, not left as a bare "-": a user would otherwise read it as "nothing outside".
             RangeSource::Unknown => println!(

@@ -108,8 +108,13 @@ pub struct ZigZag {
     check_rad: f64,
     side: Side,
     t_execute_s: f64,
+    /// Time [s] from the heading reaching the check angle to the command's reversal (0: at once, the
+    /// standard law; a recorded zig-zag's helmsman or autopilot reacts later).
+    reaction_delay_s: f64,
     /// Heading at the first execute and the sign of the current command, once executed.
     phase: Option<(f64, f64)>,
+    /// Time [s] of a reversal the check has called for and the delay still holds back.
+    pending_reversal_s: Option<f64>,
 }
 
 impl ZigZag {
@@ -126,8 +131,23 @@ impl ZigZag {
             check_rad: check_angle("check_deg", check_deg, 180.0)?,
             side,
             t_execute_s,
+            reaction_delay_s: 0.0,
             phase: None,
+            pending_reversal_s: None,
         })
+    }
+
+    /// The same zig-zag with every reversal `delay_s` [s] after the heading reaches the check angle.
+    pub fn with_reaction_delay(mut self, delay_s: f64) -> Result<ZigZag, ControlError> {
+        if !(delay_s.is_finite() && delay_s >= 0.0) {
+            return Err(ControlError::InvalidParameter {
+                name: "reaction_delay_s",
+                value: delay_s,
+                reason: "must be finite and non-negative",
+            });
+        }
+        self.reaction_delay_s = delay_s;
+        Ok(self)
     }
 }
 
@@ -151,7 +171,40 @@ impl RudderController for ZigZag {
             self.phase = Some((state.psi, self.side.sign()));
             return RudderCommand::constant(first);
         };
+        if let Some(t_reverse) = self.pending_reversal_s {
+            let tau = t_reverse - t_s;
+            if tau > dt_s - TIME_EPS_S {
+                return RudderCommand::constant(*sign * amplitude);
+            }
+            self.pending_reversal_s = None;
+            let before = *sign * amplitude;
+            *sign = -*sign;
+            return if tau > TIME_EPS_S {
+                RudderCommand {
+                    angle_rad: before,
+                    switch: Some((tau, *sign * amplitude)),
+                }
+            } else {
+                RudderCommand::constant(*sign * amplitude)
+            };
+        }
         let deviation = *sign * (state.psi - *psi0);
+        if self.reaction_delay_s > 0.0 {
+            let closing_rate = *sign * state.r;
+            let reached = if deviation >= self.check_rad {
+                Some(t_s)
+            } else if closing_rate > 0.0 {
+                let tau = (self.check_rad - deviation) / closing_rate;
+                (tau < dt_s).then_some(t_s + tau)
+            } else {
+                None
+            };
+            if let Some(t_check) = reached {
+                self.pending_reversal_s = Some(t_check + self.reaction_delay_s);
+                return self.command(t_s, dt_s, state);
+            }
+            return RudderCommand::constant(*sign * amplitude);
+        }
         if deviation >= self.check_rad {
             *sign = -*sign;
             return RudderCommand::constant(*sign * amplitude);
@@ -269,17 +322,25 @@ pub fn controller_for(
     manoeuvre: &Manoeuvre,
     t_execute_s: f64,
 ) -> Result<Box<dyn RudderController + Send>, ControlError> {
+    controller_with_reaction_delay(manoeuvre, t_execute_s, 0.0)
+}
+
+/// [`controller_for`] with a zig-zag's reversals `reaction_delay_s` [s] after each check (a recorded
+/// zig-zag's own delay, [`crate::metrics::check_reaction_delay_s`]); other manoeuvres ignore it.
+pub fn controller_with_reaction_delay(
+    manoeuvre: &Manoeuvre,
+    t_execute_s: f64,
+    reaction_delay_s: f64,
+) -> Result<Box<dyn RudderController + Send>, ControlError> {
     match *manoeuvre {
         Manoeuvre::ZigZag {
             rudder_deg,
             check_deg,
             side,
-        } => Ok(Box::new(ZigZag::new(
-            rudder_deg,
-            check_deg,
-            side,
-            t_execute_s,
-        )?)),
+        } => Ok(Box::new(
+            ZigZag::new(rudder_deg, check_deg, side, t_execute_s)?
+                .with_reaction_delay(reaction_delay_s)?,
+        )),
         Manoeuvre::Turning { rudder_deg, side } => {
             Ok(Box::new(Turning::new(rudder_deg, side, t_execute_s)?))
         }

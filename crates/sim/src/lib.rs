@@ -53,6 +53,7 @@ pub mod sim;
 pub use abkowitz::AbkowitzDynamics;
 pub use control::{
     ControlError, Replay, RudderCommand, RudderController, Turning, ZigZag, controller_for,
+    controller_with_reaction_delay,
 };
 pub use dynamics::{
     Dynamics, DynamicsError, LinearHullDerivatives, MassMatrix, OwnRange, RudderFilter, State,

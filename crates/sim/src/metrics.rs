@@ -303,6 +303,73 @@ pub fn zigzag_events(
     })
 }
 
+/// The reaction delay [s] of a recorded zig-zag's rudder reversals: the median, over the reversals the
+/// record shows, of the time from the heading reaching the check angle (execute k+1, k ≥ 1) to the
+/// rudder leaving its held angle towards the other side (the first sample past
+/// [`execute_threshold_deg`], moved back along a rudder moving at the ship's rudder rate). A helmsman or an autopilot that reacts late
+/// makes every overshoot larger than the standard law's immediate reversal would; a re-simulation
+/// that compares overshoots with the record needs the record's own delay. A reversal whose rudder has
+/// not left before the next check is not counted. `None` for a record that is not a zig-zag with a measurable reversal.
+pub fn check_reaction_delay_s(
+    rec: &Recording,
+    rudder_deg: f64,
+    check_deg: f64,
+    side: Side,
+    ship: &Ship,
+) -> Option<f64> {
+    let ev = zigzag_events(rec, rudder_deg, check_deg, side, ship)?;
+    let thr = execute_threshold_deg(rudder_deg).to_radians();
+    let rate = ship.rudder_rate_rad_s();
+    let back = if rate.is_finite() && rate > 0.0 {
+        thr / rate
+    } else {
+        0.0
+    };
+    let t = &rec.t;
+    let mut delays: Vec<f64> = Vec::new();
+    for k in 1..ev.executes_s.len() {
+        let t_check = ev.executes_s[k];
+        let t_next = ev.executes_s.get(k + 1).copied().unwrap_or(f64::INFINITY);
+        // The rudder reverses towards the side opposite to the one it held: − side after the odd
+        // checks, + side after the even ones.
+        let towards = if k % 2 == 1 {
+            -side.sign()
+        } else {
+            side.sign()
+        };
+        let i = t.partition_point(|&x| x < t_check);
+        if i == 0 || i >= t.len() {
+            continue;
+        }
+        // The last sample before the check: interpolating to the check itself would mix in the
+        // reversal when it starts inside the sample interval. A rudder that already moves there (an
+        // early reaction) gives a delay of about 0.
+        let held = rec.delta[i - 1];
+        let Some(j) = (i..t.len())
+            .take_while(|&j| t[j] < t_next)
+            .find(|&j| towards * (rec.delta[j] - held) > thr)
+        else {
+            continue;
+        };
+        let a1 = towards * (rec.delta[j] - held);
+        // Back from the first sample past the threshold along a rudder moving at the ship's rate: the
+        // departure itself, where interpolating between the samples around the kink would put it up
+        // to a fraction of a sample late.
+        let departed = if back > 0.0 { t[j] - a1 / rate } else { t[j] };
+        delays.push((departed - t_check).max(0.0));
+    }
+    if delays.is_empty() {
+        return None;
+    }
+    delays.sort_by(f64::total_cmp);
+    let n = delays.len();
+    Some(if n % 2 == 1 {
+        delays[n / 2]
+    } else {
+        0.5 * (delays[n / 2 - 1] + delays[n / 2])
+    })
+}
+
 fn zigzag_metrics(
     rec: &Recording,
     rudder_deg: f64,

@@ -1,5 +1,6 @@
-//! The recorded propeller rate as a known input of a replay: a model that takes the rate (the mmg
-//! family) replays a recording at the rate it recorded, not at the one it holds.
+//! What a re-simulation takes from the recording it is compared with: the recorded propeller rate (a
+//! model that takes the rate, the mmg family, replays a recording at the rate it recorded, not at the
+//! one it holds) and a zig-zag's reaction delay at its checks.
 
 use shipid_io::{DatasetRecording, Manoeuvre, Recording, Side};
 use shipid_pipeline::generate::T_EXECUTE_S;
@@ -155,4 +156,38 @@ fn at_another_rate_the_reference_approaches_at_the_speed_of_its_advance_ratio() 
     // No propeller: no straight run at any speed.
     let stopped = WithPropellerRate::new(&model, RecordedRate::constant(0.0));
     assert_eq!(straight_run_speed(&stopped), None);
+}
+
+#[test]
+fn validation_of_a_zigzag_recorded_with_a_late_reversal_blamed_the_model() {
+    // The recording's helmsman reverses 0.3 s after each check (the HSVA tests' ≈ 0.28 s). Before the
+    // re-simulation took the recording's own delay, the exact model's overshoots came out smaller
+    // than the recorded ones and validation blamed the model.
+    let model = MmgModel::kvlcc2();
+    let ship = *model.ship();
+    let mut zz = shipid_sim::ZigZag::new(20.0, 20.0, Side::Port, T_EXECUTE_S)
+        .unwrap()
+        .with_reaction_delay(0.3)
+        .unwrap();
+    let out = simulate(
+        &model,
+        &mut zz,
+        State::approach(ship.u0),
+        &SimOptions::new(120.0).with_step(0.05, 0.1),
+    )
+    .unwrap();
+    let r = DatasetRecording {
+        file: "zz20_20_ps.csv".into(),
+        manoeuvre: Manoeuvre::ZigZag {
+            rudder_deg: 20.0,
+            check_deg: 20.0,
+            side: Side::Port,
+        },
+        recording: out.recording,
+    };
+    let v = validate_recording(&model, &r, &ship);
+    let m = v.manoeuvre.as_ref().unwrap();
+    let delay = m.reaction_delay_s.unwrap();
+    assert!((delay - 0.3).abs() < 2e-3, "measured delay {delay}");
+    assert!(m.mrae.unwrap() < 1e-3, "{m:?}");
 }

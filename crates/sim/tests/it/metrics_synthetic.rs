@@ -379,3 +379,74 @@ proptest! {
         prop_assert_eq!(m, mm);
     }
 }
+
+/// The reference model's zig-zag with its reversals `delay_s` after each check, sampled as a recording
+/// (every 0.1 s, as the default data).
+fn zigzag_with_reaction_delay(rudder_deg: f64, check_deg: f64, delay_s: f64) -> Recording {
+    let model = MmgModel::kvlcc2();
+    let mut zz = shipid_sim::ZigZag::new(rudder_deg, check_deg, Side::Port, 5.0)
+        .unwrap()
+        .with_reaction_delay(delay_s)
+        .unwrap();
+    simulate(
+        &model,
+        &mut zz,
+        State::approach(model.ship().u0),
+        &SimOptions::new(120.0).with_step(0.05, 0.1),
+    )
+    .unwrap()
+    .recording
+}
+
+#[test]
+fn a_zigzag_reversed_late_measures_its_reaction_delay() {
+    use shipid_sim::metrics::check_reaction_delay_s;
+    let ship = kvlcc2_ship();
+    let check = |rudder_deg: f64, delay_s: f64| {
+        let rec = zigzag_with_reaction_delay(rudder_deg, rudder_deg, delay_s);
+        let measured = check_reaction_delay_s(&rec, rudder_deg, rudder_deg, Side::Port, &ship)
+            .unwrap_or_else(|| panic!("{rudder_deg}°, {delay_s} s: no reversal measured"));
+        assert!(
+            (measured - delay_s).abs() < 2e-3,
+            "{rudder_deg}°/{rudder_deg}°, delay {delay_s} s: measured {measured} s"
+        );
+    };
+    for rudder_deg in [10.0, 20.0, 35.0] {
+        for delay_s in [0.0, 0.13, 0.3, 1.0] {
+            check(rudder_deg, delay_s);
+        }
+    }
+    // A later reversal makes a larger overshoot: the delay matters to the metric it is measured for.
+    let os = |delay_s| {
+        let rec = zigzag_with_reaction_delay(20.0, 20.0, delay_s);
+        metrics(
+            &rec,
+            &Manoeuvre::ZigZag {
+                rudder_deg: 20.0,
+                check_deg: 20.0,
+                side: Side::Port,
+            },
+            &ship,
+        )
+        .overshoot_1
+        .unwrap()
+    };
+    assert!(os(0.5) > os(0.0) + 0.3, "{} vs {}", os(0.5), os(0.0));
+    // Not a zig-zag that reverses: nothing to measure.
+    let turn = record(60.0, 0.1, |t| (t, 0.0, 0.01 * t, rudder(t, 5.0, 0.6, 1.0)));
+    assert_eq!(
+        check_reaction_delay_s(&turn, 35.0, 35.0, Side::Starboard, &ship),
+        None
+    );
+}
+
+#[test]
+fn a_negative_reaction_delay_is_refused() {
+    for bad in [-0.1, f64::NAN, f64::INFINITY] {
+        let err = shipid_sim::ZigZag::new(20.0, 20.0, Side::Port, 5.0)
+            .unwrap()
+            .with_reaction_delay(bad)
+            .unwrap_err();
+        assert!(err.to_string().contains("reaction_delay_s"), "{err}");
+    }
+}
