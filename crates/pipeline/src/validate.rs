@@ -368,7 +368,31 @@ pub fn validation_warnings(
         &windage,
         "the validation",
     ));
+    warnings.extend(late_reversal_notes(ds));
     warnings
+}
+
+/// A reaction delay at a zig-zag's checks longer than this (× L/U0) is more than a helmsman's or an
+/// autopilot's reaction (the HSVA tests: 0.05 L/U0): more likely the declared check angle is not the
+/// one the test used.
+const LATE_REVERSAL_L_OVER_U0: f64 = 0.25;
+
+/// The zig-zags of `ds` whose rudder reverses implausibly long after the declared check angle.
+pub fn late_reversal_notes(ds: &shipid_io::Dataset) -> Vec<String> {
+    let scale = ds.ship.lpp / ds.ship.u0;
+    ds.recordings
+        .iter()
+        .filter_map(|r| {
+            let delay = recorded_reaction_delay_s(r, &ds.ship)?;
+            (delay > LATE_REVERSAL_L_OVER_U0 * scale).then(|| {
+                format!(
+                    "{}: the rudder reverses {delay:.2} s ({:.2} L/U0) after the heading reaches the declared check angle: is the check angle in the data set right? The re-simulation reverses with that delay",
+                    r.file,
+                    delay / scale
+                )
+            })
+        })
+        .collect()
 }
 
 pub use crate::range::RangeSource;
