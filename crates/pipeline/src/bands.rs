@@ -377,7 +377,7 @@ pub fn mmg_file_replicates(
 }
 
 /// The refinements of an mmg model file's `[valley]` that ended within its tolerance of the file's
-/// own (`fit --set mmg --refine`), which a prediction runs beside the point model.
+/// own (`fit --set mmg --tune --refine`), which a prediction runs beside the point model.
 pub struct Valley {
     /// Cost ratio at or below which a start is in the valley is 1 + this.
     pub cost_tolerance: f64,
@@ -400,7 +400,7 @@ impl Valley {
 }
 
 /// The `[valley]` of the model file `spec`: `None` for a built-in model, a file of another kind or an
-/// mmg file without one (fitted without `--refine`). A damaged `[valley]` names its key.
+/// mmg file without one (fitted without `--tune --refine`). A damaged `[valley]` names its key.
 pub fn valley_of(spec: &str) -> Result<Option<Valley>, PipelineError> {
     let path = std::path::Path::new(spec);
     if !path.is_file() {

@@ -208,12 +208,13 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
     for w in &warnings {
         eprintln!("warning: {w}");
     }
-    // Before the simulation: a model without replicates (or with a damaged calibration) is refused
-    // at once.
+    // Before the simulation: a model without replicates (or with a damaged calibration or valley) is
+    // refused at once.
     let replicates = a
         .bands
         .map(|level| ModelBands::of(a.model, level))
         .transpose()?;
+    let valley = shipid_pipeline::bands::valley_of(a.model)?;
     let request = SimRequest {
         dt_s: a.dt_s,
         duration_s: a.duration_s,
@@ -280,7 +281,6 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
             o.insert("warnings".into(), json!(warnings));
         }
     }
-    let valley = shipid_pipeline::bands::valley_of(a.model)?;
     if let (Some(v), SimStatus::Ok) = (&valley, &out.status) {
         let point = metrics(&out.recording, &m, model.ship());
         // Each member runs as the point model does: the same grid and environment, at the asked
