@@ -309,7 +309,8 @@ pub fn zigzag_events(
 /// [`execute_threshold_deg`], moved back along a rudder moving at the ship's rudder rate). A helmsman or an autopilot that reacts late
 /// makes every overshoot larger than the standard law's immediate reversal would; a re-simulation
 /// that compares overshoots with the record needs the record's own delay. A reversal whose rudder has
-/// not left before the next check is not counted. `None` for a record that is not a zig-zag with a measurable reversal.
+/// not left before the next check is not counted; a median below a tenth of the sampling interval is
+/// read as 0 (an immediate reversal, within what the samples resolve). `None` for a record that is not a zig-zag with a measurable reversal.
 pub fn check_reaction_delay_s(
     rec: &Recording,
     rudder_deg: f64,
@@ -363,11 +364,15 @@ pub fn check_reaction_delay_s(
     }
     delays.sort_by(f64::total_cmp);
     let n = delays.len();
-    Some(if n % 2 == 1 {
+    let median = if n % 2 == 1 {
         delays[n / 2]
     } else {
         0.5 * (delays[n / 2 - 1] + delays[n / 2])
-    })
+    };
+    // Below a tenth of the sampling interval the delay is the interpolation's error, not a reaction
+    // (a reversal at the check measures 1e-5 s on the default data): an immediate reversal.
+    let interval = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
+    Some(if median < 0.1 * interval { 0.0 } else { median })
 }
 
 fn zigzag_metrics(
