@@ -114,6 +114,25 @@ pub struct ParamEntry {
     pub determined_by_data: bool,
 }
 
+impl ParamEntry {
+    /// The bound the value sits on (within 1e-3 of the bounds' width, or of the prior's sd for a
+    /// one-sided bound), for a parameter the fit moved (bounds not collapsed onto one value).
+    pub fn bound_reached(&self) -> Option<f64> {
+        if !(self.lower < self.upper) {
+            return None;
+        }
+        let width = self.upper - self.lower;
+        let scale = if width.is_finite() {
+            width
+        } else {
+            self.prior_sd.abs().max(f64::MIN_POSITIVE)
+        };
+        [self.lower, self.upper]
+            .into_iter()
+            .find(|b| b.is_finite() && (self.value - b).abs() <= 1e-3 * scale)
+    }
+}
+
 /// An MMG model file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -359,6 +378,18 @@ impl MmgModelFile {
                 } else {
                     "; --inflow-from-thrust holds them there"
                 }
+            ));
+        }
+        let on_bound: Vec<String> = self
+            .parameters
+            .iter()
+            .filter_map(|p| p.bound_reached().map(|b| format!("{} = {b}", p.name)))
+            .collect();
+        if !on_bound.is_empty() {
+            lines.push(format!(
+                "  on a bound ({}): {} — the data push these past the range the bounds allow; what they stand in for may be missing from the structure (docs/mmg.md, Identifiability)",
+                on_bound.len(),
+                on_bound.join(", ")
             ));
         }
         let (data, prior): (Vec<&ParamEntry>, Vec<&ParamEntry>) =

@@ -787,3 +787,40 @@ fn a_damaged_valley_in_a_model_file_names_its_key() {
         Err("`valley.start[0].cost_ratio`: must be a positive number"),
     );
 }
+
+#[test]
+fn the_fit_summary_names_the_parameters_on_a_bound() {
+    use shipid_pipeline::mmg::MmgModelFile;
+    let f = fit(&["zz35_35_ps.csv"]);
+    let text = write_mmg_model(&f, default_data().added_mass.unwrap()).unwrap();
+    let file: MmgModelFile = toml::from_str(&text).unwrap();
+    let check = |edit: &dyn Fn(&mut MmgModelFile), expected: Option<&str>| {
+        let mut file = file.clone();
+        edit(&mut file);
+        let line = file
+            .summary()
+            .into_iter()
+            .find(|l| l.starts_with("  on a bound"));
+        match (line, expected) {
+            (Some(l), Some(name)) => assert!(l.contains(name), "{l} lacks {name}"),
+            (None, None) => {}
+            (got, want) => panic!("got {got:?}, want {want:?}"),
+        }
+    };
+    let set = |name: &'static str, at: fn(&shipid_pipeline::mmg::ParamEntry) -> f64| {
+        move |f: &mut MmgModelFile| {
+            let p = f.parameters.iter_mut().find(|p| p.name == name).unwrap();
+            p.value = at(p);
+        }
+    };
+    // The fit of ZZ35/35 on the reference's own data leaves everything inside.
+    check(&|_| {}, None);
+    // Two-sided bounds: on either side, and just inside (within 1e-3 of the width).
+    check(&set("t_p", |p| p.lower), Some("t_p = 0"));
+    check(&set("l_r", |p| p.lower), Some("l_r = -1.5"));
+    check(&set("x_h", |p| p.upper - 1e-4), Some("x_h = -0.2"));
+    // A one-sided bound, within 1e-3 of the prior's sd.
+    check(&set("n_vvv", |p| p.upper), Some("n_vvv = 0.335"));
+    // Well inside: not named.
+    check(&set("t_p", |p| 0.5 * (p.lower + p.upper)), None);
+}
