@@ -118,7 +118,8 @@ impl ParamEntry {
     /// The bound the value sits on (within 1e-3 of the bounds' width, or of the prior's sd for a
     /// one-sided bound), for a parameter the fit moved (bounds not collapsed onto one value).
     pub fn bound_reached(&self) -> Option<f64> {
-        if !(self.lower < self.upper) {
+        // Bounds collapsed onto one value (a held parameter), or not ordered: nothing the fit moved.
+        if self.lower.partial_cmp(&self.upper) != Some(std::cmp::Ordering::Less) {
             return None;
         }
         let width = self.upper - self.lower;
