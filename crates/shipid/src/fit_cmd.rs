@@ -556,6 +556,11 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
             "estimator": file.estimator,
             "parameters": file.parameters,
             "valley": file.valley,
+            "on_bound": file
+                .parameters
+                .iter()
+                .filter_map(|p| p.bound_reached().map(|b| json!({ "name": p.name, "bound": b })))
+                .collect::<Vec<_>>(),
             "warnings": warnings,
         });
         println!(

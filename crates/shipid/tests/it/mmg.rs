@@ -83,6 +83,8 @@ fn a_turn_simulated_from_a_zigzag_fit_is_flagged_as_an_extrapolation() {
         again.to_str().unwrap(),
     ]);
     let report: serde_json::Value = serde_json::from_slice(&fitted.stdout).unwrap();
+    // The fit of the reference's own zig-zag leaves every parameter inside its bounds.
+    assert_eq!(report["on_bound"], serde_json::json!([]), "{report}");
     let extent = &report["training_extent"];
     assert!(
         extent["max_drift_deg"].as_f64().unwrap() > 17.0
