@@ -188,41 +188,26 @@ impl RudderController for ZigZag {
                 RudderCommand::constant(*sign * amplitude)
             };
         }
+        // Where the heading reaches the check angle: at the start of this step, or inside it
+        // (extrapolated with the yaw rate). The reversal follows the reaction delay later (at once
+        // for the standard law), through the pending reversal above.
         let deviation = *sign * (state.psi - *psi0);
-        if self.reaction_delay_s > 0.0 {
-            let closing_rate = *sign * state.r;
-            let reached = if deviation >= self.check_rad {
-                Some(t_s)
-            } else if closing_rate > 0.0 {
-                let tau = (self.check_rad - deviation) / closing_rate;
-                (tau < dt_s).then_some(t_s + tau)
-            } else {
-                None
-            };
-            if let Some(t_check) = reached {
-                self.pending_reversal_s = Some(t_check + self.reaction_delay_s);
-                return self.command(t_s, dt_s, state);
-            }
-            return RudderCommand::constant(*sign * amplitude);
-        }
-        if deviation >= self.check_rad {
-            *sign = -*sign;
-            return RudderCommand::constant(*sign * amplitude);
-        }
-        // Reverse inside the step where the heading, extrapolated with the yaw rate, reaches the check.
         let closing_rate = *sign * state.r;
-        if closing_rate > 0.0 {
+        let reached = if deviation >= self.check_rad {
+            Some(t_s)
+        } else if closing_rate > 0.0 {
             let tau = (self.check_rad - deviation) / closing_rate;
-            if tau < dt_s {
-                let before = *sign * amplitude;
-                *sign = -*sign;
-                return RudderCommand {
-                    angle_rad: before,
-                    switch: Some((tau, *sign * amplitude)),
-                };
+            (tau < dt_s).then_some(t_s + tau)
+        } else {
+            None
+        };
+        match reached {
+            Some(t_check) => {
+                self.pending_reversal_s = Some(t_check + self.reaction_delay_s);
+                self.command(t_s, dt_s, state)
             }
+            None => RudderCommand::constant(*sign * amplitude),
         }
-        RudderCommand::constant(*sign * amplitude)
     }
 }
 
