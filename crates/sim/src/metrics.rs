@@ -321,11 +321,6 @@ pub fn check_reaction_delay_s(
     let ev = zigzag_events(rec, rudder_deg, check_deg, side, ship)?;
     let thr = execute_threshold_deg(rudder_deg).to_radians();
     let rate = ship.rudder_rate_rad_s();
-    let back = if rate.is_finite() && rate > 0.0 {
-        thr / rate
-    } else {
-        0.0
-    };
     let t = &rec.t;
     let mut delays: Vec<f64> = Vec::new();
     for k in 1..ev.executes_s.len() {
@@ -356,7 +351,11 @@ pub fn check_reaction_delay_s(
         // Back from the first sample past the threshold along a rudder moving at the ship's rate: the
         // departure itself, where interpolating between the samples around the kink would put it up
         // to a fraction of a sample late.
-        let departed = if back > 0.0 { t[j] - a1 / rate } else { t[j] };
+        let departed = if rate.is_finite() && rate > 0.0 {
+            t[j] - a1 / rate
+        } else {
+            t[j]
+        };
         delays.push((departed - t_check).max(0.0));
     }
     if delays.is_empty() {
