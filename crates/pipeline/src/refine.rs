@@ -546,12 +546,22 @@ pub fn refinement_cost<P: Parametric>(
     recordings: &[Recording],
     opts: &RefineOptions,
 ) -> Result<f64, RefineError> {
+    refinement_costs(start, &[candidate], recordings, opts).map(|c| c[0])
+}
+
+/// [`refinement_cost`] of every candidate, on one problem (its segments, thinning and the start's
+/// normalisation are built once).
+pub fn refinement_costs<P: Parametric>(
+    start: &P,
+    candidates: &[&P],
+    recordings: &[Recording],
+    opts: &RefineOptions,
+) -> Result<Vec<f64>, RefineError> {
     let problem = problem(start, recordings, opts)?;
-    Ok(problem
-        .residuals_of(Some(candidate))
+    Ok(candidates
         .iter()
-        .map(|x| x * x)
-        .sum())
+        .map(|c| problem.residuals_of(Some(*c)).iter().map(|x| x * x).sum())
+        .collect())
 }
 
 /// Refine any parameterised model `start` on `recordings` (the training windows, over ground,

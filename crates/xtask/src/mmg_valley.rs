@@ -15,7 +15,7 @@ use shipid_pipeline::mmg::{
     CV_GRID, DEFAULT_PRIOR_WEIGHT, MmgFitOptions, MmgGeometry, ParametricMmg, PriorWeight, fit_mmg,
     refine_mmg,
 };
-use shipid_pipeline::refine::{RefineOptions, refinement_cost};
+use shipid_pipeline::refine::{RefineOptions, refinement_costs};
 use shipid_pipeline::simulate::simulate_manoeuvre;
 use shipid_sim::{Dynamics, SimStatus, metrics};
 
@@ -53,9 +53,17 @@ pub fn run(dataset: &Path) -> Result<String> {
          |---|---|---|---|---|---|---|\n",
         dataset.display()
     );
-    for (lambda, _, refined, how) in &fitted {
-        let candidate = ParametricMmg::of_fit(refined, added);
-        let cost = refinement_cost(&reference, &candidate, &recordings, &refine)?;
+    let candidates: Vec<ParametricMmg> = fitted
+        .iter()
+        .map(|(_, _, refined, _)| ParametricMmg::of_fit(refined, added))
+        .collect();
+    let costs = refinement_costs(
+        &reference,
+        &candidates.iter().collect::<Vec<_>>(),
+        &recordings,
+        &refine,
+    )?;
+    for ((lambda, _, refined, how), cost) in fitted.iter().zip(costs) {
         let turn = |side| -> String {
             let m = Manoeuvre::Turning {
                 rudder_deg: 35.0,

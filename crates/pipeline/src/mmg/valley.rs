@@ -13,7 +13,7 @@ use shipid_io::{AddedMass, Dataset, Recording};
 use super::refine::{ParametricMmg, refine_mmg};
 use super::{CV_GRID, MmgFit, MmgFitOptions, PriorWeight, fit_mmg_dataset};
 use crate::error::PipelineError;
-use crate::refine::{RefineOptions, refinement_cost};
+use crate::refine::{RefineOptions, refinement_costs};
 
 /// A start belongs to the valley when its refinement ends at most this fraction above the delivered
 /// model's cost. The refinement stops on a relative decrease before flat directions have converged,
@@ -64,20 +64,12 @@ pub fn refine_valley(
     recordings: &[Recording],
     refine: &RefineOptions,
 ) -> Result<Vec<ValleyStart>, PipelineError> {
-    let reference = ParametricMmg::of_fit(start, added);
-    let delivered_cost = refinement_cost(
-        &reference,
-        &ParametricMmg::of_fit(delivered, added),
-        recordings,
-        refine,
-    )
-    .map_err(|e| crate::error::bad_input(format!("--refine: {e}")))?;
     let others: Vec<f64> = CV_GRID
         .iter()
         .copied()
         .filter(|&l| l != start.lambda)
         .collect();
-    Ok(others
+    let refined: Vec<Result<MmgFit, PipelineError>> = others
         .par_iter()
         .map(|&lambda| {
             let opts = MmgFitOptions {
@@ -85,31 +77,43 @@ pub fn refine_valley(
                 refine_folds: None,
                 ..opts.clone()
             };
-            let outcome = fit_mmg_dataset(ds, &opts)
+            fit_mmg_dataset(ds, &opts)
                 .and_then(|fit| refine_mmg(&fit, added, recordings, refine))
-                .and_then(|(fit, _)| {
-                    let cost = refinement_cost(
-                        &reference,
-                        &ParametricMmg::of_fit(&fit, added),
-                        recordings,
-                        refine,
-                    )
-                    .map_err(|e| crate::error::bad_input(e.to_string()))?;
-                    Ok(ValleyOutcome::Refined {
-                        cost_ratio: cost / delivered_cost.max(f64::MIN_POSITIVE),
-                        values: fit
-                            .estimate
-                            .params
-                            .iter()
-                            .map(|p| (p.spec.name.to_string(), p.value))
-                            .collect(),
-                    })
-                })
-                .unwrap_or_else(|e| ValleyOutcome::Failed(e.to_string()));
-            ValleyStart {
-                prior_weight: lambda,
-                outcome,
-            }
+                .map(|(fit, _)| fit)
+        })
+        .collect();
+    // Every cost on the delivered refinement's problem, built once: the delivered model first.
+    let models: Vec<ParametricMmg> = std::iter::once(delivered)
+        .chain(refined.iter().filter_map(|r| r.as_ref().ok()))
+        .map(|fit| ParametricMmg::of_fit(fit, added))
+        .collect();
+    let candidates: Vec<&ParametricMmg> = models.iter().collect();
+    let costs = refinement_costs(
+        &ParametricMmg::of_fit(start, added),
+        &candidates,
+        recordings,
+        refine,
+    )
+    .map_err(|e| crate::error::bad_input(format!("--refine: {e}")))?;
+    let delivered_cost = costs[0].max(f64::MIN_POSITIVE);
+    let mut member_costs = costs[1..].iter();
+    Ok(others
+        .into_iter()
+        .zip(refined)
+        .map(|(lambda, fit)| ValleyStart {
+            prior_weight: lambda,
+            outcome: match fit {
+                Ok(fit) => ValleyOutcome::Refined {
+                    cost_ratio: member_costs.next().copied().unwrap_or(f64::NAN) / delivered_cost,
+                    values: fit
+                        .estimate
+                        .params
+                        .iter()
+                        .map(|p| (p.spec.name.to_string(), p.value))
+                        .collect(),
+                },
+                Err(e) => ValleyOutcome::Failed(e.to_string()),
+            },
         })
         .collect())
 }
