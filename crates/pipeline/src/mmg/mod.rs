@@ -722,9 +722,10 @@ pub fn fit_mmg_model_file(
             ds.path.display()
         ))
     })?;
+    let refine = RefineOptions::for_dataset(ds);
     let mut opts = opts.clone();
     if refine_after {
-        opts.refine_folds = Some(RefineOptions::for_dataset(ds));
+        opts.refine_folds = Some(refine.clone());
     }
     let fit = fit_mmg_dataset(ds, &opts)?;
     if !refine_after {
@@ -733,7 +734,6 @@ pub fn fit_mmg_model_file(
     }
     let started = Instant::now();
     let recordings = fit_recordings(&fit, ds);
-    let refine = RefineOptions::for_dataset(ds);
     let (mut refined, how) = refine_mmg(&fit, added, &recordings, &refine)?;
     // The valley comes with the thorough path (a cross-validated λ): the other candidates are
     // refined too, which costs as many refinements again as there are; a fixed λ stays one.
