@@ -286,13 +286,7 @@ pub fn replicated_models(
              N`) or a sparse-GP model file; `{spec}` is not one"
         )));
     }
-    // A fit in a recorded wind appends `[environment]`, which the mmg and GP formats do not have.
-    let text = std::fs::read_to_string(path)
-        .map(|t| crate::environment::without_environment_table(&t))
-        .map_err(|e| InputError::read(path, &e))?;
-    let kind = toml::from_str::<toml::Table>(&text)
-        .ok()
-        .and_then(|t| t.get("kind").and_then(|k| k.as_str()).map(String::from));
+    let (text, kind) = crate::environment::model_file_family_text(path)?;
     match kind.as_deref() {
         Some("abkowitz") => abkowitz_replicates(path, &text).map(|m| (m, BandKind::Bootstrap)),
         Some(MMG_KIND) => mmg_replicates(path, &text),
@@ -406,13 +400,8 @@ pub fn valley_of(spec: &str) -> Result<Option<Valley>, PipelineError> {
     if !path.is_file() {
         return Ok(None);
     }
-    let text = std::fs::read_to_string(path)
-        .map(|t| crate::environment::without_environment_table(&t))
-        .map_err(|e| InputError::read(path, &e))?;
-    let is_mmg = toml::from_str::<toml::Table>(&text)
-        .ok()
-        .is_some_and(|t| t.get("kind").and_then(|k| k.as_str()) == Some(MMG_KIND));
-    if !is_mmg {
+    let (text, kind) = crate::environment::model_file_family_text(path)?;
+    if kind.as_deref() != Some(MMG_KIND) {
         return Ok(None);
     }
     let file: MmgModelFile =

@@ -1025,13 +1025,7 @@ pub fn stored_calibration(
     if !path.is_file() {
         return Ok(None);
     }
-    // A fit in a recorded wind appends `[environment]`, which the mmg and GP formats do not have.
-    let text = std::fs::read_to_string(path)
-        .map(|t| crate::environment::without_environment_table(&t))
-        .map_err(|e| shipid_io::InputError::read(path, &e))?;
-    let kind = toml::from_str::<toml::Table>(&text)
-        .ok()
-        .and_then(|t| t.get("kind").and_then(|k| k.as_str()).map(String::from));
+    let (text, kind) = crate::environment::model_file_family_text(path)?;
     match kind.as_deref() {
         Some("abkowitz") => {
             // The polynomial format has `[environment]`: its own reader, on the whole text.

@@ -354,6 +354,21 @@ pub fn environment_table_text(record: &EnvironmentRecord) -> Result<String, Pipe
     ))
 }
 
+/// The text of the model file at `path` as its family's reader takes it ([`without_environment_table`]:
+/// a fit in a recorded wind appends `[environment]`, which the mmg and sparse-GP formats do not
+/// have), and its `kind` (`None` when missing or the text is not TOML: the reader names the fault).
+pub fn model_file_family_text(
+    path: &std::path::Path,
+) -> Result<(String, Option<String>), shipid_io::InputError> {
+    let text = std::fs::read_to_string(path)
+        .map(|t| without_environment_table(&t))
+        .map_err(|e| shipid_io::InputError::read(path, &e))?;
+    let kind = toml::from_str::<toml::Table>(&text)
+        .ok()
+        .and_then(|t| t.get("kind").and_then(|k| k.as_str()).map(String::from));
+    Ok((text, kind))
+}
+
 /// `text` with its `[environment]` table (and sub-tables) blanked line by line, so that a reader of a
 /// format without it sees the rest with every line where it was (its error messages name the right
 /// line).
