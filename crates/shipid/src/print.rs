@@ -17,10 +17,11 @@ pub fn validation(model: &dyn Dynamics, model_spec: &str, ds: &Dataset, as_json:
 /// hi), inside)`.
 type ValleyRow = (String, &'static str, f64, f64, (f64, f64), bool);
 
-/// The valley rows of every recording with a standard manoeuvre (each member re-simulated as validate
-/// re-simulates the model), and the members' runs that diverged.
+/// The valley rows of every recording whose closed-loop re-simulation `validated` holds (each member
+/// re-simulated as validate re-simulated the model, whose metrics are taken from there), and the
+/// members' runs that diverged.
 fn valley_rows(
-    model: &dyn Dynamics,
+    validated: &[shipid_pipeline::validate::ValidatedRecording],
     model_spec: &str,
     ds: &Dataset,
     valley: &shipid_pipeline::bands::Valley,
@@ -28,21 +29,22 @@ fn valley_rows(
     let windage = shipid_pipeline::validate::validation_windage(model_spec, ds);
     let mut rows = Vec::new();
     let mut diverged = 0;
-    for r in &ds.recordings {
-        let env = shipid_pipeline::validate::validation_environment(&windage, ds, r);
-        let run = |m: &dyn Dynamics| {
-            shipid_pipeline::validate::closed_loop_in(m, r, &ds.ship, env.clone())
-        };
-        let Some(point) = run(model).filter(|o| matches!(o.status, shipid_sim::SimStatus::Ok))
-        else {
+    for v in validated {
+        let (Some(r), Some(comparison)) = (ds.recording(&v.file), &v.validation.manoeuvre) else {
             continue;
         };
-        let point = shipid_sim::metrics(&point.recording, &r.manoeuvre, &ds.ship);
+        let Some(point) = &comparison.predicted else {
+            continue;
+        };
+        let env = shipid_pipeline::validate::validation_environment(&windage, ds, r);
         let members =
-            shipid_pipeline::bands::valley_run(valley, &point, &r.manoeuvre, &ds.ship, run);
+            shipid_pipeline::bands::valley_run(valley, point, &r.manoeuvre, &ds.ship, |m| {
+                shipid_pipeline::validate::closed_loop_in(m, r, &ds.ship, env.clone())
+            });
         diverged += members.diverged();
-        let recorded = shipid_sim::metrics(&r.recording, &r.manoeuvre, &ds.ship);
-        for ((key, value), (_, predicted)) in recorded.entries().iter().zip(point.entries()) {
+        for ((key, value), (_, predicted)) in
+            comparison.recorded.entries().iter().zip(point.entries())
+        {
             let (Some(value), Some(predicted), Some((lo, hi))) =
                 (*value, predicted, members.range(key))
             else {
@@ -212,7 +214,7 @@ pub fn validation_with_bands(
     }
     let valley_check = valley
         .filter(|v| !v.members.is_empty())
-        .map(|v| (v, valley_rows(model, model_spec, ds, v)));
+        .map(|v| (v, valley_rows(&rows, model_spec, ds, v)));
     if let (Some((v, (rows, diverged))), Value::Object(o)) = (&valley_check, &mut value) {
         let mut per: Map<String, Value> = Map::new();
         for (file, metric, recorded, predicted, (lo, hi), inside) in rows {
