@@ -499,12 +499,12 @@ struct GpDrawDynamics {
 }
 
 impl Dynamics for GpDrawDynamics {
-    fn accelerations(
+    fn accelerations_for(
         &self,
         s: &shipid_sim::State,
-        delta_rad: f64,
+        input: &shipid_sim::Input,
     ) -> Result<[f64; 3], shipid_sim::DynamicsError> {
-        let x = [s.u, s.v, s.r, delta_rad];
+        let x = [s.u, s.v, s.r, input.delta_rad];
         if x.iter().any(|v| !v.is_finite()) {
             return Err(shipid_sim::DynamicsError::OutOfDomain(format!(
                 "non-finite state {x:?}"

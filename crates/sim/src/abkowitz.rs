@@ -4,14 +4,15 @@
 use shipid_io::{AddedMass, PrimeScale, Ship};
 use shipid_model::AbkowitzModel;
 
-use crate::dynamics::{Dynamics, DynamicsError, LinearHullDerivatives, Parametric, State};
+use crate::dynamics::{Dynamics, DynamicsError, Input, LinearHullDerivatives, Parametric, State};
 
 /// Wraps an identified model for simulation.
 #[derive(Debug, Clone)]
 pub struct AbkowitzDynamics(pub AbkowitzModel);
 
 impl Dynamics for AbkowitzDynamics {
-    fn accelerations(&self, s: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
+    fn accelerations_for(&self, s: &State, input: &Input) -> Result<[f64; 3], DynamicsError> {
+        let delta_rad = input.delta_rad;
         // The polynomial is only trusted where it is finite; the simulation loop turns a non-finite
         // result into a divergence status.
         Ok(self.0.accelerations(s.u, s.v, s.r, delta_rad))

@@ -108,43 +108,69 @@ pub struct LinearHullDerivatives {
     pub n_r: f64,
 }
 
-/// A 3-DOF manoeuvring model: body-axis accelerations of midship for a state and the rudder angle that
-/// acts on the hull.
+/// The known inputs that drive a model at one instant besides its state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Input {
+    /// Simulation time [s]: what a recorded wind or current is read at.
+    pub t_s: f64,
+    /// The rudder angle acting on the hull [rad], positive turns the ship to starboard.
+    pub delta_rad: f64,
+    /// A propeller rate [1/s] other than the model's own (a recorded one); `None`: the model's own.
+    /// Models that do not take the rate ([`Dynamics::takes_propeller_rate`]) ignore it.
+    pub propeller_rate_hz: Option<f64>,
+}
+
+impl Input {
+    /// The rudder alone, at time 0 and the model's own propeller rate.
+    pub fn rudder(delta_rad: f64) -> Input {
+        Input {
+            t_s: 0.0,
+            delta_rad,
+            propeller_rate_hz: None,
+        }
+    }
+}
+
+/// A 3-DOF manoeuvring model: body-axis accelerations of midship for a state and the known inputs
+/// (time, rudder angle acting on the hull, propeller rate).
 ///
 /// The MMG reference model implements it; so can an identified Abkowitz model or a Gaussian-process
 /// model of the accelerations. Models are expected to be linear in the accelerations with the rigid-body
 /// plus added-mass matrix of [`Dynamics::ship`] and [`Dynamics::added_mass`] (see [`MassMatrix`]); effects
 /// that add external forces rely on this.
+///
+/// A model that wraps another (an environment, physical effects, a recorded propeller rate) names it
+/// in [`Dynamics::wrapped`]: every optional method it does not override then answers as the wrapped
+/// model does, so a wrapper states only what it changes.
 pub trait Dynamics {
-    /// `[u̇, v̇, ṙ]` [m/s², m/s², rad/s²] of midship for `state` and the actual rudder angle `delta_rad`
-    /// (positive turns the ship to starboard). An `Err` ends a simulation as diverged.
-    fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError>;
+    /// `[u̇, v̇, ṙ]` [m/s², m/s², rad/s²] of midship for `state` and `input`: the one method a
+    /// model implements; a simulation calls it at every RK4 stage. An `Err` ends a simulation as
+    /// diverged.
+    fn accelerations_for(&self, state: &State, input: &Input) -> Result<[f64; 3], DynamicsError>;
 
-    /// [`Dynamics::accelerations`] at simulation time `t_s` [s]: what a simulation calls at every RK4
-    /// stage. Only models with a time-varying known input (a recorded wind or current:
-    /// [`crate::environment::WithEnvironment`]) differ from the time-free accelerations; wrappers pass
-    /// the time on to the model they wrap.
+    /// [`Dynamics::accelerations_for`] with the rudder alone (time 0, the model's own propeller rate).
+    fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
+        self.accelerations_for(state, &Input::rudder(delta_rad))
+    }
+
+    /// [`Dynamics::accelerations_for`] at simulation time `t_s` [s] and the model's own propeller rate.
     fn accelerations_at(
         &self,
         t_s: f64,
         state: &State,
         delta_rad: f64,
     ) -> Result<[f64; 3], DynamicsError> {
-        let _ = t_s;
-        self.accelerations(state, delta_rad)
+        self.accelerations_for(
+            state,
+            &Input {
+                t_s,
+                delta_rad,
+                propeller_rate_hz: None,
+            },
+        )
     }
 
-    /// Whether the model's forces take the propeller rate as an input (the MMG model's thrust and
-    /// rudder slipstream): a recorded rate then drives it through [`Dynamics::accelerations_at_rate`]
-    /// ([`crate::WithPropellerRate`]). Models without that input were identified at one rate and
-    /// keep it.
-    fn takes_propeller_rate(&self) -> bool {
-        false
-    }
-
-    /// [`Dynamics::accelerations_at`] with the propeller turning at `n_hz` [1/s] instead of the
-    /// model's own rate. Models that do not take the rate ([`Dynamics::takes_propeller_rate`]) ignore
-    /// it; wrappers pass it on to the model they wrap.
+    /// [`Dynamics::accelerations_for`] at `t_s` [s] with the propeller turning at `n_hz` [1/s].
     fn accelerations_at_rate(
         &self,
         t_s: f64,
@@ -152,8 +178,28 @@ pub trait Dynamics {
         delta_rad: f64,
         n_hz: f64,
     ) -> Result<[f64; 3], DynamicsError> {
-        let _ = n_hz;
-        self.accelerations_at(t_s, state, delta_rad)
+        self.accelerations_for(
+            state,
+            &Input {
+                t_s,
+                delta_rad,
+                propeller_rate_hz: Some(n_hz),
+            },
+        )
+    }
+
+    /// The model this one wraps, for the optional methods below that it does not override; `None`
+    /// for a model of its own.
+    fn wrapped(&self) -> Option<&dyn Dynamics> {
+        None
+    }
+
+    /// Whether the model's forces take the propeller rate as an input (the MMG model's thrust and
+    /// rudder slipstream): a recorded rate then drives it through [`Input::propeller_rate_hz`]
+    /// ([`crate::WithPropellerRate`]). Models without that input were identified at one rate and
+    /// keep it.
+    fn takes_propeller_rate(&self) -> bool {
+        self.wrapped().is_some_and(|m| m.takes_propeller_rate())
     }
 
     /// The ship the model describes.
@@ -164,32 +210,33 @@ pub trait Dynamics {
 
     /// Propeller rate [1/s] when the model has one (it is then written to the recording's `n`).
     fn propeller_rate_hz(&self) -> Option<f64> {
-        None
+        self.wrapped().and_then(|m| m.propeller_rate_hz())
     }
 
     /// The model's own linear hull damping derivatives, when it has them in this form.
     fn linear_hull_derivatives(&self) -> Option<LinearHullDerivatives> {
-        None
+        self.wrapped().and_then(|m| m.linear_hull_derivatives())
     }
 
     /// The filter between the recorded and the acting rudder that is part of this model (a steering-gear
     /// lag or a neutral offset found by `shipid diagnose`); a fresh one per simulation. `None`: the
     /// recorded rudder acts as it is.
     fn model_rudder_filter(&self) -> Option<Box<dyn RudderFilter>> {
-        None
+        self.wrapped().and_then(|m| m.model_rudder_filter())
     }
 
     /// The over-ground state of a ship moving through the water with `through_water` (they differ when
     /// the model includes a current).
     fn over_ground(&self, through_water: &State) -> State {
-        *through_water
+        self.wrapped()
+            .map_or(*through_water, |m| m.over_ground(through_water))
     }
 
     /// The identification range this model carries with it (a sparse GP's coverage by its sparse
     /// points); `None` for models whose range needs their training data (a polynomial's leverage,
     /// computed from the data its model file names) or that have none (the reference model).
     fn own_range(&self) -> Option<&dyn OwnRange> {
-        None
+        self.wrapped().and_then(|m| m.own_range())
     }
 }
 
@@ -222,33 +269,21 @@ impl RudderFilter for NoFilter {
     }
 }
 
-/// A pointer to a model is the model: every method passes through, so that wrappers and boxes keep the
-/// time, the propeller rate and the range of what they point to.
+/// A pointer to a model is the model: every method passes through, so that boxes and references keep
+/// the time, the propeller rate and the range of what they point to. (A pointer to an unsized model
+/// cannot name it as [`Dynamics::wrapped`], so each optional method is forwarded here.)
 macro_rules! forward_dynamics {
     ($($pointer:ty),*) => {$(
         impl<T: Dynamics + ?Sized> Dynamics for $pointer {
-            fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
-                (**self).accelerations(state, delta_rad)
-            }
-            fn accelerations_at(
+            fn accelerations_for(
                 &self,
-                t_s: f64,
                 state: &State,
-                delta_rad: f64,
+                input: &Input,
             ) -> Result<[f64; 3], DynamicsError> {
-                (**self).accelerations_at(t_s, state, delta_rad)
+                (**self).accelerations_for(state, input)
             }
             fn takes_propeller_rate(&self) -> bool {
                 (**self).takes_propeller_rate()
-            }
-            fn accelerations_at_rate(
-                &self,
-                t_s: f64,
-                state: &State,
-                delta_rad: f64,
-                n_hz: f64,
-            ) -> Result<[f64; 3], DynamicsError> {
-                (**self).accelerations_at_rate(t_s, state, delta_rad, n_hz)
             }
             fn own_range(&self) -> Option<&dyn OwnRange> {
                 (**self).own_range()

@@ -21,7 +21,7 @@ use thiserror::Error;
 
 use crate::control::RudderController;
 use crate::dynamics::{
-    Dynamics, DynamicsError, LinearHullDerivatives, MassMatrix, RudderFilter, State,
+    Dynamics, DynamicsError, Input, LinearHullDerivatives, MassMatrix, RudderFilter, State,
 };
 use crate::environment::{Aerodynamics, EnvironmentError};
 use crate::sim::{SimError, SimOptions, SimOutput, simulate_filtered};
@@ -683,23 +683,12 @@ impl<D: Dynamics> WithEffects<D> {
     }
 }
 
-impl<D: Dynamics> WithEffects<D> {
-    /// The accelerations at `t_s`, the wrapped model's at the propeller rate `n_hz` when one is given
-    /// (a recorded rate, [`crate::WithPropellerRate`]), else at its own.
-    fn accelerations_with_rate(
-        &self,
-        t_s: f64,
-        s: &State,
-        delta_rad: f64,
-        n_hz: Option<f64>,
-    ) -> Result<[f64; 3], DynamicsError> {
+impl<D: Dynamics> Dynamics for WithEffects<D> {
+    /// The wrapped model's accelerations through the water (at the propeller rate the input names,
+    /// a recorded one, else its own) with the effects' forces, added mass and current.
+    fn accelerations_for(&self, s: &State, input: &Input) -> Result<[f64; 3], DynamicsError> {
         let water = self.through_water(s);
-        let mut acc = match n_hz {
-            Some(n_hz) => self
-                .inner
-                .accelerations_at_rate(t_s, &water, delta_rad, n_hz)?,
-            None => self.inner.accelerations_at(t_s, &water, delta_rad)?,
-        };
+        let mut acc = self.inner.accelerations_for(&water, input)?;
         let ship = self.inner.ship();
         let mut force = self.constant_force;
         if let Some((wind, aero)) = &self.wind {
@@ -731,34 +720,9 @@ impl<D: Dynamics> WithEffects<D> {
         }
         Ok(acc)
     }
-}
 
-impl<D: Dynamics> Dynamics for WithEffects<D> {
-    fn accelerations(&self, s: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
-        self.accelerations_at(0.0, s, delta_rad)
-    }
-
-    fn accelerations_at(
-        &self,
-        t_s: f64,
-        s: &State,
-        delta_rad: f64,
-    ) -> Result<[f64; 3], DynamicsError> {
-        self.accelerations_with_rate(t_s, s, delta_rad, None)
-    }
-
-    fn takes_propeller_rate(&self) -> bool {
-        self.inner.takes_propeller_rate()
-    }
-
-    fn accelerations_at_rate(
-        &self,
-        t_s: f64,
-        s: &State,
-        delta_rad: f64,
-        n_hz: f64,
-    ) -> Result<[f64; 3], DynamicsError> {
-        self.accelerations_with_rate(t_s, s, delta_rad, Some(n_hz))
+    fn wrapped(&self) -> Option<&dyn Dynamics> {
+        Some(&self.inner)
     }
 
     fn ship(&self) -> &Ship {
@@ -769,10 +733,6 @@ impl<D: Dynamics> Dynamics for WithEffects<D> {
         &self.added_mass
     }
 
-    fn propeller_rate_hz(&self) -> Option<f64> {
-        self.inner.propeller_rate_hz()
-    }
-
     fn model_rudder_filter(&self) -> Option<Box<dyn RudderFilter>> {
         (self.lag.is_some() || self.rudder_offset_rad != 0.0)
             .then(|| Box::new(self.rudder_filter()) as Box<dyn RudderFilter>)
@@ -780,10 +740,6 @@ impl<D: Dynamics> Dynamics for WithEffects<D> {
 
     fn over_ground(&self, through_water: &State) -> State {
         WithEffects::over_ground(self, through_water)
-    }
-
-    fn own_range(&self) -> Option<&dyn crate::dynamics::OwnRange> {
-        self.inner.own_range()
     }
 
     fn linear_hull_derivatives(&self) -> Option<LinearHullDerivatives> {

@@ -18,9 +18,7 @@
 use shipid_io::{AddedMass, Recording, Ship, WindModel, Windage};
 use thiserror::Error;
 
-use crate::dynamics::{
-    Dynamics, DynamicsError, LinearHullDerivatives, MassMatrix, RudderFilter, State,
-};
+use crate::dynamics::{Dynamics, DynamicsError, Input, MassMatrix, State};
 
 /// Why a recording's environment cannot be used as a known input.
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -509,24 +507,15 @@ impl<D: Dynamics> WithEnvironment<D> {
     }
 }
 
-impl<D: Dynamics> WithEnvironment<D> {
-    /// The accelerations at `t_s`, the wrapped model's at the propeller rate `n_hz` when one is given
-    /// (a recorded rate, [`crate::WithPropellerRate`]), else at its own.
-    fn accelerations_with_rate(
-        &self,
-        t_s: f64,
-        s: &State,
-        delta_rad: f64,
-        n_hz: Option<f64>,
-    ) -> Result<[f64; 3], DynamicsError> {
+impl<D: Dynamics> Dynamics for WithEnvironment<D> {
+    /// The wrapped model's accelerations through the water at `input.t_s` (at the propeller rate
+    /// the input names, a recorded one, else its own), plus the wind's force and the current's
+    /// transport.
+    fn accelerations_for(&self, s: &State, input: &Input) -> Result<[f64; 3], DynamicsError> {
         let env = &self.environment;
+        let t_s = input.t_s;
         let water = env.through_water(t_s, s);
-        let mut acc = match n_hz {
-            Some(n_hz) => self
-                .inner
-                .accelerations_at_rate(t_s, &water, delta_rad, n_hz)?,
-            None => self.inner.accelerations_at(t_s, &water, delta_rad)?,
-        };
+        let mut acc = self.inner.accelerations_for(&water, input)?;
         if env.has_wind() {
             let f = env.wind_force(t_s, s);
             let da = self
@@ -540,34 +529,9 @@ impl<D: Dynamics> WithEnvironment<D> {
         acc[1] += tv;
         Ok(acc)
     }
-}
 
-impl<D: Dynamics> Dynamics for WithEnvironment<D> {
-    fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
-        self.accelerations_at(0.0, state, delta_rad)
-    }
-
-    fn accelerations_at(
-        &self,
-        t_s: f64,
-        s: &State,
-        delta_rad: f64,
-    ) -> Result<[f64; 3], DynamicsError> {
-        self.accelerations_with_rate(t_s, s, delta_rad, None)
-    }
-
-    fn takes_propeller_rate(&self) -> bool {
-        self.inner.takes_propeller_rate()
-    }
-
-    fn accelerations_at_rate(
-        &self,
-        t_s: f64,
-        s: &State,
-        delta_rad: f64,
-        n_hz: f64,
-    ) -> Result<[f64; 3], DynamicsError> {
-        self.accelerations_with_rate(t_s, s, delta_rad, Some(n_hz))
+    fn wrapped(&self) -> Option<&dyn Dynamics> {
+        Some(&self.inner)
     }
 
     fn ship(&self) -> &Ship {
@@ -578,25 +542,9 @@ impl<D: Dynamics> Dynamics for WithEnvironment<D> {
         self.inner.added_mass()
     }
 
-    fn propeller_rate_hz(&self) -> Option<f64> {
-        self.inner.propeller_rate_hz()
-    }
-
-    fn linear_hull_derivatives(&self) -> Option<LinearHullDerivatives> {
-        self.inner.linear_hull_derivatives()
-    }
-
-    fn model_rudder_filter(&self) -> Option<Box<dyn RudderFilter>> {
-        self.inner.model_rudder_filter()
-    }
-
     fn over_ground(&self, through_water: &State) -> State {
         self.inner
             .over_ground(&self.environment.over_ground(0.0, through_water))
-    }
-
-    fn own_range(&self) -> Option<&dyn crate::dynamics::OwnRange> {
-        self.inner.own_range()
     }
 }
 

@@ -15,7 +15,7 @@ use shipid_gp::{Gp, GpError, Hyper, Points, Similarity, Termination};
 use shipid_io::{AddedMass, Ship};
 use shipid_model::TrainingWindow;
 
-use crate::dynamics::{Dynamics, DynamicsError, OwnRange, State};
+use crate::dynamics::{Dynamics, DynamicsError, Input, OwnRange, State};
 
 /// The `kind` of a GP model file.
 pub const GP_KIND: &str = "sparse-gp";
@@ -210,8 +210,8 @@ impl Dynamics for GpDynamics {
         Some(self)
     }
 
-    fn accelerations(&self, s: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
-        let x = [s.u, s.v, s.r, delta_rad];
+    fn accelerations_for(&self, s: &State, input: &Input) -> Result<[f64; 3], DynamicsError> {
+        let x = [s.u, s.v, s.r, input.delta_rad];
         if x.iter().any(|v| !v.is_finite()) {
             return Err(DynamicsError::OutOfDomain(format!(
                 "non-finite state {x:?}"

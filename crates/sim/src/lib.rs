@@ -56,7 +56,8 @@ pub use control::{
     controller_with_reaction_delay,
 };
 pub use dynamics::{
-    Dynamics, DynamicsError, LinearHullDerivatives, MassMatrix, OwnRange, RudderFilter, State,
+    Dynamics, DynamicsError, Input, LinearHullDerivatives, MassMatrix, OwnRange, RudderFilter,
+    State,
 };
 pub use effects::{Effect, EffectError, EffectParseError, WithEffects, simulate_with_effects};
 pub use environment::{

@@ -9,7 +9,7 @@
 use shipid_io::{AddedMass, Ship};
 use thiserror::Error;
 
-use crate::dynamics::{Dynamics, DynamicsError, LinearHullDerivatives, State};
+use crate::dynamics::{Dynamics, DynamicsError, Input, LinearHullDerivatives, State};
 
 /// Below this speed [m/s] the hull model (normalised with the instantaneous speed) is not evaluated.
 const MIN_SPEED_M_S: f64 = 1e-6;
@@ -658,23 +658,14 @@ impl MmgModel {
 }
 
 impl Dynamics for MmgModel {
-    fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
-        Ok(self.accelerations_of(self.forces(state, delta_rad)?.total(), state))
+    fn accelerations_for(&self, state: &State, input: &Input) -> Result<[f64; 3], DynamicsError> {
+        let n_hz = input.propeller_rate_hz.unwrap_or(self.propeller_rate_hz);
+        let forces = self.forces_at_rate(state, input.delta_rad, n_hz)?.total();
+        Ok(self.accelerations_of(forces, state))
     }
 
     fn takes_propeller_rate(&self) -> bool {
         true
-    }
-
-    fn accelerations_at_rate(
-        &self,
-        _t_s: f64,
-        state: &State,
-        delta_rad: f64,
-        n_hz: f64,
-    ) -> Result<[f64; 3], DynamicsError> {
-        let forces = self.forces_at_rate(state, delta_rad, n_hz)?.total();
-        Ok(self.accelerations_of(forces, state))
     }
 
     fn ship(&self) -> &Ship {

@@ -9,9 +9,7 @@
 
 use shipid_io::{AddedMass, Recording, Ship};
 
-use crate::dynamics::{
-    Dynamics, DynamicsError, LinearHullDerivatives, OwnRange, RudderFilter, State,
-};
+use crate::dynamics::{Dynamics, DynamicsError, Input, State};
 
 /// Propeller rate [1/s] over recording time.
 #[derive(Debug, Clone, PartialEq)]
@@ -77,18 +75,23 @@ impl<D: Dynamics> WithPropellerRate<D> {
 }
 
 impl<D: Dynamics> Dynamics for WithPropellerRate<D> {
-    fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
-        self.accelerations_at(0.0, state, delta_rad)
+    /// The wrapped model at the recorded rate at `input.t_s` (a rate named in the input is the
+    /// recording's too: this one wins).
+    fn accelerations_for(&self, state: &State, input: &Input) -> Result<[f64; 3], DynamicsError> {
+        let at_rate = Input {
+            propeller_rate_hz: Some(self.rate.at(input.t_s)),
+            ..*input
+        };
+        self.inner.accelerations_for(state, &at_rate)
     }
 
-    fn accelerations_at(
-        &self,
-        t_s: f64,
-        state: &State,
-        delta_rad: f64,
-    ) -> Result<[f64; 3], DynamicsError> {
-        self.inner
-            .accelerations_at_rate(t_s, state, delta_rad, self.rate.at(t_s))
+    fn wrapped(&self) -> Option<&dyn Dynamics> {
+        Some(&self.inner)
+    }
+
+    /// The rate is the recording's now: the wrapped model takes no other.
+    fn takes_propeller_rate(&self) -> bool {
+        false
     }
 
     fn ship(&self) -> &Ship {
@@ -102,21 +105,5 @@ impl<D: Dynamics> Dynamics for WithPropellerRate<D> {
     /// The recorded rate at the simulation's start: what a simulated recording's `n` column holds.
     fn propeller_rate_hz(&self) -> Option<f64> {
         self.inner.propeller_rate_hz().map(|_| self.rate.at(0.0))
-    }
-
-    fn linear_hull_derivatives(&self) -> Option<LinearHullDerivatives> {
-        self.inner.linear_hull_derivatives()
-    }
-
-    fn model_rudder_filter(&self) -> Option<Box<dyn RudderFilter>> {
-        self.inner.model_rudder_filter()
-    }
-
-    fn over_ground(&self, through_water: &State) -> State {
-        self.inner.over_ground(through_water)
-    }
-
-    fn own_range(&self) -> Option<&dyn OwnRange> {
-        self.inner.own_range()
     }
 }

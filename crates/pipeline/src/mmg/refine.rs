@@ -4,7 +4,7 @@
 use shipid_io::{AddedMass, Recording, Ship};
 use shipid_model::Refinement;
 use shipid_sim::dynamics::Parametric;
-use shipid_sim::{Dynamics, DynamicsError, LinearHullDerivatives, MmgModel, State};
+use shipid_sim::{Dynamics, DynamicsError, Input, MmgModel, State};
 
 use super::MmgFit;
 use super::geometry::MmgGeometry;
@@ -69,33 +69,17 @@ impl ParametricMmg {
 }
 
 impl Dynamics for ParametricMmg {
-    fn accelerations(&self, state: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
-        self.model.accelerations(state, delta_rad)
+    fn accelerations_for(&self, state: &State, input: &Input) -> Result<[f64; 3], DynamicsError> {
+        self.model.accelerations_for(state, input)
     }
-    fn takes_propeller_rate(&self) -> bool {
-        true
-    }
-    fn accelerations_at_rate(
-        &self,
-        t_s: f64,
-        state: &State,
-        delta_rad: f64,
-        n_hz: f64,
-    ) -> Result<[f64; 3], DynamicsError> {
-        self.model
-            .accelerations_at_rate(t_s, state, delta_rad, n_hz)
+    fn wrapped(&self) -> Option<&dyn Dynamics> {
+        Some(&self.model)
     }
     fn ship(&self) -> &Ship {
         self.model.ship()
     }
     fn added_mass(&self) -> &AddedMass {
         self.model.added_mass()
-    }
-    fn propeller_rate_hz(&self) -> Option<f64> {
-        self.model.propeller_rate_hz()
-    }
-    fn linear_hull_derivatives(&self) -> Option<LinearHullDerivatives> {
-        self.model.linear_hull_derivatives()
     }
 }
 

@@ -12,7 +12,7 @@ use shipid_pipeline::fit::{EstimatorSpec, WindowSpec, fit_dataset, load_set};
 use shipid_pipeline::refine::{RefineOptions, refine, refinement_cost, theta_at};
 use shipid_pipeline::replay::{replay_segment, replay_segment_sensitivities, segments};
 use shipid_sim::AbkowitzDynamics;
-use shipid_sim::dynamics::{Dynamics, DynamicsError, FiniteDifferences, Parametric, State};
+use shipid_sim::dynamics::{Dynamics, DynamicsError, FiniteDifferences, Input, Parametric, State};
 
 fn embedded() -> Dataset {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
@@ -43,8 +43,8 @@ fn lsq_on_zz35(ds: &Dataset, set: &str) -> (AbkowitzModel, Recording) {
 struct NoAnalyticDerivatives(AbkowitzDynamics);
 
 impl Dynamics for NoAnalyticDerivatives {
-    fn accelerations(&self, s: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
-        self.0.accelerations(s, delta_rad)
+    fn accelerations_for(&self, s: &State, input: &Input) -> Result<[f64; 3], DynamicsError> {
+        self.0.accelerations_for(s, input)
     }
     fn ship(&self) -> &Ship {
         self.0.ship()
@@ -234,8 +234,8 @@ fn refinement_with_finite_difference_derivatives_matches_the_analytic_one() {
 struct AtUpperBound(AbkowitzDynamics, f64);
 
 impl Dynamics for AtUpperBound {
-    fn accelerations(&self, s: &State, delta_rad: f64) -> Result<[f64; 3], DynamicsError> {
-        self.0.accelerations(s, delta_rad)
+    fn accelerations_for(&self, s: &State, input: &Input) -> Result<[f64; 3], DynamicsError> {
+        self.0.accelerations_for(s, input)
     }
     fn ship(&self) -> &Ship {
         self.0.ship()

@@ -3,7 +3,7 @@
 
 use shipid_io::{AddedMass, Ship, Side};
 use shipid_sim::{
-    Dynamics, DynamicsError, MmgModel, SimError, SimOptions, SimStatus, State, Turning,
+    Dynamics, DynamicsError, Input, MmgModel, SimError, SimOptions, SimStatus, State, Turning,
     kvlcc2_ship, simulate,
 };
 
@@ -14,7 +14,7 @@ struct UnstableYaw {
 }
 
 impl Dynamics for UnstableYaw {
-    fn accelerations(&self, s: &State, _delta: f64) -> Result<[f64; 3], DynamicsError> {
+    fn accelerations_for(&self, s: &State, _input: &Input) -> Result<[f64; 3], DynamicsError> {
         Ok([0.0, 0.0, self.lambda * s.r])
     }
     fn ship(&self) -> &Ship {
@@ -41,7 +41,7 @@ struct FailsAhead {
 }
 
 impl Dynamics for FailsAhead {
-    fn accelerations(&self, s: &State, _delta: f64) -> Result<[f64; 3], DynamicsError> {
+    fn accelerations_for(&self, s: &State, _input: &Input) -> Result<[f64; 3], DynamicsError> {
         if s.x0 <= self.x_fail_m {
             Ok([0.0; 3])
         } else if self.as_error {
