@@ -17,7 +17,7 @@ use shipid_model::{
     AbkowitzModel, CoefficientSet, Dof, EstimatorInfo, ModelFile, PrimeInertia, Samples, SetFile,
     TrainingWindow, design,
 };
-use shipid_sim::metrics::zigzag_events;
+use shipid_sim::metrics::{missing_execute_reason, zigzag_events};
 
 use crate::error::{PipelineError, bad_input};
 use crate::refine::{RefineOptions, refine_output_error};
@@ -257,8 +257,10 @@ pub fn window_range(
             let ev = zigzag_events(rec, rudder_deg, check_deg, side, &ds.ship);
             let have = ev.as_ref().map_or(0, |e| e.overshoots.len());
             if n == 0 || have < n as usize {
+                let why = missing_execute_reason(rec, rudder_deg, side)
+                    .map_or(String::new(), |w| format!(": {w}"));
                 return Err(bad_input(format!(
-                    "{}: {n} overshoots requested but the record has {have}",
+                    "{}: {n} overshoots requested but the record has {have}{why}",
                     r.file
                 )));
             }

@@ -369,6 +369,7 @@ pub fn validation_warnings(
         "the validation",
     ));
     warnings.extend(late_reversal_notes(ds));
+    warnings.extend(approach_notes(ds));
     warnings
 }
 
@@ -389,6 +390,48 @@ pub fn late_reversal_notes(ds: &shipid_io::Dataset) -> Vec<String> {
                     "{}: the rudder reverses {delay:.2} s ({:.2} L/U0) after the heading reaches the declared check angle: is the check angle in the data set right? The re-simulation reverses with that delay",
                     r.file,
                     delay / scale
+                )
+            })
+        })
+        .collect()
+}
+
+/// An approach speed at the first execute further than this from U0 (÷ U0) is not the steady approach
+/// at U0 that IMO metrics assume (a test started from rest, or at another propeller rate).
+const APPROACH_SPEED_TOLERANCE: f64 = 0.05;
+/// A speed change over the L/U0 before the first execute larger than this (÷ U0) is not steady.
+const APPROACH_CHANGE_TOLERANCE: f64 = 0.02;
+
+/// The zig-zags and turning circles of `ds` whose metrics do not start from a steady approach at the
+/// data set's U0: their advance, tactical diameter or overshoots are the record's own, not the
+/// ship's standard ones (a validation compares them with a re-simulation from the same start, which
+/// stays consistent).
+pub fn approach_notes(ds: &shipid_io::Dataset) -> Vec<String> {
+    ds.recordings
+        .iter()
+        .filter_map(|r| {
+            let a = shipid_sim::metrics::approach(&r.recording, &r.manoeuvre, &ds.ship)?;
+            let off = (a.speed_ratio - 1.0).abs() > APPROACH_SPEED_TOLERANCE;
+            let changing = a.change_ratio.abs() > APPROACH_CHANGE_TOLERANCE;
+            (off || changing).then(|| {
+                let how = match (off, changing) {
+                    (true, true) => format!(
+                        "at {:.2} U0 while the ship still {} ({:+.1} % of U0 over the L/U0 before)",
+                        a.speed_ratio,
+                        if a.change_ratio > 0.0 { "accelerates" } else { "slows" },
+                        100.0 * a.change_ratio
+                    ),
+                    (true, false) => format!("at {:.2} U0", a.speed_ratio),
+                    _ => format!(
+                        "while the speed still changes ({:+.1} % of U0 over the L/U0 before)",
+                        100.0 * a.change_ratio
+                    ),
+                };
+                format!(
+                    "{}: its rudder is put over {how}, not after a steady approach at the data set's U0 = {} m/s: its {} metrics are this record's own, not the ship's standard ones",
+                    r.file,
+                    ds.ship.u0,
+                    r.manoeuvre.kind()
                 )
             })
         })

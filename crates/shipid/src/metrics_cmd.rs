@@ -43,11 +43,16 @@ pub fn metrics_json(rows: &[(String, &'static str, Metrics)]) -> Value {
 pub fn run(dataset: &Path, as_json: bool) -> Result<Outcome, CliError> {
     let ds = Dataset::load(dataset)?;
     let rows = dataset_metrics(&ds);
+    let warnings = shipid_pipeline::validate::approach_notes(&ds);
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
     if as_json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&metrics_json(&rows)).unwrap_or_default()
-        );
+        let mut out = metrics_json(&rows);
+        if !warnings.is_empty() {
+            out["warnings"] = json!(warnings);
+        }
+        println!("{}", serde_json::to_string_pretty(&out).unwrap_or_default());
     } else {
         println!("{} ({})", ds.name, dataset.display());
         println!("{}", metrics_table(&rows));

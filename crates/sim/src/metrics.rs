@@ -2,12 +2,17 @@
 //! by one code path.
 //!
 //! Definitions, chosen to work on noisy tank data as well as on simulations:
-//! - **First execute**: the rudder's initial value δ₀ is its first sample. The first execute is found
-//!   where the rudder first departs from δ₀ by more than [`execute_threshold_deg`] (0.5°, or 10 % of the
-//!   rudder amplitude if that is smaller), with the crossing time interpolated linearly and moved back by
-//!   threshold / rudder rate, i.e. to the moment a rudder moving at the ship's rudder rate would have
-//!   left δ₀. If that first departure is towards the side opposite to the declared one, the record does
-//!   not perform the declared manoeuvre and every metric is undefined. The heading ψ₀ and the midship
+//! - **First execute**: the rudder put over is the first departure from the first sample by more than a
+//!   quarter of the rudder amplitude ([`DEFINITE_FRACTION`]); the stroke that led there is the run of
+//!   samples moving monotonically towards it, and the rudder's initial value δ₀ is the median of the
+//!   samples before that stroke (the first sample when the record starts with it). The first execute
+//!   is where the stroke first departs from δ₀ by more than [`execute_threshold_deg`] (0.5°, or 10 % of
+//!   the rudder amplitude if that is smaller), with the crossing time interpolated linearly and moved
+//!   back by threshold / rudder rate, i.e. to the moment a rudder moving at the ship's rudder rate
+//!   would have left δ₀. A rudder signal that is quantised or jitters at neutral by more than the
+//!   threshold (a step of a real rudder encoder is about 0.5°) thus does not fake an execute. If the
+//!   rudder is first put over towards the side opposite to the declared one, the record does not
+//!   perform the declared manoeuvre and every metric is undefined. The heading ψ₀ and the midship
 //!   position at the first execute (interpolated) are the original course and the origin.
 //! - **Zig-zag**: with the heading deviation ψ − ψ₀ counted positive towards the first execute side,
 //!   execute k+1 (k ≥ 1) is where the deviation first crosses the check angle with alternating sign
@@ -176,8 +181,35 @@ pub fn interp(t: &[f64], y: &[f64], tq: f64) -> f64 {
     }
 }
 
-/// The first execute towards `side` (see the module docs), or `None` when the rudder never leaves its
-/// initial value, or first leaves it towards the other side.
+/// Fraction of the rudder amplitude beyond which a departure is the rudder put over rather than the
+/// jitter or quantisation of a rudder signal at rest (module docs, "First execute").
+pub const DEFINITE_FRACTION: f64 = 0.25;
+
+/// The stroke that first carries the rudder more than `definite` [rad] towards `towards` (±1) from
+/// `reference`, searched from sample `from` up to (not including) `until`: the index of the first
+/// sample past that, and the index where the monotone run of samples leading there starts. `None`
+/// when the rudder does not get there, or first gets as far towards the other side.
+fn stroke(
+    delta: &[f64],
+    from: usize,
+    until: usize,
+    reference: f64,
+    towards: f64,
+    definite: f64,
+) -> Option<(usize, usize)> {
+    let k = (from..until).find(|&i| (delta[i] - reference).abs() > definite)?;
+    if towards * (delta[k] - reference) <= 0.0 {
+        return None;
+    }
+    let mut m = k;
+    while m > 0 && towards * delta[m - 1] <= towards * delta[m] {
+        m -= 1;
+    }
+    Some((k, m))
+}
+
+/// The first execute towards `side` (see the module docs), or `None` when the rudder is never put over,
+/// or is first put over towards the other side.
 pub fn first_execute(
     rec: &Recording,
     rudder_deg: f64,
@@ -188,15 +220,19 @@ pub fn first_execute(
         return None;
     }
     let thr = execute_threshold_deg(rudder_deg).to_radians();
-    let d0 = rec.delta[0];
-    let i = rec.delta.iter().position(|d| (d - d0).abs() > thr)?;
     let s = side.sign();
-    if (rec.delta[i] - d0) * s <= 0.0 {
-        return None;
-    }
-    // i ≥ 1 since the first sample has zero departure.
-    let (a0, a1) = (s * (rec.delta[i - 1] - d0), s * (rec.delta[i] - d0));
-    let crossing = rec.t[i - 1] + (thr - a0) / (a1 - a0) * (rec.t[i] - rec.t[i - 1]);
+    let definite = DEFINITE_FRACTION * rudder_deg.to_radians();
+    let (k, m) = stroke(&rec.delta, 0, rec.delta.len(), rec.delta[0], s, definite)?;
+    let d0 = median(&rec.delta[..=m]);
+    // The stroke passes the threshold at the latest at k (a quarter of the amplitude is above it).
+    let i = (m..=k).find(|&i| s * (rec.delta[i] - d0) > thr)?;
+    let crossing = if i == m {
+        // The stroke starts beyond the threshold (a jump within one sample interval).
+        rec.t[i]
+    } else {
+        let (a0, a1) = (s * (rec.delta[i - 1] - d0), s * (rec.delta[i] - d0));
+        rec.t[i - 1] + (thr - a0) / (a1 - a0) * (rec.t[i] - rec.t[i - 1])
+    };
     let rate = ship.rudder_rate_rad_s();
     let back = if rate.is_finite() && rate > 0.0 {
         thr / rate
@@ -210,6 +246,78 @@ pub fn first_execute(
         x0_m: interp(&rec.t, &rec.x0, t_s),
         y0_m: interp(&rec.t, &rec.y0, t_s),
     })
+}
+
+/// The approach a manoeuvre's metrics start from (IMO metrics assume a steady straight approach at
+/// the ship's U0).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Approach {
+    /// Speed of midship at the first execute ÷ U0 [-].
+    pub speed_ratio: f64,
+    /// Change of that speed over the L/U0 before the first execute ÷ U0 [-] (positive: accelerating).
+    pub change_ratio: f64,
+}
+
+/// The approach of `rec` for `manoeuvre` (a zig-zag or a turning circle whose first execute the
+/// record shows); `None` otherwise.
+pub fn approach(rec: &Recording, manoeuvre: &Manoeuvre, ship: &Ship) -> Option<Approach> {
+    let (rudder_deg, side) = match *manoeuvre {
+        Manoeuvre::ZigZag {
+            rudder_deg, side, ..
+        }
+        | Manoeuvre::Turning { rudder_deg, side } => (rudder_deg, side),
+        Manoeuvre::Free => return None,
+    };
+    if !(ship.u0 > 0.0 && ship.lpp > 0.0)
+        || rec.u.len() != rec.t.len()
+        || rec.v.len() != rec.t.len()
+    {
+        return None;
+    }
+    let first = first_execute(rec, rudder_deg, side, ship)?;
+    let speed = |t_s: f64| interp(&rec.t, &rec.u, t_s).hypot(interp(&rec.t, &rec.v, t_s));
+    let before = (first.t_s - ship.lpp / ship.u0).max(rec.t[0]);
+    let (at, earlier) = (speed(first.t_s), speed(before));
+    let a = Approach {
+        speed_ratio: at / ship.u0,
+        change_ratio: (at - earlier) / ship.u0,
+    };
+    (a.speed_ratio.is_finite() && a.change_ratio.is_finite()).then_some(a)
+}
+
+/// Why `rec` has no first execute towards `side` for a rudder of `rudder_deg` ([`first_execute`]
+/// gives `None`), in words for an error message; `None` when it has one or is not usable at all.
+pub fn missing_execute_reason(rec: &Recording, rudder_deg: f64, side: Side) -> Option<String> {
+    if !(usable(rec) && rudder_deg.is_finite() && rudder_deg > 0.0) {
+        return None;
+    }
+    let definite = DEFINITE_FRACTION * rudder_deg.to_radians();
+    let d_start = rec.delta[0];
+    let side_name = |s: f64| if s > 0.0 { "starboard" } else { "port" };
+    match rec.delta.iter().find(|d| (*d - d_start).abs() > definite) {
+        None => Some(format!(
+            "its rudder never moves more than {:.1}° (a quarter of the declared {rudder_deg}°) from its first value",
+            definite.to_degrees()
+        )),
+        Some(d) if (d - d_start) * side.sign() <= 0.0 => Some(format!(
+            "its rudder is first put over to {}, while the data set declares {}",
+            side_name(-side.sign()),
+            side_name(side.sign())
+        )),
+        Some(_) => None,
+    }
+}
+
+/// Median of a non-empty slice.
+fn median(x: &[f64]) -> f64 {
+    let mut v = x.to_vec();
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
 }
 
 /// First index `i ≥ from` where `sign · f` goes from below `level` at `i − 1` to at least `level` at
@@ -320,6 +428,7 @@ pub fn check_reaction_delay_s(
 ) -> Option<f64> {
     let ev = zigzag_events(rec, rudder_deg, check_deg, side, ship)?;
     let thr = execute_threshold_deg(rudder_deg).to_radians();
+    let definite = DEFINITE_FRACTION * rudder_deg.to_radians();
     let rate = ship.rudder_rate_rad_s();
     let t = &rec.t;
     let mut delays: Vec<f64> = Vec::new();
@@ -341,10 +450,13 @@ pub fn check_reaction_delay_s(
         // reversal when it starts inside the sample interval. A rudder that already moves there (an
         // early reaction) gives a delay of about 0.
         let held = rec.delta[i - 1];
-        let Some(j) = (i..t.len())
-            .take_while(|&j| t[j] < t_next)
-            .find(|&j| towards * (rec.delta[j] - held) > thr)
-        else {
+        // The reversal's stroke (not a step of a quantised rudder at its held angle), and its first
+        // sample past the threshold.
+        let until = t.partition_point(|&x| x < t_next);
+        let Some((k, m)) = stroke(&rec.delta, i, until, held, towards, definite) else {
+            continue;
+        };
+        let Some(j) = (m.max(i)..=k).find(|&j| towards * (rec.delta[j] - held) > thr) else {
             continue;
         };
         let a1 = towards * (rec.delta[j] - held);
@@ -361,13 +473,7 @@ pub fn check_reaction_delay_s(
     if delays.is_empty() {
         return None;
     }
-    delays.sort_by(f64::total_cmp);
-    let n = delays.len();
-    let median = if n % 2 == 1 {
-        delays[n / 2]
-    } else {
-        0.5 * (delays[n / 2 - 1] + delays[n / 2])
-    };
+    let median = median(&delays);
     // Below a tenth of the sampling interval the delay is the interpolation's error, not a reaction
     // (a reversal at the check measures 1e-5 s on the default data): an immediate reversal.
     let interval = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;

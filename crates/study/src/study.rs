@@ -38,7 +38,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use shipid_io::{Dataset, InputError, Manoeuvre};
 use shipid_model::CoefficientSet;
-use shipid_sim::metrics::zigzag_events;
+use shipid_sim::metrics::{missing_execute_reason, zigzag_events};
 
 use shipid_pipeline::fit::{EstimatorSpec, WindowSpec};
 
@@ -1037,10 +1037,12 @@ fn check_overshoots(
                 let have = zigzag_events(&r.recording, rudder_deg, check_deg, side, &ds.ship)
                     .map_or(0, |e| e.overshoots.len());
                 if (have as u32) < max {
+                    let why = missing_execute_reason(&r.recording, rudder_deg, side)
+                        .map_or(String::new(), |w| format!(": {w}"));
                     return Err(InputError::key(
                         path,
                         "training.overshoots",
-                        format!("{max} overshoots requested but `{f}` has {have}"),
+                        format!("{max} overshoots requested but `{f}` has {have}{why}"),
                     ));
                 }
             }

@@ -450,3 +450,123 @@ fn a_negative_reaction_delay_is_refused() {
         assert!(err.to_string().contains("reaction_delay_s"), "{err}");
     }
 }
+
+/// `rec`'s rudder as a real encoder reports it: quantised to `step_rad`, and on the approach
+/// (before `t_execute_s`) jittering by one step about neutral, first towards `first_jitter` (±1).
+fn quantised_jittering_rudder(
+    rec: &Recording,
+    step_rad: f64,
+    t_execute_s: f64,
+    first_jitter: f64,
+) -> Recording {
+    let jitter = [
+        first_jitter,
+        0.0,
+        -first_jitter,
+        0.0,
+        0.0,
+        first_jitter,
+        -first_jitter,
+        0.0,
+    ];
+    let delta = rec
+        .t
+        .iter()
+        .zip(&rec.delta)
+        .enumerate()
+        .map(|(i, (&t, &d))| {
+            let q = (d / step_rad).round() * step_rad;
+            if t < t_execute_s - 0.2 {
+                q + jitter[i % jitter.len()] * step_rad
+            } else {
+                q
+            }
+        })
+        .collect();
+    Recording {
+        delta,
+        ..rec.clone()
+    }
+}
+
+/// Regression (`rudder-jitter-false-execute`): an encoder step of 0.0098 rad (0.56°) is above the 0.5°
+/// execute threshold, so a rudder jittering by one step at neutral took the first execute from the
+/// jitter: a jitter towards the other side left the record without metrics, one towards the turn
+/// moved the execute (and the origin of every metric) into the approach.
+#[test]
+fn a_rudder_jittering_by_one_encoder_step_at_neutral_does_not_fake_the_first_execute() {
+    let model = MmgModel::kvlcc2();
+    let ship = *model.ship();
+    let step_rad = 0.0098;
+    // A 10 s approach: the jitter has time to fake an execute.
+    let check = |man: Manoeuvre, first_jitter: f64| {
+        let mut c = shipid_sim::controller_for(&man, 10.0).unwrap();
+        let clean = simulate(
+            &model,
+            c.as_mut(),
+            State::approach(ship.u0),
+            &SimOptions::new(300.0),
+        )
+        .unwrap()
+        .recording;
+        let quantised = quantised_jittering_rudder(&clean, step_rad, 10.0, first_jitter);
+        let (a, b) = (
+            metrics(&clean, &man, &ship),
+            metrics(&quantised, &man, &ship),
+        );
+        assert!(
+            a.entries().iter().filter(|e| e.1.is_some()).count() >= 3,
+            "{man:?}: {a:?}"
+        );
+        for ((key, want), (_, got)) in a.entries().iter().zip(b.entries()) {
+            match (want, got) {
+                (Some(w), Some(g)) => assert!(
+                    (w - g).abs() <= 0.01 * w.abs().max(1.0),
+                    "{man:?}, jitter {first_jitter}: {key} {g} against {w} with a clean rudder"
+                ),
+                (None, None) => {}
+                _ => panic!("{man:?}, jitter {first_jitter}: {key} {got:?} against {want:?}"),
+            }
+        }
+    };
+    for side in [Side::Starboard, Side::Port] {
+        for first_jitter in [1.0, -1.0] {
+            check(
+                Manoeuvre::ZigZag {
+                    rudder_deg: 20.0,
+                    check_deg: 20.0,
+                    side,
+                },
+                first_jitter,
+            );
+            check(
+                Manoeuvre::Turning {
+                    rudder_deg: 35.0,
+                    side,
+                },
+                first_jitter,
+            );
+        }
+    }
+}
+
+/// Why a record has no first execute, as the overshoot-count errors of `fit` and studies say it.
+#[test]
+fn a_record_without_a_first_execute_says_why() {
+    let check = |rec: &Recording, side: Side, expected: Option<&str>| {
+        let got = shipid_sim::metrics::missing_execute_reason(rec, 20.0, side);
+        match expected {
+            None => assert_eq!(got, None),
+            Some(e) => assert!(got.as_deref().is_some_and(|g| g.contains(e)), "{got:?}"),
+        }
+    };
+    let stbd = sine_zigzag(27.0, 20.0, 0.09, Side::Starboard, 100.0, 0.05, 0.0);
+    check(&stbd, Side::Starboard, None);
+    check(
+        &stbd,
+        Side::Port,
+        Some("first put over to starboard, while the data set declares port"),
+    );
+    let still = record(50.0, 0.1, |t| (t, 0.0, 0.0, 0.004));
+    check(&still, Side::Port, Some("never moves more than 5.0°"));
+}
