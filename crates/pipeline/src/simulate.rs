@@ -284,3 +284,50 @@ pub fn straight_run_speed(model: &dyn Dynamics) -> Option<f64> {
     }
     Some(0.5 * (lo + hi))
 }
+
+/// A model that takes the propeller rate and runs straight at its own rate further than this from
+/// U0 (÷ U0) does not start a standard manoeuvre steady at U0: the rate its recordings ran at drove
+/// it at another speed (the HSVA fit: 0.5 % off).
+pub const OWN_RATE_APPROACH_TOLERANCE: f64 = 0.01;
+
+/// Where a standard manoeuvre of a model at its own propeller rate starts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum OwnRateApproach {
+    /// At U0: the model runs straight there (within [`OWN_RATE_APPROACH_TOLERANCE`]), or it takes no
+    /// propeller rate (a polynomial or a GP holds the speed its training approached at).
+    AtU0,
+    /// At the model's straight-run speed at its own rate, more than the tolerance away from U0.
+    StraightRun {
+        /// The straight-run speed [m/s].
+        speed_m_s: f64,
+        /// The model's own propeller rate [1/s].
+        rate_hz: f64,
+    },
+    /// The model runs straight at no speed between 2 % and three times U0 at its own rate: the
+    /// manoeuvre starts at U0 and is not steady.
+    NoStraightRun {
+        /// The model's own propeller rate [1/s].
+        rate_hz: f64,
+    },
+}
+
+/// The approach of a standard manoeuvre of `model` at its own propeller rate.
+pub fn own_rate_approach(model: &dyn Dynamics) -> OwnRateApproach {
+    let Some(rate_hz) = model
+        .propeller_rate_hz()
+        .filter(|_| model.takes_propeller_rate())
+    else {
+        return OwnRateApproach::AtU0;
+    };
+    let u0 = model.ship().u0;
+    match straight_run_speed(model) {
+        None => OwnRateApproach::NoStraightRun { rate_hz },
+        Some(u) if (u / u0 - 1.0).abs() > OWN_RATE_APPROACH_TOLERANCE => {
+            OwnRateApproach::StraightRun {
+                speed_m_s: u,
+                rate_hz,
+            }
+        }
+        Some(_) => OwnRateApproach::AtU0,
+    }
+}

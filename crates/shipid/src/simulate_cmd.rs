@@ -11,8 +11,8 @@ use shipid_pipeline::bands::BandRun;
 use shipid_pipeline::calibration::{ModelBands, RunBands};
 use shipid_pipeline::model_file::load_model;
 use shipid_pipeline::simulate::{
-    MAX_STORED_SAMPLES, SimRequest, constant_environment, parse_flow, sim_grid,
-    simulate_on_grid_in, simulation_windage, straight_run_speed,
+    MAX_STORED_SAMPLES, OwnRateApproach, SimRequest, constant_environment, own_rate_approach,
+    parse_flow, sim_grid, simulate_on_grid_in, simulation_windage, straight_run_speed,
 };
 use shipid_pipeline::spec::parse_manoeuvre;
 use shipid_sim::{Dynamics, RecordedRate, SimOutput, SimStatus, WithPropellerRate, metrics};
@@ -187,7 +187,28 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
             loaded.ship().u0
         );
     }
-    let approach_m_s = rate.as_ref().map_or(loaded.ship().u0, |(_, u)| *u);
+    let u0 = loaded.ship().u0;
+    let approach_m_s = match &rate {
+        Some((_, u)) => *u,
+        None => match own_rate_approach(loaded.as_ref()) {
+            OwnRateApproach::AtU0 => u0,
+            OwnRateApproach::StraightRun { speed_m_s, rate_hz } => {
+                eprintln!(
+                    "note: {} runs straight at {speed_m_s:.4} m/s ({:.2} U0) at its own propeller rate {rate_hz:.4} 1/s, not at U0 = {u0} m/s: the manoeuvre starts from that steady approach (--propeller-rate N for another rate)",
+                    a.model,
+                    speed_m_s / u0
+                );
+                speed_m_s
+            }
+            OwnRateApproach::NoStraightRun { rate_hz } => {
+                eprintln!(
+                    "warning: {} runs straight at no speed between 2 % and 3 times U0 at its own propeller rate {rate_hz:.4} 1/s: the manoeuvre starts at U0 = {u0} m/s and its approach is not steady",
+                    a.model
+                );
+                u0
+            }
+        },
+    };
     let model: &dyn Dynamics = match &rate {
         Some((driven, _)) => driven,
         None => loaded.as_ref(),

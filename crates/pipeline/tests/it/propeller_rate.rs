@@ -191,3 +191,47 @@ fn validation_of_a_zigzag_recorded_with_a_late_reversal_blamed_the_model() {
     assert!((delay - 0.3).abs() < 2e-3, "measured delay {delay}");
     assert!(m.mrae.unwrap() < 1e-3, "{m:?}");
 }
+
+/// Regression (`slow-tests-u0-mismatch`): an mmg model identified from runs at 6 rps (steady at
+/// 0.6 m/s) in a data set whose U0 is 1.179 m/s started `simulate`'s standard manoeuvres at U0 with
+/// its own 6 rps, slowing down through the execute (tactical diameter 3.67 L instead of 3.12 L).
+#[test]
+fn a_model_at_its_own_rate_starts_a_standard_manoeuvre_from_its_straight_run() {
+    use shipid_pipeline::simulate::{OwnRateApproach, own_rate_approach};
+    let check = |model: &dyn Dynamics, expected: OwnRateApproach| {
+        let got = own_rate_approach(model);
+        match (got, expected) {
+            (
+                OwnRateApproach::StraightRun { speed_m_s, rate_hz },
+                OwnRateApproach::StraightRun {
+                    speed_m_s: want_u,
+                    rate_hz: want_n,
+                },
+            ) => assert!(
+                (speed_m_s - want_u).abs() < 0.01 * want_u && rate_hz == want_n,
+                "{got:?} against {expected:?}"
+            ),
+            _ => assert_eq!(got, expected),
+        }
+    };
+    let reference = MmgModel::kvlcc2();
+    let ship = *reference.ship();
+    check(&reference, OwnRateApproach::AtU0);
+    let own = reference.propeller_rate();
+    // The same ship at half its rate: the advance ratio holds, so it runs straight at half its speed.
+    let slow = MmgModel::at_rate(ship, *reference.parameters(), 0.5 * own).unwrap();
+    check(
+        &slow,
+        OwnRateApproach::StraightRun {
+            speed_m_s: straight_run_speed(&WithPropellerRate::new(
+                &reference,
+                RecordedRate::constant(0.5 * own),
+            ))
+            .unwrap(),
+            rate_hz: 0.5 * own,
+        },
+    );
+    // A model whose rate is fixed by a recording takes no other: its approach is U0.
+    let driven = WithPropellerRate::new(&reference, RecordedRate::constant(0.5 * own));
+    check(&driven, OwnRateApproach::AtU0);
+}
