@@ -348,6 +348,11 @@ pub fn validation_warnings(
             .map(ToString::to_string)
             .collect(),
     };
+    // A study (`None`) fits its polynomial and GP cases on recordings that may have run at
+    // different rates.
+    if model.is_none() {
+        warnings.extend(rates_between_runs_note(&ds.recordings));
+    }
     // A model without a rate input, against the rate it was trained at (a study, `None`, trains on
     // the data set it tests on).
     if model.is_some_and(|m| !m.takes_propeller_rate()) {
@@ -572,32 +577,94 @@ pub fn training_rate_mismatches<'a>(
     let Some((data, windows)) = crate::range::training_windows(model_spec) else {
         return Vec::new();
     };
-    let mut trained: Vec<f64> = crate::range::window_samples(&data.1, &windows)
-        .flat_map(|(rec, idx)| {
-            let n = rec.n.as_deref().unwrap_or(&[]);
-            idx.into_iter()
-                .filter_map(|i| n.get(i).copied())
-                .collect::<Vec<f64>>()
-        })
-        .filter(|x| x.is_finite())
-        .collect();
+    // The median rate of each training window: a model trained on runs at several rates has seen each.
+    let trained = distinct_rates(
+        crate::range::window_samples(&data.1, &windows)
+            .filter_map(|(rec, idx)| {
+                let n = rec.n.as_deref()?;
+                let mut w: Vec<f64> = idx
+                    .into_iter()
+                    .filter_map(|i| n.get(i).copied())
+                    .filter(|x| x.is_finite())
+                    .collect();
+                if w.is_empty() {
+                    return None;
+                }
+                w.sort_by(f64::total_cmp);
+                Some(shipid_uncertainty::band::quantile(&w, 0.5))
+            })
+            .collect(),
+    );
     if trained.is_empty() {
         return Vec::new();
     }
-    trained.sort_by(f64::total_cmp);
-    let trained_hz = shipid_uncertainty::band::quantile(&trained, 0.5);
+    let at = match trained.as_slice() {
+        [one] => format!("{one:.3} 1/s"),
+        several => format!("runs at {} 1/s", rates_text(several)),
+    };
     recordings
         .into_iter()
         .filter_map(|r| {
             let (_, median, _) = rate_percentiles(r)?;
-            ((median - trained_hz).abs() > PROPELLER_RATE_DIFFERENCE_NOTE * trained_hz.abs()).then(|| {
+            let seen = trained
+                .iter()
+                .any(|t| (median - t).abs() <= PROPELLER_RATE_DIFFERENCE_NOTE * t.abs());
+            (!seen).then(|| {
                 format!(
-                    "{}: recorded at a propeller rate of {median:.3} 1/s, but the model was identified at {trained_hz:.3} 1/s and has no propeller-rate input (polynomial sets, sparse GP): its forces are those of the rate it was identified at (an mmg model takes the recorded rate)",
+                    "{}: recorded at a propeller rate of {median:.3} 1/s, but the model was identified at {at} and has no propeller-rate input (polynomial sets, sparse GP): its forces are those of the rates it was identified at (an mmg model takes the recorded rate)",
                     r.file
                 )
             })
         })
         .collect()
+}
+
+/// The distinct propeller rates [1/s] of `rates` (ascending): rates within
+/// [`PROPELLER_RATE_DIFFERENCE_NOTE`] of the previous distinct one are the same rate.
+fn distinct_rates(mut rates: Vec<f64>) -> Vec<f64> {
+    rates.retain(|x| x.is_finite());
+    rates.sort_by(f64::total_cmp);
+    let mut out: Vec<f64> = Vec::new();
+    for x in rates {
+        if out
+            .last()
+            .is_none_or(|&y| (x - y).abs() > PROPELLER_RATE_DIFFERENCE_NOTE * y.abs())
+        {
+            out.push(x);
+        }
+    }
+    out
+}
+
+fn rates_text(rates: &[f64]) -> String {
+    rates
+        .iter()
+        .map(|x| format!("{x:.3}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// For a fit (or a study's fits) of a model without a propeller-rate input on `recordings`: a note
+/// when they ran at different constant rates (medians more than [`PROPELLER_RATE_DIFFERENCE_NOTE`]
+/// apart), whose forces such a model mixes as if they were at one rate.
+pub fn rates_between_runs_note<'a>(
+    recordings: impl IntoIterator<Item = &'a DatasetRecording>,
+) -> Option<String> {
+    let medians: Vec<(String, f64)> = recordings
+        .into_iter()
+        .filter_map(|r| Some((r.file.clone(), rate_percentiles(r)?.1)))
+        .collect();
+    let distinct = distinct_rates(medians.iter().map(|m| m.1).collect());
+    (distinct.len() > 1).then(|| {
+        let runs = medians
+            .iter()
+            .map(|(f, n)| format!("{f} {n:.3}"))
+            .collect::<Vec<_>>()
+            .join(", ");
+        format!(
+            "the recordings ran at different propeller rates ({runs} 1/s): a model without a propeller-rate input (polynomial sets, sparse GP) fits their forces as if at one rate; an mmg model takes each sample's rate"
+        )
+    })
 }
 
 /// 2nd, 50th and 98th percentiles of the recorded propeller rate [1/s] of `r` (robust to single

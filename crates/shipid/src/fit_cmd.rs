@@ -12,7 +12,7 @@ use shipid_pipeline::fit::{EstimatorSpec, FitOutput, WindowSpec, fit_dataset, lo
 use shipid_pipeline::fit_gp::{DEFAULT_SIMILARITY, fit_gp_dataset, model_text};
 use shipid_pipeline::model_file::load_model;
 use shipid_pipeline::range::StateExtent;
-use shipid_pipeline::validate::propeller_rate_variations;
+use shipid_pipeline::validate::{propeller_rate_variations, rates_between_runs_note};
 
 use crate::{CliError, Outcome, failed};
 
@@ -122,17 +122,25 @@ fn training_warnings(
     for w in &warnings {
         eprintln!("warning: {w}");
     }
-    if validate || takes_rate {
+    if takes_rate {
         return warnings;
     }
-    let rates: Vec<String> = propeller_rate_variations(
+    let chosen = || {
         ds.recordings
             .iter()
-            .filter(|r| recordings.is_empty() || recordings.contains(&r.file)),
-    )
-    .iter()
-    .map(ToString::to_string)
-    .collect();
+            .filter(|r| recordings.is_empty() || recordings.contains(&r.file))
+    };
+    if let Some(w) = rates_between_runs_note(chosen()) {
+        eprintln!("warning: {w}");
+        warnings.push(w);
+    }
+    if validate {
+        return warnings;
+    }
+    let rates: Vec<String> = propeller_rate_variations(chosen())
+        .iter()
+        .map(ToString::to_string)
+        .collect();
     for w in &rates {
         eprintln!("warning: {w}");
     }

@@ -6,7 +6,7 @@ use shipid_io::{DatasetRecording, Manoeuvre, Recording, Side};
 use shipid_pipeline::generate::T_EXECUTE_S;
 use shipid_pipeline::replay::{replay_segment_in, segments};
 use shipid_pipeline::simulate::straight_run_speed;
-use shipid_pipeline::validate::{recorded_rate_notes, validate_recording};
+use shipid_pipeline::validate::{rates_between_runs_note, recorded_rate_notes, validate_recording};
 use shipid_sim::{
     Dynamics, MmgModel, RecordedRate, SimOptions, State, Turning, WithPropellerRate, simulate,
 };
@@ -102,7 +102,16 @@ fn a_segment_replay_follows_a_rate_that_drops_in_the_turn() {
 /// The notes a validation of a model that takes the rate (holding `own` 1/s) gives recordings of
 /// the rates `rates` (one recording each, constant over 10 samples unless a pair is given).
 fn check_notes(own: f64, rates: &[(f64, f64)], expected: &[&str]) {
-    let recordings: Vec<DatasetRecording> = rates
+    let notes = recorded_rate_notes(Some(own), &runs_at(rates));
+    assert_eq!(notes.len(), usize::from(!expected.is_empty()), "{notes:?}");
+    for e in expected {
+        assert!(notes[0].contains(e), "{notes:?} lacks {e}");
+    }
+}
+
+/// One recording per `(from, to)` pair, its rate going linearly from one to the other over 10 samples.
+fn runs_at(rates: &[(f64, f64)]) -> Vec<DatasetRecording> {
+    rates
         .iter()
         .enumerate()
         .map(|(k, &(from, to))| DatasetRecording {
@@ -118,12 +127,7 @@ fn check_notes(own: f64, rates: &[(f64, f64)], expected: &[&str]) {
                 ..Recording::default()
             },
         })
-        .collect();
-    let notes = recorded_rate_notes(Some(own), &recordings);
-    assert_eq!(notes.len(), usize::from(!expected.is_empty()), "{notes:?}");
-    for e in expected {
-        assert!(notes[0].contains(e), "{notes:?} lacks {e}");
-    }
+        .collect()
 }
 
 #[test]
@@ -234,4 +238,25 @@ fn a_model_at_its_own_rate_starts_a_standard_manoeuvre_from_its_straight_run() {
     // A model whose rate is fixed by a recording takes no other: its approach is U0.
     let driven = WithPropellerRate::new(&reference, RecordedRate::constant(0.5 * own));
     check(&driven, OwnRateApproach::AtU0);
+}
+
+/// Regression (`rate-differs-between-runs-no-warning`): a polynomial fitted on runs at 11.85 and at
+/// 6 rps said nothing, and its validation then named one of its own training runs as recorded at a
+/// rate other than the model's.
+#[test]
+fn a_fit_without_a_rate_input_on_runs_at_different_rates_says_so() {
+    let check = |rates: &[f64], expected: Option<&str>| {
+        let pairs: Vec<(f64, f64)> = rates.iter().map(|&n| (n, n)).collect();
+        let note = rates_between_runs_note(&runs_at(&pairs));
+        match expected {
+            None => assert_eq!(note, None),
+            Some(e) => assert!(note.as_deref().is_some_and(|n| n.contains(e)), "{note:?}"),
+        }
+    };
+    check(&[10.0], None);
+    check(&[10.0, 10.05, 9.97], None);
+    check(
+        &[11.852, 6.0],
+        Some("different propeller rates (run0.csv 11.852, run1.csv 6.000 1/s)"),
+    );
 }
