@@ -331,8 +331,15 @@ pub fn window_states(ds: &Dataset, windows: &[TrainingWindow]) -> Vec<[f64; 4]> 
         .collect()
 }
 
+/// Below this speed (÷ U0) a sample's drift angle and non-dimensional yaw rate are the noise of a
+/// velocity near zero (a run that starts from rest), and the mmg family's non-dimensionalisation
+/// is meaningless: its fit skips such samples, and a training extent does not take its drift and
+/// r′ from them.
+pub const SLOW_SPEED_OVER_U0: f64 = 0.05;
+
 /// The extent of a set of states, as a user reads it first: the largest drift angle, non-dimensional
-/// yaw rate and rudder angle, and the lowest speed.
+/// yaw rate (both from samples faster than [`SLOW_SPEED_OVER_U0`]) and rudder angle, and the lowest
+/// speed.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct StateExtent {
     /// Largest |β| = |atan2(−v, u)| [deg].
@@ -365,7 +372,7 @@ impl StateExtent {
                 continue;
             }
             any = true;
-            if speed > 0.0 {
+            if speed > SLOW_SPEED_OVER_U0 * ship.u0 {
                 e.max_drift_deg = e
                     .max_drift_deg
                     .max((-rec.v[i]).atan2(rec.u[i]).to_degrees().abs());

@@ -225,9 +225,10 @@ pub fn training_samples(ds: &Dataset, opts: &MmgFitOptions) -> Result<TrainingDa
                 }
             };
             let state = State::of_recording(rec, i);
-            // Below 5 % of U0 (or NaN) the MMG non-dimensionalisation is meaningless; a propeller
-            // turning astern (n < 0) is outside the MMG propeller model, which is for ahead.
-            let slow = state.speed().is_nan() || state.speed() <= 0.05 * ship.u0;
+            // Slow samples (or NaN: `range::SLOW_SPEED_OVER_U0`) are skipped; a propeller turning
+            // astern (n < 0) is outside the MMG propeller model, which is for ahead.
+            let slow = state.speed().is_nan()
+                || state.speed() <= crate::range::SLOW_SPEED_OVER_U0 * ship.u0;
             if slow || !(n_hz.is_finite() && n_hz >= 0.0) {
                 continue;
             }

@@ -96,3 +96,40 @@ fn a_run_outside_the_training_states_is_warned_about_with_what_lies_beyond() {
         "{w}"
     );
 }
+
+/// Regression (`extent-from-near-rest-noise`): a run starting from rest has a first sample at
+/// 0.005 U0 whose velocity noise points 35° off the bow; the training extent took its drift from it,
+/// so a turn with 19° of drift was not named as beyond training drift of 15°.
+#[test]
+fn the_training_extent_takes_no_drift_from_a_ship_at_rest() {
+    let ship = shipid_sim::kvlcc2_ship();
+    let u0 = ship.u0;
+    // (u, v) [÷ U0] of each sample; r = 0.
+    let rec = |uv: &[(f64, f64)]| shipid_io::Recording {
+        t: (0..uv.len()).map(|i| i as f64).collect(),
+        u: uv.iter().map(|p| p.0 * u0).collect(),
+        v: uv.iter().map(|p| p.1 * u0).collect(),
+        r: vec![0.0; uv.len()],
+        delta: vec![0.0; uv.len()],
+        ..Default::default()
+    };
+    let check = |uv: &[(f64, f64)], drift_deg: f64, min_speed: f64| {
+        let r = rec(uv);
+        let e = StateExtent::of(&r, &ship, 0..uv.len()).unwrap();
+        assert!((e.max_drift_deg - drift_deg).abs() < 0.05, "{e:?}");
+        assert!((e.min_speed_over_u0 - min_speed).abs() < 1e-3, "{e:?}");
+    };
+    let at_rest = (0.004, -0.003);
+    let drift_15 = (
+        0.5 * 15f64.to_radians().cos(),
+        -0.5 * 15f64.to_radians().sin(),
+    );
+    check(&[at_rest, drift_15], 15.0, 0.005);
+    check(&[(1.0, 0.0), drift_15], 15.0, 0.5);
+    // Just above the floor the drift counts.
+    let slow_drift_30 = (
+        0.06 * 30f64.to_radians().cos(),
+        -0.06 * 30f64.to_radians().sin(),
+    );
+    check(&[slow_drift_30, drift_15], 30.0, 0.06);
+}
