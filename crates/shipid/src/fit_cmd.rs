@@ -495,8 +495,10 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
         eprintln!("warning: {w}");
         warnings.push(w);
     }
-    if a.estimator.tune && a.estimator.refine {
-        // The one slow combination (tens of seconds): say what it is doing before it starts.
+    let slow = a.estimator.tune && a.estimator.refine;
+    if slow {
+        // The one slow combination (tens of seconds): say what it is doing before it starts (a line
+        // for logs), and on a terminal that it is still at it.
         eprintln!(
             "cross-validating the prior weight over {} candidates, every fold's fit refined (output error), then refining from every candidate (the valley){}…",
             shipid_pipeline::mmg::CV_GRID.len(),
@@ -507,7 +509,12 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
             }
         );
     }
-    let (fit, mut file) = fit_mmg_model_file(&ds, &opts, a.estimator.refine)?;
+    let bar = slow.then(|| working("cross-validating and refining the mmg fit".into()));
+    let fitted = fit_mmg_model_file(&ds, &opts, a.estimator.refine);
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    let (fit, mut file) = fitted?;
     if let Some((n, seed)) = a.bootstrap {
         let family = MmgFamily {
             opts: opts.clone(),
