@@ -3,6 +3,7 @@
 //! still be read unchanged, and applied to recordings by `diagnose` and `validate`. A sparse GP carries
 //! its own (its sparse points and their similarity, [`gp_outside_fraction`]).
 
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
 use shipid_io::{Dataset, PrimeScale, Recording};
@@ -10,6 +11,7 @@ use shipid_model::design::primed_state;
 use shipid_model::{
     AugmentedModelFile, CoefficientSet, IdentificationRange, ModelFile, TrainingWindow,
 };
+use shipid_sim::metrics::relative_to_water;
 
 use crate::model_file::{absolute_path, resolve_base, resolve_stored, training_hash};
 
@@ -215,6 +217,8 @@ pub fn outside_count(
     scale: &PrimeScale,
     idx: impl Iterator<Item = usize>,
 ) -> (usize, usize) {
+    let rec = relative_to_water(rec);
+    let rec = rec.as_ref();
     let (mut outside, mut total) = (0usize, 0usize);
     for i in idx {
         let [du, v, r, d] = primed_state(rec, scale, i);
@@ -244,6 +248,7 @@ pub fn outside_fraction(
 /// Fraction of the samples of `rec` outside the identification range a model carries (a sparse GP's:
 /// no sparse point is d_gen-similar to the state).
 pub fn gp_outside_fraction(gp: &dyn shipid_sim::OwnRange, rec: &Recording) -> f64 {
+    let rec = relative_to_water(rec);
     let outside = (0..rec.len())
         .filter(|&i| !gp.covers(rec.u[i], rec.v[i], rec.r[i], rec.delta[i]))
         .count();
@@ -309,9 +314,10 @@ pub fn state_range_of(states: &[[f64; 4]]) -> Option<IdentificationRange> {
 pub fn window_samples<'a>(
     ds: &'a Dataset,
     windows: &'a [TrainingWindow],
-) -> impl Iterator<Item = (&'a Recording, Vec<usize>)> + 'a {
+) -> impl Iterator<Item = (Cow<'a, Recording>, Vec<usize>)> + 'a {
     windows.iter().filter_map(|w| {
-        let rec = &ds.recording(&w.recording)?.recording;
+        // Through the water, as the fit saw them (a recorded current taken out).
+        let rec = relative_to_water(&ds.recording(&w.recording)?.recording);
         let idx = (0..rec.len())
             .filter(|&i| rec.t[i] >= w.t_start_s && rec.t[i] <= w.t_end_s)
             .collect();
@@ -325,7 +331,7 @@ pub fn window_states(ds: &Dataset, windows: &[TrainingWindow]) -> Vec<[f64; 4]> 
     window_samples(ds, windows)
         .flat_map(|(rec, idx)| {
             idx.into_iter()
-                .map(|i| primed_state(rec, &scale, i))
+                .map(|i| primed_state(&rec, &scale, i))
                 .collect::<Vec<_>>()
         })
         .collect()
@@ -365,6 +371,7 @@ impl StateExtent {
             max_rudder_deg: 0.0,
             min_speed_over_u0: f64::INFINITY,
         };
+        let rec = relative_to_water(rec);
         let mut any = false;
         for i in idx {
             let speed = rec.u[i].hypot(rec.v[i]);
@@ -389,7 +396,7 @@ impl StateExtent {
     /// The extent of `windows` in `ds`.
     pub fn of_windows(ds: &Dataset, windows: &[TrainingWindow]) -> Option<StateExtent> {
         window_samples(ds, windows)
-            .filter_map(|(rec, idx)| StateExtent::of(rec, &ds.ship, idx.into_iter()))
+            .filter_map(|(rec, idx)| StateExtent::of(&rec, &ds.ship, idx.into_iter()))
             .reduce(|a, b| StateExtent {
                 max_drift_deg: a.max_drift_deg.max(b.max_drift_deg),
                 max_yaw_rate_prime: a.max_yaw_rate_prime.max(b.max_yaw_rate_prime),

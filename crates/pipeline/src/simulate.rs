@@ -249,7 +249,12 @@ pub fn simulate_on_grid_in(
 ) -> Result<SimOutput, PipelineError> {
     match env {
         Some(env) => {
-            simulate_on_grid_from(&WithEnvironment::new(model, env), m, grid, approach_m_s)
+            let current = env.has_current().then(|| env.clone());
+            let mut out =
+                simulate_on_grid_from(&WithEnvironment::new(model, env), m, grid, approach_m_s)?;
+            // Its metrics are taken relative to the water, as a recording's in a current are.
+            out.recording.current = current.and_then(|e| e.current_series(&out.recording.t));
+            Ok(out)
         }
         None => simulate_on_grid_from(model, m, grid, approach_m_s),
     }

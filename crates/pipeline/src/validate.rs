@@ -176,7 +176,12 @@ pub fn closed_loop_in(
     env: Option<KnownEnvironment>,
 ) -> Option<SimOutput> {
     let rec = &r.recording;
-    let model = with_recorded_inputs(model, rec, rec.t.first().copied().unwrap_or(0.0), env);
+    let t0 = rec.t.first().copied().unwrap_or(0.0);
+    let current = env
+        .as_ref()
+        .filter(|e| e.has_current())
+        .map(|e| e.replay_from(t0));
+    let model = with_recorded_inputs(model, rec, t0, env);
     let model = model.as_ref();
     let (rudder, side) = match r.manoeuvre {
         Manoeuvre::ZigZag {
@@ -188,21 +193,21 @@ pub fn closed_loop_in(
     if rec.is_empty() {
         return None;
     }
-    let t0 = rec.t[0];
     let t_exec = first_execute(rec, rudder, side, ship).map_or(0.0, |f| (f.t_s - t0).max(0.0));
     let delay_s = recorded_reaction_delay_s(r, ship).unwrap_or(0.0);
-    Some(
-        match controller_with_reaction_delay(&r.manoeuvre, t_exec, delay_s) {
-            Ok(mut c) => shipid_sim::simulate(
-                model,
-                c.as_mut(),
-                initial_state(rec),
-                &options(ship, rec.t[rec.len() - 1] - t0),
-            )
-            .unwrap_or_else(|e| failed_output(format!("cannot simulate: {e}"))),
-            Err(e) => failed_output(format!("no controller: {e}")),
-        },
-    )
+    let mut out = match controller_with_reaction_delay(&r.manoeuvre, t_exec, delay_s) {
+        Ok(mut c) => shipid_sim::simulate(
+            model,
+            c.as_mut(),
+            initial_state(rec),
+            &options(ship, rec.t[rec.len() - 1] - t0),
+        )
+        .unwrap_or_else(|e| failed_output(format!("cannot simulate: {e}"))),
+        Err(e) => failed_output(format!("no controller: {e}")),
+    };
+    // The re-simulation's metrics are taken relative to the water, as the recording's are.
+    out.recording.current = current.and_then(|e| e.current_series(&out.recording.t));
+    Some(out)
 }
 
 /// A recorded zig-zag's reaction delay at its checks ([`check_reaction_delay_s`]), with which
@@ -433,7 +438,7 @@ pub fn approach_notes(ds: &shipid_io::Dataset) -> Vec<String> {
                     ),
                 };
                 format!(
-                    "{}: its rudder is put over {how}, not after a steady approach at the data set's U0 = {} m/s: its {} metrics are this record's own, not the ship's standard ones",
+                    "{}: its rudder is put over {how}, not after a steady approach at the data set's U0 = {:.3} m/s: its {} metrics are this record's own, not the ship's standard ones",
                     r.file,
                     ds.ship.u0,
                     r.manoeuvre.kind()

@@ -194,7 +194,7 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
             OwnRateApproach::AtU0 => u0,
             OwnRateApproach::StraightRun { speed_m_s, rate_hz } => {
                 eprintln!(
-                    "note: {} runs straight at {speed_m_s:.4} m/s ({:.2} U0) at its own propeller rate {rate_hz:.4} 1/s, not at U0 = {u0} m/s: the manoeuvre starts from that steady approach (--propeller-rate N for another rate)",
+                    "note: {} runs straight at {speed_m_s:.4} m/s ({:.2} U0) at its own propeller rate {rate_hz:.4} 1/s, not at U0 = {u0:.3} m/s: the manoeuvre starts from that steady approach (--propeller-rate N for another rate)",
                     a.model,
                     speed_m_s / u0
                 );
@@ -202,7 +202,7 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
             }
             OwnRateApproach::NoStraightRun { rate_hz } => {
                 eprintln!(
-                    "warning: {} runs straight at no speed between 2 % and 3 times U0 at its own propeller rate {rate_hz:.4} 1/s: the manoeuvre starts at U0 = {u0} m/s and its approach is not steady",
+                    "warning: {} runs straight at no speed between 2 % and 3 times U0 at its own propeller rate {rate_hz:.4} 1/s: the manoeuvre starts at U0 = {u0:.3} m/s and its approach is not steady",
                     a.model
                 );
                 u0

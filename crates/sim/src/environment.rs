@@ -374,6 +374,24 @@ impl KnownEnvironment {
         }
     }
 
+    /// The current at simulation times `t_s` as a recorded flow (speed and the direction it comes
+    /// from): what a simulation in this environment carries in its recording, so that its metrics
+    /// are taken relative to the water as the recording's are. `None` without a current.
+    pub fn current_series(&self, t_s: &[f64]) -> Option<shipid_io::FlowSeries> {
+        self.current.as_ref()?;
+        let (speed_m_s, from_rad) = t_s
+            .iter()
+            .map(|&t| {
+                let [n, e] = self.current_at(t);
+                (n.hypot(e), (-e).atan2(-n))
+            })
+            .unzip();
+        Some(shipid_io::FlowSeries {
+            speed_m_s,
+            from_rad,
+        })
+    }
+
     /// Rate of change of the current velocity [north, east] [m/s²] at `t_s`: the slope of the
     /// interval that holds it (zero beyond the ends).
     pub fn current_rate_at(&self, t_s: f64) -> [f64; 2] {

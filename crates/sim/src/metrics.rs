@@ -27,6 +27,12 @@
 //!   linearly between samples. The steady diameter is the diameter of a least-squares (Kåsa) circle
 //!   fitted to the track over the last 360° of heading change; it needs at least 540° of heading change
 //!   in the record, so that the fitted turn starts after the 180° point. All ÷ L.
+//! - **A recorded current**: a record that carries one is measured relative to the water
+//!   ([`relative_to_water`]: its drift taken out of the track, its velocities through the water), as
+//!   trials correct their turning circles; a simulation in a recorded current carries it too, so the
+//!   two compare alike.
+
+use std::borrow::Cow;
 
 use serde::{Deserialize, Serialize};
 use shipid_io::{Manoeuvre, Recording, Ship, Side};
@@ -125,6 +131,8 @@ pub fn metrics(rec: &Recording, manoeuvre: &Manoeuvre, ship: &Ship) -> Metrics {
     if !(usable(rec) && ship.lpp > 0.0 && ship.u0 > 0.0) {
         return Metrics::default();
     }
+    let rec = relative_to_water(rec);
+    let rec = rec.as_ref();
     let m = match *manoeuvre {
         Manoeuvre::ZigZag {
             rudder_deg,
@@ -248,6 +256,44 @@ pub fn first_execute(
     })
 }
 
+/// `rec` relative to the water when it carries a recorded current: positions with the current's
+/// drift since the first sample taken out (the track through the water, to which trials correct
+/// their turning circles) and velocities through the water; `rec` itself otherwise. A uniform
+/// current only carries the ship along, so a manoeuvre's metrics through the water are those of
+/// calm water.
+pub fn relative_to_water(rec: &Recording) -> Cow<'_, Recording> {
+    let n = rec.t.len();
+    let Some(current) = rec.current.as_ref().filter(|c| {
+        c.speed_m_s.len() == n
+            && c.from_rad.len() == n
+            && [&rec.x0, &rec.y0, &rec.psi, &rec.u, &rec.v]
+                .iter()
+                .all(|col| col.len() == n)
+    }) else {
+        return Cow::Borrowed(rec);
+    };
+    let mut out = rec.clone();
+    let (mut drift_n, mut drift_e) = (0.0, 0.0);
+    for i in 0..n {
+        let [cn, ce] = current.velocity_earth(i);
+        if i > 0 {
+            // Trapezoidal drift over the sample interval.
+            let [pn, pe] = current.velocity_earth(i - 1);
+            let dt = rec.t[i] - rec.t[i - 1];
+            drift_n += 0.5 * (pn + cn) * dt;
+            drift_e += 0.5 * (pe + ce) * dt;
+        }
+        out.x0[i] -= drift_n;
+        out.y0[i] -= drift_e;
+        let (s, c) = rec.psi[i].sin_cos();
+        out.u[i] -= cn * c + ce * s;
+        out.v[i] -= -cn * s + ce * c;
+    }
+    out.current = None;
+    out.accelerations = None;
+    Cow::Owned(out)
+}
+
 /// The approach a manoeuvre's metrics start from (IMO metrics assume a steady straight approach at
 /// the ship's U0).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -275,6 +321,7 @@ pub fn approach(rec: &Recording, manoeuvre: &Manoeuvre, ship: &Ship) -> Option<A
         return None;
     }
     let first = first_execute(rec, rudder_deg, side, ship)?;
+    let rec = relative_to_water(rec);
     let speed = |t_s: f64| interp(&rec.t, &rec.u, t_s).hypot(interp(&rec.t, &rec.v, t_s));
     let before = (first.t_s - ship.lpp / ship.u0).max(rec.t[0]);
     let (at, earlier) = (speed(first.t_s), speed(before));

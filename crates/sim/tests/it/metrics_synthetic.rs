@@ -570,3 +570,65 @@ fn a_record_without_a_first_execute_says_why() {
     let still = record(50.0, 0.1, |t| (t, 0.0, 0.0, 0.004));
     check(&still, Side::Port, Some("never moves more than 5.0°"));
 }
+
+/// `rec` carried along by a uniform current of `speed_m_s` from `from_deg` (earth-fixed): its track
+/// drifts, its velocities over ground gain the current, and it records the current's columns.
+fn in_current(rec: &Recording, speed_m_s: f64, from_deg: f64) -> Recording {
+    let from = from_deg.to_radians();
+    let (cn, ce) = (-speed_m_s * from.cos(), -speed_m_s * from.sin());
+    let t0 = rec.t[0];
+    let mut out = rec.clone();
+    for i in 0..rec.len() {
+        let dt = rec.t[i] - t0;
+        out.x0[i] += cn * dt;
+        out.y0[i] += ce * dt;
+        let (s, c) = rec.psi[i].sin_cos();
+        out.u[i] += cn * c + ce * s;
+        out.v[i] += -cn * s + ce * c;
+    }
+    out.current = Some(shipid_io::FlowSeries {
+        speed_m_s: vec![speed_m_s; rec.len()],
+        from_rad: vec![from; rec.len()],
+    });
+    out
+}
+
+/// Regression (`metrics-ignore-recorded-current`): a turn recorded in a 0.5 m/s current was measured
+/// on its drifting track over ground (steady diameter −13 %, advance +8 %) although the recording
+/// carried the current; trials measure it through the water, and a simulation of the same ship in
+/// calm water gave the through-water values.
+#[test]
+fn a_recorded_current_is_taken_out_of_the_metrics() {
+    let model = MmgModel::kvlcc2();
+    let ship = *model.ship();
+    let check = |man: Manoeuvre| {
+        let calm = simulate_manoeuvre(&model, &man, &SimOptions::new(600.0)).recording;
+        let want = metrics(&calm, &man, &ship);
+        assert!(
+            want.entries().iter().filter(|e| e.1.is_some()).count() >= 4,
+            "{want:?}"
+        );
+        for from_deg in [0.0, 200.0] {
+            let got = metrics(&in_current(&calm, 0.5 * ship.u0, from_deg), &man, &ship);
+            for ((key, w), (_, g)) in want.entries().iter().zip(got.entries()) {
+                assert!(
+                    match (w, g) {
+                        (Some(w), Some(g)) => (w - g).abs() <= 1e-6 * w.abs().max(1.0),
+                        (None, None) => true,
+                        _ => false,
+                    },
+                    "{man:?}, current from {from_deg}°: {key} {g:?} against {w:?} in calm water"
+                );
+            }
+        }
+    };
+    check(Manoeuvre::Turning {
+        rudder_deg: 35.0,
+        side: Side::Port,
+    });
+    check(Manoeuvre::ZigZag {
+        rudder_deg: 20.0,
+        check_deg: 20.0,
+        side: Side::Starboard,
+    });
+}
