@@ -383,7 +383,7 @@ impl KnownEnvironment {
             .iter()
             .map(|&t| {
                 let [n, e] = self.current_at(t);
-                (n.hypot(e), (-e).atan2(-n))
+                (n.hypot(e), (-e).atan2(-n).rem_euclid(std::f64::consts::TAU))
             })
             .unzip();
         Some(shipid_io::FlowSeries {
