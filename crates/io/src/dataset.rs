@@ -22,6 +22,19 @@ pub enum Origin {
     #[default]
     Midship,
     Cg,
+    /// Another point of the hull (a sea trial's GNSS antenna): the `[reference_point]` table.
+    Point,
+}
+
+/// `[reference_point]`: where the point that positions and velocities refer to lies on the hull
+/// (with `origin = "point"`), in body axes from midship.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ReferencePoint {
+    /// Forward of midship [m] (negative aft).
+    pub x_m: f64,
+    /// To starboard of the centre line [m] (negative to port).
+    pub y_m: f64,
 }
 
 /// `kind` of a recording entry.
@@ -58,6 +71,9 @@ pub struct DatasetFile {
     pub name: String,
     #[serde(default)]
     pub origin: Origin,
+    /// With `origin = "point"`: where that point lies.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference_point: Option<ReferencePoint>,
     #[serde(default = "one")]
     pub rudder_sign: i64,
     pub ship: Ship,
@@ -191,8 +207,10 @@ impl Dataset {
                 recording,
             });
         }
+        // Added masses of a data set at another point of the hull (a GNSS antenna) are given about
+        // midship: nobody computes them about an antenna.
         let added_mass = file.added_mass.map(|a| match file.origin {
-            Origin::Midship => a,
+            Origin::Midship | Origin::Point => a,
             Origin::Cg => added_mass_cg_to_midship(a, file.ship.xg),
         });
         Ok(Dataset {
@@ -254,6 +272,7 @@ pub fn parse_dataset(path: &Path, text: &str) -> Result<DatasetFile, InputError>
         ));
     }
     check_ship_ranges(path, s)?;
+    check_reference_point(path, &file)?;
     if let Some(a) = &file.added_mass {
         check_added_mass(path, a, s)?;
     }
@@ -286,6 +305,49 @@ pub const SHIP_RANGES: [(&str, f64, f64, &str); 8] = [
     ("u0", 1e-3, 1e3, "m/s"),
     ("rudder_rate", 1e-3, 1e4, "deg/s"),
 ];
+
+/// `origin = "point"` needs its `[reference_point]` on the hull; the table means nothing with
+/// another origin.
+fn check_reference_point(path: &Path, file: &DatasetFile) -> Result<(), InputError> {
+    match (file.origin, file.reference_point) {
+        (Origin::Point, None) => Err(InputError::key(
+            path,
+            "reference_point",
+            "origin = \"point\" needs a [reference_point] table with x_m (forward of midship) and y_m (to starboard) [m]",
+        )),
+        (Origin::Point, Some(p)) => {
+            let s = &file.ship;
+            for (key, value, limit, what) in [
+                ("x_m", p.x_m, s.lpp, "ship.lpp"),
+                ("y_m", p.y_m, s.beam, "ship.beam"),
+            ] {
+                if !(value.is_finite() && value.abs() <= limit) {
+                    return Err(InputError::key(
+                        path,
+                        format!("reference_point.{key}"),
+                        format!(
+                            "must be a finite distance from midship within {what} = {limit} m (a point on the hull), not {}",
+                            number(value)
+                        ),
+                    ));
+                }
+            }
+            Ok(())
+        }
+        (origin, Some(_)) => Err(InputError::key(
+            path,
+            "reference_point",
+            format!(
+                "only with origin = \"point\" (this data set says origin = \"{}\")",
+                match origin {
+                    Origin::Cg => "cg",
+                    _ => "midship",
+                }
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
 
 fn check_ship_ranges(path: &Path, s: &Ship) -> Result<(), InputError> {
     let values = [
@@ -669,23 +731,33 @@ fn to_project_conventions(rec: &mut Recording, file: &DatasetFile) {
     if file.rudder_sign == -1 {
         rec.delta.iter_mut().for_each(|d| *d = -*d);
     }
-    if file.origin == Origin::Cg {
-        cg_to_midship(rec, file.ship.xg);
+    match (file.origin, file.reference_point) {
+        (Origin::Cg, _) => cg_to_midship(rec, file.ship.xg),
+        (Origin::Point, Some(p)) => point_to_midship(rec, p.x_m, p.y_m),
+        _ => {}
     }
 }
 
-/// Midship lies x_G aft of the centre of gravity: its sway velocity is v_G − x_G r, its position is the
-/// centre of gravity's moved by −x_G along the heading; u and r are the same for every point of the hull.
+/// Midship lies x_G aft of the centre of gravity: [`point_to_midship`] from (x_G, 0).
 pub fn cg_to_midship(rec: &mut Recording, xg_m: f64) {
+    point_to_midship(rec, xg_m, 0.0);
+}
+
+/// Positions and velocities of the hull point (`x_m` forward, `y_m` to starboard of midship) → of
+/// midship. The point moves with the hull: its velocity in body axes is (u − r y, v + r x), its
+/// position is midship's plus (x, y) turned by the heading; r is the same everywhere.
+pub fn point_to_midship(rec: &mut Recording, x_m: f64, y_m: f64) {
     for i in 0..rec.len() {
         let (s, c) = rec.psi[i].sin_cos();
-        rec.x0[i] -= xg_m * c;
-        rec.y0[i] -= xg_m * s;
-        rec.v[i] -= xg_m * rec.r[i];
+        rec.x0[i] -= x_m * c - y_m * s;
+        rec.y0[i] -= x_m * s + y_m * c;
+        rec.u[i] += y_m * rec.r[i];
+        rec.v[i] -= x_m * rec.r[i];
     }
     if let Some(a) = rec.accelerations.as_mut() {
         for i in 0..a.v_dot.len() {
-            a.v_dot[i] -= xg_m * a.r_dot[i];
+            a.u_dot[i] += y_m * a.r_dot[i];
+            a.v_dot[i] -= x_m * a.r_dot[i];
         }
     }
 }

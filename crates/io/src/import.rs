@@ -27,7 +27,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use crate::dataset::{DatasetFile, Kind, Origin, PropellerTable, RecordingEntry};
+use crate::dataset::{DatasetFile, Kind, Origin, PropellerTable, RecordingEntry, ReferencePoint};
 use crate::error::InputError;
 use crate::table::{Columns, parse_cell, with_comma_hint};
 use crate::types::{AddedMass, Recording, RudderData, Ship, Side, Windage};
@@ -92,6 +92,8 @@ pub struct DatasetHeader {
     pub name: String,
     #[serde(default)]
     pub origin: Origin,
+    #[serde(default)]
+    pub reference_point: Option<ReferencePoint>,
     pub ship: Ship,
     #[serde(default)]
     pub added_mass: Option<AddedMass>,
@@ -341,6 +343,7 @@ impl Mapping {
         DatasetFile {
             name: self.dataset.name.clone(),
             origin: self.dataset.origin,
+            reference_point: self.dataset.reference_point,
             rudder_sign: 1,
             ship: self.dataset.ship,
             added_mass: self.dataset.added_mass,

@@ -28,7 +28,7 @@ pub mod types;
 pub mod units;
 pub mod write;
 
-pub use dataset::{Dataset, DatasetFile, DatasetRecording, Origin, PropellerTable};
+pub use dataset::{Dataset, DatasetFile, DatasetRecording, Origin, PropellerTable, ReferencePoint};
 pub use error::InputError;
 pub use prime::PrimeScale;
 pub use types::*;

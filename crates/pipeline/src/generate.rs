@@ -316,6 +316,7 @@ fn generate_by(
     let dataset = DatasetFile {
         name: name.into(),
         origin: Origin::Midship,
+        reference_point: None,
         rudder_sign: 1,
         ship,
         added_mass: Some(*model.added_mass()),

@@ -117,3 +117,82 @@ fn added_mass_shift_is_identity_at_zero_and_composes() {
     assert!(close(two_steps.N_rdot, one_step.N_rdot, 1e-9));
     assert!(close(two_steps.Y_rdot, one_step.Y_rdot, 1e-9));
 }
+
+/// A sea trial's GNSS antenna (`origin = "point"`, `[reference_point]`): midship's own motion,
+/// recorded at a hull point (x, y) from midship and converted back, comes out as it was.
+#[test]
+fn a_hull_point_converts_to_midship_on_a_turning_ship() {
+    use shipid_io::dataset::point_to_midship;
+    let check = |x_m: f64, y_m: f64| {
+        // Midship on a circle to starboard with drift: u, v constant in body axes, r constant.
+        let (u, v, r) = (7.5, -0.9, 0.012);
+        let n = 200;
+        let mut midship = shipid_io::Recording::default();
+        let (mut x0, mut y0) = (100.0, -40.0);
+        for i in 0..n {
+            let t = i as f64 * 0.25;
+            let psi = 0.3 + r * t;
+            if i > 0 {
+                // Exact integration of the earth velocity over a step at constant body velocity.
+                let dt = 0.25;
+                let p0 = psi - r * dt;
+                let (s1, c1) = psi.sin_cos();
+                let (s0, c0) = p0.sin_cos();
+                x0 += (u * (s1 - s0) + v * (c1 - c0)) / r;
+                y0 += (-u * (c1 - c0) + v * (s1 - s0)) / r;
+            }
+            midship.t.push(t);
+            midship.x0.push(x0);
+            midship.y0.push(y0);
+            midship.psi.push(psi);
+            midship.u.push(u);
+            midship.v.push(v);
+            midship.r.push(r);
+            midship.delta.push(0.0);
+        }
+        // The point's record: midship's position plus (x, y) turned by ψ; its velocity (u − r y, v + r x).
+        let mut at_point = midship.clone();
+        for i in 0..n {
+            let (s, c) = midship.psi[i].sin_cos();
+            at_point.x0[i] += x_m * c - y_m * s;
+            at_point.y0[i] += x_m * s + y_m * c;
+            at_point.u[i] -= r * y_m;
+            at_point.v[i] += r * x_m;
+        }
+        // The point's velocities are its track's own (rigid-body motion), checked before converting.
+        let k = n / 2;
+        let dt = at_point.t[k + 1] - at_point.t[k - 1];
+        let xd = (at_point.x0[k + 1] - at_point.x0[k - 1]) / dt;
+        let yd = (at_point.y0[k + 1] - at_point.y0[k - 1]) / dt;
+        let (s, c) = at_point.psi[k].sin_cos();
+        assert!(
+            close(xd * c + yd * s, at_point.u[k], 1e-3)
+                && close(-xd * s + yd * c, at_point.v[k], 1e-3),
+            "point ({x_m}, {y_m}): track and velocities disagree"
+        );
+        point_to_midship(&mut at_point, x_m, y_m);
+        for i in 0..n {
+            for (a, b, what) in [
+                (at_point.x0[i], midship.x0[i], "x0"),
+                (at_point.y0[i], midship.y0[i], "y0"),
+                (at_point.u[i], midship.u[i], "u"),
+                (at_point.v[i], midship.v[i], "v"),
+            ] {
+                assert!(
+                    close(a, b, 1e-9),
+                    "point ({x_m}, {y_m}), sample {i}: {what} {a} vs {b}"
+                );
+            }
+        }
+        // The velocities agree with the track's own: the point's conversion is rigid-body motion.
+        let i = n / 2;
+        let dt = midship.t[i + 1] - midship.t[i - 1];
+        let xd = (midship.x0[i + 1] - midship.x0[i - 1]) / dt;
+        let yd = (midship.y0[i + 1] - midship.y0[i - 1]) / dt;
+        let (s, c) = midship.psi[i].sin_cos();
+        assert!(close(xd * c + yd * s, u, 1e-3) && close(-xd * s + yd * c, v, 1e-3));
+    };
+    check(-130.0, 5.0);
+    check(40.0, -7.5);
+    check(0.0, 0.0);
+}

@@ -498,3 +498,37 @@ fn added_masses_must_be_finite_and_of_a_ship_s_order() {
         check_dataset_refused(&format!("{SHIP}{}", table.replace(from, to)), expected);
     }
 }
+
+#[test]
+fn a_reference_point_is_on_the_hull_and_only_with_origin_point() {
+    let with = |origin: &str, point: &str| {
+        SHIP.replacen(
+            "name = \"d\"\n",
+            &format!("name = \"d\"\norigin = \"{origin}\"\n{point}"),
+            1,
+        )
+    };
+    let point = |x: &str, y: &str| format!("[reference_point]\nx_m = {x}\ny_m = {y}\n");
+    let cases = [
+        (
+            with("point", ""),
+            "ds.toml: key `reference_point`: origin = \"point\" needs a [reference_point] table with x_m (forward of midship) and y_m (to starboard) [m]",
+        ),
+        (
+            with("midship", &point("-3.0", "0.2")),
+            "ds.toml: key `reference_point`: only with origin = \"point\" (this data set says origin = \"midship\")",
+        ),
+        (
+            with("point", &point("-30.0", "0.2")),
+            "ds.toml: key `reference_point.x_m`: must be a finite distance from midship within ship.lpp = 7 m (a point on the hull), not -30",
+        ),
+        (
+            with("point", &point("-3.0", "nan")),
+            "ds.toml: key `reference_point.y_m`: must be a finite distance from midship within ship.beam = 1.27 m (a point on the hull), not NaN",
+        ),
+    ];
+    for (text, expected) in cases {
+        check_dataset_refused(&text, expected);
+    }
+    assert!(parse_dataset(Path::new("ds.toml"), &with("point", &point("-3.0", "0.2"))).is_ok());
+}
