@@ -21,7 +21,7 @@ use shipid_uncertainty::{
 use crate::bootstrap::replicate_rng;
 use crate::error::{PipelineError, bad_input};
 use crate::mmg::file::{MMG_KIND, MmgModelFile, ReplicateKind};
-use crate::simulate::{SimGrid, simulate_manoeuvre, simulate_on_grid};
+use crate::simulate::{SimGrid, simulate_manoeuvre, simulate_on_grid_from};
 use crate::validate::closed_loop_in;
 use shipid_sim::environment::KnownEnvironment;
 
@@ -86,8 +86,10 @@ const TRACK_SAMPLES: usize = 400;
 pub enum BandRun<'a> {
     /// The standard manoeuvre from a steady approach at U0, standard step and duration (`simulate`).
     Standard,
-    /// The standard manoeuvre on a given step and duration (`simulate --dt/--duration`).
-    Grid(&'a SimGrid),
+    /// The standard manoeuvre on a given step and duration (`simulate --dt/--duration`), from a
+    /// straight approach at the given speed [m/s] (U0, or the point model's straight-run speed at its
+    /// own propeller rate: `simulate`'s approach, so that the point and its replicates start alike).
+    Grid(&'a SimGrid, f64),
     /// The recording's own manoeuvre from its recorded initial state and first execute, for its
     /// recorded length, as `validate` re-simulates it ([`closed_loop_in`]), in its recorded wind and
     /// current when it has them (`None`: calm).
@@ -120,7 +122,7 @@ pub fn manoeuvre_bands_of(
 ) -> Result<ManoeuvreBands, PipelineError> {
     let run = |model: &dyn Dynamics| match how {
         BandRun::Standard => simulate_manoeuvre(model, m, None, None),
-        BandRun::Grid(g) => simulate_on_grid(model, m, g),
+        BandRun::Grid(g, approach_m_s) => simulate_on_grid_from(model, m, g, approach_m_s),
         BandRun::Recording(r, env) => {
             closed_loop_in(model, r, ship, env.cloned()).ok_or_else(|| {
                 bad_input(format!(

@@ -68,7 +68,7 @@ use crate::fit::{EstimatorSpec, WindowSpec, fit_dataset};
 use crate::mmg::file::{MMG_KIND, MmgModelFile};
 use crate::mmg::{MmgFit, MmgFitOptions, MmgGeometry};
 use crate::out_of_kind::{ModelFamily, add_out_of_kind, out_of_kind};
-use crate::simulate::{simulate_manoeuvre, simulate_on_grid};
+use crate::simulate::{simulate_manoeuvre, simulate_on_grid_from};
 use crate::validate::closed_loop_in;
 
 /// Fewest errors of a family for a factor of its own (below, the families' pooled one).
@@ -408,7 +408,7 @@ fn run_reach(
     };
     let run = match how {
         BandRun::Standard => simulate_manoeuvre(point, m, None, None).ok(),
-        BandRun::Grid(g) => simulate_on_grid(point, m, g).ok(),
+        BandRun::Grid(g, approach_m_s) => simulate_on_grid_from(point, m, g, approach_m_s).ok(),
         BandRun::Recording(r, env) => closed_loop_in(point, r, ship, env.cloned()),
     };
     run.map_or(1.0, |run| reach(range, &run.recording, ship))

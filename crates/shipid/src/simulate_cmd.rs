@@ -317,7 +317,13 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
         add_valley(&mut value, v, &run);
     }
     if let (Some(level), Some(replicates)) = (a.bands, &replicates) {
-        let bands = replicates.bands(model, &m, model.ship(), level, BandRun::Grid(&grid))?;
+        let bands = replicates.bands(
+            model,
+            &m,
+            model.ship(),
+            level,
+            BandRun::Grid(&grid, approach_m_s),
+        )?;
         add_bands(&mut value, &bands, replicates, a.json);
     }
     if matches!(out.status, SimStatus::Ok) {

@@ -111,7 +111,7 @@ fn csv_only_comments_has_no_header() {
 fn toml_unknown_key_is_named_with_its_position() {
     check(
         "unknown_key.toml",
-        ":2:1: key `colour`: unknown field `colour`, expected one of `name`, `origin`, `rudder_sign`, `ship`, `added_mass`, `propeller`, `rudder`, `windage`, `recording`",
+        ":2:1: key `colour`: unknown field `colour`, expected one of `name`, `origin`, `reference_point`, `rudder_sign`, `ship`, `added_mass`, `propeller`, `rudder`, `windage`, `recording`",
     );
 }
 

@@ -363,3 +363,51 @@ fn simulate_and_validate_run_the_valley_of_a_refined_mmg_fit_beside_it() {
         "key `valley.start[0].values.n_r`",
     );
 }
+
+/// Regression: a fit that runs straight away from U0 at its own propeller rate starts `simulate`'s
+/// manoeuvre from its straight-run speed, and its bootstrap replicates must start there too (they
+/// started at U0, and the band lay beside the point: tactical diameter 3.400 L, band [3.28, 3.30]).
+#[test]
+fn the_bands_of_a_model_off_u0_start_where_the_point_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("mmg.toml");
+    let model = model.to_str().unwrap();
+    shipid_ok(&[
+        "fit",
+        "data/kvlcc2-mmg/dataset.toml",
+        "--set",
+        "mmg",
+        "--recordings",
+        "zz35_35_ps.csv",
+        "--lambda",
+        "1e-2",
+        "--bootstrap",
+        "24",
+        "--out",
+        model,
+    ]);
+    let out = shipid_ok(&[
+        "simulate",
+        model,
+        "--manoeuvre",
+        "turning:35:starboard",
+        "--bands",
+        "0.9",
+        "--json",
+    ]);
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("runs straight at"),
+        "the fit was meant to run straight away from U0: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    for metric in ["advance", "tactical_diameter"] {
+        let point = v[metric].as_f64().unwrap();
+        let band = &v[format!("{metric}_band")];
+        let (lo, hi) = (band[0].as_f64().unwrap(), band[1].as_f64().unwrap());
+        assert!(
+            lo <= point && point <= hi,
+            "{metric} {point} outside its band [{lo}, {hi}]: {v}"
+        );
+    }
+}
