@@ -422,7 +422,9 @@ pub fn approach_notes(ds: &shipid_io::Dataset) -> Vec<String> {
         .filter_map(|r| {
             let a = shipid_sim::metrics::approach(&r.recording, &r.manoeuvre, &ds.ship)?;
             let off = (a.speed_ratio - 1.0).abs() > APPROACH_SPEED_TOLERANCE;
-            let changing = a.change_ratio.abs() > APPROACH_CHANGE_TOLERANCE;
+            // A change the speed's noise could make is none (three standard errors).
+            let changing = a.change_ratio.abs()
+                > APPROACH_CHANGE_TOLERANCE.max(3.0 * a.change_standard_error);
             (off || changing).then(|| {
                 let how = match (off, changing) {
                     (true, true) => format!(

@@ -298,10 +298,14 @@ pub fn relative_to_water(rec: &Recording) -> Cow<'_, Recording> {
 /// the ship's U0).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Approach {
-    /// Speed of midship at the first execute ÷ U0 [-].
+    /// Speed of midship at the first execute ÷ U0 [-] (a straight line fitted to the speed over the
+    /// L/U0 before it, taken at the execute).
     pub speed_ratio: f64,
-    /// Change of that speed over the L/U0 before the first execute ÷ U0 [-] (positive: accelerating).
+    /// Change of that line over the L/U0 before the first execute ÷ U0 [-] (positive: accelerating).
     pub change_ratio: f64,
+    /// Standard error of that change from the scatter of the speed about the line ÷ U0 [-]: a
+    /// change within a few of these is the recording's noise, not an acceleration.
+    pub change_standard_error: f64,
 }
 
 /// The approach of `rec` for `manoeuvre` (a zig-zag or a turning circle whose first execute the
@@ -322,12 +326,51 @@ pub fn approach(rec: &Recording, manoeuvre: &Manoeuvre, ship: &Ship) -> Option<A
     }
     let first = first_execute(rec, rudder_deg, side, ship)?;
     let rec = relative_to_water(rec);
-    let speed = |t_s: f64| interp(&rec.t, &rec.u, t_s).hypot(interp(&rec.t, &rec.v, t_s));
-    let before = (first.t_s - ship.lpp / ship.u0).max(rec.t[0]);
-    let (at, earlier) = (speed(first.t_s), speed(before));
+    // A straight line fitted to the speed over the L/U0 before the execute: its value there and its
+    // change over that time, which the noise of single samples does not move (2 % of U0 on every
+    // sample of a steady approach).
+    let t_from = first.t_s - ship.lpp / ship.u0;
+    let window: Vec<(f64, f64)> = (0..rec.t.len())
+        .filter(|&i| rec.t[i] >= t_from && rec.t[i] <= first.t_s)
+        .map(|i| (rec.t[i] - first.t_s, rec.u[i].hypot(rec.v[i])))
+        .collect();
+    let (at, slope, slope_se) = match window.len() {
+        0 => (
+            interp(&rec.t, &rec.u, first.t_s).hypot(interp(&rec.t, &rec.v, first.t_s)),
+            0.0,
+            0.0,
+        ),
+        1 | 2 => (window[window.len() - 1].1, 0.0, 0.0),
+        n => {
+            let n = n as f64;
+            let (mt, ms) = window
+                .iter()
+                .fold((0.0, 0.0), |(a, b), (t, s)| (a + t / n, b + s / n));
+            let (sts, stt) = window.iter().fold((0.0, 0.0), |(a, b), (t, s)| {
+                (a + (t - mt) * (s - ms), b + (t - mt) * (t - mt))
+            });
+            let slope = if stt > 0.0 { sts / stt } else { 0.0 };
+            // The line at the execute (t = 0 in the window's time), and the standard error of its
+            // slope from the scatter about it.
+            let at = ms - slope * mt;
+            let scatter = window
+                .iter()
+                .map(|(t, s)| (s - (at + slope * t)).powi(2))
+                .sum::<f64>()
+                / (n - 2.0).max(1.0);
+            let se = if stt > 0.0 {
+                (scatter / stt).sqrt()
+            } else {
+                0.0
+            };
+            (at, slope, se)
+        }
+    };
+    let span = first.t_s - t_from.max(rec.t[0]);
     let a = Approach {
         speed_ratio: at / ship.u0,
-        change_ratio: (at - earlier) / ship.u0,
+        change_ratio: slope * span / ship.u0,
+        change_standard_error: slope_se * span / ship.u0,
     };
     (a.speed_ratio.is_finite() && a.change_ratio.is_finite()).then_some(a)
 }

@@ -632,3 +632,49 @@ fn a_recorded_current_is_taken_out_of_the_metrics() {
         side: Side::Starboard,
     });
 }
+
+/// Regression (`finding-steady-approach-warning`): the approach check read the speed change from two
+/// samples, so 2 % of U0 of noise on a steady approach looked like an acceleration. The change is a
+/// line fitted over the L/U0 before the execute, with its standard error from the scatter.
+#[test]
+fn the_approach_change_is_told_from_the_noise() {
+    use shipid_sim::metrics::approach;
+    let model = MmgModel::kvlcc2();
+    let ship = *model.ship();
+    let man = Manoeuvre::ZigZag {
+        rudder_deg: 20.0,
+        check_deg: 20.0,
+        side: Side::Starboard,
+    };
+    let mut c = shipid_sim::controller_for(&man, 20.0).unwrap();
+    let clean = simulate(
+        &model,
+        c.as_mut(),
+        State::approach(ship.u0),
+        &SimOptions::new(100.0),
+    )
+    .unwrap()
+    .recording;
+    // Deterministic noise of ±2 % of U0 on u.
+    let mut noisy = clean.clone();
+    for (i, u) in noisy.u.iter_mut().enumerate() {
+        // A deterministic scatter in [−1, 1).
+        let r = ((i as f64 * 12.9898).sin() * 43758.5453).rem_euclid(1.0);
+        *u += 0.02 * ship.u0 * (2.0 * r - 1.0);
+    }
+    // The same approach accelerating by 10 % of U0 over the L/U0 before the execute.
+    let mut accelerating = clean.clone();
+    let t_l = ship.lpp / ship.u0;
+    for (u, t) in accelerating.u.iter_mut().zip(&clean.t) {
+        *u -= 0.1 * ship.u0 * ((20.0 - t) / t_l).max(0.0);
+    }
+    let check = |rec: &Recording, changing: bool| {
+        let a = approach(rec, &man, &ship).unwrap();
+        let significant = a.change_ratio.abs() > 0.02_f64.max(3.0 * a.change_standard_error);
+        assert_eq!(significant, changing, "{a:?}");
+        assert!((a.speed_ratio - 1.0).abs() < 0.05, "{a:?}");
+    };
+    check(&clean, false);
+    check(&noisy, false);
+    check(&accelerating, true);
+}
