@@ -186,9 +186,13 @@ pub fn training_samples(ds: &Dataset, opts: &MmgFitOptions) -> Result<TrainingDa
             ds.path.display()
         ))
     })?;
-    if added.Y_rdot != 0.0 || added.N_vdot != 0.0 {
+    // Zero within rounding: a table written about the centre of gravity with the coupling that
+    // cancels at midship comes back from the transform as a few 1e-6 of Y_v̇ L, not 0.
+    let negligible = 1e-6 * (added.Y_vdot * ds.ship.lpp).abs();
+    if added.Y_rdot.abs() > negligible || added.N_vdot.abs() > negligible {
+        let cg = -ds.ship.xg * added.Y_vdot;
         return Err(bad_input(format!(
-            "{}: [added_mass] has Y_rdot = {} and N_vdot = {}: the MMG model has no sway–yaw added-mass coupling",
+            "{}: [added_mass] has Y_rdot = {} and N_vdot = {} about midship: the MMG model has no sway–yaw added-mass coupling there. (A data set with origin = \"cg\" gives its added masses about the centre of gravity, and moving them to midship adds x_G·Y_vdot to both: about the CG, the MMG family needs Y_rdot = N_vdot = −x_G·Y_vdot = {cg:.6}.)",
             ds.path.display(),
             added.Y_rdot,
             added.N_vdot
