@@ -393,6 +393,21 @@ impl MmgModelFile {
                 on_bound.join(", ")
             ));
         }
+        let held: Vec<String> = self
+            .parameters
+            .iter()
+            .filter_map(|p| {
+                super::priors::regression_outside(&p.prior_source)
+                    .map(|raw| format!("{} (gives {raw}, held at {})", p.name, p.prior))
+            })
+            .collect();
+        if !held.is_empty() {
+            lines.push(format!(
+                "  priors outside their regression ({}): {} — this ship lies outside the ships the regression was fitted on (or past the bound's sign): the prior is a guess; each `prior_source` says so",
+                held.len(),
+                held.join(", ")
+            ));
+        }
         let (data, prior): (Vec<&ParamEntry>, Vec<&ParamEntry>) =
             self.parameters.iter().partition(|p| p.determined_by_data);
         lines.push(format!(

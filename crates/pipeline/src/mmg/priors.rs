@@ -85,6 +85,28 @@ pub fn prime_mx(ship: &Ship, added: &AddedMass) -> f64 {
 }
 
 /// Every parameter of the model with its bounds and prior, hull derivatives first.
+/// A regression's value for this ship held within `[lo, hi]` (where it holds, or the sign a bound
+/// requires), and what the prior's source must add when it was held: the prior a user reads in the
+/// model file is the one the fit used.
+fn held_within(value: f64, lo: f64, hi: f64) -> (f64, String) {
+    let held = value.clamp(lo, hi);
+    let note = if held == value {
+        String::new()
+    } else {
+        format!(
+            "; it gives {value:.3} for this ship, outside {lo} … {hi} (the ships it was fitted on, or the sign the bound requires): held at {held}"
+        )
+    };
+    (held, note)
+}
+
+/// The value a held prior's regression gave for this ship, read back from the note [`held_within`]
+/// added to its source (the words the model file shows); `None` for a prior that is the regression's.
+pub fn regression_outside(source: &str) -> Option<f64> {
+    let (_, rest) = source.split_once("; it gives ")?;
+    rest.split_whitespace().next()?.parse().ok()
+}
+
 pub fn priors(ship: &Ship, geometry: &MmgGeometry, added: &AddedMass) -> Vec<ParamSpec> {
     let l = ship.lpp;
     let cb = block_coefficient(ship);
@@ -121,8 +143,11 @@ pub fn priors(ship: &Ship, geometry: &MmgGeometry, added: &AddedMass) -> Vec<Par
     // excite these terms: unbounded, they take whatever value helps the equation error and carry it
     // into a steady turn (docs/mmg.md, "What carries the turn"). Y'_vvr, Y'_rrr, N'_vrr come from the
     // hull's fore-and-aft asymmetry (zero in the cross-flow model) and take both signs there: no bound.
+    // A regression that gives a value past the parameter's bound for this ship is held on the bound,
+    // and its source says so.
     let hull =
         |dof: usize, column: usize, bounds: (f64, f64), prior: f64, sd: f64, source: &str| {
+            let (prior, note) = held_within(prior, bounds.0, bounds.1);
             ParamSpec {
                 name: HULL_NAMES[dof][column],
                 role: Role::Hull { dof, column },
@@ -130,7 +155,7 @@ pub fn priors(ship: &Ship, geometry: &MmgGeometry, added: &AddedMass) -> Vec<Par
                 upper: bounds.1,
                 prior,
                 prior_sd: sd,
-                source: source.to_string(),
+                source: format!("{source}{note}"),
             }
         };
     // ITTC-1957 friction line × form factor on Mumford's wetted surface S = 1.7 L d + ∇/d, as R'_0 =
@@ -139,7 +164,9 @@ pub fn priors(ship: &Ship, geometry: &MmgGeometry, added: &AddedMass) -> Vec<Par
     let c_f = 0.075 / (reynolds.log10() - 2.0).powi(2);
     let wetted_m2 = 1.7 * l * ship.draft + ship.displacement / ship.draft;
     let r0 = FORM_FACTOR * c_f * wetted_m2 / (l * ship.draft);
-    let taylor_w = (0.5 * cb - 0.05).clamp(0.0, 0.7);
+    let (taylor_w, taylor_note) = held_within(0.5 * cb - 0.05, 0.0, 0.7);
+    let (epsilon, epsilon_note) = held_within(-156.2 * cbbl * cbbl + 41.6 * cbbl - 1.76, 0.6, 1.9);
+    let (t_r, t_r_note) = held_within(0.45 - 0.28 * cb, 0.0, 0.7);
     let span_aspect = geometry.rudder_span_m.powi(2) / geometry.rudder_area_m2;
     let mut out = vec![
         hull(
@@ -191,7 +218,7 @@ pub fn priors(ship: &Ship, geometry: &MmgGeometry, added: &AddedMass) -> Vec<Par
             1,
             2,
             (-INF, 0.0),
-            (-0.185 * lb + 0.48).min(0.0),
+            -0.185 * lb + 0.48,
             ym_sd(-0.185 * lb + 0.48, 2.0),
             &format!("{ym}: Y'_vvv = −0.185 L/B + 0.48"),
         ),
@@ -218,7 +245,7 @@ pub fn priors(ship: &Ship, geometry: &MmgGeometry, added: &AddedMass) -> Vec<Par
             2,
             2,
             (-INF, N_VVV_MAX),
-            (0.69 * cb - 0.66).min(N_VVV_MAX),
+            0.69 * cb - 0.66,
             ym_sd(0.69 * cb - 0.66, 0.2),
             &format!("{ym}: N'_vvv = −(−0.69 C_b + 0.66)"),
         ),
@@ -226,7 +253,7 @@ pub fn priors(ship: &Ship, geometry: &MmgGeometry, added: &AddedMass) -> Vec<Par
             2,
             3,
             (-INF, 0.0),
-            (1.55 * cbbl - 0.76).min(0.0),
+            1.55 * cbbl - 0.76,
             ym_sd(1.55 * cbbl - 0.76, 0.3),
             &format!("{ym}: N'_vvr = 1.55 C_b B/L − 0.76"),
         ),
@@ -242,35 +269,37 @@ pub fn priors(ship: &Ship, geometry: &MmgGeometry, added: &AddedMass) -> Vec<Par
             2,
             5,
             (-INF, 0.0),
-            (0.25 * cbbl - 0.056).min(0.0),
+            0.25 * cbbl - 0.056,
             ym_sd(0.25 * cbbl - 0.056, 0.05),
             &format!("{ym}: N'_rrr = 0.25 C_b B/L − 0.056"),
         ),
     ];
-    let nl =
-        |name: &'static str, bounds: (f64, f64), prior: f64, sd: f64, source: String| ParamSpec {
+    let nl = |name: &'static str, bounds: (f64, f64), prior: f64, sd: f64, source: String| {
+        let (prior, note) = held_within(prior, bounds.0, bounds.1);
+        ParamSpec {
             name,
             role: Role::Nonlinear,
             lower: bounds.0,
             upper: bounds.1,
             prior,
             prior_sd: sd,
-            source,
-        };
+            source: format!("{source}{note}"),
+        }
+    };
     out.extend([
         nl(
             "t_p",
             (0.0, 0.5),
             0.6 * taylor_w,
             0.1,
-            "Schoenherr t_P = k w_P0 with k = 0.6 (single screw) on Taylor's w_P0".into(),
+            format!("Schoenherr t_P = k w_P0 with k = 0.6 (single screw) on Taylor's w_P0{taylor_note}"),
         ),
         nl(
             "w_p0",
             (0.0, 0.8),
             taylor_w,
             0.1,
-            "Taylor (single screw): w_P0 = 0.5 C_b − 0.05".into(),
+            format!("Taylor (single screw): w_P0 = 0.5 C_b − 0.05{taylor_note}"),
         ),
         nl(
             "c1",
@@ -296,9 +325,9 @@ pub fn priors(ship: &Ship, geometry: &MmgGeometry, added: &AddedMass) -> Vec<Par
         nl(
             "epsilon",
             (0.5, 2.0),
-            (-156.2 * cbbl * cbbl + 41.6 * cbbl - 1.76).clamp(0.6, 1.9),
+            epsilon,
             0.2,
-            format!("{kijima}: ε = −156.2 (C_b B/L)² + 41.6 C_b B/L − 1.76"),
+            format!("{kijima}: ε = −156.2 (C_b B/L)² + 41.6 C_b B/L − 1.76{epsilon_note}"),
         ),
         nl(
             "kappa",
@@ -331,9 +360,9 @@ pub fn priors(ship: &Ship, geometry: &MmgGeometry, added: &AddedMass) -> Vec<Par
         nl(
             "t_r",
             (0.0, 0.8),
-            (0.45 - 0.28 * cb).clamp(0.0, 0.7),
+            t_r,
             0.15,
-            format!("{kijima}: 1 − t_R = 0.28 C_b + 0.55"),
+            format!("{kijima}: 1 − t_R = 0.28 C_b + 0.55{t_r_note}"),
         ),
         nl(
             "a_h",

@@ -824,3 +824,44 @@ fn the_fit_summary_names_the_parameters_on_a_bound() {
     // Well inside: not named.
     check(&set("t_p", |p| 0.5 * (p.lower + p.upper)), None);
 }
+
+/// Regression (`finding-eps-prior`): for a ship outside the range of an empirical regression (a
+/// tug-like C_b B/L of about 0.23, where Kijima's ε formula is negative) the prior was silently held at the
+/// regression's limit while its source still named the formula. A held prior now says so in its
+/// source, and `priors::regression_outside` reads what the regression gave.
+#[test]
+fn a_prior_held_outside_its_regression_says_so() {
+    use shipid_pipeline::mmg::priors::regression_outside;
+    let check = |beam_m: f64, cb: f64, expected: &[(&str, f64)]| {
+        let mut ship = shipid_sim::kvlcc2_ship();
+        ship.beam = beam_m;
+        ship.displacement = cb * ship.lpp * ship.beam * ship.draft;
+        let specs = priors(
+            &ship,
+            &MmgGeometry::kvlcc2_model_scale(),
+            &shipid_sim::kvlcc2_added_mass(),
+        );
+        let held: Vec<(&str, f64)> = specs
+            .iter()
+            .filter_map(|s| regression_outside(&s.source).map(|raw| (s.name, raw)))
+            .collect();
+        assert_eq!(
+            held.iter().map(|h| h.0).collect::<Vec<_>>(),
+            expected.iter().map(|e| e.0).collect::<Vec<_>>(),
+            "{held:?}"
+        );
+        for ((name, raw), (_, want)) in held.iter().zip(expected) {
+            assert!((raw - want).abs() < 5e-3, "{name}: {raw} against {want}");
+            let s = specs.iter().find(|s| s.name == *name).unwrap();
+            assert!(
+                s.lower <= s.prior && s.prior <= s.upper,
+                "{name}: prior past its bound"
+            );
+            assert!(s.source.contains("held at"), "{}", s.source);
+        }
+    };
+    // KVLCC2 itself: every prior is its regression's.
+    check(1.27, 0.81, &[]);
+    // A tug-like hull: C_b B/L = 0.8 × 2.0 / 7 = 0.229.
+    check(2.0, 0.8, &[("n_rrr", 0.0012), ("epsilon", -0.412)]);
+}
