@@ -343,6 +343,10 @@ pub fn window_states(ds: &Dataset, windows: &[TrainingWindow]) -> Vec<[f64; 4]> 
 /// r′ from them.
 pub const SLOW_SPEED_OVER_U0: f64 = 0.05;
 
+/// A run past a training extreme by more than this fraction (drift, r′, lowest speed) is an
+/// extrapolation whatever share of it lies outside the identification range.
+pub const EXTREME_MARGIN: f64 = 0.05;
+
 /// The extent of a set of states, as a user reads it first: the largest drift angle, non-dimensional
 /// yaw rate (both from samples faster than [`SLOW_SPEED_OVER_U0`]) and rudder angle, and the lowest
 /// speed.
@@ -488,10 +492,26 @@ impl RunReach {
     /// [`EXTRAPOLATION_WARNING_SHARE`] of its samples (`None` otherwise); `diverged`: the run ended
     /// in a divergence, and has no metrics to qualify.
     pub fn warning(&self, model_spec: &str, diverged: bool) -> Option<String> {
-        if self.outside <= EXTRAPOLATION_WARNING_SHARE {
+        // The leverage of a cubic in four states can reach far in some directions: a run may go past
+        // every training extreme with few of its states outside the ellipsoid (a 35° turn to one side
+        // 1 % outside, the other side 88 %). Past the extremes is an extrapolation either way.
+        if self.outside <= EXTRAPOLATION_WARNING_SHARE && !self.clearly_beyond() {
             return None;
         }
         let beyond = self.beyond();
+        let ending = if diverged {
+            "it diverged out there"
+        } else {
+            "its metrics are an extrapolation"
+        };
+        if self.outside <= EXTRAPOLATION_WARNING_SHARE {
+            return Some(format!(
+                "{model_spec}: this run goes past the extremes of the states the model was identified on ({}), though only {:.0} % of it lies outside {}, which reaches far along the training states: {ending}",
+                beyond.join(", "),
+                100.0 * self.outside,
+                self.source.short(),
+            ));
+        }
         Some(format!(
             "{model_spec}: {:.0} % of this run lies outside where the model was identified ({}; {}): {}",
             100.0 * self.outside,
@@ -501,12 +521,19 @@ impl RunReach {
                 (true, true) => "each quantity within its training extent, in combinations the training did not visit".into(),
                 (true, false) => "the training data cannot be read for their extent".into(),
             },
-            if diverged {
-                "it diverged out there"
-            } else {
-                "its metrics are an extrapolation"
-            }
+            ending
         ))
+    }
+
+    /// Whether the run goes past a training extreme by more than [`EXTREME_MARGIN`] (drift, r′, or
+    /// speed below the lowest): what a simulation a little beyond the recorded peaks does not.
+    pub fn clearly_beyond(&self) -> bool {
+        let (run, Some(tr)) = (&self.run, &self.training) else {
+            return false;
+        };
+        run.max_drift_deg > (1.0 + EXTREME_MARGIN) * tr.max_drift_deg
+            || run.max_yaw_rate_prime > (1.0 + EXTREME_MARGIN) * tr.max_yaw_rate_prime
+            || run.min_speed_over_u0 < (1.0 - EXTREME_MARGIN) * tr.min_speed_over_u0
     }
 
     /// The quantities of the run beyond the training states' extent, in words (empty when none is).

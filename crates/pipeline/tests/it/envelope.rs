@@ -75,12 +75,13 @@ fn a_run_outside_the_training_states_is_warned_about_with_what_lies_beyond() {
         None,
         Some(&["30 %", "cannot be read"]),
     );
-    // At or below the threshold: no warning, whatever the extent says.
+    // At or below the threshold: no warning within the training extent; past its extremes, the
+    // warning says so (below).
     check(
         EXTRAPOLATION_WARNING_SHARE,
         extent(21.9, 0.89, 35.0, 0.32),
         Some(training),
-        None,
+        Some(&["goes past the extremes", "only 5 % of it lies outside"]),
     );
     check(0.0, extent(5.0, 0.2, 10.0, 0.9), Some(training), None);
     // A run that diverged has no metrics: the warning says where it went instead.
@@ -132,4 +133,25 @@ fn the_training_extent_takes_no_drift_from_a_ship_at_rest() {
         -0.06 * 30f64.to_radians().sin(),
     );
     check(&[slow_drift_30, drift_15], 30.0, 0.06);
+}
+
+/// Regression (`finding-idrange-asymmetric`): a 35° turn past every training extreme (drift, r′,
+/// speed) had 1 % of its states outside the ellipsoid on one side (88 % on the other) and no
+/// warning; a run past an extreme by more than 5 % is now warned about whatever the share.
+#[test]
+fn a_run_past_the_training_extremes_is_warned_about_at_any_share() {
+    let training = extent(17.6, 0.77, 35.0, 0.48);
+    check(
+        0.01,
+        extent(18.2, 0.84, 35.0, 0.44),
+        Some(training),
+        Some(&[
+            "this run goes past the extremes",
+            "r′ up to 0.84 (training ≤ 0.77)",
+            "only 1 % of it lies outside",
+            "its metrics are an extrapolation",
+        ]),
+    );
+    // Within the margin of the recorded peaks: no warning at a small share.
+    check(0.01, extent(17.9, 0.78, 35.0, 0.47), Some(training), None);
 }
