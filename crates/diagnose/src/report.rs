@@ -174,7 +174,7 @@ pub fn diagnose(
     let conclusion = match (own.as_ref().filter(|o| o.chosen), best) {
         (Some(o), _) => conclude_own_winds(&baseline, o),
         (None, Some(b)) => conclude_effect(&baseline, &judged, &finals, b),
-        (None, None) => conclude_nothing(&baseline, real_threshold, opts),
+        (None, None) => conclude_nothing(&baseline, &judged, real_threshold, opts),
     };
     let mut report = assemble(
         input,
@@ -308,13 +308,39 @@ impl Candidate {
 }
 
 /// No candidate accepted: `unexplained` when the mismatch is real, else `none`.
+/// A rejected candidate that explains at least this share of the mismatch is named beside a `none`
+/// or `unexplained` verdict: the recordings' noise, not the effect's absence, may be what held it back.
+const NEAR_MISS_EXPLAINS: f64 = 0.5;
+
 fn conclude_nothing(
     baseline: &Baseline,
+    judged: &[Judged],
     real_threshold: f64,
     opts: &DiagnoseOptions,
 ) -> Conclusion {
     let before_l = baseline.before_l;
     let real = before_l > real_threshold;
+    let near_miss = judged
+        .iter()
+        .filter(|j| j.assessed.explains >= NEAR_MISS_EXPLAINS)
+        .max_by(|a, b| a.assessed.explains.total_cmp(&b.assessed.explains))
+        .map_or(String::new(), |j| {
+            let name = j
+                .families
+                .iter()
+                .map(|f| match f.variant() {
+                    Some(v) => format!("{} [{v}]", f.word()),
+                    None => f.word().to_string(),
+                })
+                .collect::<Vec<_>>()
+                .join(" + ");
+            format!(
+                ". Closest: {name} explains {:.0} % of it held out ({before_l:.4} → {:.4} L) but was not accepted: its gain is within what the recordings' noise (floor {:.4} L) can make; more or cleaner recordings would tell whether it is there",
+                100.0 * j.assessed.explains,
+                j.assessed.after_l,
+                baseline.noise_floor
+            )
+        });
     Conclusion {
         verdict: if real {
             Verdict::Unexplained
@@ -327,12 +353,13 @@ fn conclude_nothing(
         after_scores: baseline.before_each.clone(),
         explanation: if real {
             format!(
-                "held-out position RMSE {before_l:.4} L exceeds the model's own level and the noise ({real_threshold:.4} L), and no effect of the library reduces it by {:.0} % in both halves",
+                "held-out position RMSE {before_l:.4} L exceeds the model's own level and the noise ({real_threshold:.4} L), and no effect of the library reduces it by {:.0} % in both halves{near_miss}",
                 100.0 * opts.min_gain
             )
         } else {
             format!(
-                "no effect reduces the mismatch beyond the noise; position RMSE {before_l:.4} L is within the model's own level and the noise ({real_threshold:.4} L)"
+                "no effect reduces the mismatch beyond the noise; position RMSE {before_l:.4} L is within the model's own level and the noise ({real_threshold:.4} L = {:.0} × the model's own level + 3 × the noise floor + what replays resolve){near_miss}",
+                opts.real_mismatch_factor
             )
         },
     }
