@@ -343,6 +343,31 @@ pub fn window_states(ds: &Dataset, windows: &[TrainingWindow]) -> Vec<[f64; 4]> 
 /// r′ from them.
 pub const SLOW_SPEED_OVER_U0: f64 = 0.05;
 
+/// Width (× L/U0) of the moving average a state extent takes its velocities through: the window of
+/// the acceleration estimate (docs/data-format.md), over which measurement noise averages out and a
+/// manoeuvre's peaks stay (a simulated ZZ35/35's peak r′ moves by 0.1 %).
+pub const EXTENT_SMOOTHING_L_OVER_U0: f64 = 0.3;
+
+/// Centred moving average of `y(t)` over `t ± half_s` (uneven sampling allowed; the ends average
+/// what they have).
+fn moving_average(t: &[f64], y: &[f64], half_s: f64) -> Vec<f64> {
+    let n = t.len().min(y.len());
+    let (mut lo, mut hi, mut sum) = (0usize, 0usize, 0.0);
+    let mut out = Vec::with_capacity(n);
+    for i in 0..n {
+        while hi < n && t[hi] <= t[i] + half_s {
+            sum += y[hi];
+            hi += 1;
+        }
+        while t[lo] < t[i] - half_s {
+            sum -= y[lo];
+            lo += 1;
+        }
+        out.push(sum / (hi - lo) as f64);
+    }
+    out
+}
+
 /// A run past a training extreme by more than this fraction (drift, r′, lowest speed) is an
 /// extrapolation whatever share of it lies outside the identification range.
 pub const EXTREME_MARGIN: f64 = 0.05;
@@ -363,11 +388,31 @@ pub struct StateExtent {
 }
 
 impl StateExtent {
-    /// The extent of the samples `idx` of `rec` (`None` without samples).
+    /// The extent of the samples `idx` of `rec` (`None` without samples): a simulated run's, whose
+    /// states are exact up to where it diverged.
     pub fn of(
         rec: &Recording,
         ship: &shipid_io::Ship,
         idx: impl Iterator<Item = usize>,
+    ) -> Option<StateExtent> {
+        Self::of_states(rec, ship, idx, false)
+    }
+
+    /// The extent of the samples `idx` of a *recording* (training data), its velocities averaged
+    /// over [`EXTENT_SMOOTHING_L_OVER_U0`] first so that measurement noise does not widen it.
+    pub fn of_recorded(
+        rec: &Recording,
+        ship: &shipid_io::Ship,
+        idx: impl Iterator<Item = usize>,
+    ) -> Option<StateExtent> {
+        Self::of_states(rec, ship, idx, true)
+    }
+
+    fn of_states(
+        rec: &Recording,
+        ship: &shipid_io::Ship,
+        idx: impl Iterator<Item = usize>,
+        smooth: bool,
     ) -> Option<StateExtent> {
         let mut e = StateExtent {
             max_drift_deg: 0.0,
@@ -376,20 +421,28 @@ impl StateExtent {
             min_speed_over_u0: f64::INFINITY,
         };
         let rec = relative_to_water(rec);
+        // A recording's extremes are the motion's, not its measurement noise's: velocities averaged
+        // over EXTENT_SMOOTHING_L_OVER_U0 (2 % of U0 of noise on v put 5° of drift into the extent
+        // of a recorded zig-zag, and hid the extrapolation of a turn).
+        let half_s = 0.5 * EXTENT_SMOOTHING_L_OVER_U0 * ship.lpp / ship.u0;
+        let smoothed = |y: &[f64]| {
+            if smooth {
+                moving_average(&rec.t, y, half_s)
+            } else {
+                y.to_vec()
+            }
+        };
+        let (u, v, r) = (smoothed(&rec.u), smoothed(&rec.v), smoothed(&rec.r));
         let mut any = false;
         for i in idx {
-            let speed = rec.u[i].hypot(rec.v[i]);
+            let speed = u[i].hypot(v[i]);
             if !speed.is_finite() {
                 continue;
             }
             any = true;
             if speed > SLOW_SPEED_OVER_U0 * ship.u0 {
-                e.max_drift_deg = e
-                    .max_drift_deg
-                    .max((-rec.v[i]).atan2(rec.u[i]).to_degrees().abs());
-                e.max_yaw_rate_prime = e
-                    .max_yaw_rate_prime
-                    .max((rec.r[i] * ship.lpp / speed).abs());
+                e.max_drift_deg = e.max_drift_deg.max((-v[i]).atan2(u[i]).to_degrees().abs());
+                e.max_yaw_rate_prime = e.max_yaw_rate_prime.max((r[i] * ship.lpp / speed).abs());
             }
             e.max_rudder_deg = e.max_rudder_deg.max(rec.delta[i].to_degrees().abs());
             e.min_speed_over_u0 = e.min_speed_over_u0.min(speed / ship.u0);
@@ -400,7 +453,7 @@ impl StateExtent {
     /// The extent of `windows` in `ds`.
     pub fn of_windows(ds: &Dataset, windows: &[TrainingWindow]) -> Option<StateExtent> {
         window_samples(ds, windows)
-            .filter_map(|(rec, idx)| StateExtent::of(&rec, &ds.ship, idx.into_iter()))
+            .filter_map(|(rec, idx)| StateExtent::of_recorded(&rec, &ds.ship, idx.into_iter()))
             .reduce(|a, b| StateExtent {
                 max_drift_deg: a.max_drift_deg.max(b.max_drift_deg),
                 max_yaw_rate_prime: a.max_yaw_rate_prime.max(b.max_yaw_rate_prime),

@@ -155,3 +155,41 @@ fn a_run_past_the_training_extremes_is_warned_about_at_any_share() {
     // Within the margin of the recorded peaks: no warning at a small share.
     check(0.01, extent(17.9, 0.78, 35.0, 0.47), Some(training), None);
 }
+
+/// Regression (`finding-idrange-noise`): 2 % of U0 of noise on the recorded velocities put 5° of drift
+/// and 0.16 of r′ into the training extent of a zig-zag, so the turn a fit extrapolated to was
+/// inside it. A recording's extent takes its velocities averaged over 0.3 L/U0.
+#[test]
+fn a_recordings_extent_is_not_widened_by_its_noise() {
+    use shipid_sim::{MmgModel, SimOptions, State, ZigZag};
+    let model = MmgModel::kvlcc2();
+    let ship = shipid_sim::kvlcc2_ship();
+    let mut zz = ZigZag::new(35.0, 35.0, shipid_io::Side::Port, 2.0).unwrap();
+    let clean = shipid_sim::simulate(
+        &model,
+        &mut zz,
+        State::approach(ship.u0),
+        &SimOptions::new(120.0),
+    )
+    .unwrap()
+    .recording;
+    let mut noisy = clean.clone();
+    for (i, (u, v)) in noisy.u.iter_mut().zip(noisy.v.iter_mut()).enumerate() {
+        let r = |k: f64| ((i as f64 * k).sin() * 43758.5453).rem_euclid(1.0) * 2.0 - 1.0;
+        *u += 0.02 * ship.u0 * r(12.9898);
+        *v += 0.02 * ship.u0 * r(78.233);
+    }
+    let n = clean.len();
+    let exact = StateExtent::of(&clean, &ship, 0..n).unwrap();
+    let raw = StateExtent::of(&noisy, &ship, 0..n).unwrap();
+    let recorded = StateExtent::of_recorded(&noisy, &ship, 0..n).unwrap();
+    assert!(
+        raw.max_drift_deg > exact.max_drift_deg + 1.0,
+        "{raw:?} {exact:?}"
+    );
+    assert!(
+        (recorded.max_drift_deg - exact.max_drift_deg).abs() < 0.5
+            && (recorded.max_yaw_rate_prime / exact.max_yaw_rate_prime - 1.0).abs() < 0.03,
+        "noisy, averaged: {recorded:?}; exact: {exact:?}"
+    );
+}
