@@ -58,6 +58,12 @@ impl FlowSeries {
         [-self.speed_m_s[i] * c, -self.speed_m_s[i] * s]
     }
 
+    /// True when the recorded speed is zero throughout: a recorded calm, which is information (the
+    /// environment was measured), unlike a missing column.
+    pub fn is_calm(&self) -> bool {
+        self.speed_m_s.iter().all(|&s| s == 0.0)
+    }
+
     /// The samples `range` of the series.
     pub fn slice(&self, range: std::ops::Range<usize>) -> FlowSeries {
         FlowSeries {

@@ -10,7 +10,9 @@
 
 use serde::{Deserialize, Serialize};
 use shipid_io::deriv::accelerations_or_estimate;
-use shipid_io::{Accelerations, AddedMass, Dataset, DatasetRecording, Recording, Ship, Windage};
+use shipid_io::{
+    Accelerations, AddedMass, Dataset, DatasetRecording, FlowSeries, Recording, Ship, Windage,
+};
 use shipid_sim::environment::{ASSUMED_WINDAGE_SOURCE, assumed_windage};
 use shipid_sim::{Dynamics, KnownEnvironment, MassMatrix, RecordedRate};
 
@@ -272,10 +274,15 @@ pub fn environment_notes<'a>(
     let mut by_flows: Vec<(&'static str, bool, Vec<&str>)> = Vec::new();
     for r in recordings {
         let (wind, current) = (r.recording.wind.is_some(), r.recording.current.is_some());
+        let calm = |f: &Option<FlowSeries>| f.as_ref().is_none_or(FlowSeries::is_calm);
+        let (wind_calm, current_calm) = (calm(&r.recording.wind), calm(&r.recording.current));
         let flows = match (wind, current) {
             (false, false) => continue,
+            (true, true) if wind_calm && current_calm => "a recorded calm (wind and current zero)",
             (true, true) => "a recorded wind and current",
+            (true, false) if wind_calm => "a recorded calm (wind zero throughout)",
             (true, false) => "a recorded wind",
+            _ if current_calm => "a recorded calm (current zero throughout)",
             _ => "a recorded current",
         };
         match by_flows.iter_mut().find(|(f, _, _)| *f == flows) {

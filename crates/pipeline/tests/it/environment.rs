@@ -306,3 +306,29 @@ fn segment_sensitivities_in_a_wind_and_current_are_the_derivatives_of_the_replay
         }
     }
 }
+
+/// A recording whose current columns are zero throughout is a recorded calm, and the note says so
+/// rather than that the run "carries a recorded current"; a real current is still named.
+#[test]
+fn a_current_recorded_as_zero_is_noted_as_a_recorded_calm() {
+    let check = |speed_m_s: f64, expected: &str| {
+        let mut ds = calm_training();
+        ds.recordings.truncate(1);
+        let n = ds.recordings[0].recording.len();
+        ds.recordings[0].recording.current = Some(FlowSeries {
+            speed_m_s: vec![speed_m_s; n],
+            from_rad: vec![0.0; n],
+        });
+        let chosen = ChosenWindage::of_dataset(&ds);
+        let notes = shipid_pipeline::environment::environment_notes(
+            &ds,
+            &ds.recordings,
+            &chosen,
+            "the fit",
+        );
+        assert_eq!(notes.len(), 1, "{notes:?}");
+        assert!(notes[0].contains(expected), "{}", notes[0]);
+    };
+    check(0.0, "a recorded calm (current zero throughout)");
+    check(0.1, "carries a recorded current;");
+}
