@@ -173,7 +173,12 @@ pub fn diagnose(
     };
     let conclusion = match (own.as_ref().filter(|o| o.chosen), best) {
         (Some(o), _) => conclude_own_winds(&baseline, o),
-        (None, Some(b)) => conclude_effect(&baseline, &judged, &finals, b),
+        (None, Some(b)) => match input.model_level_over_l {
+            Some(level) if baseline.before_l <= OWN_MISFIT_FACTOR * level => {
+                conclude_own_misfit(&baseline, &judged, b, level)
+            }
+            _ => conclude_effect(&baseline, &judged, &finals, b),
+        },
         (None, None) => conclude_nothing(&baseline, &judged, real_threshold, opts),
     };
     let mut report = assemble(
@@ -304,6 +309,38 @@ impl Candidate {
             .chain(self.combined_with.iter().map(|e| one(e.effect, e.variant)))
             .collect::<Vec<_>>()
             .join(" + ")
+    }
+}
+
+/// Held-out error within this factor of the model's own level (its segment replays on its training
+/// recordings): the recordings are reproduced as well as the training data were.
+const OWN_MISFIT_FACTOR: f64 = 1.25;
+
+/// An effect was accepted, but the recordings differ from the model no more than its own training
+/// data do: the shape the effect takes out is the model's own misfit (a symmetric polynomial of a
+/// port/starboard asymmetric ship, say), present in the training data as much, and not something
+/// these recordings add. Named, not applied: the verdict is `none`.
+fn conclude_own_misfit(
+    baseline: &Baseline,
+    judged: &[Judged],
+    b: usize,
+    level_over_l: f64,
+) -> Conclusion {
+    let a = &judged[b].assessed;
+    Conclusion {
+        verdict: Verdict::None,
+        effects: Vec::new(),
+        standard_errors: BTreeMap::new(),
+        before_scores: baseline.before_each.clone(),
+        after_scores: baseline.before_each.clone(),
+        explanation: format!(
+            "the recordings differ from the model no more than its own training data do (held-out position RMSE {:.4} L against its own level {level_over_l:.4} L): {} would take out {:.0} % of it ({:.4} → {:.4} L), but that shape is the model's own misfit, in its training data as much, not an effect these recordings add; a model structure that has it (refit), not an augmented model, is the remedy",
+            baseline.before_l,
+            describe(&judged[b].families),
+            100.0 * a.explains,
+            baseline.before_l,
+            a.after_l
+        ),
     }
 }
 

@@ -158,7 +158,8 @@ impl Dataset {
             .map(|p| propeller_data(path, dir, p))
             .transpose()?;
         let mut recordings = Vec::new();
-        let mut opened: Vec<(usize, PathBuf)> = Vec::new();
+        let mut opened: Vec<(usize, FileIdentity)> = Vec::new();
+        let mut copies: Vec<(usize, u64)> = Vec::new();
         for (i, entry) in file.recordings.iter().enumerate() {
             if !keep(&entry.file) {
                 continue;
@@ -172,8 +173,10 @@ impl Dataset {
                     format!("recording file `{}` not found", csv.display()),
                 ));
             }
-            // Different names of one file (a link, `sub/../a.csv`) are caught here, where the files exist.
+            // Different names of one file (a link, `sub/../a.csv`, a hard link) are caught here, where
+            // the files exist.
             if let Ok(real) = csv.canonicalize() {
+                let real = file_identity(&real);
                 if let Some((j, _)) = opened.iter().find(|(_, p)| *p == real) {
                     return Err(InputError::key(
                         path,
@@ -200,7 +203,27 @@ impl Dataset {
                     ),
                 ));
             }
+            // A copy of a file under another name is the same recording counted twice.
+            let fingerprint = samples_fingerprint(&recording);
+            if let Some((j, _)) = copies.iter().find(|(_, f)| *f == fingerprint) {
+                return Err(InputError::key(
+                    path,
+                    format!("recording[{i}].file"),
+                    format!(
+                        "`{}` holds the same samples as recording[{j}].file `{}` (a copy): list each recording once",
+                        entry.file, file.recordings[*j].file
+                    ),
+                ));
+            }
+            copies.push((i, fingerprint));
             to_project_conventions(&mut recording, &file);
+            crate::consistency::check_channels(
+                &csv,
+                &recording,
+                &manoeuvre,
+                file.ship.lpp,
+                file.ship.u0,
+            )?;
             recordings.push(DatasetRecording {
                 file: entry.file.clone(),
                 manoeuvre,
@@ -272,6 +295,7 @@ pub fn parse_dataset(path: &Path, text: &str) -> Result<DatasetFile, InputError>
         ));
     }
     check_ship_ranges(path, s)?;
+    check_ship_proportions(path, s, file.rudder.as_ref())?;
     check_reference_point(path, &file)?;
     if let Some(a) = &file.added_mass {
         check_added_mass(path, a, s)?;
@@ -377,6 +401,89 @@ fn check_ship_ranges(path: &Path, s: &Ship) -> Result<(), InputError> {
     Ok(())
 }
 
+/// Each ship key may be within its range and the ship still impossible: a displacement given as the
+/// mass in tonnes (block coefficient 800), a length in mm beside a beam in m, a radius of gyration of
+/// 25 L. Every fitted coefficient is scaled by these, so the proportions are checked too, with margins
+/// wide enough for barges, catamarans and fine naval hulls.
+fn check_ship_proportions(
+    path: &Path,
+    s: &Ship,
+    rudder: Option<&RudderData>,
+) -> Result<(), InputError> {
+    let block = s.displacement / (s.lpp * s.beam * s.draft);
+    // Proportions of the hull first: a length in another unit shows there, not as a block coefficient.
+    let checks = [
+        (
+            "ship.beam",
+            s.lpp / s.beam,
+            (1.0, 30.0),
+            "length-beam ratio L/B",
+            "ships have about 3 … 12; L and B in different units?",
+        ),
+        (
+            "ship.draft",
+            s.beam / s.draft,
+            (0.3, 40.0),
+            "beam-draft ratio B/T",
+            "ships have about 2 … 6; B and T in different units?",
+        ),
+        (
+            "ship.displacement",
+            block,
+            (0.1, 1.05),
+            "block coefficient ∇/(L B T)",
+            "ships have about 0.35 … 0.9; a mass in t or kg given as the volume in m³, or L, B, T in another unit?",
+        ),
+        (
+            "ship.kzz",
+            s.kzz / s.lpp,
+            (0.05, 1.0),
+            "yaw radius of gyration k_zz/L",
+            "ships have about 0.2 … 0.3; k_zz is a radius in m, not a moment of inertia",
+        ),
+    ];
+    for (key, value, (lo, hi), what, hint) in checks {
+        if !(lo..=hi).contains(&value) {
+            return Err(InputError::key(
+                path,
+                key,
+                format!(
+                    "gives a {what} of {} (accepted {} … {}): {hint}",
+                    three_digits(value),
+                    number(lo),
+                    number(hi)
+                ),
+            ));
+        }
+    }
+    if let Some(r) = rudder {
+        let share = r.area_m2 / (s.lpp * s.draft);
+        // A non-finite or non-positive area is `check_rudder`'s to name.
+        if share.is_finite() && share > 0.5 {
+            return Err(InputError::key(
+                path,
+                "rudder.area_m2",
+                format!(
+                    "{} m² is {} × L T (rudders have about 1/70 … 1/30 of it): a wrong unit?",
+                    number(r.area_m2),
+                    three_digits(share)
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A ratio as a message shows it: three significant digits.
+fn three_digits(x: f64) -> String {
+    match x.abs() {
+        a if a >= 100.0 => format!("{x:.0}"),
+        a if a >= 10.0 => format!("{x:.1}"),
+        a if a >= 1.0 => format!("{x:.2}"),
+        _ => format!("{x:.3}"),
+    }
+}
+
 /// Added masses are finite and at most 100 times the ship's mass (times L, L² for the moment terms):
 /// real hulls have about 0.02 … 1 times, so anything beyond is a unit or sign-of-magnitude slip that
 /// would dominate every fitted force.
@@ -391,6 +498,18 @@ fn check_added_mass(path: &Path, a: &AddedMass, s: &Ship) -> Result<(), InputErr
         ("N_rdot", a.N_rdot, m * l * l, "kg m²"),
     ];
     for (key, value, scale, unit) in entries {
+        // The diagonal derivatives are minus the added masses, which are positive for any body.
+        if matches!(key, "X_udot" | "Y_vdot" | "N_rdot") && value > 0.0 {
+            return Err(InputError::key(
+                path,
+                format!("added_mass.{key}"),
+                format!(
+                    "{} {unit} is positive; the data set gives the derivative, which is minus the added mass (write {})",
+                    number(value),
+                    number(-value)
+                ),
+            ));
+        }
         if !value.is_finite() || value.abs() > 100.0 * scale {
             return Err(InputError::key(
                 path,
@@ -404,6 +523,39 @@ fn check_added_mass(path: &Path, a: &AddedMass, s: &Ship) -> Result<(), InputErr
         }
     }
     Ok(())
+}
+
+/// A hash of every sample of the channels that define a motion: equal for a copy of a file.
+fn samples_fingerprint(rec: &Recording) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    for channel in [
+        &rec.t, &rec.x0, &rec.y0, &rec.psi, &rec.u, &rec.v, &rec.r, &rec.delta,
+    ] {
+        channel.len().hash(&mut h);
+        channel.iter().for_each(|x| x.to_bits().hash(&mut h));
+    }
+    h.finish()
+}
+
+/// What makes two paths one file: the canonical path, and on Unix the device and inode too, which
+/// a hard link shares under another name.
+#[derive(Debug, PartialEq)]
+enum FileIdentity {
+    Path(PathBuf),
+    #[cfg(unix)]
+    Inode(u64, u64),
+}
+
+fn file_identity(canonical: &Path) -> FileIdentity {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        if let Ok(m) = std::fs::metadata(canonical) {
+            return FileIdentity::Inode(m.dev(), m.ino());
+        }
+    }
+    FileIdentity::Path(canonical.to_path_buf())
 }
 
 /// A recording file name without `.` components and repeated separators: `./a.csv`, `a.csv` and

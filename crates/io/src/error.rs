@@ -106,6 +106,14 @@ impl InputError {
         match err.span() {
             Some(span) => {
                 let (line, column) = line_col(text, span.start);
+                // The key with the table it sits in (`ship.lpp`, `recording[2].note`): a bare `lpp`
+                // or a line number alone leaves the user to work out which table is meant.
+                let key = key.or_else(|| key_on_line(text, line)).map(|k| {
+                    match table_path_at(text, line) {
+                        Some(table) => format!("{table}.{k}"),
+                        None => k,
+                    }
+                });
                 InputError {
                     file: file.to_path_buf(),
                     location: Location::Toml { line, column, key },
@@ -147,6 +155,43 @@ fn backticked(message: &str) -> Option<String> {
     let start = message.find('`')? + 1;
     let len = message[start..].find('`')?;
     Some(message[start..start + len].to_string())
+}
+
+/// The table a 1-based `line` of TOML `text` belongs to, as a key path: `ship` under `[ship]`,
+/// `recording[2]` under the third `[[recording]]`; `None` at the top level.
+fn table_path_at(text: &str, line: usize) -> Option<String> {
+    let mut table: Option<String> = None;
+    let mut counts: std::collections::HashMap<String, usize> = std::collections::HashMap::new();
+    for l in text.lines().take(line) {
+        let l = l.trim();
+        if let Some(rest) = l.strip_prefix("[[") {
+            let name = rest.split("]]").next()?.trim().to_string();
+            let k = counts.entry(name.clone()).or_insert(0);
+            table = Some(format!("{name}[{k}]"));
+            *k += 1;
+        } else if let Some(rest) = l.strip_prefix('[') {
+            let name = rest.split(']').next()?.trim();
+            // `[recording.sub]` after `[[recording]]` belongs to its latest element.
+            table = Some(match name.split_once('.') {
+                Some((head, tail)) if counts.contains_key(head) => {
+                    format!("{head}[{}].{tail}", counts[head] - 1)
+                }
+                _ => name.to_string(),
+            });
+        }
+    }
+    table
+}
+
+/// The key assigned on a 1-based `line` (`lpp = "7.0"` → `lpp`), when the line is an assignment.
+fn key_on_line(text: &str, line: usize) -> Option<String> {
+    let l = text.lines().nth(line.checked_sub(1)?)?.trim();
+    if l.starts_with('[') || l.starts_with('#') {
+        return None;
+    }
+    let (key, _) = l.split_once('=')?;
+    let key = key.trim().trim_matches('"');
+    (!key.is_empty() && !key.contains(char::is_whitespace)).then(|| key.to_string())
 }
 
 /// 1-based line and column (in characters) of a byte offset.

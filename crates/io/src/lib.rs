@@ -7,6 +7,7 @@
 //!
 //! - [`recording`]: one recording CSV file → [`Recording`];
 //! - [`dataset`]: a data set TOML and its recordings → [`Dataset`];
+//! - [`consistency`]: do a recording's channels describe one motion (units, signs, axes)?
 //! - [`import`]: a foreign layout described by a mapping TOML → a data set in the project's format;
 //! - [`open_water`]: the propeller's open-water CSV → the quadratic K_T(J);
 //! - [`relative_wind`]: the wind measured on board (relative) turned into the true wind;
@@ -15,6 +16,7 @@
 //! - [`deriv`]: the smoothing differentiator that estimates accelerations;
 //! - [`error`]: [`InputError`], which always names the file and the line/column or key.
 
+pub mod consistency;
 pub mod dataset;
 pub mod deriv;
 pub mod error;

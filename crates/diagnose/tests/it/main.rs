@@ -1,4 +1,5 @@
 //! Integration tests of the diagnosis crate (one binary, a module per concern).
 
 mod known_wind;
+mod own_misfit;
 mod own_winds;

@@ -119,7 +119,7 @@ fn toml_unknown_key_is_named_with_its_position() {
 fn toml_missing_ship_key() {
     check(
         "missing_ship_key.toml",
-        ":4:1: key `lpp`: missing field `lpp`",
+        ":4:1: key `ship.lpp`: missing field `lpp`",
     );
 }
 
@@ -151,7 +151,7 @@ fn toml_zigzag_without_check_angle() {
 fn toml_unknown_side() {
     check(
         "bad_side.toml",
-        ":19:8: unknown variant `left`, expected `port` or `starboard`",
+        ":19:8: key `recording[0].side`: unknown variant `left`, expected `port` or `starboard`",
     );
 }
 
@@ -193,7 +193,7 @@ fn csv_negative_wind_speed_names_the_cell() {
 fn toml_windage_without_lateral_area() {
     check(
         "windage_without_lateral_area.toml",
-        ":14:1: key `lateral_area_m2`: missing field `lateral_area_m2`",
+        ":14:1: key `windage.lateral_area_m2`: missing field `lateral_area_m2`",
     );
 }
 

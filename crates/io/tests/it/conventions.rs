@@ -34,7 +34,7 @@ fn unit_suffixes_convert_to_si_and_heading_is_unwrapped() {
 fn cg_origin_and_sname_rudder_are_converted_to_midship_and_starboard_positive() {
     let path = Path::new("tests/fixtures/good/cg_sname.toml");
     let ds = Dataset::load(path).unwrap();
-    let raw = read_recording(Path::new("tests/fixtures/good/units_wrapped_heading.csv")).unwrap();
+    let raw = read_recording(Path::new("tests/fixtures/good/cg_turn.csv")).unwrap();
     let rec = &ds.recordings[0].recording;
     let xg = ds.ship.xg;
     assert_eq!(

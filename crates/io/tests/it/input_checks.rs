@@ -265,6 +265,75 @@ fn ship_keys_outside_physical_ranges_are_refused() {
     }
 }
 
+/// Regression: each key within its range made an impossible ship that was fitted silently (a
+/// displacement given as the mass in tonnes: block coefficient 800, Y_v −15.6 instead of −0.026).
+#[test]
+fn impossible_ship_proportions_are_refused_naming_the_key() {
+    let cases = [
+        (
+            "displacement = 3.27",
+            "displacement = 3270.0",
+            "ds.toml: key `ship.displacement`: gives a block coefficient ∇/(L B T) of 800 (accepted",
+        ),
+        (
+            "lpp = 7.0",
+            "lpp = 7000.0",
+            "ds.toml: key `ship.beam`: gives a length-beam ratio L/B of 5512 (accepted",
+        ),
+        (
+            "kzz = 1.75",
+            "kzz = 175.0",
+            "ds.toml: key `ship.kzz`: gives a yaw radius of gyration k_zz/L of 25.0 (accepted",
+        ),
+    ];
+    for (from, to, expected) in cases {
+        match parse_dataset(Path::new("ds.toml"), &SHIP.replace(from, to)) {
+            Ok(_) => panic!("{to} accepted"),
+            Err(e) => assert!(e.to_string().starts_with(expected), "{e}"),
+        }
+    }
+    let rudder = "[rudder]\narea_m2 = 539.0\nspan_m = 0.345\nx_m = -3.5\n";
+    check_dataset_refused(
+        &format!("{SHIP}{rudder}"),
+        "ds.toml: key `rudder.area_m2`: 539 m² is 167 × L T (rudders have about 1/70 … 1/30 of it): a wrong unit?",
+    );
+    let added = "[added_mass]\nX_udot = 247.9\nY_vdot = -2513.0\nY_rdot = 0.0\nN_vdot = 0.0\nN_rdot = -6074.5\n";
+    check_dataset_refused(
+        &format!("{SHIP}{added}"),
+        "ds.toml: key `added_mass.X_udot`: 247.9 kg is positive; the data set gives the derivative, which is minus the added mass (write -247.9)",
+    );
+}
+
+/// Regression: a hard link and a byte-for-byte copy of one recording under two names were both
+/// read, the run counted twice (9602 samples with no note, the uncertainty understated).
+#[test]
+fn a_hard_link_or_a_copy_of_a_recording_is_refused() {
+    let dir = TempDir::new("twice");
+    let text = recording_text(HEADER, |_, _| {});
+    std::fs::write(dir.0.join("a.csv"), &text).unwrap();
+    std::fs::hard_link(dir.0.join("a.csv"), dir.0.join("b.csv")).unwrap();
+    std::fs::write(dir.0.join("c.csv"), &text).unwrap();
+    let entry = |f: &str| format!("[[recording]]\nfile = \"{f}\"\nkind = \"free\"\n");
+    for (second, words) in [
+        (
+            "b.csv",
+            "`b.csv` is the same file as recording[0].file `a.csv`",
+        ),
+        (
+            "c.csv",
+            "`c.csv` holds the same samples as recording[0].file `a.csv` (a copy)",
+        ),
+    ] {
+        let ds = dir.0.join(format!("ds-{second}.toml"));
+        std::fs::write(&ds, format!("{SHIP}{}{}", entry("a.csv"), entry(second))).unwrap();
+        let e = Dataset::load(&ds).unwrap_err().to_string();
+        assert!(
+            e.contains("key `recording[1].file`") && e.contains(words),
+            "{e}"
+        );
+    }
+}
+
 #[test]
 fn a_recording_listed_twice_is_refused_naming_both_entries() {
     let entry = |f: &str| format!("[[recording]]\nfile = \"{f}\"\nkind = \"free\"\n");
@@ -404,7 +473,10 @@ fn a_write_failing_half_way_leaves_no_dataset_toml() {
     let dir = TempDir::new("half-way");
     let out = dir.0.join("out");
     let (file, rec) = one_recording_dataset(&["a.csv", "sub/b.csv"]);
-    write_dataset(&out, &file, &[&rec, &rec], &[]).unwrap();
+    // Two runs, not one copied: the loader refuses a copy counted twice.
+    let mut other = rec.clone();
+    other.x0.iter_mut().for_each(|x| *x += 1.0);
+    write_dataset(&out, &file, &[&rec, &other], &[]).unwrap();
     assert!(Dataset::load(&out.join("dataset.toml")).is_ok());
     // Rewrite with the second recording's folder replaced by a file: the old dataset.toml must not
     // survive beside a half-written set.

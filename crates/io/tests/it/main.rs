@@ -3,6 +3,7 @@
 //! of `cargo test`).
 
 mod bad_input;
+mod channel_consistency;
 mod conventions;
 mod input_checks;
 mod prime_and_derivatives;

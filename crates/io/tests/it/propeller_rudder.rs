@@ -92,11 +92,11 @@ fn an_open_water_table_gives_its_points_and_the_quadratic_through_them() {
 fn an_unknown_key_is_named() {
     check_message(
         &format!("{PROPELLER}pitch_m = 0.15\n"),
-        "ds.toml:18:1: key `pitch_m`: unknown field `pitch_m`, expected one of `diameter_m`, `x_m`, `k_t`, `open_water`, `rate_rps`",
+        "ds.toml:18:1: key `propeller.pitch_m`: unknown field `pitch_m`, expected one of `diameter_m`, `x_m`, `k_t`, `open_water`, `rate_rps`",
     );
     check_message(
         &format!("{RUDDER}chord_m = 0.15\n"),
-        "ds.toml:18:1: key `chord_m`: unknown field `chord_m`, expected one of `area_m2`, `span_m`, `x_m`",
+        "ds.toml:18:1: key `rudder.chord_m`: unknown field `chord_m`, expected one of `area_m2`, `span_m`, `x_m`",
     );
 }
 
@@ -104,7 +104,7 @@ fn an_unknown_key_is_named() {
 fn a_missing_key_is_named() {
     check_message(
         "[rudder]\narea_m2 = 0.0539\nx_m = -3.5\n",
-        "ds.toml:14:1: key `span_m`: missing field `span_m`",
+        "ds.toml:14:1: key `rudder.span_m`: missing field `span_m`",
     );
 }
 

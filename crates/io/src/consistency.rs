@@ -1,0 +1,432 @@
+//! Do a recording's channels describe one motion? The heading must change as the yaw rate
+//! integrates, the track must follow the velocities turned by the heading, recorded accelerations
+//! must integrate to the velocities' changes, and the rudder must reach about the angle the data set
+//! declares. A unit left off a header (`psi` holding degrees), a mirrored axis or a sign flipped by a
+//! logger reads as a valid file, and every number computed from it is silently wrong (a heading in
+//! degrees gave first overshoots of 3110°; a sway velocity with the wrong sign fitted N_v with the
+//! wrong sign and still replayed its own data well). Channels that disagree clearly are refused
+//! with the likely cause; noise and small disagreements pass.
+//!
+//! Each comparison is made on increments over windows of a quarter ship length of travel, so that
+//! sensor noise averages out and a gyro bias cannot accumulate.
+
+use std::path::Path;
+
+use crate::error::{InputError, number};
+use crate::types::{Manoeuvre, Recording};
+
+/// Window of the increments compared, in L/U0.
+pub const WINDOW_L_OVER_U0: f64 = 0.25;
+
+/// Scale factors within this band of 1 agree (a tank's carriage and a GNSS both drift a little).
+const FACTOR_BAND: (f64, f64) = (0.8, 1.25);
+
+/// A linear relation explains the increments when its residual is below this share of their energy.
+const CLEAR_FIT: f64 = 0.3;
+
+/// A track agrees with its velocities when their residual is below this share of its energy.
+const TRACK_AGREES: f64 = 0.05;
+
+/// Another reading of the channels is taken as the cause when it leaves less than this share of the
+/// residual of the reading as given (and the given reading is above the noise).
+const ALTERNATIVE_WINS: f64 = 0.25;
+
+/// Residual share below which the given reading is within noise (no alternative is looked for).
+const NOISE_SHARE: f64 = 1e-3;
+
+/// Below this RMS heading increment per window [rad] (0.1°) the heading carries no test.
+const HEADING_SIGNIFICANT_RAD: f64 = 0.1_f64 * std::f64::consts::PI / 180.0;
+
+/// Refuse `rec` (read from `file`) when its channels clearly contradict each other or the declared
+/// manoeuvre. The ship's length `lpp_m` and approach speed `u0_m_s` set the comparison window and
+/// what counts as moving.
+pub fn check_channels(
+    file: &Path,
+    rec: &Recording,
+    manoeuvre: &Manoeuvre,
+    lpp_m: f64,
+    u0_m_s: f64,
+) -> Result<(), InputError> {
+    let windows = windows(rec, WINDOW_L_OVER_U0 * lpp_m / u0_m_s);
+    if windows.len() >= 4 {
+        check_heading(file, rec, &windows)?;
+        // A track is tested when the ship moves at a quarter of U0 on average at least: at rest, the
+        // position noise is all there is.
+        check_track(file, rec, &windows, 0.25 * u0_m_s)?;
+        check_accelerations(file, rec, &windows)?;
+    }
+    check_rudder_amplitude(file, rec, manoeuvre)
+}
+
+/// Sample index pairs (start, end) of consecutive windows of about `window_s`, at least 3 samples
+/// apart.
+fn windows(rec: &Recording, window_s: f64) -> Vec<(usize, usize)> {
+    let n = rec.len();
+    if n < 8 {
+        return Vec::new();
+    }
+    let dt = (rec.t[n - 1] - rec.t[0]) / (n - 1) as f64;
+    let step = ((window_s / dt).round() as usize).clamp(3, n / 4);
+    (0..)
+        .map(|k| (k * step, (k + 1) * step))
+        .take_while(|&(_, b)| b < n)
+        .collect()
+}
+
+/// Trapezoidal integral of `f` over samples a..=b.
+fn integral(t: &[f64], f: impl Fn(usize) -> f64, a: usize, b: usize) -> f64 {
+    (a..b)
+        .map(|i| 0.5 * (f(i) + f(i + 1)) * (t[i + 1] - t[i]))
+        .sum()
+}
+
+/// Least-squares factor k of `measured ≈ k · predicted` and the residual's share of the measured
+/// energy; `None` when the prediction has no energy.
+fn factor(measured: &[f64], predicted: &[f64]) -> (Option<f64>, f64) {
+    let pp: f64 = predicted.iter().map(|p| p * p).sum();
+    let mm: f64 = measured.iter().map(|m| m * m).sum();
+    if pp <= 0.0 || mm <= 0.0 {
+        return (None, 1.0);
+    }
+    let k = measured
+        .iter()
+        .zip(predicted)
+        .map(|(m, p)| m * p)
+        .sum::<f64>()
+        / pp;
+    let rr: f64 = measured
+        .iter()
+        .zip(predicted)
+        .map(|(m, p)| (m - k * p).powi(2))
+        .sum();
+    (Some(k), rr / mm)
+}
+
+/// Where `measured − k · predicted` (`per` values per window) first gets close to its largest
+/// (a quarter of it), as "t = a … b s": where a spike sits, or where a frozen or spliced part begins.
+fn worst_window(
+    rec: &Recording,
+    windows: &[(usize, usize)],
+    measured: &[f64],
+    predicted: &[f64],
+    k: f64,
+    per: usize,
+) -> String {
+    let error: Vec<f64> = (0..windows.len())
+        .map(|w| {
+            (0..per)
+                .map(|j| (measured[w * per + j] - k * predicted[w * per + j]).powi(2))
+                .sum()
+        })
+        .collect();
+    let largest = error.iter().copied().fold(0.0, f64::max);
+    let first = error.iter().position(|&e| e >= 0.25 * largest).unwrap_or(0);
+    let (a, b) = windows[first];
+    format!(
+        "first large between t = {} and {} s",
+        number(rec.t[a]),
+        number(rec.t[b])
+    )
+}
+
+fn rms(x: &[f64]) -> f64 {
+    (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
+}
+
+/// What a scale factor `k` between two channels most likely is, for a message.
+fn likely_factor(k: f64, what_scaled: &str, unit_hint: &str) -> String {
+    let deg = 180.0 / std::f64::consts::PI;
+    let near = |x: f64, target: f64| (x / target - 1.0).abs() < 0.1;
+    if near(k, -1.0) {
+        format!("opposite signs: {what_scaled} has the other sign convention")
+    } else if near(k, deg) || near(k, -deg) {
+        format!("a factor 180/π: {what_scaled} holds degrees read as radians ({unit_hint})")
+    } else if near(k, 1.0 / deg) || near(k, -1.0 / deg) {
+        format!(
+            "a factor π/180: {what_scaled} holds radians read as degrees (check its header's unit)"
+        )
+    } else {
+        format!("a factor {} (a wrong unit?)", number_short(k))
+    }
+}
+
+fn number_short(x: f64) -> String {
+    if x.abs() >= 0.01 && x.abs() < 1e4 {
+        format!("{x:.3}")
+    } else {
+        format!("{x:.2e}")
+    }
+}
+
+/// The heading's increments against the yaw rate's integral.
+fn check_heading(
+    file: &Path,
+    rec: &Recording,
+    windows: &[(usize, usize)],
+) -> Result<(), InputError> {
+    let dpsi: Vec<f64> = windows
+        .iter()
+        .map(|&(a, b)| rec.psi[b] - rec.psi[a])
+        .collect();
+    let int_r: Vec<f64> = windows
+        .iter()
+        .map(|&(a, b)| integral(&rec.t, |i| rec.r[i], a, b))
+        .collect();
+    let (moves_psi, moves_r) = (rms(&dpsi), rms(&int_r));
+    if moves_psi.max(moves_r) < HEADING_SIGNIFICANT_RAD {
+        return Ok(());
+    }
+    let deg = 180.0 / std::f64::consts::PI;
+    // One channel flat while the other turns the ship: a channel the logger did not fill.
+    if moves_r < 1e-2 * moves_psi && moves_psi > 5.0 * HEADING_SIGNIFICANT_RAD {
+        return Err(InputError::file(
+            file,
+            format!(
+                "column `r` does not move (RMS {:.3}° per window) while `psi` turns the ship by {:.2}° RMS per window of {WINDOW_L_OVER_U0} L/U0: the yaw rate channel is empty or wrong",
+                moves_r * deg,
+                moves_psi * deg
+            ),
+        ));
+    }
+    if moves_psi < 1e-2 * moves_r && moves_r > 5.0 * HEADING_SIGNIFICANT_RAD {
+        return Err(InputError::file(
+            file,
+            format!(
+                "column `psi` does not move (RMS {:.3}° per window) while `r` integrates to {:.2}° RMS per window of {WINDOW_L_OVER_U0} L/U0: the heading channel is empty or wrong",
+                moves_psi * deg,
+                moves_r * deg
+            ),
+        ));
+    }
+    let (k, residual) = factor(&dpsi, &int_r);
+    if let Some(k) = k
+        && residual < CLEAR_FIT
+        && !(FACTOR_BAND.0..=FACTOR_BAND.1).contains(&k)
+    {
+        return Err(InputError::file(
+            file,
+            format!(
+                "columns `psi` and `r` disagree: the heading changes {} times as much as the yaw rate integrates to ({}); headings and yaw rates are positive to starboard, in rad and rad/s unless the header says `[deg]` / `[deg/s]` (docs/data-format.md)",
+                number_short(k),
+                likely_factor(
+                    k,
+                    "`psi` (or `r`)",
+                    "write `psi[deg]`, or `r[rad/s]` if r is the one in radians"
+                )
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The track's increments against the velocities turned by the heading, with the readings a
+/// mistaken axis or sign would give.
+fn check_track(
+    file: &Path,
+    rec: &Recording,
+    windows: &[(usize, usize)],
+    moving_m_s: f64,
+) -> Result<(), InputError> {
+    // Earth velocity of midship from body velocities: x0 north, y0 east, ψ from north to starboard.
+    let earth = |i: usize, v_sign: f64| {
+        let (s, c) = rec.psi[i].sin_cos();
+        let v = v_sign * rec.v[i];
+        (rec.u[i] * c - v * s, rec.u[i] * s + v * c)
+    };
+    let predicted = |v_sign: f64| -> Vec<f64> {
+        windows
+            .iter()
+            .flat_map(|&(a, b)| {
+                [
+                    integral(&rec.t, |i| earth(i, v_sign).0, a, b),
+                    integral(&rec.t, |i| earth(i, v_sign).1, a, b),
+                ]
+            })
+            .collect()
+    };
+    let track = |y_sign: f64, swapped: bool| -> Vec<f64> {
+        windows
+            .iter()
+            .flat_map(|&(a, b)| {
+                let (dx, dy) = (rec.x0[b] - rec.x0[a], y_sign * (rec.y0[b] - rec.y0[a]));
+                if swapped { [dy, dx] } else { [dx, dy] }
+            })
+            .collect()
+    };
+    let as_given = predicted(1.0);
+    let measured = track(1.0, false);
+    // A ship at rest (or nearly) carries no test of its track.
+    let travel = rms(&measured).max(rms(&as_given));
+    let window_s = rec.t[windows[0].1] - rec.t[windows[0].0];
+    if !travel.is_finite() || travel < moving_m_s * window_s {
+        return Ok(());
+    }
+    let (k, residual) = factor(&measured, &as_given);
+    let alternatives: [(&str, Vec<f64>, &Vec<f64>); 3] = [
+        (
+            "the track `y0` is mirrored (east negative), or `x0`/`y0` are not north/east",
+            track(-1.0, false),
+            &as_given,
+        ),
+        (
+            "`x0` and `y0` are swapped (x0 is north, y0 east)",
+            track(1.0, true),
+            &as_given,
+        ),
+        (
+            "`v` has the other sign (sway positive to starboard)",
+            measured.clone(),
+            &predicted(-1.0),
+        ),
+    ];
+    if residual > NOISE_SHARE {
+        for (cause, m, p) in &alternatives {
+            let (k_alt, r_alt) = factor(m, p);
+            if r_alt < ALTERNATIVE_WINS * residual
+                && r_alt < TRACK_AGREES
+                && k_alt.is_some_and(|k| (FACTOR_BAND.0..=FACTOR_BAND.1).contains(&k))
+            {
+                return Err(InputError::file(
+                    file,
+                    format!(
+                        "the track (`x0`, `y0`) does not follow the velocities (`u`, `v`) turned by the heading `psi` ({:.1} % of its movement unexplained over windows of {WINDOW_L_OVER_U0} L/U0); it would ({:.2} %) if {cause} (docs/conventions.md)",
+                        100.0 * residual,
+                        100.0 * r_alt
+                    ),
+                ));
+            }
+        }
+    }
+    match k {
+        Some(k) if residual < CLEAR_FIT && !(FACTOR_BAND.0..=FACTOR_BAND.1).contains(&k) => {
+            let cause = match k {
+                k if (k / 1000.0 - 1.0).abs() < 0.1 => {
+                    "positions in mm (or velocities in km/s)?".to_string()
+                }
+                k if (k / 0.5144 - 1.0).abs() < 0.05 => "velocities in knots?".to_string(),
+                k if (k / 1.852 - 1.0).abs() < 0.05 => {
+                    "positions in nautical miles ÷ … or velocities in km/h?".to_string()
+                }
+                k if (k / 3.6 - 1.0).abs() < 0.05 => "velocities in km/h?".to_string(),
+                _ => "a wrong unit?".to_string(),
+            };
+            Err(InputError::file(
+                file,
+                format!(
+                    "the track (`x0`, `y0`) moves {} times as far as the velocities (`u`, `v`) carry the ship ({cause}); positions are in m and velocities in m/s unless the header says otherwise (docs/data-format.md)",
+                    number_short(k)
+                ),
+            ))
+        }
+        _ if residual > CLEAR_FIT => Err(InputError::file(
+            file,
+            format!(
+                "the track (`x0`, `y0`) does not follow the velocities (`u`, `v`) turned by the heading `psi`: {:.0} % of its movement over windows of {WINDOW_L_OVER_U0} L/U0 is unexplained, {} (a spike, a spliced run, or a sign or axis convention?); the conventions are in docs/conventions.md",
+                100.0 * residual,
+                worst_window(rec, windows, &measured, &as_given, 1.0, 2)
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// Recorded accelerations against the changes of the velocities they belong to.
+fn check_accelerations(
+    file: &Path,
+    rec: &Recording,
+    windows: &[(usize, usize)],
+) -> Result<(), InputError> {
+    let Some(acc) = &rec.accelerations else {
+        return Ok(());
+    };
+    let channels: [(&str, &str, &[f64], &[f64]); 3] = [
+        ("u_dot", "u", &acc.u_dot, &rec.u),
+        ("v_dot", "v", &acc.v_dot, &rec.v),
+        ("r_dot", "r", &acc.r_dot, &rec.r),
+    ];
+    for (name, of, dot, x) in channels {
+        if dot.len() != x.len() {
+            continue;
+        }
+        let change: Vec<f64> = windows.iter().map(|&(a, b)| x[b] - x[a]).collect();
+        let int: Vec<f64> = windows
+            .iter()
+            .map(|&(a, b)| integral(&rec.t, |i| dot[i], a, b))
+            .collect();
+        let (moves, integrates) = (rms(&change), rms(&int));
+        // The velocity must change clearly (its own noise is not a test); u changes least of the three.
+        let typical = rms(x).max(f64::MIN_POSITIVE);
+        if moves < 0.02 * typical || moves <= 0.0 {
+            continue;
+        }
+        if integrates < 1e-2 * moves {
+            return Err(InputError::file(
+                file,
+                format!(
+                    "column `{name}` is (nearly) zero while `{of}` changes: a recorded acceleration that does not integrate to its velocity's change; leave the acceleration columns out and shipid estimates them (docs/data-format.md)"
+                ),
+            ));
+        }
+        let (k, residual) = factor(&change, &int);
+        if let Some(k) = k
+            && residual < CLEAR_FIT
+            && !(FACTOR_BAND.0..=FACTOR_BAND.1).contains(&k)
+        {
+            return Err(InputError::file(
+                file,
+                format!(
+                    "columns `{name}` and `{of}` disagree: `{of}` changes {} times as much as `{name}` integrates to ({})",
+                    number_short(k),
+                    likely_factor(k, &format!("`{name}`"), &format!("write `{name}[deg/s2]`"))
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The rudder of a zig-zag or turn must reach about the declared angle: a factor 180/π either way is
+/// a unit left off the header or the data set's angle given in radians.
+fn check_rudder_amplitude(
+    file: &Path,
+    rec: &Recording,
+    manoeuvre: &Manoeuvre,
+) -> Result<(), InputError> {
+    let declared_deg = match *manoeuvre {
+        Manoeuvre::ZigZag { rudder_deg, .. } | Manoeuvre::Turning { rudder_deg, .. } => rudder_deg,
+        Manoeuvre::Free => return Ok(()),
+    };
+    let (at, recorded_deg) = rec
+        .delta
+        .iter()
+        .enumerate()
+        .fold((0, 0.0_f64), |(at, m), (i, d)| {
+            if d.abs() > m { (i, d.abs()) } else { (at, m) }
+        });
+    let recorded_deg = recorded_deg.to_degrees();
+    if recorded_deg < 0.1 {
+        return Ok(()); // a rudder that never moves: the metrics say there is no execute
+    }
+    let ratio = recorded_deg / declared_deg;
+    if (0.1..=2.5).contains(&ratio) {
+        return Ok(());
+    }
+    let deg = 180.0 / std::f64::consts::PI;
+    let cause = if (ratio / deg - 1.0).abs() < 0.15 {
+        "the data set's `rudder` in radians, or the column `delta` holding degrees without `[deg]` in its header?"
+    } else if (ratio * deg - 1.0).abs() < 0.15 {
+        "the column `delta[deg]` holding radians?"
+    } else {
+        "a wrong unit, or the wrong recording?"
+    };
+    Err(InputError::file(
+        file,
+        format!(
+            "the rudder reaches {}° (at t = {} s) while the data set declares a {} with {}° rudder ({cause})",
+            number_short(recorded_deg),
+            number(rec.t[at]),
+            manoeuvre.kind(),
+            number(declared_deg)
+        ),
+    ))
+}

@@ -1,0 +1,273 @@
+//! A recording whose channels contradict each other (a unit left off a header, a sign or axis
+//! convention of another tool, a logger's empty channel) is refused with the likely cause; consistent
+//! channels with noise pass. Each case changes one channel of a consistent synthetic zig-zag.
+
+use std::path::Path;
+
+use shipid_io::consistency::check_channels;
+use shipid_io::{Accelerations, Manoeuvre, Recording, Side};
+
+const LPP_M: f64 = 7.0;
+const U0_M_S: f64 = 1.2;
+const DEG: f64 = 180.0 / std::f64::consts::PI;
+
+/// A zig-zag-like motion with every channel consistent: yaw rate, sway and surge from smooth laws,
+/// heading and track integrated from them, accelerations their derivatives, and a little noise on
+/// the measured positions and heading.
+fn consistent() -> Recording {
+    let dt = 0.1;
+    let n = 1500;
+    let w = 0.08; // rad/s
+    let t: Vec<f64> = (0..n).map(|i| i as f64 * dt).collect();
+    let r: Vec<f64> = t.iter().map(|t| 0.05 * (w * t).sin()).collect();
+    let v: Vec<f64> = r.iter().map(|r| -1.4 * r).collect();
+    let u: Vec<f64> = t
+        .iter()
+        .map(|t| U0_M_S * (1.0 - 0.05 * (w * t).sin().powi(2)))
+        .collect();
+    let (mut psi, mut x0, mut y0) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let earth = |k: usize, p: f64| {
+        let (s, c) = p.sin_cos();
+        (u[k] * c - v[k] * s, u[k] * s + v[k] * c)
+    };
+    for i in 1..n {
+        psi[i] = psi[i - 1] + 0.5 * (r[i] + r[i - 1]) * dt;
+        let (a, b) = (earth(i - 1, psi[i - 1]), earth(i, psi[i]));
+        x0[i] = x0[i - 1] + 0.5 * (a.0 + b.0) * dt;
+        y0[i] = y0[i - 1] + 0.5 * (a.1 + b.1) * dt;
+    }
+    // Deterministic noise in [-1, 1) times the scale: a few mm, a tenth of a degree.
+    let noise = |i: usize, scale: f64| {
+        scale * (2.0 * ((i as f64 * 12.9898).sin() * 43758.5453).fract().abs() - 1.0)
+    };
+    let r_dot: Vec<f64> = t.iter().map(|t| 0.05 * w * (w * t).cos()).collect();
+    let u_dot: Vec<f64> = t
+        .iter()
+        .map(|t| -U0_M_S * 0.05 * w * (2.0 * w * t).sin())
+        .collect();
+    Recording {
+        x0: x0
+            .iter()
+            .enumerate()
+            .map(|(i, x)| x + noise(i, 0.004))
+            .collect(),
+        y0: y0
+            .iter()
+            .enumerate()
+            .map(|(i, y)| y + noise(i + 7, 0.004))
+            .collect(),
+        psi: psi
+            .iter()
+            .enumerate()
+            .map(|(i, p)| p + noise(i + 3, 0.1 / DEG))
+            .collect(),
+        delta: r
+            .iter()
+            .map(|r| 35.0_f64.to_radians() * r.signum())
+            .collect(),
+        accelerations: Some(Accelerations {
+            u_dot,
+            v_dot: r_dot.iter().map(|a| -1.4 * a).collect(),
+            r_dot,
+        }),
+        t,
+        u,
+        v,
+        r,
+        ..Default::default()
+    }
+}
+
+const ZIGZAG: Manoeuvre = Manoeuvre::ZigZag {
+    rudder_deg: 35.0,
+    check_deg: 35.0,
+    side: Side::Port,
+};
+
+/// `change` applied to the consistent recording, checked against the declared `manoeuvre`: `None`
+/// expects it accepted, `Some(words)` refused with a message holding `words`.
+fn check(change: impl Fn(&mut Recording), manoeuvre: &Manoeuvre, expected: Option<&str>) {
+    let mut rec = consistent();
+    change(&mut rec);
+    let got = check_channels(Path::new("rec.csv"), &rec, manoeuvre, LPP_M, U0_M_S);
+    match (got, expected) {
+        (Ok(()), None) => {}
+        (Err(e), Some(words)) => {
+            let text = e.to_string();
+            assert!(text.starts_with("rec.csv: "), "{text}");
+            assert!(text.contains(words), "expected `{words}` in: {text}");
+        }
+        (Ok(()), Some(words)) => panic!("accepted; expected a refusal with `{words}`"),
+        (Err(e), None) => panic!("refused a consistent recording: {e}"),
+    }
+}
+
+#[test]
+fn consistent_channels_with_noise_pass() {
+    check(|_| {}, &ZIGZAG, None);
+}
+
+#[test]
+fn free_manoeuvre_without_accelerations_passes() {
+    check(|r| r.accelerations = None, &Manoeuvre::Free, None);
+}
+
+#[test]
+fn heading_in_degrees_read_as_radians_is_named() {
+    check(
+        |r| r.psi.iter_mut().for_each(|p| *p *= DEG),
+        &ZIGZAG,
+        Some("a factor 180/π: `psi` (or `r`) holds degrees read as radians"),
+    );
+}
+
+#[test]
+fn yaw_rate_in_degrees_per_second_read_as_radians_is_named() {
+    check(
+        |r| r.r.iter_mut().for_each(|x| *x *= DEG),
+        &ZIGZAG,
+        Some("a factor π/180"),
+    );
+}
+
+#[test]
+fn heading_counter_clockwise_is_named() {
+    check(
+        |r| r.psi.iter_mut().for_each(|p| *p = -*p),
+        &ZIGZAG,
+        Some("opposite signs"),
+    );
+}
+
+#[test]
+fn empty_yaw_rate_channel_is_named() {
+    check(
+        |r| r.r.iter_mut().for_each(|x| *x = 0.0),
+        &ZIGZAG,
+        Some("column `r` does not move"),
+    );
+}
+
+#[test]
+fn sway_with_the_other_sign_is_named() {
+    check(
+        |r| r.v.iter_mut().for_each(|x| *x = -*x),
+        &ZIGZAG,
+        Some("if `v` has the other sign"),
+    );
+}
+
+#[test]
+fn mirrored_east_axis_is_named() {
+    check(
+        |r| r.y0.iter_mut().for_each(|y| *y = -*y),
+        &ZIGZAG,
+        Some("the track `y0` is mirrored"),
+    );
+}
+
+#[test]
+fn swapped_position_axes_are_named() {
+    check(
+        |r| std::mem::swap(&mut r.x0, &mut r.y0),
+        &ZIGZAG,
+        Some("`x0` and `y0` are swapped"),
+    );
+}
+
+#[test]
+fn positions_in_millimetres_are_named() {
+    check(
+        |r| {
+            r.x0.iter_mut().for_each(|x| *x *= 1000.0);
+            r.y0.iter_mut().for_each(|y| *y *= 1000.0);
+        },
+        &ZIGZAG,
+        Some("positions in mm"),
+    );
+}
+
+#[test]
+fn velocities_in_knots_are_named() {
+    check(
+        |r| {
+            r.u.iter_mut().for_each(|x| *x /= 0.514444);
+            r.v.iter_mut().for_each(|x| *x /= 0.514444);
+        },
+        &ZIGZAG,
+        Some("velocities in knots"),
+    );
+}
+
+#[test]
+fn a_frozen_track_beside_moving_velocities_is_refused_with_where() {
+    check(
+        |r| {
+            let (x, y) = (r.x0[900], r.y0[900]);
+            r.x0[900..].iter_mut().for_each(|v| *v = x);
+            r.y0[900..].iter_mut().for_each(|v| *v = y);
+        },
+        &ZIGZAG,
+        Some("first large between t = 90"),
+    );
+}
+
+#[test]
+fn zero_recorded_accelerations_are_refused() {
+    check(
+        |r| {
+            let a = r.accelerations.as_mut().unwrap();
+            for c in [&mut a.u_dot, &mut a.v_dot, &mut a.r_dot] {
+                c.iter_mut().for_each(|x| *x = 0.0);
+            }
+        },
+        &ZIGZAG,
+        Some("is (nearly) zero while"),
+    );
+}
+
+#[test]
+fn yaw_acceleration_in_degrees_is_named() {
+    check(
+        |r| {
+            let a = r.accelerations.as_mut().unwrap();
+            a.r_dot.iter_mut().for_each(|x| *x *= DEG);
+        },
+        &ZIGZAG,
+        Some("columns `r_dot` and `r` disagree"),
+    );
+}
+
+#[test]
+fn rudder_in_degrees_read_as_radians_for_a_small_zigzag_is_named() {
+    check(
+        |r| r.delta.iter_mut().for_each(|d| *d = 3.0 * d.signum()),
+        &Manoeuvre::ZigZag {
+            rudder_deg: 3.0,
+            check_deg: 3.0,
+            side: Side::Port,
+        },
+        Some("the column `delta` holding degrees without `[deg]`"),
+    );
+}
+
+#[test]
+fn rudder_angle_declared_in_radians_is_named() {
+    check(
+        |_| {},
+        &Manoeuvre::Turning {
+            rudder_deg: 0.61,
+            side: Side::Port,
+        },
+        Some("the data set's `rudder` in radians"),
+    );
+}
+
+#[test]
+fn a_rudder_a_little_short_of_the_declared_angle_passes() {
+    check(
+        |r| r.delta.iter_mut().for_each(|d| *d *= 0.9),
+        &ZIGZAG,
+        None,
+    );
+}
