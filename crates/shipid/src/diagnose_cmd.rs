@@ -102,6 +102,7 @@ pub fn run(args: &DiagnoseArgs) -> Result<Outcome, CliError> {
             "--horizon {horizon_l_over_u0}: must be a number of L/U0 above 0.5"
         )));
     }
+    check_outputs(args)?;
     let (base, base_effects) = load_model_parts(model_spec)?;
     let mut ds = Dataset::load(dataset)?;
     if let Some(name) = only_recording {
@@ -317,6 +318,34 @@ pub fn run(args: &DiagnoseArgs) -> Result<Outcome, CliError> {
         }
     }
     Ok(Outcome::Ok)
+}
+
+/// Every path the diagnosis may write, checked before it starts: the report, the augmented model
+/// (beside the report by default), the figures' folder, against each other and the files read.
+fn check_outputs(a: &DiagnoseArgs) -> Result<(), CliError> {
+    use crate::outputs::{Inputs, check_distinct, check_file, check_folder};
+    let inputs = || Inputs::new().model(a.model_spec).dataset(a.dataset);
+    if let Some(dir) = a.plots {
+        check_folder("--plots", dir, &["report.json", "report.html"], &inputs())?;
+    }
+    let report = a
+        .json_out
+        .map(Path::to_path_buf)
+        .or_else(|| a.plots.map(|d| d.join("report.json")));
+    if let Some(p) = &report {
+        check_file("--json", p, &inputs())?;
+    }
+    let model = a
+        .model_out
+        .map(Path::to_path_buf)
+        .or_else(|| report.as_ref().map(|p| p.with_extension("model.toml")));
+    if let Some(m) = &model {
+        check_file("--model-out", m, &inputs())?;
+        if let Some(r) = &report {
+            check_distinct(("--json", r), ("--model-out", m))?;
+        }
+    }
+    Ok(())
 }
 
 /// A recording's own wind as an effect acting on the data set's windage (as the diagnosis fitted it).

@@ -273,7 +273,7 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
         ds.ship.lpp
     );
     write_atomic(a.out, format!("{header}{text}").as_bytes())
-        .map_err(|e| crate::write_failed(a.out, e))?;
+        .map_err(|e| crate::not_saved(a.out, e, "the fitted model"))?;
     let all_solved = out.dofs.iter().all(|d| d.fit.status.is_solved());
     let extent = StateExtent::of_windows(&ds, &out.file.training);
     print_summary(&out, Some(a.out), a.json, &warnings, extent.as_ref());
@@ -561,7 +561,8 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     }
     shipid_pipeline::model_file::anchor_training(&mut file.training, a.out);
     let text = with_environment_table(write_mmg_model_file(&file)?, &ds, &a.recordings)?;
-    write_atomic(a.out, text.as_bytes()).map_err(|e| crate::write_failed(a.out, e))?;
+    write_atomic(a.out, text.as_bytes())
+        .map_err(|e| crate::not_saved(a.out, e, "the fitted model"))?;
     if a.json {
         let report = json!({
             "fit_time_s": fit.fit_time_s,
@@ -659,7 +660,7 @@ pub fn run_gp(
         .extend(training_warnings(&ds, recordings, validate, false));
     shipid_pipeline::model_file::anchor_training(&mut file.training, out);
     let text = with_environment_table(model_text(&file).map_err(failed)?, &ds, recordings)?;
-    write_atomic(out, text.as_bytes()).map_err(|e| crate::write_failed(out, e))?;
+    write_atomic(out, text.as_bytes()).map_err(|e| crate::not_saved(out, e, "the fitted model"))?;
     let extent = StateExtent::of_windows(&ds, &file.training);
     if json {
         let mut value = serde_json::to_value(&report).unwrap_or_default();

@@ -7,13 +7,14 @@ use shipid_io::write::write_dataset_with;
 use crate::{CliError, Outcome, bad_input, failed};
 
 pub fn run(mapping: &Path, out: &Path, source: Option<&Path>) -> Result<Outcome, CliError> {
-    // Refused before any source is read: the mistake is in the command line, not in the data.
-    if out.exists() && !out.is_dir() {
-        return Err(bad_input(format!(
-            "--out {}: exists and is not a directory",
-            out.display()
-        )));
-    }
+    // Refused before any source is read: the mistake is in the command line, not in the data (the
+    // sources themselves are guarded by the writer, which knows their names).
+    crate::outputs::check_folder(
+        "--out",
+        out,
+        &["dataset.toml"],
+        &crate::outputs::Inputs::new().file(mapping, "the mapping file"),
+    )?;
     let imported = shipid_io::import::import(mapping, source)?;
     let comments = vec![
         format!(

@@ -482,6 +482,16 @@ fn weights_csv_rows(csv: &mut String, motion: &str, what: &str, x: &[f64], modes
 /// `shipid inverse`.
 pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
     faer::set_global_parallelism(faer::Par::Seq);
+    let mut inputs = crate::outputs::Inputs::new().file(a.targets, "the targets file");
+    if let Some(ships) = a.ships {
+        inputs = inputs.file(ships, "the ships database");
+    }
+    crate::outputs::check_folder(
+        "--out",
+        a.out,
+        &["summary.json", "modes.csv", "modes.svg"],
+        &inputs,
+    )?;
     if a.samples < MIN_SAMPLES {
         return Err(bad_input(format!(
             "--samples {}: the network needs at least {MIN_SAMPLES} simulated ships per target",

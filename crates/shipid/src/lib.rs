@@ -7,6 +7,7 @@ pub mod fit_cmd;
 pub mod import;
 pub mod inverse_cmd;
 pub mod metrics_cmd;
+pub mod outputs;
 pub mod print;
 pub mod report_cmd;
 pub mod simulate_cmd;
@@ -99,4 +100,13 @@ pub fn failed_msg(msg: impl fmt::Display) -> CliError {
 /// A failed write, naming the file (an `io::Error` alone says only "No such file or directory").
 pub fn write_failed(path: &std::path::Path, e: impl fmt::Display) -> CliError {
     CliError::Failed(anyhow::anyhow!("cannot write {}: {e}", path.display()))
+}
+
+/// A result computed but not written: the message says what is lost, so a failure after minutes of
+/// work is not mistaken for a failure before it.
+pub fn not_saved(path: &std::path::Path, e: impl fmt::Display, what: &str) -> CliError {
+    CliError::Failed(anyhow::anyhow!(
+        "cannot write {}: {e}: {what} was computed but not saved; give a writable path and run again",
+        path.display()
+    ))
 }

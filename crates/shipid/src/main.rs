@@ -352,6 +352,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             recorded_current,
             wind_channels,
         } => {
+            shipid::outputs::check_folder("--out", &out, &[], &shipid::outputs::Inputs::new())?;
             let effects = shipid_pipeline::generate::parse_effects(&effect)?;
             let recorded = match (&recorded_wind, &recorded_current) {
                 (None, None) => None,
@@ -434,6 +435,11 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             structures,
             inflow_from_thrust,
         } => {
+            shipid::outputs::check_file(
+                "--out",
+                &out,
+                &shipid::outputs::Inputs::new().dataset(&dataset),
+            )?;
             if inflow_from_thrust && set != shipid_pipeline::mmg::SET_NAME {
                 return Err(shipid::bad_input(
                     "--inflow-from-thrust applies to --set mmg (the other families have no propeller model)",
@@ -535,38 +541,48 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             wind,
             current,
             propeller_rate,
-        } => match (manoeuvre, replay) {
-            (_, Some(ds)) => {
-                // A replay follows each recording's own time base: these would be silently ignored.
-                for (given, flag) in [
-                    (dt.is_some(), "--dt"),
-                    (duration.is_some(), "--duration"),
-                    (allow_large, "--allow-large"),
-                    (out.is_some(), "--out"),
-                ] {
-                    if given {
-                        return Err(shipid::bad_input(format!(
-                            "{flag} does not apply to --replay (each recording is replayed on its own time base)"
-                        )));
-                    }
-                }
-                shipid::simulate_cmd::run_replay(&model, &ds, json)
+        } => {
+            // With --replay, --out is refused below as not applying.
+            if let (Some(out), None) = (&out, &replay) {
+                shipid::outputs::check_file(
+                    "--out",
+                    out,
+                    &shipid::outputs::Inputs::new().model(&model),
+                )?;
             }
-            (Some(m), None) => shipid::simulate_cmd::run(&shipid::simulate_cmd::SimulateArgs {
-                model: &model,
-                manoeuvre: &m,
-                dt_s: dt,
-                duration_s: duration,
-                allow_large,
-                json,
-                out_csv: out.as_deref(),
-                bands,
-                wind: wind.as_deref(),
-                current: current.as_deref(),
-                propeller_rate_hz: propeller_rate,
-            }),
-            (None, None) => Err(shipid::bad_input("give --manoeuvre or --replay")),
-        },
+            match (manoeuvre, replay) {
+                (_, Some(ds)) => {
+                    // A replay follows each recording's own time base: these would be silently ignored.
+                    for (given, flag) in [
+                        (dt.is_some(), "--dt"),
+                        (duration.is_some(), "--duration"),
+                        (allow_large, "--allow-large"),
+                        (out.is_some(), "--out"),
+                    ] {
+                        if given {
+                            return Err(shipid::bad_input(format!(
+                                "{flag} does not apply to --replay (each recording is replayed on its own time base)"
+                            )));
+                        }
+                    }
+                    shipid::simulate_cmd::run_replay(&model, &ds, json)
+                }
+                (Some(m), None) => shipid::simulate_cmd::run(&shipid::simulate_cmd::SimulateArgs {
+                    model: &model,
+                    manoeuvre: &m,
+                    dt_s: dt,
+                    duration_s: duration,
+                    allow_large,
+                    json,
+                    out_csv: out.as_deref(),
+                    bands,
+                    wind: wind.as_deref(),
+                    current: current.as_deref(),
+                    propeller_rate_hz: propeller_rate,
+                }),
+                (None, None) => Err(shipid::bad_input("give --manoeuvre or --replay")),
+            }
+        }
         Command::Run {
             study,
             jobs,

@@ -18,6 +18,11 @@ pub fn run(dir: &Path, study: Option<&Path>) -> Result<Outcome, CliError> {
             dir.display()
         )));
     }
+    let mut inputs = crate::outputs::Inputs::new();
+    if let Some(study) = study {
+        inputs = inputs.file(study, "the study file");
+    }
+    crate::outputs::check_folder("DIR", dir, &[shipid_report::REPORT_FILE], &inputs)?;
     let html = if dir.join("report.json").is_file() {
         shipid_report::diagnosis_page(&DiagnosisFiles::in_dir(dir), &meta)
     } else if dir.join("summary.csv").is_file() {

@@ -259,19 +259,6 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
         eprintln!("warning: {w}");
         warnings.push(w);
     }
-    if let Some(path) = a.out_csv {
-        let rate_note = a
-            .propeller_rate_hz
-            .map_or(String::new(), |n| format!(" --propeller-rate {n}"));
-        let comments = vec![format!(
-            "shipid {} simulate {} --manoeuvre {}{rate_note}; midship, SI, rudder positive to starboard",
-            env!("CARGO_PKG_VERSION"),
-            a.model,
-            a.manoeuvre
-        )];
-        write_atomic(path, recording_csv(&out.recording, &comments).as_bytes())
-            .map_err(|e| crate::write_failed(path, e))?;
-    }
     let mut value = outcome_json(&out, &m, model);
     if let Value::Object(o) = &mut value {
         if let Some(w) = wind {
@@ -415,6 +402,20 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
                     .map_or(String::new(), |r| format!("; reach of this run {r:.2}"))
             );
         }
+    }
+    // Written after the metrics are shown: a write that fails then loses no more than the file.
+    if let Some(path) = a.out_csv {
+        let rate_note = a
+            .propeller_rate_hz
+            .map_or(String::new(), |n| format!(" --propeller-rate {n}"));
+        let comments = vec![format!(
+            "shipid {} simulate {} --manoeuvre {}{rate_note}; midship, SI, rudder positive to starboard",
+            env!("CARGO_PKG_VERSION"),
+            a.model,
+            a.manoeuvre
+        )];
+        write_atomic(path, recording_csv(&out.recording, &comments).as_bytes())
+            .map_err(|e| crate::not_saved(path, e, "the simulated time series"))?;
     }
     Ok(match out.status {
         SimStatus::Ok => Outcome::Ok,

@@ -24,7 +24,14 @@ pub fn run_and_write(
     force: bool,
     progress: bool,
 ) -> Result<(Vec<CaseResult>, Option<PathBuf>), CliError> {
-    check_out_dir(out)?;
+    crate::outputs::check_folder(
+        "--out",
+        out,
+        &RUN_WRITES,
+        &crate::outputs::Inputs::new()
+            .file(&study.path, "the study file")
+            .dataset(&study.dataset_path),
+    )?;
     let lock = RunLock::acquire(out)?;
     if let Some(pid) = lock.taken_over_from {
         eprintln!(
@@ -84,6 +91,19 @@ pub fn run_and_write(
     drop(lock);
     Ok((results, report))
 }
+
+/// The files a run writes at the top of its output folder (the cases' own go under `cases/`).
+const RUN_WRITES: [&str; 9] = [
+    "study.toml",
+    "run.json",
+    "summary.csv",
+    "summary.parquet",
+    "coefficients.csv",
+    "coefficients.parquet",
+    "diagnostics.csv",
+    "diagnostics.parquet",
+    shipid_report::REPORT_FILE,
+];
 
 /// An output folder that is a file (or under one) is the user's mistake, named before any work.
 fn check_out_dir(out: &Path) -> Result<(), CliError> {
@@ -171,6 +191,12 @@ pub fn plot(study_path: &Path, out: Option<&Path>) -> Result<Outcome, CliError> 
             study_path.display()
         )));
     }
+    crate::outputs::check_folder(
+        "--out",
+        &out.join("figures"),
+        &[],
+        &crate::outputs::Inputs::new().file(study_path, "the study file"),
+    )?;
     // Not while a run is rewriting the tables the figures are drawn from.
     let lock = RunLock::acquire(&out)?;
     let report = shipid_figures::write_figures(&study, &out);
