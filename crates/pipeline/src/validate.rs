@@ -34,16 +34,56 @@ pub fn rms(x: &[f64]) -> f64 {
 /// it reproduces to 0.05°).
 pub const DT_OVER_L_OVER_U0: f64 = 0.05 / (7.0 / 1.179);
 
-/// Open-loop replay errors.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+/// Open-loop replay errors. The RMSEs are over the samples the replay reached; serialised, a
+/// diverged replay's are `null`: over the few samples before a divergence they are near zero and
+/// would read as a perfect fit.
+#[derive(Debug, Clone, PartialEq)]
 pub struct ReplayErrors {
-    #[serde(flatten)]
     pub status: SimStatus,
     pub position_rmse_over_l: f64,
     pub heading_rmse_deg: f64,
     pub u_rmse_m_s: f64,
     pub v_rmse_m_s: f64,
     pub r_rmse_deg_s: f64,
+}
+
+impl ReplayErrors {
+    /// The RMSEs a reader may compare: `None` when the replay diverged.
+    pub fn comparable(&self) -> Option<[f64; 5]> {
+        matches!(self.status, SimStatus::Ok).then_some([
+            self.position_rmse_over_l,
+            self.heading_rmse_deg,
+            self.u_rmse_m_s,
+            self.v_rmse_m_s,
+            self.r_rmse_deg_s,
+        ])
+    }
+}
+
+impl Serialize for ReplayErrors {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        #[derive(Serialize)]
+        struct Shown<'a> {
+            #[serde(flatten)]
+            status: &'a SimStatus,
+            position_rmse_over_l: Option<f64>,
+            heading_rmse_deg: Option<f64>,
+            u_rmse_m_s: Option<f64>,
+            v_rmse_m_s: Option<f64>,
+            r_rmse_deg_s: Option<f64>,
+        }
+        let rmse = self.comparable();
+        let at = |i: usize| rmse.map(|r| r[i]);
+        Shown {
+            status: &self.status,
+            position_rmse_over_l: at(0),
+            heading_rmse_deg: at(1),
+            u_rmse_m_s: at(2),
+            v_rmse_m_s: at(3),
+            r_rmse_deg_s: at(4),
+        }
+        .serialize(serializer)
+    }
 }
 
 /// Closed-loop metrics comparison.

@@ -262,7 +262,21 @@ pub fn validation_with_bands(
             let outside = v["outside_identification_range"]
                 .as_f64()
                 .map_or("-".into(), |x| format!("{:.0}%", 100.0 * x));
-            let status = v["replay"]["status"].as_str().unwrap_or("?").to_string();
+            // Why a row has "-" in place of its errors: which simulation diverged, when and why.
+            let diverged = |part: &str| {
+                (v[part]["status"].as_str() == Some("diverged")).then(|| {
+                    format!(
+                        "{part} diverged at t = {:.1} s ({})",
+                        v[part]["t_s"].as_f64().unwrap_or(f64::NAN),
+                        v[part]["reason"].as_str().unwrap_or("no reason given")
+                    )
+                })
+            };
+            let status = [diverged("replay"), diverged("manoeuvre")]
+                .into_iter()
+                .flatten()
+                .collect::<Vec<_>>()
+                .join("; ");
             println!(
                 "{file:<16} {:>10} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8} {}",
                 f("position_rmse_over_l"),
@@ -272,11 +286,12 @@ pub fn validation_with_bands(
                 f("r_rmse_deg_s"),
                 mrae,
                 outside,
-                if status == "ok" {
-                    String::new()
-                } else {
-                    status
-                }
+                status
+            );
+        }
+        if rows.iter().any(|r| r.validation.diverged()) {
+            println!(
+                "-: undefined where a simulation diverged (errors over the samples before it would read as a fit)"
             );
         }
         let delays: Vec<f64> = recs
