@@ -7,6 +7,32 @@ use shipid_sim::Dynamics;
 
 use crate::Outcome;
 
+/// What a model's training data lets a command say about its identification range (`what`: where
+/// the command shows it): empty when the range can be given or the model names none to give (the
+/// reference), else why it is unavailable or unverified. `validate` and `simulate` say the same.
+pub fn training_range_warnings(model_spec: &str, what: &str) -> Vec<String> {
+    use shipid_pipeline::range::{TrainingSource, training_source};
+    match training_source(model_spec) {
+        TrainingSource::Read {
+            unverified: true,
+            model,
+            data,
+        } => vec![format!(
+            "{}: its training windows carry no `dataset_hash` (written by an older shipid): cannot check that {} is still the data it was fitted on; the identification range assumes it is",
+            model.display(),
+            data.2.display()
+        )],
+        TrainingSource::Read { .. } => vec![],
+        TrainingSource::NotRecorded if model_spec.starts_with("mmg:") => vec![],
+        TrainingSource::NotRecorded => vec![format!(
+            "{model_spec}: the model names no training data: the identification range ({what}) is unavailable"
+        )],
+        TrainingSource::Unavailable(why) => vec![format!(
+            "{why}; the identification range ({what}) is unavailable"
+        )],
+    }
+}
+
 /// Validates `model` on every recording of `ds` and prints the table (or the JSON with `as_json`);
 /// `SomeFailed` when a simulation diverged.
 pub fn validation(model: &dyn Dynamics, model_spec: &str, ds: &Dataset, as_json: bool) -> Outcome {

@@ -250,8 +250,21 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
     }
     let env = constant_environment(wind, current, &windage, model.ship(), grid.duration_s)?;
     let out = simulate_on_grid_in(model, &m, &grid, env.clone(), approach_m_s)?;
-    let reach = shipid_pipeline::range::model_envelope(a.model, model)
+    let envelope = shipid_pipeline::range::model_envelope(a.model, model);
+    let reach = envelope
+        .as_ref()
         .and_then(|e| e.reach(model, &out.recording));
+    // Silence would read as "inside": without its training data a model's extrapolation cannot be
+    // told, and the user is told why, as `validate` tells it.
+    let range_unavailable = if envelope.is_none() && model.own_range().is_none() {
+        crate::print::training_range_warnings(a.model, "`outside` and the extrapolation warning")
+    } else {
+        Vec::new()
+    };
+    for w in &range_unavailable {
+        eprintln!("warning: {w}");
+    }
+    warnings.extend(range_unavailable.iter().cloned());
     if let Some(w) = reach
         .as_ref()
         .and_then(|r| r.warning(a.model, !matches!(out.status, SimStatus::Ok)))
@@ -283,6 +296,11 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
             o.insert(
                 "identification_range".into(),
                 serde_json::to_value(r).unwrap_or_default(),
+            );
+        } else if !range_unavailable.is_empty() {
+            o.insert(
+                "identification_range".into(),
+                json!({ "unavailable": range_unavailable.join("; ") }),
             );
         }
         if !warnings.is_empty() {

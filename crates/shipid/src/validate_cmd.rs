@@ -4,7 +4,6 @@ use std::path::Path;
 
 use shipid_io::Dataset;
 use shipid_pipeline::model_file::{load_model, ship_mismatch};
-use shipid_pipeline::range::{TrainingSource, training_source};
 
 use crate::{CliError, Outcome};
 
@@ -39,7 +38,9 @@ pub fn run(
     }
     // A sparse GP carries its own identification range; a polynomial's needs its training data.
     if model.own_range().is_none() {
-        warn_about_training(model_spec);
+        for w in crate::print::training_range_warnings(model_spec, "column `outside`") {
+            eprintln!("warning: {w}");
+        }
     }
     Ok(crate::print::validation_with_bands(
         model.as_ref(),
@@ -51,27 +52,4 @@ pub fn run(
             .map(|(level, source)| crate::print::BandCheck { level, source }),
         valley.as_ref(),
     ))
-}
-
-/// Says on stderr when the identification range (the `outside` column) cannot be given, and why.
-fn warn_about_training(model_spec: &str) {
-    match training_source(model_spec) {
-        TrainingSource::Read {
-            unverified: true,
-            model,
-            data,
-        } => eprintln!(
-            "warning: {}: its training windows carry no `dataset_hash` (written by an older shipid): cannot check that {} is still the data it was fitted on; the identification range assumes it is",
-            model.display(),
-            data.2.display()
-        ),
-        TrainingSource::Read { .. } => {}
-        TrainingSource::NotRecorded if model_spec.starts_with("mmg:") => {}
-        TrainingSource::NotRecorded => eprintln!(
-            "warning: {model_spec}: the model names no training data: the identification range (column `outside`) is unavailable"
-        ),
-        TrainingSource::Unavailable(why) => {
-            eprintln!("warning: {why}\nthe identification range (column `outside`) is unavailable")
-        }
-    }
 }
