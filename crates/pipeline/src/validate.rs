@@ -14,13 +14,129 @@
 
 use serde::Serialize;
 use shipid_io::{DatasetRecording, Manoeuvre, Recording, Ship};
-use shipid_sim::metrics::{check_reaction_delay_s, first_execute};
+use shipid_sim::metrics::{
+    DEFINITE_FRACTION, check_reaction_delay_s, first_execute, missing_execute_reason,
+};
 use shipid_sim::{
     Dynamics, KnownEnvironment, Metrics, Replay, SimOptions, SimOutput, SimStatus, State,
     controller_with_reaction_delay, metrics,
 };
 
 use crate::environment::{ChosenWindage, WindageSource, environment_with, with_recorded_inputs};
+use crate::error::{PipelineError, bad_input};
+
+/// A data set without recordings has nothing to validate or measure: refused as `fit` refuses it,
+/// rather than answered with an empty table.
+pub fn require_recordings(ds: &shipid_io::Dataset) -> Result<(), PipelineError> {
+    if ds.recordings.is_empty() {
+        return Err(bad_input(format!(
+            "{} has no recordings (no [[recording]] table): nothing to compute",
+            ds.path.display()
+        )));
+    }
+    Ok(())
+}
+
+/// Below this share of the declared amplitude the recorded rudder is not the declared manoeuvre.
+const AMPLITUDE_SHARE: f64 = 0.5;
+
+/// Why metrics that `r`'s declared manoeuvre defines are undefined in `m` (its metrics), in words for
+/// a table's "-": `"<file>: <metrics> undefined: <why>"`; `None` when all are defined or the recording
+/// declares no standard manoeuvre.
+pub fn undefined_metrics_reason(r: &DatasetRecording, ship: &Ship, m: &Metrics) -> Option<String> {
+    let zigzag = match r.manoeuvre {
+        Manoeuvre::ZigZag { .. } => true,
+        Manoeuvre::Turning { .. } => false,
+        Manoeuvre::Free => return None,
+    };
+    let missing: Vec<&str> = m
+        .entries()
+        .iter()
+        .filter(|(key, v)| {
+            v.is_none()
+                && zigzag == matches!(*key, "overshoot_1" | "overshoot_2" | "t_a" | "t_check")
+        })
+        .map(|(key, _)| *key)
+        .collect();
+    if missing.is_empty() {
+        return None;
+    }
+    Some(format!(
+        "{}: {} undefined: {}",
+        r.file,
+        missing.join(", "),
+        undefined_why(r, ship)
+    ))
+}
+
+fn undefined_why(r: &DatasetRecording, ship: &Ship) -> String {
+    let rec = &r.recording;
+    let (rudder_deg, check_deg, side) = match r.manoeuvre {
+        Manoeuvre::ZigZag {
+            rudder_deg,
+            check_deg,
+            side,
+        } => (rudder_deg, Some(check_deg), side),
+        Manoeuvre::Turning { rudder_deg, side } => (rudder_deg, None, side),
+        Manoeuvre::Free => return "a free recording defines no standard metrics".into(),
+    };
+    let n = rec.t.len();
+    if n < 3 {
+        return format!("the record has {n} samples, too few for any metric");
+    }
+    if let Some(why) = missing_execute_reason(rec, rudder_deg, side) {
+        return why;
+    }
+    let side_name = if side.sign() > 0.0 {
+        "starboard"
+    } else {
+        "port"
+    };
+    let Some(first) = first_execute(rec, rudder_deg, side, ship) else {
+        return format!(
+            "no first rudder execute to {side_name} is found (the record is unusable: non-finite values or times not increasing?)"
+        );
+    };
+    let s = side.sign();
+    let d0 = rec.delta[0];
+    let reached_deg = rec
+        .delta
+        .iter()
+        .map(|d| s * (d - d0))
+        .fold(f64::NEG_INFINITY, f64::max)
+        .to_degrees();
+    if reached_deg < AMPLITUDE_SHARE * rudder_deg {
+        return format!(
+            "its rudder goes at most {reached_deg:.1}° to {side_name}, against the declared {rudder_deg}°: is the declared amplitude (or the rudder's unit) right?"
+        );
+    }
+    let after = rec.t.partition_point(|t| *t < first.t_s);
+    let turned_deg = rec.psi[after..]
+        .iter()
+        .map(|p| s * (p - first.psi_rad))
+        .fold(0.0, f64::max)
+        .to_degrees();
+    let definite = DEFINITE_FRACTION * rudder_deg.to_radians();
+    let reverses = rec.delta[after..].iter().any(|d| s * (d - d0) < -definite);
+    let duration_s = rec.t[n - 1] - first.t_s;
+    match check_deg {
+        Some(check) if turned_deg < check => format!(
+            "the heading turns at most {turned_deg:.1}° in the {duration_s:.0} s after the execute, never reaching the declared check angle {check}°"
+        ),
+        Some(_) if !reverses => format!(
+            "its rudder never reverses in the {duration_s:.0} s after the execute: a turning circle declared as a zig-zag?"
+        ),
+        Some(_) => format!(
+            "the record ends {duration_s:.0} s after the execute, before the overshoot completes"
+        ),
+        None if reverses => {
+            "its rudder reverses after the execute: a zig-zag declared as a turning circle?".into()
+        }
+        None => format!(
+            "the heading turns {turned_deg:.0}° in the {duration_s:.0} s after the execute (the advance and transfer need 90°, the tactical diameter 180°, the steady diameter a steady turn beyond): the record is too short"
+        ),
+    }
+}
 
 /// Root mean square of `x` (0 for no samples).
 pub fn rms(x: &[f64]) -> f64 {

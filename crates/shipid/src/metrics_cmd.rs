@@ -41,14 +41,32 @@ pub fn metrics_json(rows: &[(String, &'static str, Metrics)]) -> Value {
 }
 
 pub fn run(dataset: &Path, as_json: bool) -> Result<Outcome, CliError> {
+    use shipid_pipeline::validate::{
+        approach_notes, late_reversal_notes, require_recordings, undefined_metrics_reason,
+    };
     let ds = Dataset::load(dataset)?;
+    require_recordings(&ds)?;
     let rows = dataset_metrics(&ds);
-    let warnings = shipid_pipeline::validate::approach_notes(&ds);
+    // The declarations validate questions are questioned here too: the metrics rest on them.
+    let mut warnings = late_reversal_notes(&ds);
+    warnings.extend(approach_notes(&ds));
     for w in &warnings {
         eprintln!("warning: {w}");
     }
+    // A "-" says nothing on its own: each recording with one says why.
+    let undefined: Vec<(String, String)> = ds
+        .recordings
+        .iter()
+        .zip(&rows)
+        .filter_map(|(r, (_, _, m))| {
+            undefined_metrics_reason(r, &ds.ship, m).map(|why| (r.file.clone(), why))
+        })
+        .collect();
     if as_json {
         let mut out = metrics_json(&rows);
+        for (file, why) in &undefined {
+            out["recordings"][file]["undefined"] = json!(why);
+        }
         if !warnings.is_empty() {
             out["warnings"] = json!(warnings);
         }
@@ -56,6 +74,13 @@ pub fn run(dataset: &Path, as_json: bool) -> Result<Outcome, CliError> {
     } else {
         println!("{} ({})", ds.name, dataset.display());
         println!("{}", metrics_table(&rows));
+        println!(
+            "times t_a and t_check × U0/L, distances ÷ L (docs/conventions.md); - undefined{}",
+            if undefined.is_empty() { "" } else { ":" }
+        );
+        for (_, why) in &undefined {
+            println!("  {why}");
+        }
     }
     Ok(Outcome::Ok)
 }
@@ -67,26 +92,26 @@ pub fn metrics_table(rows: &[(String, &'static str, Metrics)]) -> String {
         "kind",
         "os1 [deg]",
         "os2 [deg]",
-        "t_a",
-        "t_check",
-        "advance",
-        "transfer",
-        "tact. D",
-        "steady D",
+        "t_a·U0/L",
+        "t_check·U0/L",
+        "advance/L",
+        "transfer/L",
+        "tact. D/L",
+        "steady D/L",
     ];
     let width = rows.iter().map(|r| r.0.len()).max().unwrap_or(9).max(9);
     let mut lines = vec![
         std::iter::once(format!("{:<width$}", header[0]))
-            .chain(header[1..].iter().map(|h| format!("{h:>11}")))
+            .chain(header[1..].iter().map(|h| format!("{h:>12}")))
             .collect::<Vec<_>>()
             .join(" "),
     ];
     for (file, kind, m) in rows {
-        let mut cells = vec![format!("{file:<width$}"), format!("{kind:>11}")];
+        let mut cells = vec![format!("{file:<width$}"), format!("{kind:>12}")];
         for (_, v) in m.entries() {
             cells.push(
                 v.filter(|x| x.is_finite())
-                    .map_or_else(|| format!("{:>11}", "-"), |x| format!("{x:>11.3}")),
+                    .map_or_else(|| format!("{:>12}", "-"), |x| format!("{x:>12.3}")),
             );
         }
         lines.push(cells.join(" "));

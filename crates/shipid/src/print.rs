@@ -171,10 +171,32 @@ pub fn validation_with_bands(
     let (rows, source) = validate_dataset(model, model_spec, ds);
     let dataset = &ds.path;
     let any_failed = rows.iter().any(|r| r.validation.diverged());
-    let recs: Map<String, Value> = rows
+    let mut recs: Map<String, Value> = rows
         .iter()
         .map(|r| (r.file.clone(), serde_json::to_value(r).unwrap_or_default()))
         .collect();
+    // An MRAE of "-" without a diverged run needs its reason: the recording, or its declaration,
+    // defines no metric the re-simulation could be compared on.
+    let mut no_mrae = Vec::new();
+    for v in &rows {
+        let (Some(c), Some(r)) = (&v.validation.manoeuvre, ds.recording(&v.file)) else {
+            continue;
+        };
+        if c.mrae.is_some() || v.validation.diverged() {
+            continue;
+        }
+        let why = shipid_pipeline::validate::undefined_metrics_reason(r, &ds.ship, &c.recorded)
+            .unwrap_or_else(|| {
+                format!(
+                    "{}: the re-simulation defines none of the recorded metrics",
+                    v.file
+                )
+            });
+        if let Some(Value::Object(m)) = recs.get_mut(&v.file).map(|x| &mut x["manoeuvre"]) {
+            m.insert("mrae_undefined".into(), json!(why));
+        }
+        no_mrae.push(why);
+    }
     let mut value = json!({
         "model": model_spec,
         "dataset": dataset.display().to_string(),
@@ -314,6 +336,9 @@ pub fn validation_with_bands(
                 outside,
                 status
             );
+        }
+        for why in &no_mrae {
+            println!("MRAE -: {why}");
         }
         if rows.iter().any(|r| r.validation.diverged()) {
             println!(

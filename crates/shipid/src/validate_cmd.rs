@@ -28,6 +28,7 @@ pub fn run(
         .transpose()?;
     let valley = shipid_pipeline::bands::valley_of(model_spec)?;
     let ds = Dataset::load(dataset)?;
+    shipid_pipeline::validate::require_recordings(&ds)?;
     // Validation still runs: its errors are what the user asked for; the warnings say what they
     // cannot mean.
     if let Some(m) = ship_mismatch(model.ship(), &ds.ship) {
