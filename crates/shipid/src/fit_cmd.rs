@@ -235,6 +235,7 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     a.estimator.validate()?;
     let set = load_set(a.set)?;
     let ds = Dataset::load(a.dataset)?;
+    warn_window_clipped(&ds, &a.recordings, a.window);
     let out = fit_dataset(&ds, set, &a.estimator, &a.recordings, a.window, a.solver)?;
     let warnings = training_warnings(&ds, &a.recordings, a.validate, false);
     if let Some(none) = out.no_information() {
@@ -467,6 +468,7 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     use shipid_pipeline::mmg::{MmgFitOptions, fit_mmg_model_file, write_mmg_model_file};
     let opts = MmgFitOptions::from_spec(&a.estimator, &a.recordings, a.window)?;
     let ds = Dataset::load(a.dataset)?;
+    warn_window_clipped(&ds, &a.recordings, a.window);
     let mut warnings = training_warnings(&ds, &a.recordings, a.validate, true);
     for r in ds
         .recordings
@@ -624,6 +626,7 @@ pub fn run_gp(
         }
     }
     let ds = Dataset::load(dataset)?;
+    warn_window_clipped(&ds, recordings, window);
     let threshold = similarity.unwrap_or(DEFAULT_SIMILARITY);
     let (mut file, model, mut report) = fit_gp_dataset(&ds, recordings, window, threshold)?;
     for w in &report.warnings {
@@ -699,6 +702,32 @@ pub fn run_gp(
         return Ok(crate::print::validation(model.as_ref(), &spec, &ds, json));
     }
     Ok(Outcome::Ok)
+}
+
+/// A `--window` reaching beyond a training recording is fitted on the part inside it: said, with
+/// the span actually used, so a typo (`0:10000`, `-50:100`) is not taken for the window asked. A
+/// window missing a recording altogether is the fit's to refuse.
+fn warn_window_clipped(ds: &Dataset, recordings: &[String], window: WindowSpec) {
+    let WindowSpec::Time { start_s, end_s } = window else {
+        return;
+    };
+    for r in ds
+        .recordings
+        .iter()
+        .filter(|r| recordings.is_empty() || recordings.contains(&r.file))
+    {
+        let (Some(&a), Some(&b)) = (r.recording.t.first(), r.recording.t.last()) else {
+            continue;
+        };
+        if (start_s < a || end_s > b) && start_s < b && end_s > a {
+            eprintln!(
+                "warning: --window {start_s}:{end_s} s reaches beyond {} ({a}–{b} s): fitted on {}–{} s",
+                r.file,
+                start_s.max(a),
+                end_s.min(b)
+            );
+        }
+    }
 }
 
 /// The extent of the states the model was identified on, below a fit's summary: what a manoeuvre must

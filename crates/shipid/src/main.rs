@@ -692,6 +692,13 @@ fn parse_window(text: &str) -> Result<shipid_pipeline::fit::WindowSpec, CliError
     if !(start_s.is_finite() && end_s.is_finite() && end_s > start_s) {
         return Err(bad());
     }
+    // Beyond this no recording runs; such a number would also print as hundreds of digits.
+    const MAX_WINDOW_S: f64 = 1e7;
+    if start_s.abs() > MAX_WINDOW_S || end_s.abs() > MAX_WINDOW_S {
+        return Err(shipid::bad_input(format!(
+            "--window `{text}`: times beyond ±{MAX_WINDOW_S:e} s (116 days) are no recording's"
+        )));
+    }
     Ok(shipid_pipeline::fit::WindowSpec::Time { start_s, end_s })
 }
 
