@@ -16,12 +16,14 @@ pub fn run(mapping: &Path, out: &Path, source: Option<&Path>) -> Result<Outcome,
         &crate::outputs::Inputs::new().file(mapping, "the mapping file"),
     )?;
     let imported = shipid_io::import::import(mapping, source)?;
+    // Named relative to the files written, not as typed: the bytes must not depend on the working
+    // directory the import ran from.
+    let mapping_name = shipid_pipeline::model_file::stored_path(&out.join("dataset.toml"), mapping);
     let comments = vec![
         format!(
-            "Imported by shipid {} from {} (mapping {}).",
+            "Imported by shipid {} from {} (mapping {mapping_name}).",
             env!("CARGO_PKG_VERSION"),
             imported.dataset.name,
-            mapping.display()
         ),
         "Project conventions: SI units, rudder positive to starboard (source sign converted)."
             .into(),

@@ -426,10 +426,16 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
         let rate_note = a
             .propeller_rate_hz
             .map_or(String::new(), |n| format!(" --propeller-rate {n}"));
+        // The model named relative to the file written, not as typed: the bytes must not depend on
+        // the working directory.
+        let model_name = if a.model.starts_with("mmg:") {
+            a.model.to_string()
+        } else {
+            shipid_pipeline::model_file::stored_path(path, Path::new(a.model))
+        };
         let comments = vec![format!(
-            "shipid {} simulate {} --manoeuvre {}{rate_note}; midship, SI, rudder positive to starboard",
+            "shipid {} simulate {model_name} --manoeuvre {}{rate_note}; midship, SI, rudder positive to starboard",
             env!("CARGO_PKG_VERSION"),
-            a.model,
             a.manoeuvre
         )];
         write_atomic(path, recording_csv(&out.recording, &comments).as_bytes())

@@ -438,3 +438,76 @@ fn masks_change_only_what_they_name() {
         "case,fit_time_s,mrae\nc1,#,0.1\n"
     );
 }
+
+/// Regression: `import` wrote the mapping, and `simulate --out` the model, into the first comment of
+/// every file as typed ("mapping ../../imp/import.toml"), so the bytes depended on the working
+/// directory. The same inputs typed from two folders now write the same bytes.
+#[test]
+fn import_and_simulate_comments_do_not_depend_on_the_working_directory() {
+    let tmp = tempfile::tempdir().unwrap();
+    let top = tmp.path();
+    let deep = top.join("deep/er");
+    std::fs::create_dir_all(&deep).unwrap();
+    std::fs::write(top.join("mapping.toml"), MAPPING).unwrap();
+    let sub = root().join(
+        "crates/shipid/tests/hostile/paths/simulate_model_in_a_subfolder_flags_its_extrapolation/sub",
+    );
+    std::fs::create_dir_all(top.join("sub")).unwrap();
+    for f in ["dataset.toml", "model.toml", "r.csv"] {
+        std::fs::copy(sub.join(f), top.join("sub").join(f)).unwrap();
+    }
+    let source = root().join("data/kvlcc2-mmg");
+    let source = source.to_str().unwrap();
+    // The exit code is not the point (this model's run diverges: exit 1, its CSV written all the same).
+    let run = |cwd: &Path, args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_shipid"))
+            .args(args)
+            .current_dir(cwd)
+            .output()
+            .unwrap()
+    };
+    let o = run(
+        top,
+        &["import", "mapping.toml", "--out", "o1", "--source", source],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = run(
+        &deep,
+        &[
+            "import",
+            "../../mapping.toml",
+            "--out",
+            "../../o2",
+            "--source",
+            source,
+        ],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in ["dataset.toml", "tc35_sb.csv"] {
+        let (a, b) = (
+            std::fs::read_to_string(top.join("o1").join(f)).unwrap(),
+            std::fs::read_to_string(top.join("o2").join(f)).unwrap(),
+        );
+        assert_eq!(a, b, "{f}");
+    }
+    let zigzag = ["--manoeuvre", "zigzag:20/20:port", "--out"];
+    run(
+        top,
+        &[&["simulate", "sub/model.toml"][..], &zigzag, &["s1.csv"]].concat(),
+    );
+    run(
+        &deep,
+        &[
+            &["simulate", "../../sub/model.toml"][..],
+            &zigzag,
+            &["../../s2.csv"],
+        ]
+        .concat(),
+    );
+    let (a, b) = (
+        std::fs::read_to_string(top.join("s1.csv")).unwrap(),
+        std::fs::read_to_string(top.join("s2.csv")).unwrap(),
+    );
+    assert!(a.starts_with("# shipid"), "{a:.200}");
+    assert_eq!(a, b);
+}
