@@ -367,11 +367,26 @@ pub fn study_page(dir: &Path, meta: &RunMeta) -> Result<String, ReportError> {
                 .filter_map(|&i| parse_num(summary.rows[i][j].trim()))
                 .filter(|x| x.is_finite())
                 .collect();
+            // Tests that have no value (a diverged prediction or replay) are left out of the
+            // median: the cell says over how many, so one surviving test does not pass for all.
+            let tests = c
+                .rows
+                .iter()
+                .filter(|&&i| test_name_col.is_none_or(|t| !summary.rows[i][t].is_empty()))
+                .count();
             match median(&mut xs) {
                 Some(m) => {
+                    let of = if xs.len() < tests {
+                        format!(
+                            " <span class=\"muted\">({} of {tests} tests)</span>",
+                            xs.len()
+                        )
+                    } else {
+                        String::new()
+                    };
                     let _ = write!(
                         b,
-                        "<td class=\"n\" title=\"{} of {} tests\">{}</td>",
+                        "<td class=\"n\" title=\"{} of {} tests\">{}{of}</td>",
                         m,
                         xs.len(),
                         esc(&num(m))

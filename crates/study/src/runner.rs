@@ -105,11 +105,17 @@ pub struct TestRow {
     pub status: TestStatus,
     pub diverged_at_s: Option<f64>,
     pub replay_status: TestStatus,
-    pub position_rmse_over_l: f64,
-    pub heading_rmse_deg: f64,
-    pub u_rmse_m_s: f64,
-    pub v_rmse_m_s: f64,
-    pub r_rmse_deg_s: f64,
+    /// When the replay diverged [s]; absent when it ran to the end (and in results written before
+    /// it existed).
+    #[serde(default)]
+    pub replay_diverged_at_s: Option<f64>,
+    /// The replay's errors over the whole recording; absent when the replay diverged, whose errors
+    /// up to the divergence would rank a model that failed among the best (see [`TestRow::rmse`]).
+    pub position_rmse_over_l: Option<f64>,
+    pub heading_rmse_deg: Option<f64>,
+    pub u_rmse_m_s: Option<f64>,
+    pub v_rmse_m_s: Option<f64>,
+    pub r_rmse_deg_s: Option<f64>,
     pub recorded: Metrics,
     pub predicted: Option<Metrics>,
     pub relative_error: std::collections::BTreeMap<String, f64>,
@@ -123,6 +129,14 @@ pub struct TestRow {
     /// without bands keep their files and references).
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub bands: BTreeMap<String, MetricBandRow>,
+}
+
+impl TestRow {
+    /// A replay error as the tables show it: none for a diverged replay, also in a `result.json`
+    /// written before 0.2.2, which stored the errors up to the divergence.
+    pub fn rmse(&self, value: Option<f64>) -> Option<f64> {
+        value.filter(|_| self.replay_status != TestStatus::Diverged)
+    }
 }
 
 /// One metric's band in a study ([`TestRow::bands`]): the band and whether the recorded value lies
@@ -455,20 +469,25 @@ fn test_rows(
                         None,
                     ),
                 };
+            let (replay_status, replay_diverged_at_s) = match v.replay.status {
+                SimStatus::Ok => (TestStatus::Ok, None),
+                SimStatus::Diverged { t_s, .. } => (TestStatus::Diverged, Some(t_s)),
+            };
+            // Errors up to a divergence cover only the part the model managed: left out, as a
+            // diverged prediction's MRAE is.
+            let whole = |x: f64| (replay_status == TestStatus::Ok).then_some(x);
             TestRow {
                 test: r.file.clone(),
                 kind: v.kind.into(),
                 status,
                 diverged_at_s,
-                replay_status: match v.replay.status {
-                    SimStatus::Ok => TestStatus::Ok,
-                    SimStatus::Diverged { .. } => TestStatus::Diverged,
-                },
-                position_rmse_over_l: v.replay.position_rmse_over_l,
-                heading_rmse_deg: v.replay.heading_rmse_deg,
-                u_rmse_m_s: v.replay.u_rmse_m_s,
-                v_rmse_m_s: v.replay.v_rmse_m_s,
-                r_rmse_deg_s: v.replay.r_rmse_deg_s,
+                replay_status,
+                replay_diverged_at_s,
+                position_rmse_over_l: whole(v.replay.position_rmse_over_l),
+                heading_rmse_deg: whole(v.replay.heading_rmse_deg),
+                u_rmse_m_s: whole(v.replay.u_rmse_m_s),
+                v_rmse_m_s: whole(v.replay.v_rmse_m_s),
+                r_rmse_deg_s: whole(v.replay.r_rmse_deg_s),
                 recorded,
                 predicted,
                 relative_error,

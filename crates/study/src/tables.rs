@@ -218,14 +218,15 @@ pub fn summary_table(study: &Study, results: &[CaseResult]) -> Table {
         "replay_status",
         text(&|x| x.replay_status.as_str().to_string()),
     );
+    t.push_num("replay_diverged_at_s", num(&|x| x.replay_diverged_at_s));
     t.push_num(
         "position_rmse_over_l",
-        num(&|x| Some(x.position_rmse_over_l)),
+        num(&|x| x.rmse(x.position_rmse_over_l)),
     );
-    t.push_num("heading_rmse_deg", num(&|x| Some(x.heading_rmse_deg)));
-    t.push_num("u_rmse_m_s", num(&|x| Some(x.u_rmse_m_s)));
-    t.push_num("v_rmse_m_s", num(&|x| Some(x.v_rmse_m_s)));
-    t.push_num("r_rmse_deg_s", num(&|x| Some(x.r_rmse_deg_s)));
+    t.push_num("heading_rmse_deg", num(&|x| x.rmse(x.heading_rmse_deg)));
+    t.push_num("u_rmse_m_s", num(&|x| x.rmse(x.u_rmse_m_s)));
+    t.push_num("v_rmse_m_s", num(&|x| x.rmse(x.v_rmse_m_s)));
+    t.push_num("r_rmse_deg_s", num(&|x| x.rmse(x.r_rmse_deg_s)));
     t.push_num(
         "outside_identification_range",
         num(&|x| x.outside_identification_range),

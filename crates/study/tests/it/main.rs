@@ -1,5 +1,7 @@
 //! The study file's layers: raw TOML → checked study (each axis resolved) → cases.
 
+mod diverged_replay;
+
 use std::path::{Path, PathBuf};
 
 use shipid_pipeline::fit::WindowSpec;
@@ -215,11 +217,12 @@ fn banded_results(study: &shipid_study::Study) -> Vec<shipid_study::CaseResult> 
         status: TestStatus::Ok,
         diverged_at_s: None,
         replay_status: TestStatus::Ok,
-        position_rmse_over_l: 0.0,
-        heading_rmse_deg: 0.0,
-        u_rmse_m_s: 0.0,
-        v_rmse_m_s: 0.0,
-        r_rmse_deg_s: 0.0,
+        replay_diverged_at_s: None,
+        position_rmse_over_l: Some(0.0),
+        heading_rmse_deg: Some(0.0),
+        u_rmse_m_s: Some(0.0),
+        v_rmse_m_s: Some(0.0),
+        r_rmse_deg_s: Some(0.0),
         recorded: Default::default(),
         predicted: None,
         relative_error: Default::default(),
