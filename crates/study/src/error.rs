@@ -23,6 +23,16 @@ pub enum StudyError {
         holder.map(|p| format!(" (pid {p})")).unwrap_or_default()
     )]
     Locked { path: PathBuf, holder: Option<u32> },
+    /// The study is larger than a run takes without the user's consent (`--allow-large`).
+    #[error(
+        "{}: {why} ({grid}): nothing was run; give --allow-large to run them all",
+        path.display()
+    )]
+    TooLarge {
+        path: PathBuf,
+        why: String,
+        grid: String,
+    },
     /// A result table could not be written or read.
     #[error("{}: {message}", path.display())]
     Table { path: PathBuf, message: String },
@@ -31,6 +41,9 @@ pub enum StudyError {
 impl StudyError {
     /// Whether the user's input is to blame.
     pub fn is_bad_input(&self) -> bool {
-        matches!(self, StudyError::Input(_) | StudyError::Locked { .. })
+        matches!(
+            self,
+            StudyError::Input(_) | StudyError::Locked { .. } | StudyError::TooLarge { .. }
+        )
     }
 }

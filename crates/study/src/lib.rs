@@ -20,7 +20,7 @@ pub use error::StudyError;
 pub use lock::RunLock;
 pub use record::RunRecord;
 pub use runner::{
-    CaseOutcome, CaseResult, CaseStatus, LARGE_RUN_CASES, OutcomeCounts, RunPlan, default_out,
-    run_study,
+    CaseOutcome, CaseResult, CaseStatus, LARGE_RUN_CASES, LARGE_RUN_REPLICATE_SIMULATIONS,
+    OutcomeCounts, RunPlan, default_out, run_study,
 };
-pub use study::{Case, Study, load_study};
+pub use study::{Case, Study, StudySize, load_study, load_study_within};

@@ -735,6 +735,12 @@ fn remove_temporaries(dir: &Path) {
 /// grid that large is more often a typo (a value list pasted twice as a range) than a plan.
 pub const LARGE_RUN_CASES: usize = 5_000;
 
+/// Studies with bands whose cases × replicates × tests exceed this are refused likewise: each
+/// replicate is a refit and a re-simulation of every test, and at a few milliseconds each a million
+/// take about as long as the largest grid [`LARGE_RUN_CASES`] lets through (the shipped
+/// `studies/bands.toml` needs about ten thousand).
+pub const LARGE_RUN_REPLICATE_SIMULATIONS: usize = 1_000_000;
+
 /// Where a study's results go by default: `results/<name>/`.
 pub fn default_out(study: &Study) -> PathBuf {
     PathBuf::from("results").join(&study.name)

@@ -211,7 +211,53 @@ pub struct Study {
 /// Read, check and expand a study file.
 pub fn load_study(path: &Path) -> Result<Study, InputError> {
     let raw = RawStudy::read(path)?;
-    Ok(CheckedStudy::from_raw(path, raw)?.into_study())
+    CheckedStudy::from_raw(path, raw)?.into_study()
+}
+
+/// What a study costs, counted from the lengths of its axes (before any case is built).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StudySize {
+    pub cases: usize,
+    /// Bootstrap replicate simulations of a study with bands: cases × replicates × tests (each
+    /// replicate is also a refit); 0 without bands.
+    pub replicate_simulations: usize,
+}
+
+impl StudySize {
+    /// Whether a run of this size needs the user's consent (`shipid run --allow-large`): why, or
+    /// `None` when it is within [`crate::LARGE_RUN_CASES`] and
+    /// [`crate::runner::LARGE_RUN_REPLICATE_SIMULATIONS`].
+    pub fn too_large(&self) -> Option<String> {
+        use crate::runner::{LARGE_RUN_CASES, LARGE_RUN_REPLICATE_SIMULATIONS};
+        if self.cases > LARGE_RUN_CASES {
+            Some(format!("{} cases, more than {LARGE_RUN_CASES}", self.cases))
+        } else if self.replicate_simulations > LARGE_RUN_REPLICATE_SIMULATIONS {
+            Some(format!(
+                "{} bootstrap replicate simulations (cases × replicates × tests), more than \
+                 {LARGE_RUN_REPLICATE_SIMULATIONS}",
+                self.replicate_simulations
+            ))
+        } else {
+            None
+        }
+    }
+}
+
+/// [`load_study`] for a run: a study larger than [`StudySize::too_large`] allows is refused
+/// (unless `allow_large`) after its checks and before its cases are built, so a short file that
+/// expands to millions of cases is refused in moments instead of filling the memory first.
+pub fn load_study_within(path: &Path, allow_large: bool) -> Result<Study, crate::StudyError> {
+    let raw = RawStudy::read(path)?;
+    let checked = CheckedStudy::from_raw(path, raw)?;
+    let size = checked.size();
+    if let Some(why) = size.too_large().filter(|_| !allow_large) {
+        return Err(crate::StudyError::TooLarge {
+            path: path.to_path_buf(),
+            why,
+            grid: checked.grid(),
+        });
+    }
+    Ok(checked.into_study()?)
 }
 
 impl RawStudy {
@@ -285,6 +331,30 @@ impl CheckedStudy {
         })
     }
 
+    /// The size of the run, from the axes' lengths (saturating: a product past `usize` is simply
+    /// too large).
+    pub fn size(&self) -> StudySize {
+        let gp = self.estimators.iter().filter(|e| e.spec.name == GP).count();
+        let polynomial = self.estimators.len() - gp;
+        let per_setting = self.training.len().saturating_mul(self.windows.len());
+        let polynomial_cases = self
+            .sets
+            .len()
+            .saturating_mul(polynomial)
+            .saturating_mul(per_setting);
+        let cases = polynomial_cases.saturating_add(gp.saturating_mul(per_setting));
+        // Only polynomial cases get replicates (bands refuse the others).
+        let replicate_simulations = self.bands.map_or(0, |b| {
+            polynomial_cases
+                .saturating_mul(b.replicates)
+                .saturating_mul(self.tests.len())
+        });
+        StudySize {
+            cases,
+            replicate_simulations,
+        }
+    }
+
     /// Sets × polynomial estimators × training × windows, then the GP's cases, which have no set. The
     /// GP comes last so that adding it left the order (and so the tables) of every existing study as
     /// it was.
@@ -333,10 +403,13 @@ impl CheckedStudy {
         parts.join(" + ")
     }
 
-    pub fn into_study(self) -> Study {
+    /// The study with its cases; two cases with one id (two configurations whose readable parts
+    /// read alike and whose 32-bit hashes collide) are refused, as they would share a folder.
+    pub fn into_study(self) -> Result<Study, InputError> {
         let cases = self.cases();
+        check_unique_ids(&self.path, &cases)?;
         let grid = self.grid();
-        Study {
+        Ok(Study {
             path: self.path,
             name: self.name,
             description: self.description,
@@ -348,8 +421,50 @@ impl CheckedStudy {
             tests: self.tests,
             check: self.check,
             bands: self.bands,
-        }
+        })
     }
+}
+
+/// Refuses two cases with one id, naming both and the axis they differ on.
+fn check_unique_ids(path: &Path, cases: &[Case]) -> Result<(), InputError> {
+    let mut seen: std::collections::HashMap<&str, &Case> = std::collections::HashMap::new();
+    for c in cases {
+        let Some(earlier) = seen.insert(&c.id, c) else {
+            continue;
+        };
+        let key = if earlier.set != c.set {
+            "sets"
+        } else if earlier.training != c.training {
+            "training.recordings"
+        } else if earlier.window != c.window {
+            "training.windows"
+        } else {
+            "estimator"
+        };
+        return Err(InputError::key(
+            path,
+            key,
+            format!(
+                "two cases would share the id (and folder) `{}`: {} and {}; rename one of them",
+                c.id,
+                describe(earlier),
+                describe(c)
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// A case as its configuration reads, for messages.
+fn describe(c: &Case) -> String {
+    format!(
+        "set `{}`, estimator {:?}, solver {}, training [{}], window {}",
+        c.set,
+        c.estimator,
+        c.solver,
+        c.training.join(", "),
+        c.window.label()
+    )
 }
 
 /// `bands` and `bootstrap` go together: a level without replicates has nothing to take percentiles
@@ -502,11 +617,23 @@ fn check_sets(path: &Path, sets: &[String], polynomial: bool) -> Result<(), Inpu
             format!("`{}` repeats sets[{j}]", sets[i]),
         ));
     }
+    // Each file once, however it is spelt (`myset.toml`, `./myset.toml`, `sub/../myset.toml`, a
+    // link): the same set twice is one fit run twice under two ids.
+    let mut files: BTreeMap<PathBuf, usize> = BTreeMap::new();
     for (i, s) in sets.iter().enumerate() {
         if CoefficientSet::builtin(s).is_some() || s == shipid_pipeline::mmg::SET_NAME {
             continue;
         }
         let file = beside(path, s);
+        if let Ok(real) = std::fs::canonicalize(&file)
+            && let Some(j) = files.insert(real, i)
+        {
+            return Err(InputError::key(
+                path,
+                format!("sets[{i}]"),
+                format!("`{s}` is the same file as sets[{j}] (`{}`)", sets[j]),
+            ));
+        }
         if !file.is_file() {
             return Err(InputError::key(
                 path,
@@ -600,11 +727,26 @@ fn check_training(
             "the grid is empty: no training combination",
         ));
     }
-    if let Some((i, j)) = first_repeat(combos) {
+    // A combination is a set of recordings: the same ones in another order are the same training
+    // data under another id.
+    let sorted: Vec<Vec<&String>> = combos
+        .iter()
+        .map(|c| {
+            let mut c: Vec<&String> = c.iter().collect();
+            c.sort();
+            c
+        })
+        .collect();
+    if let Some((i, j)) = first_repeat(&sorted) {
+        let order = if combos[i] == combos[j] {
+            ""
+        } else {
+            " in another order (the order of a combination does not matter)"
+        };
         return Err(InputError::key(
             path,
             format!("training.recordings[{i}]"),
-            format!("repeats training.recordings[{j}]"),
+            format!("repeats training.recordings[{j}]{order}"),
         ));
     }
     for (i, combo) in combos.iter().enumerate() {
@@ -1125,6 +1267,10 @@ fn case(set: &str, est: &EstimatorSpec, solver: &str, combo: &[String], w: Windo
             }
         })
         .collect();
-    c.id = format!("{clean}-{:08x}", hash as u32);
+    // A folder named with a leading dot is hidden from listings (and `..` would climb out of
+    // `cases/`): a set file named `.x.toml` or `../x.toml` must not give one.
+    let visible = clean.trim_start_matches('.');
+    let dots = clean.len() - visible.len();
+    c.id = format!("{}{visible}-{:08x}", "_".repeat(dots), hash as u32);
     c
 }

@@ -1,0 +1,162 @@
+//! The grid's checks before any case runs: one id per case, one spelling per set file, one order per
+//! training combination, and the run's size counted from the axes (tester's findings A6, A10, H3, H4).
+
+use std::path::Path;
+
+use shipid_study::study::load_study;
+use shipid_study::{StudyError, load_study_within};
+
+use super::study_file;
+
+/// The first fault of a study body (whose data set line `study_file` adds), or its case ids.
+fn load(dir_setup: impl FnOnce(&Path), body: &str) -> Result<Vec<String>, String> {
+    let (dir, path) = study_file(body);
+    dir_setup(dir.path());
+    load_study(&path)
+        .map(|s| s.cases.iter().map(|c| c.id.clone()).collect())
+        .map_err(|e| e.to_string())
+}
+
+fn set_file(dir: &Path, name: &str) {
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../model/sets/reduced32.toml");
+    let to = dir.join(name);
+    std::fs::create_dir_all(to.parent().unwrap()).unwrap();
+    std::fs::copy(shipped, to).unwrap();
+}
+
+fn body(sets: &str, training: &str, extra: &str) -> String {
+    format!(
+        "name = \"g\"\nsets = {sets}\n{extra}\n[training]\nrecordings = {training}\n\
+         [[estimator]]\nname = \"lsq\"\n[test]\nrecordings = [\"zz20_20_ps.csv\"]\n"
+    )
+}
+
+#[test]
+fn equivalent_set_paths_are_refused_as_one_set_named_twice() {
+    for (sets, second) in [
+        (r#"["myset.toml", "./myset.toml"]"#, "sets[1]"),
+        (
+            r#"["myset.toml", "reduced32", "sub/../myset.toml"]"#,
+            "sets[2]",
+        ),
+    ] {
+        let err = load(
+            |d| {
+                set_file(d, "myset.toml");
+                std::fs::create_dir_all(d.join("sub")).unwrap();
+            },
+            &body(sets, r#"[["zz35_35_ps.csv"]]"#, ""),
+        )
+        .unwrap_err();
+        assert!(
+            err.contains(second) && err.contains("same file as sets[0]"),
+            "{err}"
+        );
+    }
+}
+
+#[test]
+fn a_training_combination_in_another_order_is_refused_as_a_repeat() {
+    let err = load(
+        |_| {},
+        &body(
+            r#"["reduced32"]"#,
+            r#"[["zz35_35_ps.csv", "tc35_ps.csv"], ["tc35_ps.csv", "zz35_35_ps.csv"]]"#,
+            "",
+        ),
+    )
+    .unwrap_err();
+    assert!(
+        err.contains("training.recordings[1]") && err.contains("another order"),
+        "{err}"
+    );
+}
+
+#[test]
+fn two_cases_whose_ids_collide_are_refused_naming_both() {
+    // The two names sanitise alike and their FNV-1a hashes agree in the 32 bits of the id.
+    let (a, b) = ("s ;]'=.toml", "s_!%@!.toml");
+    let err = load(
+        |d| {
+            set_file(d, a);
+            set_file(d, b);
+        },
+        &body(&format!("[{a:?}, {b:?}]"), r#"[["zz35_35_ps.csv"]]"#, ""),
+    )
+    .unwrap_err();
+    assert!(
+        err.contains("share the id") && err.contains(a) && err.contains(b),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_case_folder_never_starts_with_a_dot() {
+    let ids = load(
+        |d| {
+            set_file(d, ".hidden.toml");
+            set_file(d, "up/x.toml");
+        },
+        &body(
+            r#"[".hidden.toml", "../up/x.toml"]"#,
+            r#"[["zz35_35_ps.csv"]]"#,
+            "",
+        ),
+    );
+    // `../up/x.toml` is beside the study's folder, not in it: only the first exists.
+    let err = ids.unwrap_err();
+    assert!(err.contains("sets[1]"), "{err}");
+    let ids = load(
+        |d| set_file(d, ".hidden.toml"),
+        &body(r#"[".hidden.toml"]"#, r#"[["zz35_35_ps.csv"]]"#, ""),
+    )
+    .unwrap();
+    assert!(ids.iter().all(|id| !id.starts_with('.')), "{ids:?}");
+}
+
+#[test]
+fn a_huge_grid_is_refused_from_its_axes_without_building_its_cases() {
+    // 4000 λ × 2500 windows: ten million cases, refused as the product of the axes' lengths.
+    let lambdas: Vec<String> = (1..=4000).map(|k| format!("{}e-7", k)).collect();
+    let windows: Vec<String> = (0..2500)
+        .map(|k| format!("[{}.0, {}.0]", k % 50, 100 + k / 50))
+        .collect();
+    let text = format!(
+        "name = \"huge\"\nsets = [\"reduced32\"]\n[training]\nrecordings = [[\"zz35_35_ps.csv\"]]\n\
+         windows = [{}]\n[[estimator]]\nname = \"ridge\"\nlambda = [{}]\n[test]\nrecordings = \"all\"\n",
+        windows.join(", "),
+        lambdas.join(", ")
+    );
+    let (_dir, path) = study_file(&text);
+    match load_study_within(&path, false) {
+        Err(e @ StudyError::TooLarge { .. }) => {
+            assert!(e.is_bad_input());
+            let msg = e.to_string();
+            assert!(
+                msg.contains("10000000 cases") && msg.contains("--allow-large"),
+                "{msg}"
+            );
+        }
+        Err(e) => panic!("{e}"),
+        Ok(s) => panic!("{} cases accepted", s.cases.len()),
+    }
+}
+
+#[test]
+fn bootstrap_replicates_count_in_the_size_of_a_run() {
+    let lambdas: Vec<String> = (1..=20).map(|k| format!("{k}e-6")).collect();
+    let text = format!(
+        "name = \"boot\"\nbands = 0.9\nbootstrap = 10000\nsets = [\"reduced32\"]\n[training]\n\
+         recordings = [[\"zz35_35_ps.csv\"]]\n[[estimator]]\nname = \"ridge\"\nlambda = [{}]\n\
+         [test]\nrecordings = \"all\"\n",
+        lambdas.join(", ")
+    );
+    let (_dir, path) = study_file(&text);
+    // 20 cases × 10 000 replicates × 6 tests.
+    let err = load_study_within(&path, false).err().unwrap().to_string();
+    assert!(
+        err.contains("1200000 bootstrap replicate simulations"),
+        "{err}"
+    );
+    assert_eq!(load_study_within(&path, true).unwrap().cases.len(), 20);
+}
