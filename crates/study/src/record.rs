@@ -36,6 +36,13 @@ impl RunRecord {
         warnings: Vec<String>,
     ) -> RunRecord {
         let finished = SystemTime::now();
+        // The study's own warnings (a window past a recording) belong to every record of its run.
+        let mut warnings = warnings;
+        for w in &study.warnings {
+            if !warnings.contains(w) {
+                warnings.push(w.clone());
+            }
+        }
         RunRecord {
             tool_version: tool_version.into(),
             study: study.name.clone(),

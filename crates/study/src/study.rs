@@ -206,6 +206,9 @@ pub struct Study {
     pub check: BTreeMap<String, Tolerance>,
     /// Bands of the test metrics, when the study asks for them.
     pub bands: Option<StudyBands>,
+    /// What the checks let through but a user should hear before the run (a time window that
+    /// extends past a training recording, which its cases fit on less than the window says).
+    pub warnings: Vec<String>,
 }
 
 /// Read, check and expand a study file.
@@ -286,6 +289,8 @@ pub struct CheckedStudy {
     pub tests: Vec<String>,
     pub check: BTreeMap<String, Tolerance>,
     pub bands: Option<StudyBands>,
+    /// See [`Study::warnings`].
+    pub warnings: Vec<String>,
 }
 
 /// One point of the estimator axis.
@@ -309,6 +314,7 @@ impl CheckedStudy {
         };
         check_training(path, &raw.training.recordings, known)?;
         let windows = training_windows(path, &raw.training, &dataset)?;
+        let warnings = window_extents(path, &windows, &raw.training.recordings, &dataset)?;
         let estimators = check_estimators(path, &raw.estimators)?;
         check_mmg_estimators(path, &raw.sets, &estimators)?;
         let tests = test_recordings(path, &raw.test.recordings, known)?;
@@ -328,6 +334,7 @@ impl CheckedStudy {
             tests,
             check: raw.check,
             bands,
+            warnings,
         })
     }
 
@@ -421,6 +428,7 @@ impl CheckedStudy {
             tests: self.tests,
             check: self.check,
             bands: self.bands,
+            warnings: self.warnings,
         })
     }
 }
@@ -851,21 +859,80 @@ fn time_windows(path: &Path, windows: &[[f64; 2]]) -> Result<Vec<WindowSpec>, In
     }
     windows
         .iter()
-        .map(|[a, b]| {
-            if a.is_finite() && b.is_finite() && b > a {
-                Ok(WindowSpec::Time {
+        .enumerate()
+        .map(|(k, [a, b])| {
+            // Recordings start at 0 s: a negative start would be labelled with a time no sample has.
+            let why = if !(a.is_finite() && b.is_finite()) {
+                Some("is not a time window (give finite seconds)")
+            } else if *a < 0.0 {
+                Some("starts before 0 s, where recordings start")
+            } else if b <= a {
+                Some("does not end after it starts")
+            } else {
+                None
+            };
+            match why {
+                None => Ok(WindowSpec::Time {
                     start_s: *a,
                     end_s: *b,
-                })
-            } else {
-                Err(InputError::key(
+                }),
+                Some(why) => Err(InputError::key(
                     path,
-                    "training.windows",
-                    format!("[{a}, {b}] is not a time window"),
-                ))
+                    format!("training.windows[{k}]"),
+                    format!("[{a}, {b}] {why}"),
+                )),
             }
         })
         .collect()
+}
+
+/// Each time window against each training recording it cuts: one that leaves a recording too few
+/// samples to fit is the study's input error (not a `fit-failed` case at run time); one that
+/// extends past a recording is fitted on the part recorded, which the returned warnings say, as
+/// the window's label in the tables gives the requested times.
+fn window_extents(
+    path: &Path,
+    windows: &[WindowSpec],
+    combos: &[Vec<String>],
+    dataset: &Dataset,
+) -> Result<Vec<String>, InputError> {
+    let mut files: Vec<&String> = combos.iter().flatten().collect();
+    files.sort();
+    files.dedup();
+    let mut warnings = Vec::new();
+    for (k, w) in windows.iter().enumerate() {
+        let WindowSpec::Time { start_s, end_s } = *w else {
+            continue;
+        };
+        for f in &files {
+            let Some(r) = dataset.recording(f) else {
+                continue;
+            };
+            let key = format!("training.windows[{k}]");
+            let range = shipid_pipeline::fit::window_range(r, dataset, *w)
+                .map_err(|e| InputError::key(path, &key, e.to_string()))?;
+            let t = &r.recording.t;
+            let (Some(&first), Some(&last)) = (t.first(), t.last()) else {
+                continue;
+            };
+            // Half a sample interval of slack: a window written as the record's length is not past it.
+            let dt = if t.len() > 1 {
+                (last - first) / (t.len() - 1) as f64
+            } else {
+                0.0
+            };
+            if start_s < first - 0.5 * dt || end_s > last + 0.5 * dt {
+                let (a, b) = (t[range.start], t[range.end - 1]);
+                warnings.push(format!(
+                    "{}: {key} = [{start_s}, {end_s}] s extends past `{f}` (recorded {first}–{last} s): \
+                     its cases fit `{f}` on {a}–{b} s, though the tables label them {}",
+                    path.display(),
+                    w.label()
+                ));
+            }
+        }
+    }
+    Ok(warnings)
 }
 
 /// The estimator axis: every entry expanded over its hyper-parameter values, in the file's order.

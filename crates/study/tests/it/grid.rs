@@ -1,5 +1,6 @@
 //! The grid's checks before any case runs: one id per case, one spelling per set file, one order per
-//! training combination, and the run's size counted from the axes (tester's findings A6, A10, H3, H4).
+//! training combination, the run's size counted from the axes, and time windows against the
+//! recordings they cut (tester's findings A4, A6, A10, H3, H4).
 
 use std::path::Path;
 
@@ -159,4 +160,36 @@ fn bootstrap_replicates_count_in_the_size_of_a_run() {
         "{err}"
     );
     assert_eq!(load_study_within(&path, true).unwrap().cases.len(), 20);
+}
+
+fn windows_study(windows: &str) -> Result<shipid_study::Study, String> {
+    let (_dir, path) = study_file(&format!(
+        "name = \"w\"\nsets = [\"reduced32\"]\n[training]\nrecordings = [[\"zz35_35_ps.csv\"]]\n\
+         windows = {windows}\n[[estimator]]\nname = \"lsq\"\n[test]\nrecordings = [\"zz20_20_ps.csv\"]\n"
+    ));
+    load_study(&path).map_err(|e| e.to_string())
+}
+
+#[test]
+fn a_window_outside_the_recording_is_refused_or_warned_with_the_span_fitted() {
+    for (windows, key, why) in [
+        ("[[-10.0, 1e9]]", "training.windows[0]", "before 0 s"),
+        (
+            "[[0.0, 100.0], [50.0, 50.0]]",
+            "training.windows[1]",
+            "does not end after",
+        ),
+        ("[[500.0, 600.0]]", "training.windows[0]", "too few to fit"),
+        ("[[0.0, 0.05]]", "training.windows[0]", "too few to fit"),
+    ] {
+        let err = windows_study(windows).err().unwrap_or_default();
+        assert!(err.contains(key) && err.contains(why), "{windows}: {err}");
+    }
+    let study = windows_study("[[0.0, 100.0], [10.0, 1e9]]").unwrap();
+    assert_eq!(study.warnings.len(), 1, "{:?}", study.warnings);
+    let w = &study.warnings[0];
+    assert!(
+        w.contains("training.windows[1]") && w.contains("zz35_35_ps.csv") && w.contains("10–480 s"),
+        "{w}"
+    );
 }
