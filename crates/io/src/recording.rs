@@ -106,6 +106,9 @@ pub fn parse_recording(path: &Path, text: &str) -> Result<Recording, InputError>
         let quantity = match Quantity::from_name(name) {
             Some(q) if Quantity::RECORDING.contains(&q) => q,
             _ => {
+                if let Some(hint) = misspelt_column(name) {
+                    return Err(InputError::cell(path, header_line, i + 1, raw, hint));
+                }
                 slots.push(None); // unknown columns are kept by the source but ignored here
                 continue;
             }
@@ -197,6 +200,76 @@ pub fn parse_recording(path: &Path, text: &str) -> Result<Recording, InputError>
         }
         e
     })
+}
+
+/// An unknown column that looks like a known one misspelt (`Psi`, `windspeed`, `wind_dir`): ignored
+/// like any other unknown column it would silently drop a recorded channel (a recorded wind read as
+/// calm), so it is refused with the name to write. Other unknown columns (`roll`, `torque`,
+/// `wind_gust`) are the source's own and ignored.
+fn misspelt_column(name: &str) -> Option<String> {
+    let known = || Quantity::RECORDING.iter().map(|q| q.name());
+    let lower = name.to_lowercase();
+    if let Some(k) = known().find(|k| *k == lower) {
+        return Some(format!(
+            "not a column name: names are lower-case, write `{k}` (an unknown column would be ignored)"
+        ));
+    }
+    let close = known()
+        .filter(|k| k.len() >= 5 && lower.len() >= 4)
+        .map(|k| (edit_distance(&lower, k), k))
+        .filter(|&(d, _)| d <= 2)
+        .min_by_key(|&(d, _)| d)
+        .map(|(_, k)| k);
+    let flow_word = ["wind", "current"]
+        .into_iter()
+        .find(|w| lower.starts_with(w) && !lower.starts_with("relative_"));
+    let guess = close.or_else(|| {
+        let flow = flow_word?;
+        let direction = ["dir", "from", "angle", "deg", "head"]
+            .iter()
+            .any(|d| lower.contains(d));
+        let speed = ["sp", "vel", "mag", "kn", "m_s", "ms"]
+            .iter()
+            .any(|d| lower.contains(d));
+        // A wind measured on board is the relative wind, which has columns of its own.
+        let relative = flow == "wind" && lower.contains("rel");
+        let (from, speed_name) = match (flow, relative) {
+            (_, true) => ("relative_wind_angle", "relative_wind_speed"),
+            ("wind", false) => ("wind_from", "wind_speed"),
+            _ => ("current_from", "current_speed"),
+        };
+        match (direction, speed) {
+            (true, false) => Some(from),
+            (false, true) => Some(speed_name),
+            _ => None,
+        }
+    })?;
+    let what = match guess {
+        g if g.ends_with("_from") => " (the direction it comes FROM, clockwise from north)",
+        "relative_wind_angle" => " (the angle off the bow the relative wind comes from)",
+        _ => "",
+    };
+    Some(format!(
+        "not a column shipid knows; did you mean `{guess}`{what}? An unknown column is ignored, and this one would drop a recorded channel (docs/data-format.md)"
+    ))
+}
+
+/// Levenshtein distance of two short ASCII-ish names.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let (a, b): (Vec<char>, Vec<char>) = (a.chars().collect(), b.chars().collect());
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for i in 1..=a.len() {
+        let mut prev = row[0];
+        row[0] = i;
+        for j in 1..=b.len() {
+            let cur = row[j];
+            row[j] = (row[j] + 1)
+                .min(row[j - 1] + 1)
+                .min(prev + usize::from(a[i - 1] != b[j - 1]));
+            prev = cur;
+        }
+    }
+    row[b.len()]
 }
 
 /// `psi[deg]` → ("psi", Some("deg")); `psi` → ("psi", None).

@@ -604,3 +604,37 @@ fn a_reference_point_is_on_the_hull_and_only_with_origin_point() {
     }
     assert!(parse_dataset(Path::new("ds.toml"), &with("point", &point("-3.0", "0.2"))).is_ok());
 }
+
+/// Regression: a misspelt optional column (`windspeed`, `wind_dir`) or a capitalised one was ignored
+/// like any unknown column, and the recorded wind silently read as calm. Near misses of a known name
+/// are refused with the name to write; the source's own extra columns are still ignored.
+#[test]
+fn a_misspelt_column_is_refused_with_the_name_to_write() {
+    let header = |extra: &str| format!("{HEADER},{extra}");
+    let with_extra = |extra: &str| recording_text(&header(extra), |_, row| row.push("1.0".into()));
+    for (extra, words) in [
+        ("windspeed", "did you mean `wind_speed`?"),
+        ("wind_spd", "did you mean `wind_speed`?"),
+        (
+            "wind_dir[deg]",
+            "did you mean `wind_from` (the direction it comes FROM",
+        ),
+        ("current_direction", "did you mean `current_from`"),
+        ("wind_rel_speed", "did you mean `relative_wind_speed`?"),
+        ("Thrust", "names are lower-case, write `thrust`"),
+    ] {
+        let e = parse_recording(Path::new("rec.csv"), &with_extra(extra)).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with(&format!("rec.csv:1:9: column `{extra}`: "))
+                && e.to_string().contains(words),
+            "{extra}: {e}"
+        );
+    }
+    for extra in ["roll[deg]", "torque", "wind_gust", "heave", "delta_cmd"] {
+        assert!(
+            parse_recording(Path::new("rec.csv"), &with_extra(extra)).is_ok(),
+            "{extra} refused"
+        );
+    }
+}
