@@ -26,12 +26,18 @@ pub fn write_atomic(path: &Path, contents: &[u8]) -> std::io::Result<()> {
         path.extension().and_then(|e| e.to_str()).unwrap_or(""),
         std::process::id()
     ));
-    {
+    let written = (|| {
         let mut f = std::fs::File::create(&tmp)?;
         f.write_all(contents)?;
         f.sync_all()?;
+        drop(f);
+        std::fs::rename(&tmp, path)
+    })();
+    // A failed write or rename (the target a folder, a full disk) leaves no temporary file behind.
+    if written.is_err() {
+        let _ = std::fs::remove_file(&tmp);
     }
-    std::fs::rename(&tmp, path)
+    written
 }
 
 /// The channels a recording's wind is written as: the true wind (`wind_speed`, `wind_from`), or the

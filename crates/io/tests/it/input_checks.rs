@@ -638,3 +638,18 @@ fn a_misspelt_column_is_refused_with_the_name_to_write() {
         );
     }
 }
+
+/// Regression: a write whose rename failed (the target an existing folder) left its `*.tmp` file
+/// beside it.
+#[test]
+fn a_failed_atomic_write_leaves_no_temporary_file() {
+    let dir = TempDir::new("atomic");
+    let target = dir.0.join("model.toml");
+    std::fs::create_dir_all(&target).unwrap();
+    assert!(shipid_io::write::write_atomic(&target, b"x = 1\n").is_err());
+    let left: Vec<_> = std::fs::read_dir(&dir.0)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(left, ["model.toml"], "{left:?}");
+}
