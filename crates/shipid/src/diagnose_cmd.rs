@@ -402,7 +402,12 @@ fn print_summary(r: &Report, model: &str, dataset: &Path, level_from: Option<&st
         );
     }
     for e in &r.effects {
-        println!("  effect: {e}");
+        println!("  effect: {}", effect_with_units(e, &r.standard_errors));
+    }
+    if !r.effects.is_empty() && !r.standard_errors.is_empty() {
+        println!(
+            "    (± one standard error from the recordings' scatter about the fit; it leaves out the base model's own error, which a base that misfits its own training data passes on to these values)"
+        );
     }
     if !r.per_recording_wind.is_empty() {
         println!(
@@ -447,9 +452,6 @@ fn print_summary(r: &Report, model: &str, dataset: &Path, level_from: Option<&st
         for line in check.lines() {
             println!("  {line}");
         }
-    }
-    for (k, v) in &r.standard_errors {
-        println!("    ± {k} {v:.4}");
     }
     // Combined candidates ("asymmetry [rudder_offset] + wind") are long: the name column takes the
     // widest title so that the numbers stay in their columns.
@@ -530,4 +532,81 @@ fn write_augmented(
         std::fs::create_dir_all(parent).map_err(|e| crate::write_failed(parent, e))?;
     }
     write_atomic(out, text.as_bytes()).map_err(|e| crate::write_failed(out, e))
+}
+
+/// An effect as the diagnosis found it: its string form as `--effect` reads it (six significant
+/// digits), then each parameter with its unit and standard error.
+fn effect_with_units(
+    effect_text: &str,
+    standard_errors: &std::collections::BTreeMap<String, f64>,
+) -> String {
+    let Ok(effect) = effect_text.parse::<shipid_sim::Effect>() else {
+        return effect_text.to_string();
+    };
+    let parameters = effect.parameters();
+    let canonical = format!(
+        "{}:{}",
+        effect.kind(),
+        parameters
+            .iter()
+            .map(|(k, v)| format!("{k}={}", significant(*v, 6)))
+            .collect::<Vec<_>>()
+            .join(",")
+    );
+    let described: Vec<String> = parameters
+        .iter()
+        .map(|(k, v)| {
+            let unit = shipid_sim::Effect::parameter_unit(k);
+            let se = standard_errors
+                .get(*k)
+                .or_else(|| standard_errors.get(&format!("{}.{k}", effect.kind())))
+                .map_or(String::new(), |s| format!(" ± {}", significant(*s, 2)));
+            format!(
+                "{k} {}{se}{}",
+                significant(*v, 4),
+                if unit.is_empty() {
+                    String::new()
+                } else {
+                    format!(" {unit}")
+                }
+            )
+        })
+        .collect();
+    format!("{canonical} ({})", described.join(", "))
+}
+
+/// `x` with `digits` significant digits, without trailing zeros.
+fn significant(x: f64, digits: usize) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let magnitude = x.abs().log10().floor() as i32;
+    let decimals = (digits as i32 - 1 - magnitude).max(0) as usize;
+    let text = format!("{x:.decimals$}");
+    if text.contains('.') {
+        text.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        text
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Regression: the found effect was printed as `asymmetry:offset=0.9756141492521352` and its
+    /// standard errors as bare `± offset 0.0366` lines, without units.
+    #[test]
+    fn a_found_effect_is_printed_with_units_and_its_standard_errors() {
+        let se = std::collections::BTreeMap::from([("offset".to_string(), 0.0366)]);
+        assert_eq!(
+            effect_with_units(
+                "asymmetry:offset=0.9756141492521352,y0=0,n0=-0.899671016418675",
+                &se
+            ),
+            "asymmetry:offset=0.975614,y0=0,n0=-0.899671 (offset 0.9756 ± 0.037 deg, y0 0 N, n0 -0.8997 N m)"
+        );
+        assert_eq!(significant(241.0764, 4), "241.1");
+        assert_eq!(significant(0.000123456, 2), "0.00012");
+    }
 }

@@ -353,6 +353,19 @@ impl Effect {
         }
     }
 
+    /// The unit of parameter `key` of [`Effect::parameters`] ("" for a ratio).
+    pub fn parameter_unit(key: &str) -> &'static str {
+        match key {
+            "speed" => "m/s",
+            "from_deg" | "offset" => "deg",
+            "af" | "al" => "m²",
+            "tau" | "delay" => "s",
+            "y0" => "N",
+            "n0" => "N m",
+            _ => "",
+        }
+    }
+
     /// Checks the parameters' ranges.
     pub fn validate(&self) -> Result<(), EffectError> {
         let e = self.kind();
