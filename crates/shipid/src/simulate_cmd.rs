@@ -382,7 +382,12 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
                     })
             };
             let (band, valley) = (range("band"), range("valley"));
-            println!("{k:>18}: {v}{band}{valley}");
+            // A metric with its unit and the digits its band has; other entries as they are.
+            let shown = match (shipid_sim::metrics::metric_unit(k), v.as_f64()) {
+                (Some(unit), Some(x)) => format!("{x:.4} {unit}"),
+                _ => v.to_string(),
+            };
+            println!("{k:>18}: {shown}{band}{valley}");
         }
         if let Some(r) = &reach {
             println!(

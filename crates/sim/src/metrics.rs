@@ -84,6 +84,17 @@ impl Metrics {
     }
 }
 
+/// The unit a metric of [`Metrics::entries`] is given in, as printed beside it: overshoots in degrees,
+/// times in L/U0 (t·U0/L), lengths in ship lengths.
+pub fn metric_unit(key: &str) -> Option<&'static str> {
+    match key {
+        "overshoot_1" | "overshoot_2" => Some("°"),
+        "t_a" | "t_check" => Some("L/U0"),
+        "advance" | "transfer" | "tactical_diameter" | "steady_diameter" => Some("L"),
+        _ => None,
+    }
+}
+
 /// Rudder departure [deg] from its initial value that marks the first execute for a rudder amplitude of
 /// `rudder_deg`: 0.5°, or 10 % of the amplitude if smaller. Well above the noise of tank rudder signals
 /// (HSVA: a few hundredths of a degree) and reached within 0.04 s at a rudder rate of 15.8 °/s.
