@@ -60,6 +60,8 @@ fn colour(i: usize) -> RGBColor {
 #[derive(Debug, Default)]
 pub struct FigureReport {
     pub written: Vec<PathBuf>,
+    /// Figures of an earlier run in the folder that this run does not draw, removed.
+    pub removed: Vec<PathBuf>,
     /// One message per figure that could not be drawn.
     pub warnings: Vec<String>,
 }
@@ -126,24 +128,76 @@ fn case_label(study: &Study, c: &Case) -> String {
     )
 }
 
-fn load_cases<'a>(study: &'a Study, out: &Path) -> Vec<CaseData<'a>> {
+/// The cases' models as their folders hold them. A case left out of the figures is named in the
+/// warnings (no `result.json`, one that cannot be read, or no loadable `model.toml` although its fit
+/// made a model), so a figure never lacks a case without a word; a fit that made no model is the
+/// tables' to report, not a warning here.
+fn load_cases<'a>(study: &'a Study, out: &Path, warnings: &mut Vec<String>) -> Vec<CaseData<'a>> {
     study
         .cases
         .iter()
         .map(|case| {
             let dir = out.join("cases").join(&case.id);
+            let result_path = dir.join("result.json");
+            let none = CaseData {
+                case,
+                model: None,
+                gp: None,
+                mmg: None,
+            };
+            // Without its result the case is unfinished (or damaged): a model.toml beside it may be
+            // of another configuration, so none of it is drawn.
+            let has_model = match std::fs::read_to_string(&result_path) {
+                Ok(text) => match serde_json::from_str::<shipid_study::CaseResult>(&text) {
+                    Ok(r) => r.status.has_model(),
+                    Err(e) => {
+                        warnings.push(format!(
+                            "case {}: {} cannot be read ({e}): the case is left out of the figures",
+                            case.id,
+                            result_path.display()
+                        ));
+                        return none;
+                    }
+                },
+                Err(e) => {
+                    warnings.push(format!(
+                        "case {}: {}: {e} (not run yet?): the case is left out of the figures",
+                        case.id,
+                        result_path.display()
+                    ));
+                    return none;
+                }
+            };
             let path = dir.join("model.toml");
-            let text = std::fs::read_to_string(&path).ok();
+            let text = std::fs::read_to_string(&path);
             let gp = text
                 .as_deref()
+                .ok()
                 .and_then(|t| load_gp_model(&path, t).ok().flatten());
             let mmg = text
                 .as_deref()
+                .ok()
                 .and_then(|t| load_mmg_model_if_kind(&path, t).ok().flatten());
-            let model = text
-                .filter(|_| gp.is_none() && mmg.is_none())
-                .and_then(|t| toml::from_str::<ModelFile>(&t).ok())
-                .and_then(|f| f.to_model().ok());
+            let model = match (&text, gp.is_some() || mmg.is_some()) {
+                (Ok(t), false) => toml::from_str::<ModelFile>(t)
+                    .map_err(|e| e.to_string())
+                    .and_then(|f| f.to_model().map_err(|e| e.to_string()))
+                    .map_err(|e| (has_model, e)),
+                (Ok(_), true) => Err((false, String::new())),
+                (Err(e), _) => Err((has_model, e.to_string())),
+            };
+            let model = match model {
+                Ok(m) => Some(m),
+                Err((true, why)) => {
+                    warnings.push(format!(
+                        "case {}: {}: {why}: its predictions and forces are left out of the figures",
+                        case.id,
+                        path.display()
+                    ));
+                    None
+                }
+                Err((false, _)) => None,
+            };
             CaseData {
                 case,
                 model,
@@ -178,7 +232,6 @@ fn best_case<'c, 'a>(cases: &'c [CaseData<'a>], out: &Path) -> Option<&'c CaseDa
         .min_by(|a, b| a.0.total_cmp(&b.0))
         .map(|(_, c)| c)
         .or_else(|| with_model.clone().next())
-        .or_else(|| cases.first())
 }
 
 /// File-name-safe form of a name.
@@ -196,6 +249,64 @@ fn slug(s: &str) -> String {
     s.trim_end_matches("_csv").to_string()
 }
 
+/// The file-name part of a set or test name, distinct for distinct names: the name itself when it
+/// is already safe (`reduced32`, or `zz20_20_ps` for `zz20_20_ps.csv`), else its safe form with a
+/// hash of the name as written, as case ids have (`a/b.toml` and `a_b.toml` both read `a_b_toml`).
+fn unique_slug(s: &str) -> String {
+    let safe = |x: &str| {
+        !x.is_empty()
+            && !x.ends_with("_csv")
+            && x.chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+    };
+    let stem = s.strip_suffix(".csv").unwrap_or(s);
+    if safe(stem) {
+        stem.to_string()
+    } else {
+        format!(
+            "{}-{:08x}",
+            slug(s),
+            shipid_pipeline::generate::fnv1a(s) as u32
+        )
+    }
+}
+
+/// The file-name prefixes of the figures [`write_figures`] draws: an SVG of the figures folder with
+/// one of them that a run did not draw is a leftover of an earlier run (another study, or bands since
+/// turned off), removed so the folder and the report show the current run only.
+pub const FIGURE_PREFIXES: [&str; 7] = [
+    "trajectories_",
+    "heading_",
+    "bands_",
+    "coefficient_convergence",
+    "coefficients_",
+    "vif_",
+    "forces_",
+];
+
+/// Removes the figures of `dir` that shipid draws (by [`FIGURE_PREFIXES`]) and `keep` does not
+/// hold; other files are the user's and stay.
+fn remove_stale(dir: &Path, keep: &[PathBuf], report: &mut FigureReport) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let path = e.path();
+        let name = e.file_name().to_string_lossy().into_owned();
+        let ours = name.ends_with(".svg") && FIGURE_PREFIXES.iter().any(|p| name.starts_with(p));
+        if !ours || keep.contains(&path) || !path.is_file() {
+            continue;
+        }
+        match std::fs::remove_file(&path) {
+            Ok(()) => report.removed.push(path),
+            Err(e) => report.warnings.push(format!(
+                "{}: left from an earlier run and cannot be removed: {e}",
+                path.display()
+            )),
+        }
+    }
+}
+
 /// Write every figure of a run whose outputs are in `out` into `out/figures/`.
 pub fn write_figures(study: &Study, out: &Path) -> FigureReport {
     let mut report = FigureReport::default();
@@ -206,7 +317,7 @@ pub fn write_figures(study: &Study, out: &Path) -> FigureReport {
             .push(format!("cannot create {}: {e}", dir.display()));
         return report;
     }
-    let cases = load_cases(study, out);
+    let cases = load_cases(study, out, &mut report.warnings);
     let r = &mut report;
     for test in &study.tests {
         let Some(rec) = study.dataset.recording(test) else {
@@ -215,12 +326,12 @@ pub fn write_figures(study: &Study, out: &Path) -> FigureReport {
         let sims = predictions(study, &cases, rec);
         attempt(
             r,
-            dir.join(format!("trajectories_{}.svg", slug(test))),
+            dir.join(format!("trajectories_{}.svg", unique_slug(test))),
             &|p: &Path| trajectories(p, study, rec, &sims).map(|_| true),
         );
         attempt(
             r,
-            dir.join(format!("heading_{}.svg", slug(test))),
+            dir.join(format!("heading_{}.svg", unique_slug(test))),
             &|p: &Path| heading(p, rec, &sims).map(|_| true),
         );
     }
@@ -230,7 +341,7 @@ pub fn write_figures(study: &Study, out: &Path) -> FigureReport {
                 for test in &study.tests {
                     attempt(
                         r,
-                        dir.join(format!("bands_{}.svg", slug(test))),
+                        dir.join(format!("bands_{}.svg", unique_slug(test))),
                         &|p: &Path| metric_bands(p, study, &summary, test),
                     );
                 }
@@ -247,7 +358,7 @@ pub fn write_figures(study: &Study, out: &Path) -> FigureReport {
             for set in distinct(rows.iter().map(|x| x.set.clone())) {
                 attempt(
                     r,
-                    dir.join(format!("coefficients_{}.svg", slug(&set))),
+                    dir.join(format!("coefficients_{}.svg", unique_slug(&set))),
                     &|p: &Path| bars(p, &set, &rows, BarKind::Coefficients).map(|_| true),
                 );
             }
@@ -260,7 +371,7 @@ pub fn write_figures(study: &Study, out: &Path) -> FigureReport {
             for set in distinct(rows.iter().map(|x| x.set.clone())) {
                 attempt(
                     r,
-                    dir.join(format!("vif_{}.svg", slug(&set))),
+                    dir.join(format!("vif_{}.svg", unique_slug(&set))),
                     &|p: &Path| bars(p, &set, &rows, BarKind::Vif).map(|_| true),
                 );
             }
@@ -270,11 +381,13 @@ pub fn write_figures(study: &Study, out: &Path) -> FigureReport {
     if let Some(chosen) = best_case(&cases, out)
         && let Some(test) = chosen.case.training.first()
     {
-        let name = format!("forces_{}_{}.svg", slug(&chosen.case.id), slug(test));
+        let name = format!("forces_{}_{}.svg", slug(&chosen.case.id), unique_slug(test));
         attempt(r, dir.join(name), &|p: &Path| {
             forces(p, study, chosen, test).map(|_| true)
         });
     }
+    let written = report.written.clone();
+    remove_stale(&dir, &written, &mut report);
     report
 }
 

@@ -212,8 +212,22 @@ pub fn figures_html(
     dir: &Path,
     id_prefix: &str,
     notes: &mut Vec<String>,
+    keep: &dyn Fn(&str) -> Option<String>,
 ) -> Result<(String, usize), ReportError> {
-    let files = svg_files(dir)?;
+    let mut files = svg_files(dir)?;
+    files.retain(|f| {
+        let name = f
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        match keep(&name) {
+            None => true,
+            Some(why) => {
+                notes.push(format!("figures/{name}: {why}: left out"));
+                false
+            }
+        }
+    });
     let mut body = String::new();
     let mut index: Vec<String> = Vec::new();
     let mut group = None;

@@ -338,7 +338,7 @@ pub fn diagnosis_page(files: &DiagnosisFiles, meta: &RunMeta) -> Result<String, 
     b.push_str("<section id=\"figures\"><h2>Figures</h2>");
     match &files.figures {
         Some(d) if d.is_dir() => {
-            let (html, n) = figures_html(d, "dfig", &mut notes)?;
+            let (html, n) = figures_html(d, "dfig", &mut notes, &|_| None)?;
             if n == 0 {
                 b.push_str("<p class=\"muted\">No figures in the figures folder.</p>");
             }

@@ -408,7 +408,18 @@ pub fn study_page(dir: &Path, meta: &RunMeta) -> Result<String, ReportError> {
     let fig_dir = dir.join("figures");
     let mut fig_notes = Vec::new();
     if fig_dir.is_dir() {
-        let (html, n) = figures_html(&fig_dir, "fig", &mut fig_notes)?;
+        // A force figure names its case: one of a case this run does not have is a leftover of an
+        // earlier run into the folder (`shipid run` and `plot` remove them; an older version did not).
+        let current: Vec<String> = cases
+            .iter()
+            .filter(|c| !c.rows.is_empty())
+            .map(|c| format!("forces_{}_", figure_slug(&c.id)))
+            .collect();
+        let keep = |name: &str| {
+            (name.starts_with("forces_") && !current.iter().any(|p| name.starts_with(p.as_str())))
+                .then(|| "a figure of a case that is not in summary.csv".to_string())
+        };
+        let (html, n) = figures_html(&fig_dir, "fig", &mut fig_notes, &keep)?;
         if n == 0 {
             b.push_str("<p class=\"muted\">No figures in <code>figures/</code>.</p>");
         }
@@ -481,6 +492,21 @@ fn worse(a: &'static str, b: &'static str) -> &'static str {
         _ => 0,
     };
     if rank(b) > rank(a) { b } else { a }
+}
+
+/// A case id as `shipid-figures` writes it into a figure's file name.
+fn figure_slug(id: &str) -> String {
+    let s: String = id
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    s.trim_end_matches("_csv").to_string()
 }
 
 fn median(xs: &mut [f64]) -> Option<f64> {

@@ -256,3 +256,27 @@ fn a_study_with_bands_shows_each_metrics_band_and_whether_the_record_is_inside()
     // A study without bands keeps its metric table as it was.
     assert!(!page().contains("<th>band</th>"));
 }
+
+#[test]
+fn a_force_figure_of_a_case_not_in_the_summary_is_left_out() {
+    let dir = tempfile::tempdir().unwrap();
+    copy_dir(&fixture("study"), dir.path());
+    let svg = fs::read_to_string(dir.path().join("figures/vif_reduced32.svg")).unwrap();
+    let current = summary_case_ids(&page())[0].clone();
+    fs::write(
+        dir.path()
+            .join(format!("figures/forces_{current}_zz35_35_ps.svg")),
+        &svg,
+    )
+    .unwrap();
+    fs::write(
+        dir.path()
+            .join("figures/forces_full74_lsq_fast_zz35_35_ps_os4-0badcafe_zz35_35_ps.svg"),
+        &svg,
+    )
+    .unwrap();
+    let html = study_page(dir.path(), &meta()).unwrap();
+    assert!(html.contains(&format!("data-file=\"forces_{current}_zz35_35_ps.svg\"")));
+    assert!(!html.contains("data-file=\"forces_full74"));
+    assert!(html.contains("forces_full74_lsq_fast_zz35_35_ps_os4-0badcafe_zz35_35_ps.svg: a figure of a case that is not in summary.csv: left out"));
+}
