@@ -25,7 +25,7 @@ mod study;
 pub mod svg;
 
 pub use diagnosis::diagnosis_page;
-pub use study::study_page;
+pub use study::{study_page, study_page_with_warnings};
 
 /// The file name [`write_report`] writes.
 pub const REPORT_FILE: &str = "report.html";
@@ -79,7 +79,9 @@ impl ReportError {
 /// any other key (`wall_time_s`, `cases`, `case_outcomes`, …) is listed under "Run record" as it is.
 #[derive(Debug, Clone, Default)]
 pub struct RunMeta {
-    /// `shipid` version that wrote the results (`env!("CARGO_PKG_VERSION")` in the CLI).
+    /// The caller's `shipid` version (`env!("CARGO_PKG_VERSION")` in the CLI). A study page shows the
+    /// version that computed the results (`run.json`, else the cases' `config.toml`, else this one)
+    /// and warns when they differ from this one.
     pub tool_version: Option<String>,
     /// Study name, or a title for a diagnosis (default: the study's `name`, else the folder name).
     pub name: Option<String>,

@@ -25,6 +25,16 @@ struct Case {
 /// The HTML page of the study output folder `dir` (layout in the crate docs). `summary.csv` is
 /// required; everything else is shown when present.
 pub fn study_page(dir: &Path, meta: &RunMeta) -> Result<String, ReportError> {
+    study_page_with_warnings(dir, meta).map(|(html, _)| html)
+}
+
+/// [`study_page`] and the warnings about the folder's provenance that the caller should print
+/// (shown in the page too): results computed by another shipid version than the caller's
+/// (`meta.tool_version`), as `run.json` or the cases' `config.toml` name it.
+pub fn study_page_with_warnings(
+    dir: &Path,
+    meta: &RunMeta,
+) -> Result<(String, Vec<String>), ReportError> {
     let summary = Csv::read(&dir.join("summary.csv"))?;
     let case_col = summary.case_col()?;
     let coefficients = Csv::read_optional(&dir.join("coefficients.csv"))?;
@@ -155,16 +165,51 @@ pub fn study_page(dir: &Path, meta: &RunMeta) -> Result<String, ReportError> {
         });
     let mut used_keys: Vec<&str> = vec!["study_name", "name", "warnings"];
     let mut header: Vec<(String, String)> = Vec::new();
-    let version = meta
-        .tool_version
+    // The version that computed the results, not the one writing this page: `shipid report` of an
+    // old folder must not vouch for results with its own version.
+    let run_version = str_of(&["tool_version", "shipid_version", "version"]);
+    let version = run_version
         .clone()
-        .or_else(|| str_of(&["tool_version", "shipid_version", "version"]))
-        .or_else(|| config_str("shipid_version"));
+        .or_else(|| config_str("shipid_version"))
+        .or_else(|| meta.tool_version.clone());
     used_keys.extend(["tool_version", "shipid_version", "version"]);
     header.push((
         "tool version".into(),
-        version.map_or("unknown".into(), |v| format!("shipid {v}")),
+        version
+            .as_ref()
+            .map_or("unknown".into(), |v| format!("shipid {v}")),
     ));
+    let mut version_warnings = Vec::new();
+    if let Some(mine) = &meta.tool_version {
+        if let Some(v) = run_version.as_ref().filter(|v| *v != mine) {
+            version_warnings.push(format!(
+                "run.json: the run was made by shipid {v}, this page by shipid {mine}: rerun the \
+                 study to have its results from this version"
+            ));
+        }
+        let mut others: BTreeMap<String, Vec<&str>> = BTreeMap::new();
+        for (c, (config, _, _)) in cases.iter().zip(&configs) {
+            if let Some(v) = config
+                .as_ref()
+                .and_then(|(_, t)| t.get("shipid_version"))
+                .and_then(|v| v.as_str())
+                .filter(|v| v != mine)
+            {
+                others.entry(v.to_string()).or_default().push(&c.id);
+            }
+        }
+        for (v, ids) in others {
+            version_warnings.push(format!(
+                "{} case(s) were computed by shipid {v}, not {mine} (their config.toml says so; \
+                 e.g. {}): rerun the study (--force) to recompute them",
+                ids.len(),
+                ids[0]
+            ));
+        }
+        if version.as_ref().is_some_and(|v| v != mine) {
+            header.push(("page written by".into(), format!("shipid {mine}")));
+        }
+    }
     if let Some(f) = meta
         .study_file
         .as_ref()
@@ -196,7 +241,8 @@ pub fn study_page(dir: &Path, meta: &RunMeta) -> Result<String, ReportError> {
     header.extend(meta.details.iter().cloned());
 
     // ---- warnings
-    let mut warnings: Vec<String> = meta.warnings.clone();
+    let mut warnings: Vec<String> = version_warnings.clone();
+    warnings.extend(meta.warnings.iter().cloned());
     if let Some(Value::Array(ws)) = run_obj.and_then(|o| o.get("warnings")) {
         for w in ws {
             warnings.push(match w {
@@ -474,7 +520,10 @@ pub fn study_page(dir: &Path, meta: &RunMeta) -> Result<String, ReportError> {
     }
     b.push_str("</section>");
     b.push_str("<footer>Written by shipid-report from the files of the output folder; the page has no script and loads nothing.</footer>");
-    Ok(page(&format!("{name} — shipid study report"), &b))
+    Ok((
+        page(&format!("{name} — shipid study report"), &b),
+        version_warnings,
+    ))
 }
 
 fn count_box(b: &mut String, what: &str, n: usize, class: &str) {

@@ -31,10 +31,9 @@ fn header_shows_version_study_data_set_and_run_record() {
     let html = page();
     assert_self_contained(&html);
     assert!(html.contains("<title>truncation — shipid study report</title>"));
-    assert!(
-        html.contains("shipid 9.9.9-test"),
-        "the caller's version wins"
-    );
+    // The version that made the run, not the caller's (which writes the page and warns).
+    assert!(html.contains("<dd>shipid 0.2.1</dd>"), "run.json's version");
+    assert!(html.contains("shipid 9.9.9-test"), "the page's writer");
     assert!(html.contains("studies/truncation.toml"));
     assert!(html.contains("data/kvlcc2-mmg/dataset.toml"));
     assert!(html.contains("<dt>started</dt><dd>2026-11-24T06:49:01Z</dd>"));
@@ -255,6 +254,30 @@ fn a_study_with_bands_shows_each_metrics_band_and_whether_the_record_is_inside()
     assert!(!html.contains(">overshoot_1_lo<"));
     // A study without bands keeps its metric table as it was.
     assert!(!page().contains("<th>band</th>"));
+}
+
+#[test]
+fn a_page_names_the_version_of_the_run_and_warns_of_the_callers_other_one() {
+    use shipid_report::study_page_with_warnings;
+    // Written by the version that made the run: no warning.
+    let same = RunMeta {
+        tool_version: Some("0.2.1".into()),
+        ..Default::default()
+    };
+    let (html, warnings) = study_page_with_warnings(&fixture("study"), &same).unwrap();
+    assert!(warnings.is_empty(), "{warnings:?}");
+    assert!(html.contains("<dd>shipid 0.2.1</dd>") && !html.contains("page written by"));
+    // A newer binary reporting the folder: run.json and the three cases' configs name 0.2.1.
+    let (html, warnings) = study_page_with_warnings(&fixture("study"), &meta()).unwrap();
+    assert_eq!(warnings.len(), 2, "{warnings:?}");
+    assert!(warnings[0].contains("run.json") && warnings[0].contains("shipid 0.2.1"));
+    assert!(warnings[1].contains("3 case(s) were computed by shipid 0.2.1, not 9.9.9-test"));
+    assert!(
+        html.contains("<dd>shipid 0.2.1</dd>"),
+        "the results' version"
+    );
+    let w = html.find("id=\"warnings\"").expect("warnings box");
+    assert!(html[w..].contains("3 case(s) were computed by shipid 0.2.1"));
 }
 
 #[test]
