@@ -74,6 +74,8 @@ pub struct ManoeuvreBands {
     pub replicates: usize,
     /// Replicate runs that diverged before the end of the manoeuvre.
     pub diverged: usize,
+    /// Which: the indices of those replicates (an ensemble's tell its structures).
+    pub diverged_members: Vec<usize>,
     pub metrics: Vec<MetricBand>,
     pub track: Option<TrackBand>,
 }
@@ -138,13 +140,16 @@ pub fn manoeuvre_bands_of(
         .par_iter()
         .map(|model| run(model.as_ref()).ok())
         .collect();
-    let diverged = runs
+    let diverged_members: Vec<usize> = runs
         .iter()
-        .filter(|r| {
+        .enumerate()
+        .filter(|(_, r)| {
             r.as_ref()
                 .is_none_or(|r| !matches!(r.status, SimStatus::Ok))
         })
-        .count();
+        .map(|(i, _)| i)
+        .collect();
+    let diverged = diverged_members.len();
     let replicate_metrics: Vec<Option<MetricEntries>> = runs
         .iter()
         .map(|r| {
@@ -172,6 +177,7 @@ pub fn manoeuvre_bands_of(
         level,
         replicates: replicates.len(),
         diverged,
+        diverged_members,
         metrics,
         track,
     })

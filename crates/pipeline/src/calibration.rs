@@ -1229,6 +1229,32 @@ impl ModelBands {
         }
     }
 
+    /// For an ensemble of several structures, how many of each structure's replicates are among
+    /// `diverged` (replicate indices, structures in their stored order): "full68 50 of 50, …", or
+    /// `None` for one structure or another kind of band.
+    pub fn diverged_by_structure(&self, diverged: &[usize]) -> Option<String> {
+        let ModelBands::Calibrated(c) = self else {
+            return None;
+        };
+        if c.source != CalibratedSource::Ensemble || c.structures.len() < 2 {
+            return None;
+        }
+        let mut start = 0;
+        let parts: Vec<String> = c
+            .structures
+            .iter()
+            .map(|(name, n)| {
+                let lost = diverged
+                    .iter()
+                    .filter(|&&i| (start..start + n).contains(&i))
+                    .count();
+                start += n;
+                format!("{name} {lost} of {n}")
+            })
+            .collect();
+        Some(parts.join(", "))
+    }
+
     /// Which band this is, in one line.
     pub fn what(&self) -> String {
         match self {
@@ -1284,5 +1310,42 @@ impl ModelBands {
                     .map(|bands| RunBands { bands, reach: None })
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ensemble(structures: &[(&str, usize)]) -> ModelBands {
+        ModelBands::Calibrated(Box::new(StoredCalibration {
+            level: 0.9,
+            folds: 2,
+            source: CalibratedSource::Ensemble,
+            structures: structures
+                .iter()
+                .map(|(n, k)| (n.to_string(), *k))
+                .collect(),
+            factors: BTreeMap::new(),
+            out_of_kind: None,
+            replicates: Vec::new(),
+            range: None,
+        }))
+    }
+
+    /// Regression: half of a four-structure ensemble diverged in a turn and the band's description
+    /// still named all four; the replicates are pooled in the structures' order, so their indices
+    /// tell which structure each diverged one belongs to.
+    #[test]
+    fn diverged_replicates_are_counted_per_structure() {
+        let bands = ensemble(&[("reduced32", 3), ("full68", 2), ("chen2021", 2)]);
+        assert_eq!(
+            bands.diverged_by_structure(&[3, 4, 6]).as_deref(),
+            Some("reduced32 0 of 3, full68 2 of 2, chen2021 1 of 2")
+        );
+        assert_eq!(
+            ensemble(&[("reduced32", 3)]).diverged_by_structure(&[0]),
+            None
+        );
     }
 }

@@ -371,12 +371,21 @@ pub fn validation_with_bands(
         }
     }
     if !as_json && let Some((check, (band_rows, diverged, reaches))) = &band_check {
+        // Diverged runs are summed over the recordings: say of how many, or "200 diverged" of 200
+        // replicates reads as all of them.
+        let recordings = band_rows
+            .iter()
+            .map(|r| r.0.as_str())
+            .collect::<std::collections::BTreeSet<_>>()
+            .len();
         println!(
-            "\nbands: {:.0} % over {} {} ({} replicate runs diverged); {}",
+            "\nbands: {:.0} % over {} {} ({} of the {} replicate runs diverged, over {} recordings); {}",
             check.level * 100.0,
             check.source.replicates(),
             check.source.noun(),
             diverged,
+            check.source.replicates() * recordings,
+            recordings,
             check.source.what()
         );
         if !reaches.is_empty() {

@@ -475,6 +475,9 @@ fn add_bands(value: &mut Value, run: &RunBands, source: &ModelBands, with_track:
     about.insert("level".into(), json!(bands.level));
     about.insert("replicates".into(), json!(bands.replicates));
     about.insert("diverged".into(), json!(bands.diverged));
+    if let Some(w) = source.diverged_by_structure(&bands.diverged_members) {
+        about.insert("diverged_by_structure".into(), json!(w));
+    }
     about.insert("kind".into(), json!(source.kind()));
     about.insert("what".into(), json!(source.what()));
     if let Some(reach) = run.reach {
@@ -495,8 +498,17 @@ fn add_bands(value: &mut Value, run: &RunBands, source: &ModelBands, with_track:
     }
     o.insert("bands".into(), Value::Object(about));
     if bands.diverged > 0 {
+        // An ensemble's structures that diverge are the ones most wrong here: the band then holds
+        // less of the model-form spread than its description says, and the user must know which.
+        let which = source
+            .diverged_by_structure(&bands.diverged_members)
+            .map_or(String::new(), |w| {
+                format!(
+                    "; by structure: {w} (a structure whose replicates diverged adds nothing to the band's model-form spread here)"
+                )
+            });
         eprintln!(
-            "warning: {} of {} {} diverged in this manoeuvre (their metrics are undefined; the band is over the others)",
+            "warning: {} of {} {} diverged in this manoeuvre (their metrics are undefined; the band is over the others){which}",
             bands.diverged,
             bands.replicates,
             source.noun()
