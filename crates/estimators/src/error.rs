@@ -35,8 +35,9 @@ pub enum EstimatorError {
         upper: f64,
     },
 
-    /// A hyper-parameter that is negative, NaN or infinite.
-    #[error("hyper-parameter {name} = {value} must be finite and >= 0")]
+    /// A hyper-parameter that is negative, NaN, infinite or beyond
+    /// [`crate::MAX_HYPER_PARAMETER`].
+    #[error("hyper-parameter {name} = {value} must be finite, >= 0 and <= 1e15")]
     InvalidHyperParameter { name: &'static str, value: f64 },
 
     /// A cross-validation fold specification that cannot be used.

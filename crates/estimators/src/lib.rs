@@ -122,7 +122,10 @@ pub use problem::column_scales;
 pub use tuning::{
     CvPoint, Family, Folds, Tuning, default_epsilon_grid, default_grid, log_grid, tune, tune_svr,
 };
-pub use types::{Bounds, Estimator, Fit, ILL_CONDITIONED_THRESHOLD, Solver, Status};
+pub use types::{
+    Bounds, EXPLAINS_NOTHING_RATIO, Estimator, Fit, ILL_CONDITIONED_THRESHOLD, MAX_HYPER_PARAMETER,
+    Solver, Status, explains_nothing,
+};
 
 /// Re-exported so that callers use the same faer version for designs.
 pub use faer;

@@ -31,9 +31,9 @@ impl Params {
         self
     }
 
-    /// Everything that can be judged without the data: every hyper-parameter finite and
-    /// ≥ 0 (λ, α, C, ε; C = 0 is a valid, if trivial, SVR whose solution is the point of
-    /// the box nearest 0), and bounds of equal lengths with `lower ≤ upper`, no NaN,
+    /// Everything that can be judged without the data: every hyper-parameter finite, ≥ 0
+    /// and at most [`crate::MAX_HYPER_PARAMETER`] (λ, α, C, ε; C = 0 is a valid, if trivial,
+    /// SVR whose solution is the point of the box nearest 0), and bounds of equal lengths with `lower ≤ upper`, no NaN,
     /// `lower < +∞`, `upper > −∞`. That the bounds have one entry per design column is
     /// checked by the fit, which knows the design.
     pub fn check(self) -> Result<CheckedParams, EstimatorError> {

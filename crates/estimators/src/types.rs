@@ -10,6 +10,33 @@ use crate::error::EstimatorError;
 /// data. It is applied to the *effective* condition number of each fit, see [`Fit`].
 pub const ILL_CONDITIONED_THRESHOLD: f64 = 6.7e7;
 
+/// The largest λ, α, C or ε a fit takes: 1e15, about 1/ε_mach (4.5e15). Every objective works
+/// on unit-RMS columns, so the data enter it at scale one (`ZᵀZ/n` has a unit diagonal): beyond
+/// 1/ε_mach, `ZᵀZ/n + λI` rounds to `λI` and the Ridge solution no longer depends on how the
+/// regressors relate to each other; a Lasso α or an SVR ε that large exceeds any target a
+/// prime-system fit can have (all coefficients zero), and an SVR C that large makes `½‖γ‖²`
+/// vanish below the rounding of the loss (an unregularised fit, which C far smaller gives as
+/// well). Such a value is a typo or a probe, never a setting; what a merely large value does to a
+/// fit is said by [`explains_nothing`].
+pub const MAX_HYPER_PARAMETER: f64 = 1e15;
+
+/// A fit whose residual RMS is at least this share of the target's RMS explains (almost) nothing
+/// of it: within 0.1 %, the coefficients are as good as zero (a penalty or an ε-tube that swallowed
+/// the data).
+pub const EXPLAINS_NOTHING_RATIO: f64 = 0.999;
+
+/// Whether a fit explains (almost) nothing of its target: every coefficient zero, or the residual
+/// RMS within 0.1 % of the target's ([`EXPLAINS_NOTHING_RATIO`]). Such a fit is solved (its status
+/// may be `Ok`) but is not a model of the data: `--c 1 --epsilon 0.01` on prime forces, whose
+/// spread lies inside the ε-tube, gives all zeros. A target that is itself zero has nothing to
+/// explain, so it does not count.
+pub fn explains_nothing(coefficients: &[f64], residual_rms: f64, target_rms: f64) -> bool {
+    if target_rms.is_nan() || target_rms <= 0.0 {
+        return false;
+    }
+    coefficients.iter().all(|&b| b == 0.0) || residual_rms >= EXPLAINS_NOTHING_RATIO * target_rms
+}
+
 /// A per-degree-of-freedom estimator and its hyper-parameters.
 ///
 /// The objectives (documented in detail at the crate root) are, with `n` samples,
@@ -48,7 +75,7 @@ impl Estimator {
 
     pub(crate) fn validate(&self) -> Result<(), EstimatorError> {
         let check = |name: &'static str, value: f64| {
-            if value.is_finite() && value >= 0.0 {
+            if value.is_finite() && (0.0..=MAX_HYPER_PARAMETER).contains(&value) {
                 Ok(())
             } else {
                 Err(EstimatorError::InvalidHyperParameter { name, value })

@@ -2,6 +2,7 @@
 //! instead of one per file); each module was a test file of its own, and `common` holds
 //! the data generators and helpers they share.
 
+mod absurd;
 mod agreement;
 mod common;
 mod diagnostics;
