@@ -31,6 +31,11 @@ pub enum CaseStatus {
     Ok,
     /// Solved, but the design's condition number is above the estimators' threshold.
     IllConditioned,
+    /// Solved, but some DOF's fit explains (almost) nothing of its target (all coefficients zero,
+    /// or a residual within 0.1 % of the target: `shipid_estimators::explains_nothing`), e.g. an
+    /// SVR whose ε-tube holds every sample. The model exists and is tested; it is not a model of
+    /// the data.
+    ExplainsNothing,
     /// The solver stopped short (reduced accuracy, iteration limit, failure).
     SolverFailed,
     /// The fit could not be made at all (`message` says why).
@@ -43,14 +48,18 @@ impl CaseStatus {
         match self {
             CaseStatus::Ok => "ok",
             CaseStatus::IllConditioned => "ill-conditioned",
+            CaseStatus::ExplainsNothing => "explains-nothing",
             CaseStatus::SolverFailed => "solver-failed",
             CaseStatus::FitFailed => "fit-failed",
         }
     }
 
-    /// Whether a model came out of the fit (possibly ill-conditioned).
+    /// Whether a model came out of the fit (possibly ill-conditioned, or explaining nothing).
     pub fn has_model(self) -> bool {
-        matches!(self, CaseStatus::Ok | CaseStatus::IllConditioned)
+        matches!(
+            self,
+            CaseStatus::Ok | CaseStatus::IllConditioned | CaseStatus::ExplainsNothing
+        )
     }
 }
 
@@ -368,10 +377,20 @@ pub fn run_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
     if let Some(none) = out.no_information() {
         return (failed(none.to_string()), None);
     }
+    let dof_status = |d: &shipid_pipeline::fit::DofReport| {
+        let s = case_status(&d.fit.status);
+        let nothing =
+            shipid_estimators::explains_nothing(&d.fit.coefficients, d.residual_rms, d.target_rms);
+        if nothing && s.has_model() {
+            CaseStatus::ExplainsNothing.max(s)
+        } else {
+            s
+        }
+    };
     let worst = out
         .dofs
         .iter()
-        .map(|d| case_status(&d.fit.status))
+        .map(dof_status)
         .max()
         .unwrap_or(CaseStatus::Ok);
     let model = AbkowitzDynamics(out.model.clone());
@@ -420,7 +439,7 @@ pub fn run_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
             .iter()
             .map(|d| DofSummary {
                 dof: d.dof.to_string(),
-                status: case_status(&d.fit.status),
+                status: dof_status(d),
                 residual_rms: d.residual_rms,
                 condition_number: d.condition_number,
                 scaled_condition_number: d.scaled_condition_number,

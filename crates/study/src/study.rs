@@ -1072,12 +1072,40 @@ fn polynomial_estimators(
                 };
                 InputError::key(path, entry_key(i, key), msg)
             })?;
+            check_hyper_bounds(path, i, &spec)?;
             Ok(CheckedEstimator {
                 spec,
                 solver: solver.clone(),
             })
         })
         .collect()
+}
+
+/// A value beyond what the estimators take ([`shipid_estimators::MAX_HYPER_PARAMETER`]) would
+/// fail every case it makes at run time: the estimators' own check, here, names the key instead.
+fn check_hyper_bounds(path: &Path, i: usize, spec: &EstimatorSpec) -> Result<(), InputError> {
+    use shipid_estimators::{Estimator, Params, Solver};
+    let probes = [
+        (
+            spec.lambda.map(|lambda| Estimator::Ridge { lambda }),
+            "lambda",
+        ),
+        (spec.alpha.map(|alpha| Estimator::Lasso { alpha }), "alpha"),
+        (spec.c.map(|c| Estimator::Svr { c, epsilon: 0.0 }), "c"),
+        (
+            spec.epsilon
+                .map(|epsilon| Estimator::Svr { c: 1.0, epsilon }),
+            "epsilon",
+        ),
+    ];
+    for (estimator, key) in probes {
+        if let Some(e) = estimator
+            && let Err(err) = Params::new(e, Solver::Fast).check()
+        {
+            return Err(InputError::key(path, entry_key(i, key), err.to_string()));
+        }
+    }
+    Ok(())
 }
 
 /// A key that the estimator would ignore (a λ grid on LSQ, values beside `tune = true`) is a mistake

@@ -1,6 +1,7 @@
 //! The study file's layers: raw TOML → checked study (each axis resolved) → cases.
 
 mod diverged_replay;
+mod explains_nothing;
 mod grid;
 
 use std::path::{Path, PathBuf};
