@@ -69,13 +69,30 @@ pub fn summary_pivot(summary: &Table, pivot: Option<&str>) -> Result<String, Tab
         p.rows = separated_rows(summary, &p)?;
     }
     let percent = p.value.ends_with("mrae") || p.value.ends_with("rel_error");
-    summary.pivot_markdown(&p, "case", |x| {
+    let mut md = summary.pivot_markdown(&p, "case", |x| {
         if percent {
             format!("{:.1} %", 100.0 * x)
         } else {
             format!("{x:.4}")
         }
-    })
+    })?;
+    // A case without test rows has a row of empty cells: say why, so they do not read as missing
+    // values (a "–" is a diverged prediction).
+    if let (Some(test), Some(case), Some(status)) = (
+        summary.column("test"),
+        summary.column("case"),
+        summary.column("case_status"),
+    ) {
+        for i in (0..summary.rows()).filter(|&i| test.cell(i).is_empty()) {
+            md.push_str(&format!(
+                "\n{}: {}, no test results (cases/{}/result.json says why)\n",
+                case.cell(i),
+                status.cell(i),
+                case.cell(i)
+            ));
+        }
+    }
+    Ok(md)
 }
 
 /// The cells of a `<metric>_band` value, when the summary has that metric's band columns and no

@@ -240,6 +240,11 @@ impl Table {
         }
         let row_label = self.labeller(&pivot.rows)?;
         let col_label = self.labeller(&pivot.cols)?;
+        let col_columns = pivot
+            .cols
+            .iter()
+            .map(|n| self.get(n))
+            .collect::<Result<Vec<_>, _>>()?;
         let mut row_keys: Vec<String> = Vec::new();
         let mut col_keys: Vec<String> = Vec::new();
         let mut cells: BTreeMap<(String, String), String> = BTreeMap::new();
@@ -247,6 +252,11 @@ impl Table {
             let (r, c) = (row_label(i), col_label(i));
             if !row_keys.contains(&r) {
                 row_keys.push(r.clone());
+            }
+            // A row with no column key at all (a study case whose fit failed has no test) keeps its
+            // row but makes no column: a "–" column would read as a test of that name.
+            if col_columns.iter().all(|col| col.cell(i).is_empty()) {
+                continue;
             }
             if !col_keys.contains(&c) {
                 col_keys.push(c.clone());

@@ -340,3 +340,28 @@ fn a_band_pivot_that_would_merge_two_cases_is_refused_naming_them() {
         "{md}"
     );
 }
+
+#[test]
+fn a_fit_failed_case_adds_no_phantom_column_to_the_default_table() {
+    use shipid_study::tables::{summary_pivot, summary_table};
+    let two_sets = ONE_CASE.replace(
+        r#"sets = ["reduced32"]"#,
+        r#"sets = ["reduced32", "full68"]"#,
+    );
+    let (_dir, path) = study_file(&two_sets);
+    let study = load_study(&path).unwrap();
+    let mut results = banded_results(&study);
+    results[1].status = shipid_study::CaseStatus::FitFailed;
+    results[1].tests.clear();
+    let md = summary_pivot(&summary_table(&study, &results), None).unwrap();
+    let header = md.lines().next().unwrap();
+    assert!(!header.contains('–'), "{md}");
+    assert_eq!(header.matches('|').count(), 2 + study.tests.len(), "{md}");
+    assert!(
+        md.contains(&format!(
+            "{}: fit-failed, no test results",
+            study.cases[1].id
+        )),
+        "{md}"
+    );
+}
