@@ -264,7 +264,35 @@ pub fn parse_dataset(path: &Path, text: &str) -> Result<DatasetFile, InputError>
             format!("must be 1 or -1, not {}", file.rudder_sign),
         ));
     }
+    check_ship(path, &file.ship)?;
     let s = &file.ship;
+    if let Some(r) = &file.rudder {
+        check_rudder_area(path, s, r)?;
+    }
+
+    check_reference_point(path, &file)?;
+    if let Some(a) = &file.added_mass {
+        check_added_mass(path, a, s)?;
+    }
+    check_distinct_recordings(path, &file.recordings)?;
+    if let Some(p) = &file.propeller {
+        check_propeller(path, p, s.lpp)?;
+    }
+    if let Some(r) = &file.rudder {
+        check_rudder(path, r, s.lpp)?;
+    }
+    if let Some(w) = &file.windage {
+        check_windage(path, w, s.lpp)?;
+    }
+    for (i, entry) in file.recordings.iter().enumerate() {
+        manoeuvre_of(path, i, entry)?;
+    }
+    Ok(file)
+}
+
+/// The checks of a `[ship]` table wherever it is read (a data set, a model file): every key a
+/// positive finite number within its physical range, x_G on the hull, and the proportions of a ship.
+pub fn check_ship(path: &Path, s: &Ship) -> Result<(), InputError> {
     let positive = [
         ("lpp", s.lpp),
         ("beam", s.beam),
@@ -295,25 +323,7 @@ pub fn parse_dataset(path: &Path, text: &str) -> Result<DatasetFile, InputError>
         ));
     }
     check_ship_ranges(path, s)?;
-    check_ship_proportions(path, s, file.rudder.as_ref())?;
-    check_reference_point(path, &file)?;
-    if let Some(a) = &file.added_mass {
-        check_added_mass(path, a, s)?;
-    }
-    check_distinct_recordings(path, &file.recordings)?;
-    if let Some(p) = &file.propeller {
-        check_propeller(path, p, s.lpp)?;
-    }
-    if let Some(r) = &file.rudder {
-        check_rudder(path, r, s.lpp)?;
-    }
-    if let Some(w) = &file.windage {
-        check_windage(path, w, s.lpp)?;
-    }
-    for (i, entry) in file.recordings.iter().enumerate() {
-        manoeuvre_of(path, i, entry)?;
-    }
-    Ok(file)
+    check_ship_proportions(path, s)
 }
 
 /// Physical ranges of the ship keys (`docs/data-format.md`): from a small tank model to the largest
@@ -405,11 +415,7 @@ fn check_ship_ranges(path: &Path, s: &Ship) -> Result<(), InputError> {
 /// mass in tonnes (block coefficient 800), a length in mm beside a beam in m, a radius of gyration of
 /// 25 L. Every fitted coefficient is scaled by these, so the proportions are checked too, with margins
 /// wide enough for barges, catamarans and fine naval hulls.
-fn check_ship_proportions(
-    path: &Path,
-    s: &Ship,
-    rudder: Option<&RudderData>,
-) -> Result<(), InputError> {
+fn check_ship_proportions(path: &Path, s: &Ship) -> Result<(), InputError> {
     let block = s.displacement / (s.lpp * s.beam * s.draft);
     // Proportions of the hull first: a length in another unit shows there, not as a block coefficient.
     let checks = [
@@ -456,20 +462,23 @@ fn check_ship_proportions(
             ));
         }
     }
-    if let Some(r) = rudder {
-        let share = r.area_m2 / (s.lpp * s.draft);
-        // A non-finite or non-positive area is `check_rudder`'s to name.
-        if share.is_finite() && share > 0.5 {
-            return Err(InputError::key(
-                path,
-                "rudder.area_m2",
-                format!(
-                    "{} m² is {} × L T (rudders have about 1/70 … 1/30 of it): a wrong unit?",
-                    number(r.area_m2),
-                    three_digits(share)
-                ),
-            ));
-        }
+    Ok(())
+}
+
+/// A rudder of half the hull's lateral area or more is a unit slip.
+fn check_rudder_area(path: &Path, s: &Ship, r: &RudderData) -> Result<(), InputError> {
+    let share = r.area_m2 / (s.lpp * s.draft);
+    // A non-finite or non-positive area is `check_rudder`'s to name.
+    if share.is_finite() && share > 0.5 {
+        return Err(InputError::key(
+            path,
+            "rudder.area_m2",
+            format!(
+                "{} m² is {} × L T (rudders have about 1/70 … 1/30 of it): a wrong unit?",
+                number(r.area_m2),
+                three_digits(share)
+            ),
+        ));
     }
     Ok(())
 }
@@ -487,7 +496,7 @@ fn three_digits(x: f64) -> String {
 /// Added masses are finite and at most 100 times the ship's mass (times L, L² for the moment terms):
 /// real hulls have about 0.02 … 1 times, so anything beyond is a unit or sign-of-magnitude slip that
 /// would dominate every fitted force.
-fn check_added_mass(path: &Path, a: &AddedMass, s: &Ship) -> Result<(), InputError> {
+pub fn check_added_mass(path: &Path, a: &AddedMass, s: &Ship) -> Result<(), InputError> {
     let m = s.mass_kg();
     let l = s.lpp;
     let entries = [
@@ -504,7 +513,7 @@ fn check_added_mass(path: &Path, a: &AddedMass, s: &Ship) -> Result<(), InputErr
                 path,
                 format!("added_mass.{key}"),
                 format!(
-                    "{} {unit} is positive; the data set gives the derivative, which is minus the added mass (write {})",
+                    "{} {unit} is positive; it is a derivative, minus the added mass (write {})",
                     number(value),
                     number(-value)
                 ),
@@ -521,6 +530,18 @@ fn check_added_mass(path: &Path, a: &AddedMass, s: &Ship) -> Result<(), InputErr
                 ),
             ));
         }
+    }
+    // The sway-yaw block of the mass matrix about midship must be positive definite: a ship that
+    // accelerates against the force pushing it simulates without a word (`Y_vdot = 1e6`: "ok").
+    let m22 = m - a.Y_vdot;
+    let m33 = m * (s.kzz * s.kzz + s.xg * s.xg) - a.N_rdot;
+    let (m23, m32) = (m * s.xg - a.Y_rdot, m * s.xg - a.N_vdot);
+    if !(m22 > 0.0 && m33 > 0.0 && m22 * m33 - m23 * m32 > 0.0) {
+        return Err(InputError::key(
+            path,
+            "added_mass",
+            "with these added masses the sway-yaw mass matrix of the ship is not positive definite (the ship would accelerate against the force that pushes it): check the signs and units of Y_vdot, Y_rdot, N_vdot and N_rdot",
+        ));
     }
     Ok(())
 }

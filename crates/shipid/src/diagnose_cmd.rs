@@ -134,6 +134,14 @@ pub fn run(args: &DiagnoseArgs) -> Result<Outcome, CliError> {
             dataset.display()
         )));
     }
+    let differences = shipid_pipeline::model_file::ship_differences(base.ship(), &ds.ship);
+    if !differences.is_empty() {
+        eprintln!(
+            "warning: {model_spec} on {}: the ships differ ({}): a diagnosis may blame the difference on a missing effect; diagnose with a model of this ship",
+            dataset.display(),
+            differences.join("; ")
+        );
+    }
     // A horizon raised beyond every recording makes each segment a whole recording: the mismatch
     // could no longer be located in time, and a model's own drift would be blamed on an effect.
     // (Short recordings under the default horizon are diagnosed whole, as documented.)

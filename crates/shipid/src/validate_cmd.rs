@@ -37,6 +37,14 @@ pub fn run(
             dataset.display()
         );
     }
+    let differences = shipid_pipeline::model_file::ship_differences(model.ship(), &ds.ship);
+    if !differences.is_empty() {
+        eprintln!(
+            "warning: {model_spec} on {}: the ships differ ({}): the errors below compare different ships",
+            dataset.display(),
+            differences.join("; ")
+        );
+    }
     // A sparse GP carries its own identification range; a polynomial's needs its training data.
     if model.own_range().is_none() {
         for w in crate::print::training_range_warnings(model_spec, "column `outside`") {

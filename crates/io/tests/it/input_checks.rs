@@ -300,7 +300,7 @@ fn impossible_ship_proportions_are_refused_naming_the_key() {
     let added = "[added_mass]\nX_udot = 247.9\nY_vdot = -2513.0\nY_rdot = 0.0\nN_vdot = 0.0\nN_rdot = -6074.5\n";
     check_dataset_refused(
         &format!("{SHIP}{added}"),
-        "ds.toml: key `added_mass.X_udot`: 247.9 kg is positive; the data set gives the derivative, which is minus the added mass (write -247.9)",
+        "ds.toml: key `added_mass.X_udot`: 247.9 kg is positive; it is a derivative, minus the added mass (write -247.9)",
     );
 }
 
