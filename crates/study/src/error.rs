@@ -33,6 +33,9 @@ pub enum StudyError {
         why: String,
         grid: String,
     },
+    /// The output folder holds the results of another study (or of an older version of this one).
+    #[error("{}: {message}", path.display())]
+    NotThisStudy { path: PathBuf, message: String },
     /// A result table could not be written or read.
     #[error("{}: {message}", path.display())]
     Table { path: PathBuf, message: String },
@@ -43,7 +46,10 @@ impl StudyError {
     pub fn is_bad_input(&self) -> bool {
         matches!(
             self,
-            StudyError::Input(_) | StudyError::Locked { .. } | StudyError::TooLarge { .. }
+            StudyError::Input(_)
+                | StudyError::Locked { .. }
+                | StudyError::TooLarge { .. }
+                | StudyError::NotThisStudy { .. }
         )
     }
 }

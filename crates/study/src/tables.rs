@@ -95,6 +95,56 @@ pub fn summary_pivot(summary: &Table, pivot: Option<&str>) -> Result<String, Tab
     Ok(md)
 }
 
+/// Refuses an output folder whose `summary.csv` is not this study's run: a case the study does not
+/// have (another study, or an older version of this one, wrote it) or a case of the study missing.
+/// `shipid table` and `shipid plot` check it before showing anything under the study's name.
+pub fn check_output_of(study: &Study, out: &Path) -> Result<(), StudyError> {
+    let path = out.join("summary.csv");
+    let refuse = |message: String| StudyError::NotThisStudy {
+        path: path.clone(),
+        message,
+    };
+    if !path.is_file() {
+        return Err(refuse(format!(
+            "not found: run `shipid run {}` first",
+            study.path.display()
+        )));
+    }
+    let summary = Table::read_csv(&path).map_err(|e| refuse(e.to_string()))?;
+    let Some(col) = summary.column("case") else {
+        return Err(refuse(
+            "no `case` column: not a summary written by shipid run".into(),
+        ));
+    };
+    let shown: std::collections::BTreeSet<String> =
+        (0..summary.rows()).map(|i| col.cell(i)).collect();
+    let known: std::collections::BTreeSet<&str> =
+        study.cases.iter().map(|c| c.id.as_str()).collect();
+    let run_first = format!("run `shipid run {}` first", study.path.display());
+    let foreign: Vec<&String> = shown
+        .iter()
+        .filter(|id| !known.contains(id.as_str()))
+        .collect();
+    if let Some(first) = foreign.first() {
+        return Err(refuse(format!(
+            "{} case(s) are not cases of {} (e.g. {first}): written by another study or an older \
+             version of it; {run_first}",
+            foreign.len(),
+            study.path.display()
+        )));
+    }
+    let missing: Vec<&&str> = known.iter().filter(|id| !shown.contains(**id)).collect();
+    if let Some(first) = missing.first() {
+        return Err(refuse(format!(
+            "lacks {} of the {} cases of {} (e.g. {first}): {run_first}",
+            missing.len(),
+            known.len(),
+            study.path.display()
+        )));
+    }
+    Ok(())
+}
+
 /// The cells of a `<metric>_band` value, when the summary has that metric's band columns and no
 /// column of that name: `[lo, hi] inside`, `[lo, hi] outside`, `[lo, hi]` without a recorded value,
 /// or empty without a band.

@@ -2,6 +2,7 @@
 
 mod diverged_replay;
 mod explains_nothing;
+mod foreign_output;
 mod grid;
 
 use std::path::{Path, PathBuf};
