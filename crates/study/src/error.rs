@@ -25,14 +25,10 @@ pub enum StudyError {
     Locked { path: PathBuf, holder: Option<u32> },
     /// The study is larger than a run takes without the user's consent (`--allow-large`).
     #[error(
-        "{}: {why} ({grid}): nothing was run; give --allow-large to run them all",
+        "{}: {why}: nothing was run; give --allow-large to run them all",
         path.display()
     )]
-    TooLarge {
-        path: PathBuf,
-        why: String,
-        grid: String,
-    },
+    TooLarge { path: PathBuf, why: String },
     /// The output folder holds the results of another study (or of an older version of this one).
     #[error("{}: {message}", path.display())]
     NotThisStudy { path: PathBuf, message: String },

@@ -227,18 +227,21 @@ pub struct StudySize {
 }
 
 impl StudySize {
-    /// Whether a run of this size needs the user's consent (`shipid run --allow-large`): why, or
-    /// `None` when it is within [`crate::LARGE_RUN_CASES`] and
-    /// [`crate::runner::LARGE_RUN_REPLICATE_SIMULATIONS`].
-    pub fn too_large(&self) -> Option<String> {
+    /// Why a run of this size needs the user's consent (`shipid run --allow-large`), naming how
+    /// the grid (`grid`, [`CheckedStudy::grid`]) makes it; `None` within [`crate::LARGE_RUN_CASES`]
+    /// cases and [`crate::runner::LARGE_RUN_REPLICATE_SIMULATIONS`] replicate simulations.
+    pub fn too_large(&self, grid: &str) -> Option<String> {
         use crate::runner::{LARGE_RUN_CASES, LARGE_RUN_REPLICATE_SIMULATIONS};
         if self.cases > LARGE_RUN_CASES {
-            Some(format!("{} cases, more than {LARGE_RUN_CASES}", self.cases))
+            Some(format!(
+                "{} cases ({grid}), more than {LARGE_RUN_CASES}",
+                self.cases
+            ))
         } else if self.replicate_simulations > LARGE_RUN_REPLICATE_SIMULATIONS {
             Some(format!(
-                "{} bootstrap replicate simulations (cases × replicates × tests), more than \
-                 {LARGE_RUN_REPLICATE_SIMULATIONS}",
-                self.replicate_simulations
+                "{} bootstrap replicate simulations ({} cases ({grid}) × replicates × tests), more \
+                 than {LARGE_RUN_REPLICATE_SIMULATIONS}",
+                self.replicate_simulations, self.cases
             ))
         } else {
             None
@@ -252,12 +255,14 @@ impl StudySize {
 pub fn load_study_within(path: &Path, allow_large: bool) -> Result<Study, crate::StudyError> {
     let raw = RawStudy::read(path)?;
     let checked = CheckedStudy::from_raw(path, raw)?;
-    let size = checked.size();
-    if let Some(why) = size.too_large().filter(|_| !allow_large) {
+    if let Some(why) = checked
+        .size()
+        .too_large(&checked.grid())
+        .filter(|_| !allow_large)
+    {
         return Err(crate::StudyError::TooLarge {
             path: path.to_path_buf(),
             why,
-            grid: checked.grid(),
         });
     }
     Ok(checked.into_study()?)
@@ -863,11 +868,11 @@ fn time_windows(path: &Path, windows: &[[f64; 2]]) -> Result<Vec<WindowSpec>, In
         .map(|(k, [a, b])| {
             // Recordings start at 0 s: a negative start would be labelled with a time no sample has.
             let why = if !(a.is_finite() && b.is_finite()) {
-                Some("is not a time window (give finite seconds)")
+                Some("give finite seconds")
             } else if *a < 0.0 {
-                Some("starts before 0 s, where recordings start")
+                Some("it starts before 0 s, where recordings start")
             } else if b <= a {
-                Some("does not end after it starts")
+                Some("it does not end after it starts")
             } else {
                 None
             };
@@ -878,8 +883,11 @@ fn time_windows(path: &Path, windows: &[[f64; 2]]) -> Result<Vec<WindowSpec>, In
                 }),
                 Some(why) => Err(InputError::key(
                     path,
-                    format!("training.windows[{k}]"),
-                    format!("[{a}, {b}] {why}"),
+                    "training.windows",
+                    format!(
+                        "[{a}, {b}] is not a time window: {why} (window {}, counting from 1)",
+                        k + 1
+                    ),
                 )),
             }
         })
@@ -908,9 +916,16 @@ fn window_extents(
             let Some(r) = dataset.recording(f) else {
                 continue;
             };
-            let key = format!("training.windows[{k}]");
-            let range = shipid_pipeline::fit::window_range(r, dataset, *w)
-                .map_err(|e| InputError::key(path, &key, e.to_string()))?;
+            let range = shipid_pipeline::fit::window_range(r, dataset, *w).map_err(|e| {
+                InputError::key(
+                    path,
+                    "training.windows",
+                    format!(
+                        "[{start_s}, {end_s}] (window {}, counting from 1): {e}",
+                        k + 1
+                    ),
+                )
+            })?;
             let t = &r.recording.t;
             let (Some(&first), Some(&last)) = (t.first(), t.last()) else {
                 continue;
@@ -924,7 +939,7 @@ fn window_extents(
             if start_s < first - 0.5 * dt || end_s > last + 0.5 * dt {
                 let (a, b) = (t[range.start], t[range.end - 1]);
                 warnings.push(format!(
-                    "{}: {key} = [{start_s}, {end_s}] s extends past `{f}` (recorded {first}–{last} s): \
+                    "{}: training.windows[{k}] = [{start_s}, {end_s}] s extends past `{f}` (recorded {first}–{last} s): \
                      its cases fit `{f}` on {a}–{b} s, though the tables label them {}",
                     path.display(),
                     w.label()
