@@ -37,7 +37,10 @@ pub enum EstimatorError {
 
     /// A hyper-parameter that is negative, NaN, infinite or beyond
     /// [`crate::MAX_HYPER_PARAMETER`].
-    #[error("hyper-parameter {name} = {value} must be finite, >= 0 and <= 1e15")]
+    #[error(
+        "hyper-parameter {name} = {} must be finite, >= 0 and <= 1e15",
+        readable(*value)
+    )]
     InvalidHyperParameter { name: &'static str, value: f64 },
 
     /// A cross-validation fold specification that cannot be used.
@@ -67,5 +70,14 @@ impl From<faer::linalg::solvers::SvdError> for EstimatorError {
 impl From<faer::linalg::solvers::EvdError> for EstimatorError {
     fn from(e: faer::linalg::solvers::EvdError) -> Self {
         EstimatorError::Decomposition(format!("self-adjoint eigendecomposition: {e:?}"))
+    }
+}
+
+/// A value as a reader takes it in: `1e300` rather than its 301 digits.
+fn readable(x: f64) -> String {
+    if x.is_finite() && x != 0.0 && !(1e-4..1e6).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
     }
 }
