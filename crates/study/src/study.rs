@@ -470,10 +470,28 @@ fn check_unique_ids(path: &Path, cases: &[Case]) -> Result<(), InputError> {
 
 /// A case as its configuration reads, for messages.
 fn describe(c: &Case) -> String {
+    let e = &c.estimator;
+    let mut est = e.name.clone();
+    for (name, v) in [
+        ("λ", e.lambda),
+        ("α", e.alpha),
+        ("C", e.c),
+        ("ε", e.epsilon),
+        ("d_gen", e.similarity),
+    ] {
+        if let Some(v) = v {
+            est.push_str(&format!(" {name}={v:e}"));
+        }
+    }
+    if e.tune {
+        est.push_str(" tuned");
+    }
+    if e.refine {
+        est.push_str(" refined");
+    }
     format!(
-        "set `{}`, estimator {:?}, solver {}, training [{}], window {}",
+        "(set `{}`, {est}, solver {}, training [{}], window {})",
         c.set,
-        c.estimator,
         c.solver,
         c.training.join(", "),
         c.window.label()
