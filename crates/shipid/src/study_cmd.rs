@@ -422,15 +422,32 @@ pub fn check(
 struct ScratchDir(PathBuf);
 
 impl ScratchDir {
+    /// A new folder of this process's own under the temporary folder. `create_dir` (not `_all`)
+    /// fails on anything already there, a symbolic link planted at a predictable name included, so
+    /// the tables are never written through it; the name takes the clock's nanoseconds too, and a
+    /// taken name is tried again with the next.
     fn new(study: &Study) -> Result<ScratchDir, CliError> {
-        let dir = std::env::temp_dir().join(format!(
-            "shipid-check-{}-{}",
-            study.name,
-            std::process::id()
-        ));
-        std::fs::create_dir_all(&dir)
-            .map_err(|e| failed(anyhow::anyhow!("{}: {e}", dir.display())))?;
-        Ok(ScratchDir(dir))
+        let base = std::env::temp_dir();
+        let mut last = None;
+        for attempt in 0..16u32 {
+            let nanos = std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.subsec_nanos());
+            let dir = base.join(format!(
+                "shipid-check-{}-{}-{nanos:09}-{attempt}",
+                study.name,
+                std::process::id()
+            ));
+            match std::fs::create_dir(&dir) {
+                Ok(()) => return Ok(ScratchDir(dir)),
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => last = Some(dir),
+                Err(e) => return Err(failed(anyhow::anyhow!("{}: {e}", dir.display()))),
+            }
+        }
+        Err(failed(anyhow::anyhow!(
+            "{}: every scratch folder name tried is taken",
+            last.unwrap_or(base).display()
+        )))
     }
 }
 
