@@ -101,6 +101,12 @@ impl EstimatorSpec {
                 Some(x) if flag == "c" && x == 0.0 => {
                     Err(bad_input("--c must be > 0, got 0 (C = 0 ignores the data)"))
                 }
+                Some(x) if x > shipid_estimators::MAX_HYPER_PARAMETER && x.is_finite() => {
+                    Err(bad_input(format!(
+                        "--{flag} {x:e} is beyond {:e}: the regularisation would drown the data in rounding (the fit would ignore them)",
+                        shipid_estimators::MAX_HYPER_PARAMETER
+                    )))
+                }
                 Some(x) if x.is_finite() && x >= 0.0 => Ok(()),
                 Some(x) => Err(bad_input(format!(
                     "--{flag} must be a non-negative number, not {x}"

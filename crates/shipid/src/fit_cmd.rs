@@ -81,6 +81,9 @@ pub fn report_json(out: &FitOutput, warnings: &[String]) -> Value {
             if !collinear.is_empty() {
                 o.insert("collinear_regressors".into(), json!(collinear));
             }
+            if explains_nothing(d) {
+                o.insert("explains_nothing".into(), json!(true));
+            }
             if let shipid_estimators::Status::RankDeficient { zero_columns } = &d.fit.status {
                 let names: Vec<&String> = zero_columns
                     .iter()
@@ -185,6 +188,12 @@ fn status_words(d: &shipid_pipeline::fit::DofReport) -> String {
     }
 }
 
+/// A DOF whose fit explains (almost) nothing of its target: every coefficient zero, or the
+/// residual as large as the target (a regularisation that ignores the data, say).
+fn explains_nothing(d: &shipid_pipeline::fit::DofReport) -> bool {
+    shipid_estimators::explains_nothing(&d.fit.coefficients, d.residual_rms, d.target_rms)
+}
+
 /// The fit's summary on stdout: the JSON report, or one line per DOF; `out` is the model file
 /// written, if any.
 fn print_summary(
@@ -222,6 +231,25 @@ fn print_summary(
             d.target_rms,
             d.condition_number.unwrap_or(f64::NAN)
         );
+        if explains_nothing(d) {
+            let why = match shipid_pipeline::fit::svr_epsilon(&d.fit.estimator) {
+                Some(eps) if eps >= d.target_rms => format!(
+                    "the SVR's ε {eps:.3e} is as wide as the target's RMS: every sample lies in its insensitive tube; give a smaller --epsilon or use --tune"
+                ),
+                _ => "the estimator's settings ignore the data; lower the regularisation or use --tune".into(),
+            };
+            eprintln!(
+                "warning: {}: the fit explains nothing of the target (residual RMS {:.3e} against the target's {:.3e}{}): {why}",
+                d.dof,
+                d.residual_rms,
+                d.target_rms,
+                if d.fit.coefficients.iter().all(|c| *c == 0.0) {
+                    ", every coefficient 0"
+                } else {
+                    ""
+                }
+            );
+        }
     }
 }
 

@@ -26,7 +26,12 @@ pub fn run(dir: &Path, study: Option<&Path>) -> Result<Outcome, CliError> {
     let html = if dir.join("report.json").is_file() {
         shipid_report::diagnosis_page(&DiagnosisFiles::in_dir(dir), &meta)
     } else if dir.join("summary.csv").is_file() {
-        shipid_report::study_page(dir, &meta)
+        shipid_report::study_page_with_warnings(dir, &meta).map(|(html, notes)| {
+            for n in notes {
+                eprintln!("warning: {n}");
+            }
+            html
+        })
     } else {
         return Err(bad_input(format!(
             "{}: neither a study output folder (summary.csv) nor a diagnosis folder (report.json)",

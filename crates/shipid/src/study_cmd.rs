@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 use shipid_report::RunMeta;
 use shipid_study::tables::write_tables;
 use shipid_study::{
-    CaseResult, LARGE_RUN_CASES, OutcomeCounts, RunLock, RunPlan, RunRecord, Study, default_out,
-    load_study, run_study,
+    CaseResult, OutcomeCounts, RunLock, RunPlan, RunRecord, Study, default_out, load_study,
+    run_study,
 };
 use shipid_tables::{Table, Tolerance, compare};
 
@@ -32,6 +32,7 @@ pub fn run_and_write(
             .file(&study.path, "the study file")
             .dataset(&study.dataset_path),
     )?;
+    refuse_foreign_folder(out)?;
     let lock = RunLock::acquire(out)?;
     if let Some(pid) = lock.taken_over_from {
         eprintln!(
@@ -58,7 +59,12 @@ pub fn run_and_write(
     write_tables(study, &results, out)?;
     // What the data carry that the models may not: a varying propeller rate, a recorded wind or
     // current (removed before each fit and applied in each test's replays), and the windage used.
-    let mut warnings = shipid_pipeline::validate::validation_warnings("", None, &study.dataset);
+    let mut warnings = study.warnings.clone();
+    warnings.extend(shipid_pipeline::validate::validation_warnings(
+        "",
+        None,
+        &study.dataset,
+    ));
     warnings.extend(shipid_figures::write_figures(study, out).warnings);
     RunRecord::new(
         env!("CARGO_PKG_VERSION"),
@@ -76,8 +82,10 @@ pub fn run_and_write(
         warnings: warnings.clone(),
         details: vec![],
     };
-    let report = shipid_report::study_page(out, &meta)
-        .and_then(|html| shipid_report::write_report(out, &html));
+    let report = shipid_report::study_page_with_warnings(out, &meta).and_then(|(html, notes)| {
+        warnings.extend(notes);
+        shipid_report::write_report(out, &html)
+    });
     let report = match report {
         Ok(p) => Some(p),
         Err(e) => {
@@ -106,6 +114,39 @@ const RUN_WRITES: [&str; 9] = [
 ];
 
 /// An output folder that is a file (or under one) is the user's mistake, named before any work.
+/// A study writes `cases/`, `figures/`, tables and a report into its folder and removes figures of
+/// its own earlier runs there: a folder that holds other things and no sign of a shipid run (`--out
+/// /`, a home folder) is refused before anything is written into it.
+fn refuse_foreign_folder(out: &Path) -> Result<(), CliError> {
+    let Ok(entries) = std::fs::read_dir(out) else {
+        return Ok(()); // new (or unreadable: the write says so)
+    };
+    let names: Vec<String> = entries
+        .filter_map(Result::ok)
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    let ours = [
+        "run.json",
+        "study.toml",
+        "cases",
+        "summary.csv",
+        shipid_study::lock::LOCK_FILE,
+    ];
+    if names.is_empty() || names.iter().any(|n| ours.contains(&n.as_str())) {
+        return Ok(());
+    }
+    let mut shown: Vec<&str> = names.iter().map(String::as_str).collect();
+    shown.sort_unstable();
+    let more = if shown.len() > 3 { ", …" } else { "" };
+    shown.truncate(3);
+    Err(bad_input(format!(
+        "--out {}: holds {} other entries (`{}`{more}) and no earlier shipid run; a study writes cases/, figures/, tables and a report there: give a new or empty folder",
+        out.display(),
+        names.len(),
+        shown.join("`, `")
+    )))
+}
+
 fn check_out_dir(out: &Path) -> Result<(), CliError> {
     let mut p = Some(out);
     while let Some(dir) = p {
@@ -117,19 +158,6 @@ fn check_out_dir(out: &Path) -> Result<(), CliError> {
             )));
         }
         p = dir.parent();
-    }
-    Ok(())
-}
-
-/// A grid larger than [`LARGE_RUN_CASES`] runs only when the user insists.
-fn check_size(study: &Study, allow_large: bool) -> Result<(), CliError> {
-    let n = study.cases.len();
-    if n > LARGE_RUN_CASES && !allow_large {
-        return Err(bad_input(format!(
-            "{}: {n} cases ({}), more than {LARGE_RUN_CASES}: nothing was run; give --allow-large to run them all",
-            study.path.display(),
-            study.grid
-        )));
     }
     Ok(())
 }
@@ -147,8 +175,8 @@ pub fn run(
     if jobs == 0 {
         return Err(bad_input("--jobs 0: give at least 1"));
     }
-    let study = load_study(study_path)?;
-    check_size(&study, allow_large)?;
+    // Sized from the grid's axes before any case is built (a 5 KB file can make millions).
+    let study = shipid_study::load_study_within(study_path, allow_large)?;
     let out = out
         .map(PathBuf::from)
         .unwrap_or_else(|| default_out(&study));
@@ -197,6 +225,9 @@ pub fn plot(study_path: &Path, out: Option<&Path>) -> Result<Outcome, CliError> 
         &[],
         &crate::outputs::Inputs::new().file(study_path, "the study file"),
     )?;
+    // Another study's folder: its figures would be drawn from the wrong grid, and its own removed
+    // as stale.
+    shipid_study::tables::check_output_of(&study, &out)?;
     // Not while a run is rewriting the tables the figures are drawn from.
     let lock = RunLock::acquire(&out)?;
     let report = shipid_figures::write_figures(&study, &out);
@@ -326,8 +357,8 @@ pub fn check(
     if jobs == 0 {
         return Err(bad_input("--jobs 0: give at least 1"));
     }
-    let study = load_study(study_path)?;
-    check_size(&study, allow_large)?;
+    // Sized from the grid's axes before any case is built (a 5 KB file can make millions).
+    let study = shipid_study::load_study_within(study_path, allow_large)?;
     // Named before the run, not after minutes of it.
     if bless {
         check_out_dir(reference)
