@@ -20,6 +20,15 @@ pub fn run(dir: &Path, study: Option<&Path>) -> Result<Outcome, CliError> {
     }
     let mut inputs = crate::outputs::Inputs::new();
     if let Some(study) = study {
+        // The page names it as the study the results came from: a path that is not a file would be
+        // named all the same.
+        if !study.is_file() {
+            return Err(bad_input(format!(
+                "--study {}: not a file (give the study file the results in {} came from)",
+                study.display(),
+                dir.display()
+            )));
+        }
         inputs = inputs.file(study, "the study file");
     }
     crate::outputs::check_folder("DIR", dir, &[shipid_report::REPORT_FILE], &inputs)?;

@@ -20,7 +20,9 @@ pub use error::StudyError;
 pub use lock::RunLock;
 pub use record::RunRecord;
 pub use runner::{
-    CaseOutcome, CaseResult, CaseStatus, LARGE_RUN_CASES, LARGE_RUN_REPLICATE_SIMULATIONS,
-    OutcomeCounts, RunPlan, default_out, run_study,
+    CaseOutcome, CaseResult, CaseStatus, OutcomeCounts, RunPlan, default_out, run_study,
 };
-pub use study::{Case, Study, StudySize, load_study, load_study_within};
+pub use study::{
+    Case, LARGE_RUN_CASES, LARGE_RUN_REPLICATE_SIMULATIONS, Study, StudySize, load_study,
+    load_study_within,
+};

@@ -749,17 +749,6 @@ fn remove_temporaries(dir: &Path) {
     }
 }
 
-/// Runs of more cases than this are refused unless the user insists (`shipid run --allow-large`):
-/// at a tenth of a second to a second per case, 5 000 cases already take minutes to hours, and a
-/// grid that large is more often a typo (a value list pasted twice as a range) than a plan.
-pub const LARGE_RUN_CASES: usize = 5_000;
-
-/// Studies with bands whose cases × replicates × tests exceed this are refused likewise: each
-/// replicate is a refit and a re-simulation of every test, and at a few milliseconds each a million
-/// take about as long as the largest grid [`LARGE_RUN_CASES`] lets through (the shipped
-/// `studies/bands.toml` needs about ten thousand).
-pub const LARGE_RUN_REPLICATE_SIMULATIONS: usize = 1_000_000;
-
 /// Where a study's results go by default: `results/<name>/`.
 pub fn default_out(study: &Study) -> PathBuf {
     PathBuf::from("results").join(&study.name)

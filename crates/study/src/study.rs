@@ -217,6 +217,17 @@ pub fn load_study(path: &Path) -> Result<Study, InputError> {
     CheckedStudy::from_raw(path, raw)?.into_study()
 }
 
+/// Runs of more cases than this are refused unless the user insists (`shipid run --allow-large`):
+/// at a tenth of a second to a second per case, 5 000 cases already take minutes to hours, and a
+/// grid that large is more often a typo (a value list pasted twice as a range) than a plan.
+pub const LARGE_RUN_CASES: usize = 5_000;
+
+/// Studies with bands whose cases × replicates × tests exceed this are refused likewise: each
+/// replicate is a refit and a re-simulation of every test, and at a few milliseconds each a million
+/// take about as long as the largest grid [`LARGE_RUN_CASES`] lets through (the shipped
+/// `studies/bands.toml` needs about ten thousand).
+pub const LARGE_RUN_REPLICATE_SIMULATIONS: usize = 1_000_000;
+
 /// What a study costs, counted from the lengths of its axes (before any case is built).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct StudySize {
@@ -228,10 +239,9 @@ pub struct StudySize {
 
 impl StudySize {
     /// Why a run of this size needs the user's consent (`shipid run --allow-large`), naming how
-    /// the grid (`grid`, [`CheckedStudy::grid`]) makes it; `None` within [`crate::LARGE_RUN_CASES`]
-    /// cases and [`crate::runner::LARGE_RUN_REPLICATE_SIMULATIONS`] replicate simulations.
+    /// the grid (`grid`, [`CheckedStudy::grid`]) makes it; `None` within [`LARGE_RUN_CASES`]
+    /// cases and [`LARGE_RUN_REPLICATE_SIMULATIONS`] replicate simulations.
     pub fn too_large(&self, grid: &str) -> Option<String> {
-        use crate::runner::{LARGE_RUN_CASES, LARGE_RUN_REPLICATE_SIMULATIONS};
         if self.cases > LARGE_RUN_CASES {
             Some(format!(
                 "{} cases ({grid}), more than {LARGE_RUN_CASES}",
