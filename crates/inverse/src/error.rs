@@ -14,7 +14,7 @@ pub enum InverseError {
         target: String,
         key: &'static str,
         value: f64,
-        reason: &'static str,
+        reason: String,
     },
     /// A motion index is non-finite or has the wrong sign for its logarithm.
     #[error("motion {motion}: index {key} = {value}: {reason}")]
@@ -30,11 +30,15 @@ pub enum InverseError {
     /// A request that does not fit the modes or the network (wrong number of weights…).
     #[error("invalid request: {0}")]
     Invalid(String),
-    /// Too few simulations gave all indexes to train a network.
-    #[error("only {valid} of {total} simulated samples are usable; at least {needed} are needed")]
+    /// Too few simulations gave all indexes to train a network; `reasons` counts why the others
+    /// were dropped.
+    #[error(
+        "only {valid} of {total} simulated samples are usable; at least {needed} are needed (dropped: {reasons})"
+    )]
     TooFewSamples {
         valid: usize,
         total: usize,
         needed: usize,
+        reasons: String,
     },
 }

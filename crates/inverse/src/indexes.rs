@@ -95,7 +95,8 @@ pub struct MotionTarget {
 
 impl MotionTarget {
     /// The indexes, checked: finite, non-zero (they are log-transformed), of the sign their definition
-    /// gives (all positive but the port turn's tactical diameter), speed ratio in (0, 1].
+    /// gives (all positive but the port turn's tactical diameter), ψ_peak/ψ_check ratios ≥ 1, speed
+    /// ratio in (0, 1].
     pub fn indexes(&self) -> Result<MotionIndexes, InverseError> {
         let q = MotionIndexes([
             self.advance_p35,
@@ -139,6 +140,23 @@ impl MotionTarget {
                     } else {
                         "must be negative (the port turn's tactical diameter is signed, negative to port)"
                     },
+                });
+            }
+        }
+        // ψ_peak is the heading at the first overshoot, past the check heading ψ_check where the
+        // rudder reverses: a zig-zag cannot peak before it reaches its check, so the ratio is ≥ 1
+        // (1: no overshoot).
+        for (key, v) in [
+            ("heading_peak_p20", self.heading_peak_p20),
+            ("heading_peak_m20", self.heading_peak_m20),
+        ] {
+            if v < 1.0 {
+                return Err(InverseError::Index {
+                    motion: self.name.clone(),
+                    key,
+                    value: v,
+                    reason: "must be at least 1: ψ_peak/ψ_check, the first overshoot's heading \
+                             over the check heading, which a zig-zag reaches before it peaks",
                 });
             }
         }

@@ -40,6 +40,40 @@ pub struct SimulationDatabase {
     pub requested: usize,
 }
 
+impl SimulationDatabase {
+    /// Why draws were dropped, counted by kind ("12 × turn +35 diverged; 3 × …"), most frequent
+    /// first; "none" when nothing was.
+    pub fn dropped_summary(&self) -> String {
+        let mut kinds: std::collections::BTreeMap<String, usize> = Default::default();
+        for (_, f) in &self.dropped {
+            *kinds.entry(f.kind()).or_default() += 1;
+        }
+        if kinds.is_empty() {
+            return "none".into();
+        }
+        let mut counted: Vec<(String, usize)> = kinds.into_iter().collect();
+        counted.sort_by(|a, b| b.1.cmp(&a.1).then_with(|| a.0.cmp(&b.0)));
+        counted
+            .iter()
+            .map(|(k, n)| format!("{n} × {k}"))
+            .collect::<Vec<_>>()
+            .join("; ")
+    }
+
+    /// The smallest and largest value of each index over the usable samples: a target index outside
+    /// it is one no simulated ship reached, so the network extrapolates there.
+    pub fn index_range(&self) -> [(f64, f64); N_INDEXES] {
+        std::array::from_fn(|i| {
+            self.samples
+                .iter()
+                .map(|s| s.indexes.0[i])
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                    (lo.min(v), hi.max(v))
+                })
+        })
+    }
+}
+
 /// `n` weight vectors of the first `n_modes` modes, uniform in ±3 σ_i, from `seed`.
 pub fn sample_weights(
     modes: &VariationModes,
@@ -204,6 +238,7 @@ impl InverseModel {
                 valid: n,
                 total: db.requested,
                 needed: MIN_SAMPLES,
+                reasons: db.dropped_summary(),
             });
         }
         let split = Split::new(n, opts.seed);

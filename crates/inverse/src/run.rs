@@ -285,7 +285,7 @@ pub fn run_target(
     };
     if let Some(&bad) = candidates.iter().find(|&&n| n == 0 || n > available) {
         return Err(InverseError::Invalid(format!(
-            "{bad} modes: the database has {available}"
+            "{bad} modes: the database has {available} modes, give 1–{available}"
         )));
     }
     let mut attempts = Vec::new();

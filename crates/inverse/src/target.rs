@@ -21,6 +21,20 @@ pub const RHO_SEA_KG_M3: f64 = 1025.0;
 /// Kinematic viscosity of sea water at 15 °C [m²/s] (ITTC 2011 fresh/sea water tables: 1.1892e-6).
 pub const NU_SEA_M2_S: f64 = 1.1892e-6;
 
+/// Gravity [m/s²] for the Froude number.
+pub const G_M_S2: f64 = 9.81;
+/// Largest approach Froude number U0/√(gL) of a target. The database's ships and the MMG standard
+/// method are displacement ships (KVLCC2 at 0.14, container ships up to about 0.3); above 0.5 a hull
+/// rides its own bow wave or planes, which no hull-force polynomial of the database describes, and a
+/// speed that high is far more often a wrong unit (knots or km/h given as m/s).
+pub const MAX_FROUDE: f64 = 0.5;
+/// A propeller diameter or rudder span at most this multiple of the draft: ships carry them below
+/// the waterline (D_P/T ≈ 0.5 … 0.8, in ballast up to about 1.2); twice the draft is a wrong unit.
+pub const MAX_APPENDAGE_OVER_DRAFT: f64 = 2.0;
+/// A rudder area at most this fraction of L × T: ships have A_R/(L T) ≈ 1/70 … 1/30; a tenth is
+/// three times the largest.
+pub const MAX_RUDDER_AREA_RATIO: f64 = 0.1;
+
 /// Added masses in the MMG primes: m'_x, m'_y ÷ ½ρL²d, J'_z ÷ ½ρL⁴d.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -127,9 +141,12 @@ pub fn resistance_prime(lpp_m: f64, beam_m: f64, draft_m: f64, cb: f64, u0_m_s: 
 }
 
 impl TargetShip {
-    /// Checks the particulars (positive lengths, speeds, 0 < C_B ≤ 1, …).
+    /// Checks the particulars: positive lengths and speeds, 0 < C_B ≤ 1, t_P in [0, 1), each within
+    /// the physical ranges of a data set's `[ship]` ([`shipid_io::dataset::SHIP_RANGES`]), the hull's
+    /// proportions as `shipid_io::dataset::check_ship` checks them, a displacement ship's Froude number
+    /// ([`MAX_FROUDE`]) and a propeller and rudder that fit the hull.
     pub fn validate(&self) -> Result<(), InverseError> {
-        let bad = |key: &'static str, value: f64, reason: &'static str| InverseError::Target {
+        let bad = |key: &'static str, value: f64, reason: String| InverseError::Target {
             target: self.name.clone(),
             key,
             value,
@@ -146,27 +163,132 @@ impl TargetShip {
             ("rudder_rate_deg_s", self.rudder_rate_deg_s),
         ] {
             if !(v.is_finite() && v > 0.0) {
-                return Err(bad(key, v, "must be finite and positive"));
+                return Err(bad(key, v, "must be finite and positive".into()));
             }
         }
         if !(self.cb > 0.0 && self.cb <= 1.0) {
-            return Err(bad("cb", self.cb, "must be in (0, 1]"));
+            return Err(bad("cb", self.cb, "must be in (0, 1]".into()));
+        }
+        // The ranges of a data set's [ship] (one table of them for every command), by the targets
+        // file's keys.
+        for (key, v) in [
+            ("lpp_m", self.lpp_m),
+            ("beam_m", self.beam_m),
+            ("draft_m", self.draft_m),
+            ("u0_m_s", self.u0_m_s),
+            ("rudder_rate_deg_s", self.rudder_rate_deg_s),
+        ] {
+            let ship_key = key.split('_').next().unwrap_or(key);
+            let ship_key = if key == "rudder_rate_deg_s" {
+                "rudder_rate"
+            } else {
+                ship_key
+            };
+            if let Some((_, lo, hi, unit)) = shipid_io::dataset::SHIP_RANGES
+                .iter()
+                .find(|(k, ..)| *k == ship_key)
+                && !(*lo..=*hi).contains(&v)
+            {
+                return Err(bad(
+                    key,
+                    v,
+                    format!(
+                        "outside the physical range {lo} … {hi} {unit} of a ship (a wrong unit?)"
+                    ),
+                ));
+            }
+        }
+        let froude = self.u0_m_s / (G_M_S2 * self.lpp_m).sqrt();
+        if froude > MAX_FROUDE {
+            return Err(bad(
+                "u0_m_s",
+                self.u0_m_s,
+                format!(
+                    "gives a Froude number U0/√(gL) of {froude:.3} for lpp_m = {} m, above {MAX_FROUDE}: \
+                     no displacement ship (the 20 ships of the database and the MMG model's hull \
+                     forces are of displacement ships at Fn ≈ 0.1 … 0.3); a wrong unit (knots, km/h)?",
+                    self.lpp_m
+                ),
+            ));
         }
         if !(self.xg_m.is_finite() && self.xg_m.abs() < 0.5 * self.lpp_m) {
-            return Err(bad("xg_m", self.xg_m, "must be finite and within the ship"));
+            return Err(bad(
+                "xg_m",
+                self.xg_m,
+                "must be finite and within the ship".into(),
+            ));
+        }
+        // The hull's proportions as a data set's [ship] is checked (L/B, B/T, ∇/(LBT), k_zz/L), the
+        // message's key mapped to the targets file's.
+        if let Err(e) = shipid_io::dataset::check_ship(std::path::Path::new(""), &self.ship()) {
+            let (key, value) = match &e.location {
+                shipid_io::error::Location::Key(k) if k == "ship.draft" => {
+                    ("draft_m", self.draft_m)
+                }
+                shipid_io::error::Location::Key(k) if k == "ship.displacement" => ("cb", self.cb),
+                shipid_io::error::Location::Key(k) if k == "ship.xg" => ("xg_m", self.xg_m),
+                shipid_io::error::Location::Key(k) if k == "ship.u0" => ("u0_m_s", self.u0_m_s),
+                shipid_io::error::Location::Key(k) if k == "ship.rudder_rate" => {
+                    ("rudder_rate_deg_s", self.rudder_rate_deg_s)
+                }
+                shipid_io::error::Location::Key(k) if k == "ship.beam" => ("beam_m", self.beam_m),
+                _ => ("lpp_m", self.lpp_m),
+            };
+            return Err(bad(key, value, e.message));
+        }
+        // A propeller or rudder larger than the hull is a wrong unit: the MMG forces scale with
+        // D_P² and A_R, and no ship of the database carries one.
+        for (key, v, limit, what) in [
+            (
+                "propeller_diameter_m",
+                self.propeller_diameter_m,
+                MAX_APPENDAGE_OVER_DRAFT * self.draft_m,
+                "draft_m",
+            ),
+            (
+                "rudder_span_m",
+                self.rudder_span_m,
+                MAX_APPENDAGE_OVER_DRAFT * self.draft_m,
+                "draft_m",
+            ),
+            (
+                "rudder_area_m2",
+                self.rudder_area_m2,
+                MAX_RUDDER_AREA_RATIO * self.lpp_m * self.draft_m,
+                "lpp_m × draft_m",
+            ),
+        ] {
+            if v > limit {
+                return Err(bad(
+                    key,
+                    v,
+                    format!(
+                        "larger than {limit} ({} × {what}): no ship's appendage; a wrong unit?",
+                        if key == "rudder_area_m2" {
+                            MAX_RUDDER_AREA_RATIO
+                        } else {
+                            MAX_APPENDAGE_OVER_DRAFT
+                        }
+                    ),
+                ));
+            }
         }
         if !(self.t_p.is_finite() && (0.0..1.0).contains(&self.t_p)) {
-            return Err(bad("t_p", self.t_p, "must be in [0, 1)"));
+            return Err(bad("t_p", self.t_p, "must be in [0, 1)".into()));
         }
         for (i, v) in self.k_t.iter().enumerate() {
             if !v.is_finite() {
-                return Err(bad(["k_t[0]", "k_t[1]", "k_t[2]"][i], *v, "must be finite"));
+                return Err(bad(
+                    ["k_t[0]", "k_t[1]", "k_t[2]"][i],
+                    *v,
+                    "must be finite".into(),
+                ));
             }
         }
         if let Some(f) = self.f_alpha
             && !(f.is_finite() && f > 0.0)
         {
-            return Err(bad("f_alpha", f, "must be finite and positive"));
+            return Err(bad("f_alpha", f, "must be finite and positive".into()));
         }
         if let Some(a) = self.added_mass {
             for (key, v) in [
@@ -175,7 +297,7 @@ impl TargetShip {
                 ("added_mass.j_z", a.j_z),
             ] {
                 if !(v.is_finite() && v >= 0.0) {
-                    return Err(bad(key, v, "must be finite and non-negative"));
+                    return Err(bad(key, v, "must be finite and non-negative".into()));
                 }
             }
         }

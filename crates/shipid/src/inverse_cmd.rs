@@ -149,18 +149,6 @@ pub fn build(
     Ok((db, secs))
 }
 
-fn dropped_summary(db: &SimulationDatabase) -> String {
-    let mut kinds: std::collections::BTreeMap<String, usize> = Default::default();
-    for (_, f) in &db.dropped {
-        *kinds.entry(f.kind()).or_default() += 1;
-    }
-    kinds
-        .iter()
-        .map(|(k, n)| format!("{n} × {k}"))
-        .collect::<Vec<_>>()
-        .join("; ")
-}
-
 /// Largest `--samples` run without `--allow-large`.
 pub const MAX_SAMPLES: usize = 100_000;
 
@@ -512,7 +500,8 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
         && (n == 0 || n > modes.singular_values.len())
     {
         return Err(bad_input(format!(
-            "--modes {n}: the database has {} modes",
+            "--modes {n}: the database has {} modes; give 1–{}",
+            modes.singular_values.len(),
             modes.singular_values.len()
         )));
     }
@@ -583,7 +572,7 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
             db.requested,
             db.samples.len(),
             db.dropped.len(),
-            dropped_summary(db),
+            db.dropped_summary(),
             run.build_time_s
         );
         let motions = &run.motions;

@@ -318,6 +318,62 @@ fn bad_target_particulars_name_their_key() {
     check_target_error(&base.replacen("t_p = 0.22", "t_p = 1.5", 1), "t_p");
 }
 
+/// An absurd ship is refused by the key that makes it absurd, before any simulation: a speed of
+/// 797 m/s (Froude number 14), a length in km, a beam in mm, a propeller wider than the hull is deep.
+#[test]
+fn absurd_target_particulars_name_their_key() {
+    let base = include_str!("../../../../data/paper003/targets.toml");
+    check_target_error(&base.replacen("u0_m_s = 7.97", "u0_m_s = 797", 1), "u0_m_s");
+    check_target_error(
+        &base.replacen("u0_m_s = 7.97", "u0_m_s = 30.0", 1),
+        "u0_m_s",
+    );
+    check_target_error(&base.replacen("lpp_m = 320.0", "lpp_m = 0.001", 1), "lpp_m");
+    check_target_error(
+        &base.replacen("beam_m = 58.0", "beam_m = 58000.0", 1),
+        "beam_m",
+    );
+    check_target_error(
+        &base.replacen(
+            "propeller_diameter_m = 9.86",
+            "propeller_diameter_m = 98.6",
+            1,
+        ),
+        "propeller_diameter_m",
+    );
+    check_target_error(
+        &base.replacen("rudder_area_m2 = 112.5", "rudder_area_m2 = 11250", 1),
+        "rudder_area_m2",
+    );
+    // The shipped targets stay valid.
+    let t: TargetsFile = toml::from_str(base).expect("parses");
+    for target in &t.target {
+        target.validate().expect("shipped target is valid");
+    }
+}
+
+/// A zig-zag peaks past its check heading: ψ_peak/ψ_check below 1 is no zig-zag's index.
+#[test]
+fn heading_peak_below_the_check_is_refused() {
+    let mut t = kvlcc2();
+    t.motion[0].heading_peak_p20 = 0.5;
+    match t.motion[0].indexes() {
+        Err(e @ InverseError::Index { key, .. }) => {
+            assert_eq!(key, "heading_peak_p20");
+            assert!(e.to_string().contains("at least 1"), "{e}");
+        }
+        other => panic!("unexpected {other:?}"),
+    }
+    t.motion[0].heading_peak_p20 = 1.0;
+    t.motion[0].heading_peak_m20 = 0.99;
+    match t.motion[0].indexes() {
+        Err(InverseError::Index { key, .. }) => assert_eq!(key, "heading_peak_m20"),
+        other => panic!("unexpected {other:?}"),
+    }
+    t.motion[0].heading_peak_m20 = 1.0;
+    t.motion[0].indexes().expect("no overshoot is a ratio of 1");
+}
+
 #[test]
 fn bad_motion_indexes_name_their_key() {
     let mut t = kvlcc2();
@@ -354,6 +410,17 @@ fn too_few_samples_is_an_error() {
         InverseModel::train(&db, &TrainOptions::default()),
         Err(InverseError::TooFewSamples { .. })
     ));
+    // The message says why the draws were dropped.
+    let db = shipid_inverse::pipeline::SimulationDatabase {
+        samples: vec![],
+        dropped: vec![
+            (0, shipid_inverse::indexes::IndexFailure::NoModel),
+            (1, shipid_inverse::indexes::IndexFailure::NoModel),
+        ],
+        requested: 2,
+    };
+    let err = InverseModel::train(&db, &TrainOptions::default()).expect_err("too few");
+    assert!(err.to_string().contains("2 × no MMG model"), "{err}");
     let _ = Coefficients([0.0; 24]);
 }
 
