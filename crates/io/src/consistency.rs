@@ -47,6 +47,8 @@ pub fn check_channels(
     lpp_m: f64,
     u0_m_s: f64,
 ) -> Result<(), InputError> {
+    check_spikes(file, rec)?;
+    check_heading_lag(file, rec)?;
     let windows = windows(rec, WINDOW_L_OVER_U0 * lpp_m / u0_m_s);
     if windows.len() >= 4 {
         check_heading(file, rec, &windows)?;
@@ -429,4 +431,118 @@ fn check_rudder_amplitude(
             number(declared_deg)
         ),
     ))
+}
+
+/// A single sample this many times the channel's whole spread (1st to 99th percentile) away from the
+/// mean of its neighbours is no motion: a missing-value marker (-999) or a corrupt sample.
+const SPIKE_SPREADS: f64 = 5.0;
+
+/// Isolated samples far beyond the channel's spread in the continuous channels (the rudder may step).
+fn check_spikes(file: &Path, rec: &Recording) -> Result<(), InputError> {
+    let n = rec.len();
+    if n < 50 {
+        return Ok(());
+    }
+    let channels: [(&str, &[f64], &str); 6] = [
+        ("x0", &rec.x0, "m"),
+        ("y0", &rec.y0, "m"),
+        ("psi", &rec.psi, "rad"),
+        ("u", &rec.u, "m/s"),
+        ("v", &rec.v, "m/s"),
+        ("r", &rec.r, "rad/s"),
+    ];
+    for (name, x, unit) in channels {
+        let mut sorted = x.to_vec();
+        sorted.sort_by(f64::total_cmp);
+        let spread =
+            sorted[(0.99 * (n - 1) as f64) as usize] - sorted[(0.01 * (n - 1) as f64) as usize];
+        if spread <= 0.0 {
+            continue;
+        }
+        // The largest departure is the spike itself (its neighbours depart by half as much).
+        let (i, off) = (1..n - 1)
+            .map(|i| (i, x[i] - 0.5 * (x[i - 1] + x[i + 1])))
+            .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+            .unwrap_or((0, 0.0));
+        if off.abs() > SPIKE_SPREADS * spread {
+            return Err(InputError::file(
+                file,
+                format!(
+                    "column `{name}`: the sample at t = {} s is {} {unit}, {:.0} times the channel's spread away from its neighbours: a missing-value marker (-999?) or a corrupt sample; fill or cut it",
+                    number(rec.t[i]),
+                    number_short(x[i]),
+                    off.abs() / spread
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A heading that lags the yaw rate by more than this [s] (and two samples) is refused: the turn
+/// would be measured from a heading that arrives late (a 1 s gyro latency moved t_a by 10 %).
+const HEADING_LAG_S: f64 = 0.4;
+
+/// The lag of the heading's rate behind the yaw rate, by the best correlation over shifts of up to
+/// 2 s; refused when the channels clearly agree better shifted.
+fn check_heading_lag(file: &Path, rec: &Recording) -> Result<(), InputError> {
+    let n = rec.len();
+    if n < 100 {
+        return Ok(());
+    }
+    let dt = (rec.t[n - 1] - rec.t[0]) / (n - 1) as f64;
+    let max_shift = ((2.0 / dt).round() as usize).clamp(1, n / 10);
+    // Rates over ±0.5 s: a compass's noise differentiated sample by sample would hide any lag.
+    let h = ((0.5 / dt).round() as usize).clamp(1, n / 20);
+    let rate: Vec<f64> = (h..n - h)
+        .map(|i| (rec.psi[i + h] - rec.psi[i - h]) / (rec.t[i + h] - rec.t[i - h]))
+        .collect();
+    let r: Vec<f64> = (h..n - h)
+        .map(|i| rec.r[i - h..=i + h].iter().sum::<f64>() / (2 * h + 1) as f64)
+        .collect();
+    // Correlation of the heading's rate at i + k with the yaw rate at i (k > 0: the heading lags).
+    let correlation = |k: isize| -> f64 {
+        let m = rate.len() as isize;
+        let range = (0.max(-k))..(m.min(m - k));
+        let (mut ab, mut aa, mut bb) = (0.0, 0.0, 0.0);
+        for i in range {
+            let (a, b) = (rate[(i + k) as usize], r[i as usize]);
+            ab += a * b;
+            aa += a * a;
+            bb += b * b;
+        }
+        if aa > 0.0 && bb > 0.0 {
+            ab / (aa * bb).sqrt()
+        } else {
+            0.0
+        }
+    };
+    let at_zero = correlation(0);
+    let (best_k, best) = (-(max_shift as isize)..=max_shift as isize)
+        .map(|k| (k, correlation(k)))
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap_or((0, at_zero));
+    let lag_s = best_k as f64 * dt;
+    // Smooth manoeuvres correlate highly at any small shift; what tells a lag is the unexplained
+    // share 1 − ρ² falling to a quarter or less when shifted.
+    let unexplained = |rho: f64| 1.0 - rho * rho;
+    if lag_s.abs() >= HEADING_LAG_S
+        && best_k.unsigned_abs() >= 2
+        && best > 0.9
+        && unexplained(best) < 0.25 * unexplained(at_zero)
+    {
+        let (late, early) = if lag_s > 0.0 {
+            ("psi", "r")
+        } else {
+            ("r", "psi")
+        };
+        return Err(InputError::file(
+            file,
+            format!(
+                "column `{late}` lags `{early}` by {:.2} s (the heading's rate matches the yaw rate with correlation {best:.3} shifted, {at_zero:.3} as recorded): a sensor latency; shift one of them so that the channels share one clock",
+                lag_s.abs()
+            ),
+        ));
+    }
+    Ok(())
 }

@@ -194,6 +194,20 @@ pub fn read_mapping(path: &Path) -> Result<Mapping, InputError> {
                 ),
             ));
         }
+        if let Some((j, _)) = m.columns[..i]
+            .iter()
+            .enumerate()
+            .find(|(_, o)| o.index == c.index)
+        {
+            return Err(InputError::key(
+                path,
+                key("index"),
+                format!(
+                    "source column {} is already mapped to {} (column[{j}]): one source column is one quantity",
+                    c.index, m.columns[j].quantity
+                ),
+            ));
+        }
         if let Some(j) = seen.insert(q, i) {
             return Err(InputError::key(
                 path,
@@ -442,6 +456,9 @@ pub fn parse_table(path: &Path, text: &str, m: &Mapping) -> Result<Recording, In
         .map(|s| (s.1, (s.0 + 1, s.3.clone())))
         .collect();
     let mut lines = Vec::new();
+    // Every data line has as many fields as the first: a blank field in a whitespace-separated file
+    // shifts every later field into the wrong quantity (a propeller rate read from the roll column).
+    let mut width: Option<(usize, usize)> = None;
     for (i, line) in text.lines().enumerate().skip(m.format.skip_lines) {
         let line_no = i + 1;
         if line.trim().is_empty() {
@@ -453,6 +470,25 @@ pub fn parse_table(path: &Path, text: &str, m: &Mapping) -> Result<Recording, In
             let d = m.format.delimiter.chars().next().unwrap_or(',');
             line.split(d).map(str::trim).collect()
         };
+        match width {
+            None => width = Some((fields.len(), line_no)),
+            Some((n, first)) if fields.len() != n => {
+                return Err(InputError::line(
+                    path,
+                    line_no,
+                    format!(
+                        "{} fields where line {first} has {n}: a missing value (a blank field{}) would shift the columns after it; fill it or cut the recording",
+                        fields.len(),
+                        if m.format.delimiter == "whitespace" {
+                            ", which whitespace separation cannot see"
+                        } else {
+                            ""
+                        }
+                    ),
+                ));
+            }
+            Some(_) => {}
+        }
         if fields.len() < needed {
             return Err(InputError::line(
                 path,

@@ -65,6 +65,18 @@ impl std::str::FromStr for WindChannels {
     }
 }
 
+/// A number in the shortest form that reads back to the same `f64`.
+fn fmt_exact(x: f64) -> String {
+    if x == 0.0 {
+        return "0".into();
+    }
+    if (1e-4..1e16).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
 /// The CSV text of a recording, with `comments` as `#` lines before the header.
 pub fn recording_csv(rec: &Recording, comments: &[String]) -> String {
     recording_csv_with(rec, comments, WindChannels::True)
@@ -146,7 +158,14 @@ pub fn recording_csv_with(rec: &Recording, comments: &[String], wind: WindChanne
         if let Some(c) = &rec.current {
             row.extend([c.speed_m_s[i], c.from_rad[i]]);
         }
-        let cells: Vec<String> = row.into_iter().map(fmt_sig).collect();
+        // Time and position carry an offset (seconds since a year began, UTM metres) that nine
+        // significant digits would eat: 2.9e7 s + 0.1 s steps were written as repeated times. They
+        // are written in full (the shortest form that reads back exactly); the rest with nine.
+        let cells: Vec<String> = row
+            .into_iter()
+            .enumerate()
+            .map(|(k, x)| if k < 3 { fmt_exact(x) } else { fmt_sig(x) })
+            .collect();
         out.push_str(&cells.join(","));
         out.push('\n');
     }

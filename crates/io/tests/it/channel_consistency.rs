@@ -271,3 +271,27 @@ fn a_rudder_a_little_short_of_the_declared_angle_passes() {
         None,
     );
 }
+
+#[test]
+fn a_missing_value_marker_in_the_yaw_rate_is_named_with_its_time() {
+    check(
+        |r| r.r[840] = -999.0_f64.to_radians(),
+        &ZIGZAG,
+        Some("column `r`: the sample at t = 84 s is -17.436 rad/s"),
+    );
+}
+
+#[test]
+fn a_heading_that_lags_the_yaw_rate_by_a_second_is_named() {
+    check(
+        |r| {
+            let lag = 10; // samples of 0.1 s
+            let late: Vec<f64> = (0..r.psi.len())
+                .map(|i| r.psi[i.saturating_sub(lag)])
+                .collect();
+            r.psi = late;
+        },
+        &ZIGZAG,
+        Some("column `psi` lags `r` by 1.00 s"),
+    );
+}

@@ -653,3 +653,67 @@ fn a_failed_atomic_write_leaves_no_temporary_file() {
         .collect();
     assert_eq!(left, ["model.toml"], "{left:?}");
 }
+
+/// A minimal whitespace mapping of `HEADER`'s columns (plus `extra` column entries) over `raw/a.dat`.
+fn whitespace_mapping(dir: &Path, extra: &str) -> PathBuf {
+    let columns: String = HEADER
+        .split(',')
+        .enumerate()
+        .map(|(i, q)| format!("[[column]]\nindex = {}\nquantity = \"{q}\"\n", i + 1))
+        .collect();
+    let ship = SHIP.replace("name = \"d\"\n[ship]", "[dataset.ship]");
+    let mapping = format!(
+        "source_dir = \"raw\"\n[format]\ndelimiter = \"whitespace\"\nskip_lines = 1\n{columns}{extra}[dataset]\nname = \"i\"\n{ship}[[recording]]\nsource = \"a.dat\"\nfile = \"a.csv\"\nkind = \"free\"\n"
+    );
+    let path = dir.join("mapping.toml");
+    std::fs::write(&path, mapping).unwrap();
+    path
+}
+
+/// Regression: a blank field in a whitespace-separated source shifted every later field into the
+/// wrong quantity (the propeller rate read from the roll column), and one source column could be
+/// mapped to two quantities (the rudder copied into `n`); both imported with exit 0.
+#[test]
+fn an_import_refuses_a_short_row_and_a_column_mapped_twice() {
+    let dir = TempDir::new("import-shift");
+    std::fs::create_dir_all(dir.0.join("raw")).unwrap();
+    let text = recording_text(&format!("{HEADER},roll"), |i, row| {
+        row.push("0.5".into());
+        if i == 7 {
+            row[7] = String::new(); // a blank rudder cell
+        }
+    })
+    .replace(',', " ");
+    std::fs::write(dir.0.join("raw/a.dat"), text).unwrap();
+    let mapping = whitespace_mapping(&dir.0, "");
+    let e = match shipid_io::import::import(&mapping, None) {
+        Ok(_) => panic!("a short row was imported"),
+        Err(e) => e.to_string(),
+    };
+    assert!(
+        e.contains(":9: 8 fields where line 2 has 9: a missing value"),
+        "{e}"
+    );
+    let twice = whitespace_mapping(&dir.0, "[[column]]\nindex = 8\nquantity = \"n\"\n");
+    let e = shipid_io::import::read_mapping(&twice)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("key `column[8].index`: source column 8 is already mapped to delta (column[7])"),
+        "{e}"
+    );
+}
+
+/// Regression: times of 2.9e7 s (seconds since a year began) sampled at 0.1 s were written with nine
+/// significant digits, as repeated times, and the imported data set could not be read back.
+#[test]
+fn large_times_and_positions_are_written_exactly() {
+    let mut rec =
+        parse_recording(Path::new("rec.csv"), &recording_text(HEADER, |_, _| {})).unwrap();
+    rec.t.iter_mut().for_each(|t| *t += 2.9e7 + 0.05);
+    rec.x0.iter_mut().for_each(|x| *x += 5.8e6);
+    let text = shipid_io::write::recording_csv(&rec, &[]);
+    let back = parse_recording(Path::new("rec.csv"), &text).unwrap();
+    assert_eq!(back.t, rec.t);
+    assert_eq!(back.x0, rec.x0);
+}
