@@ -133,6 +133,11 @@ fn load_parts(
         return Ok((Box::new(MmgModel::kvlcc2()), Vec::new()));
     }
     let path = Path::new(spec);
+    if !spec.starts_with("mmg:") && !path.exists() {
+        return Err(bad_input(format!(
+            "model file `{spec}` not found (a model is `mmg:kvlcc2` or a model file written by `shipid fit`)"
+        )));
+    }
     if spec.starts_with("mmg:") || !path.is_file() {
         return Err(bad_input(format!(
             "unknown model `{spec}`: expected `mmg:kvlcc2` or a model file"
