@@ -67,8 +67,9 @@ enum Command {
         /// reduced32, full68, full74 (full68 + port/starboard asymmetry), chen2021, a set file, or mmg
         /// (the MMG model's parameters, docs/mmg.md; --estimator bounded-lsq|ridge, --lambda = the
         /// prior weight or --tune).
-        #[arg(long, default_value = "reduced32")]
-        set: String,
+        /// Default: reduced32 (none for the sparse GP, which has no coefficient set).
+        #[arg(long)]
+        set: Option<String>,
         /// lsq, bounded-lsq, ridge, lasso, svr, or sparse-gp (paper 001; --set does not apply).
         /// Default: lsq, and bounded-lsq for --set mmg.
         #[arg(long)]
@@ -440,6 +441,13 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                 &out,
                 &shipid::outputs::Inputs::new().dataset(&dataset),
             )?;
+            // A set beside the GP would be ignored without a word: it has no coefficients.
+            if let (Some(given), Some(shipid_pipeline::fit::GP)) = (&set, estimator.as_deref()) {
+                return Err(shipid::bad_input(format!(
+                    "--set {given} does not apply to --estimator sparse-gp (a Gaussian process has no coefficient set): drop --set"
+                )));
+            }
+            let set = set.unwrap_or_else(|| "reduced32".to_string());
             if inflow_from_thrust && set != shipid_pipeline::mmg::SET_NAME {
                 return Err(shipid::bad_input(
                     "--inflow-from-thrust applies to --set mmg (the other families have no propeller model)",
