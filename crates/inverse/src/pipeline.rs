@@ -386,6 +386,13 @@ pub fn nearest(db: &SimulationDatabase, model: &InverseModel, q: &MotionIndexes)
         .unwrap_or((0, f64::NAN))
 }
 
+/// Largest number of simulations per start of [`refine`] (`--refine-evals`). The simplex over at
+/// most 20 mode weights stops by itself once its values agree to 1e-6, after a few hundred to a few
+/// thousand simulations; beyond that a cap only adds waiting. And every simulation is four
+/// manoeuvres (about 1 ms of CPU): with the ensemble's hundred-odd starts per motion, 10 000 per
+/// start is already up to half an hour of CPU per motion — 4 000 000 000 would be decades.
+pub const MAX_REFINE_EVALS: usize = 10_000;
+
 /// Weights refined by re-simulation (see [`refine`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Refined {
@@ -436,6 +443,32 @@ pub fn refine(
     checks: &PhysicalChecks,
     max_evals: usize,
 ) -> Option<Refined> {
+    refine_counted(
+        target,
+        modes,
+        model,
+        given,
+        starts,
+        settings,
+        checks,
+        max_evals,
+        &|| {},
+    )
+}
+
+/// [`refine`], calling `on_eval` after each simulation (a progress count).
+#[allow(clippy::too_many_arguments)]
+pub fn refine_counted(
+    target: &TargetShip,
+    modes: &VariationModes,
+    model: &InverseModel,
+    given: &MotionIndexes,
+    starts: &[Vec<f64>],
+    settings: &SimSettings,
+    checks: &PhysicalChecks,
+    max_evals: usize,
+    on_eval: &(dyn Fn() + Sync),
+) -> Option<Refined> {
     let k = starts.first()?.len();
     let sigma = &modes.weight_std[..k];
     let lim = WEIGHT_RANGE_STD;
@@ -449,6 +482,7 @@ pub fn refine(
     let mut best: Option<Refined> = None;
     let mut eval = |z: &[f64], best: &mut Option<Refined>| -> f64 {
         evaluations += 1;
+        on_eval();
         let x = to_x(z);
         match simulate_weights(target, modes, &x, settings, checks) {
             Ok(q) => {

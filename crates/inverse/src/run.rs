@@ -20,13 +20,13 @@ pub use shipid_uncertainty::Spread;
 
 use crate::error::InverseError;
 use crate::indexes::{MotionIndexes, SimSettings};
-use crate::inversion::{MotionInversion, RefineOutcome, invert_motion};
+use crate::inversion::{MotionInversion, RefineOutcome, invert_motion_counted};
 use crate::mlp::TrainOptions;
 use crate::modes::VariationModes;
 use crate::physical::PhysicalChecks;
 use crate::pipeline::{
     HeldOut, InverseModel, Refined, SimulationDatabase, WEIGHT_RANGE_STD, build_database,
-    clip_weights, held_out, mismatch_of_relative_errors, refine, sample_weights,
+    clip_weights, held_out, mismatch_of_relative_errors, refine_counted, sample_weights,
 };
 use crate::target::TargetShip;
 
@@ -143,11 +143,18 @@ fn stage(
     given: &[(String, MotionIndexes)],
     n_modes: usize,
     o: &RunOptions,
-    tick: &(dyn Fn() + Sync),
+    progress: &Progress,
 ) -> Result<Stage, InverseError> {
     let weights = sample_weights(modes, n_modes, o.samples, o.seed);
     let start = std::time::Instant::now();
-    let db = build_database(target, modes, &weights, &o.settings, &o.checks, tick)?;
+    let db = build_database(
+        target,
+        modes,
+        &weights,
+        &o.settings,
+        &o.checks,
+        progress.ship,
+    )?;
     let secs = start.elapsed().as_secs_f64();
     let model = InverseModel::train(
         &db,
@@ -159,7 +166,7 @@ fn stage(
     let motions = given
         .iter()
         .map(|(name, q)| {
-            invert_motion(
+            invert_motion_counted(
                 target,
                 modes,
                 &db,
@@ -169,6 +176,7 @@ fn stage(
                 name,
                 *q,
                 o.refine_evals,
+                progress.refinement,
             )
         })
         .collect();
@@ -270,6 +278,34 @@ pub fn run_target(
     o: &RunOptions,
     tick: &(dyn Fn() + Sync),
 ) -> Result<TargetRun, InverseError> {
+    run_target_with_progress(
+        target,
+        modes,
+        given,
+        o,
+        &Progress {
+            ship: tick,
+            refinement: &|| {},
+        },
+    )
+}
+
+/// What [`run_target_with_progress`] reports as it goes.
+pub struct Progress<'a> {
+    /// Called per simulated database ship.
+    pub ship: &'a (dyn Fn() + Sync),
+    /// Called per simulation of a refinement (the first network's and the ensemble's).
+    pub refinement: &'a (dyn Fn() + Sync),
+}
+
+/// [`run_target`] with a count of the refinement's simulations too.
+pub fn run_target_with_progress(
+    target: &TargetShip,
+    modes: &VariationModes,
+    given: &[(String, MotionIndexes)],
+    o: &RunOptions,
+    progress: &Progress,
+) -> Result<TargetRun, InverseError> {
     let available = modes.singular_values.len();
     let candidates: Vec<usize> = match o.fixed_modes {
         Some(n) => vec![n],
@@ -292,7 +328,7 @@ pub fn run_target(
     let mut chosen: Option<(usize, Stage)> = None;
     let mut short: Option<String> = None;
     for &n in &candidates {
-        let st = match stage(target, modes, given, n, o, tick) {
+        let st = match stage(target, modes, given, n, o, progress) {
             Ok(st) => st,
             // More modes draw more unphysical ships: when too few remain to train on, the search
             // keeps the last count that could be trained and says why it stopped.
@@ -372,7 +408,7 @@ pub fn run_target(
     let ensembles = if o.refine_evals == 0 {
         Vec::new()
     } else {
-        ensembles(target, modes, given, &st, &held, o)?
+        ensembles(target, modes, given, &st, &held, o, progress.refinement)?
     };
     Ok(TargetRun {
         choice: ModeChoice {
@@ -400,6 +436,13 @@ pub const RESTARTS_PER_NETWORK: usize = 6;
 /// with fewer kept members after a round of restarts gets another round, up to
 /// [`MAX_RESTART_ROUNDS`].
 pub const BAND_MEMBERS: usize = 20;
+/// Refinement starts of one motion at most: the first network's two (its answer and the nearest
+/// database ship) per number of modes tried, and [`MAX_RESTART_ROUNDS`] rounds of the ensemble's.
+pub fn max_refinement_starts(networks: usize, mode_attempts: usize) -> usize {
+    2 * mode_attempts
+        + MAX_RESTART_ROUNDS * (networks.max(1) * RESTARTS_PER_NETWORK + BEST_RESTARTS_PER_ROUND)
+}
+
 /// Rounds of restarts at most (each [`RESTARTS_PER_NETWORK`] − 1 jittered starts per network).
 pub const MAX_RESTART_ROUNDS: usize = 3;
 /// Half-width of the uniform jitter of a restart's start, per mode [σ_i].
@@ -420,6 +463,7 @@ fn ensembles(
     st: &Stage,
     held: &HeldOut,
     o: &RunOptions,
+    on_eval: &(dyn Fn() + Sync),
 ) -> Result<Vec<Ensemble>, InverseError> {
     let others: Vec<InverseModel> = (1..o.networks.max(1) as u64)
         .into_par_iter()
@@ -491,7 +535,7 @@ fn ensembles(
                 }
                 tried += starts.len();
                 candidates.par_extend(starts.par_iter().filter_map(|start| {
-                    refine(
+                    refine_counted(
                         target,
                         modes,
                         &st.model,
@@ -500,6 +544,7 @@ fn ensembles(
                         &o.settings,
                         &o.checks,
                         o.refine_evals,
+                        on_eval,
                     )
                 }));
                 candidates.sort_by(|a, b| a.objective.total_cmp(&b.objective));

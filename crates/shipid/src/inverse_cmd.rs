@@ -14,25 +14,31 @@
 //! `[bootstrap]` replicates for `--bands`.
 
 use std::fmt::Write as _;
+use std::io::IsTerminal as _;
 use std::path::Path;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use shipid_figures::inverse::{MotionFigure, motions_figure, write_modes};
 use shipid_inverse::database::{PAPER003_SHIPS_TOML, ShipsFile};
 use shipid_inverse::indexes::{INDEX_KEYS, MotionIndexes, SimSettings};
 use shipid_inverse::inversion::{
-    InputFault, MotionInversion, RefineOutcome, check_inputs, header_markdown, indexes_csv,
-    motions_markdown,
+    DeliveredFit, FIT_WARN_MEAN_RELATIVE_ERROR, InputFault, MotionInversion, RefineOutcome,
+    check_inputs, delivered_markdown, fit_toml_comment, header_markdown, indexes_csv,
+    motions_markdown, outside_flags, outside_range,
 };
 use shipid_inverse::modes::VariationModes;
 use shipid_inverse::physical::{Bound, MODEL_FILE_NAMES, PhysicalChecks, model_file_values};
 use shipid_inverse::pipeline::{
-    MIN_SAMPLES, SimulationDatabase, WEIGHT_RANGE_STD, build_database, sample_weights,
+    MAX_REFINE_EVALS, MIN_SAMPLES, SimulationDatabase, WEIGHT_RANGE_STD, build_database,
+    sample_weights,
 };
 use shipid_inverse::run::{
-    Ensemble, INTERIOR_MARGIN_SIGMA, MEMBER_MISMATCH_FACTOR, RESTART_JITTER_SIGMA,
-    RESTARTS_PER_NETWORK, RunOptions, Spread, TargetRun, inside_box, member_parameters, run_target,
+    Ensemble, INTERIOR_MARGIN_SIGMA, MEMBER_MISMATCH_FACTOR, Progress, RESTART_JITTER_SIGMA,
+    RESTARTS_PER_NETWORK, RunOptions, Spread, TargetRun, inside_box, max_refinement_starts,
+    member_parameters, run_target_with_progress,
 };
 use shipid_inverse::target::{TargetShip, TargetsFile};
 use shipid_io::write::write_atomic;
@@ -128,6 +134,62 @@ pub fn progress(n: usize, what: &str) -> ProgressBar {
         .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     bar
+}
+
+/// Seconds between the refinement's progress lines when stderr is no terminal (a log file), where
+/// the bar is not drawn.
+const PROGRESS_LINE_S: f64 = 30.0;
+
+/// The refinement's progress: a bar of its simulations on a terminal, a line every
+/// [`PROGRESS_LINE_S`] elsewhere.
+struct RefinementProgress {
+    bar: ProgressBar,
+    name: String,
+    most: usize,
+    done: AtomicUsize,
+    start: Instant,
+    last_line: Mutex<f64>,
+    terminal: bool,
+}
+
+impl RefinementProgress {
+    fn new(name: &str, most: usize) -> RefinementProgress {
+        let bar = ProgressBar::new(most as u64);
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{spinner} {pos} refinement simulations (at most {len})  elapsed {elapsed}",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+        );
+        RefinementProgress {
+            bar,
+            name: name.to_string(),
+            most,
+            done: AtomicUsize::new(0),
+            start: Instant::now(),
+            last_line: Mutex::new(0.0),
+            terminal: std::io::stderr().is_terminal(),
+        }
+    }
+
+    fn tick(&self) {
+        self.bar.inc(1);
+        let done = self.done.fetch_add(1, Ordering::Relaxed) + 1;
+        if self.terminal {
+            return;
+        }
+        let t = self.start.elapsed().as_secs_f64();
+        let Ok(mut last) = self.last_line.lock() else {
+            return;
+        };
+        if t - *last >= PROGRESS_LINE_S {
+            *last = t;
+            eprintln!(
+                "{}: {done} refinement simulations of at most {} in {t:.0} s",
+                self.name, self.most
+            );
+        }
+    }
 }
 
 pub fn build(
@@ -264,6 +326,8 @@ struct Delivered {
     /// (the best one when none is), else the network's refined or clipped answer.
     weights: Vec<f64>,
     refined: bool,
+    /// Which answer it is, in words ("ensemble member 3 of 24 (…)").
+    source: String,
     model: Option<MmgModel>,
     members: Option<(Vec<Vec<f64>>, Spread)>,
     dropped: usize,
@@ -279,16 +343,42 @@ fn deliver(
     // Every kept member matches the indexes about as well as the best (within
     // MEMBER_MISMATCH_FACTOR); among them a ship inside the sampled box is one the database's
     // variation describes, so it is delivered before a better-matching one on the box's edge.
-    let best = e.and_then(|e| {
-        e.members
-            .iter()
-            .find(|r| inside_box(modes, &r.weights).iter().all(|inside| *inside))
-            .or(e.members.first())
-    });
-    let (weights, refined) = match (best, &m.refined) {
-        (Some(best), _) => (best.weights.clone(), true),
-        (None, RefineOutcome::Done { refined, .. }) => (refined.weights.clone(), true),
-        _ => (m.weights.clone(), false),
+    let members = e.map_or(&[][..], |e| &e.members[..]);
+    let inside = members
+        .iter()
+        .position(|r| inside_box(modes, &r.weights).iter().all(|inside| *inside));
+    let best = inside.or((!members.is_empty()).then_some(0));
+    let (weights, refined, source) = match (best, &m.refined) {
+        (Some(k), _) => (
+            members[k].weights.clone(),
+            true,
+            match (inside, k) {
+                (Some(_), 0) => format!(
+                    "ensemble member 1 of {} (the best-matching, inside the trained box)",
+                    members.len()
+                ),
+                (Some(_), k) => format!(
+                    "ensemble member {} of {} (the best-matching inside the trained box; members \
+                     1–{k} match better but sit on its edge)",
+                    k + 1,
+                    members.len()
+                ),
+                (None, _) => format!(
+                    "ensemble member 1 of {} (the best-matching; none lies inside the trained box)",
+                    members.len()
+                ),
+            },
+        ),
+        (None, RefineOutcome::Done { refined, .. }) => (
+            refined.weights.clone(),
+            true,
+            "the first network's refined answer".to_string(),
+        ),
+        _ => (
+            m.weights.clone(),
+            false,
+            "the first network's answer, clipped to the trained box (no refinement)".to_string(),
+        ),
     };
     let model = modes
         .generate(&weights)
@@ -299,12 +389,14 @@ fn deliver(
     Delivered {
         weights,
         refined,
+        source,
         model,
         members: e.and_then(|e| member_parameters(target, modes, e)),
         dropped: e.map_or(0, |e| e.dropped),
     }
 }
 
+#[allow(clippy::too_many_arguments)]
 fn model_file(
     target: &TargetShip,
     modes: &VariationModes,
@@ -313,6 +405,7 @@ fn model_file(
     d: &Delivered,
     model: &MmgModel,
     seed: u64,
+    fit: Option<&DeliveredFit>,
 ) -> MmgModelFile {
     let (ship, added, geometry) = target_geometry(target);
     let n_modes = run.choice.modes;
@@ -400,7 +493,7 @@ fn model_file(
                 "paper 003 inverse identification of target `{}`, motion `{}` from its nine motion \
                  indexes: SVD variation modes of the 20-ship database, mode weights by an MLP trained \
                  on {} simulated ships{}; modes: {}. No equation error: residual_rms is not defined \
-                 (nan). Parameters without `inverse network` in their source are fixed.",
+                 (nan). Parameters without `inverse network` in their source are fixed. Delivered: {}; {}",
                 target.name,
                 motion.name,
                 run.db.samples.len(),
@@ -409,7 +502,9 @@ fn model_file(
                 } else {
                     ""
                 },
-                run.choice.reason
+                run.choice.reason,
+                d.source,
+                fit_sentence(fit),
             ),
             prior_weight: 0.0,
             tuned: false,
@@ -427,6 +522,35 @@ fn model_file(
         calibration: None,
         valley: None,
     }
+}
+
+/// The fit of the delivered model in one sentence, for the model file's `method`.
+fn fit_sentence(fit: Option<&DeliveredFit>) -> String {
+    let Some(fit) = fit else {
+        return "its re-simulation of the nine indexes failed.".into();
+    };
+    let mut s = format!(
+        "its own re-simulated indexes miss the targets by a mean |relative error| of {:.1} % ({}).",
+        100.0 * fit.mean_abs,
+        fit.errors_text()
+    );
+    if fit.misses() {
+        let _ = write!(
+            s,
+            " MORE THAN {:.0} %: the targets may lie outside what the database's ships can reach; \
+             this model is not the target's ship.",
+            100.0 * FIT_WARN_MEAN_RELATIVE_ERROR
+        );
+    }
+    let outside = fit.outside_text();
+    if !outside.is_empty() {
+        let _ = write!(
+            s,
+            " Targets outside the simulated database's range: {}.",
+            outside.join("; ")
+        );
+    }
+    s
 }
 
 /// The 10/10 zig-zag and the 20° turning circle of a model, as `shipid simulate` runs them.
@@ -494,6 +618,17 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
             a.samples
         )));
     }
+    if a.refine_evals > MAX_REFINE_EVALS {
+        let starts = max_refinement_starts(NETWORKS, (MAX_MODES - 1).div_ceil(MODE_STEP) + 1);
+        return Err(bad_input(format!(
+            "--refine-evals {}: more than {MAX_REFINE_EVALS} simulations per refinement start. The \
+             simplex stops by itself after a few hundred to a few thousand; each motion refines from \
+             up to {starts} starts of 4 simulated manoeuvres each (about 1 ms of CPU), so this would \
+             run up to {:.0} CPU hours per motion. Give 0–{MAX_REFINE_EVALS} (default 150).",
+            a.refine_evals,
+            starts as f64 * a.refine_evals as f64 * 1e-3 / 3600.0
+        )));
+    }
     let (modes, targets) = load(a.ships, a.targets)?;
     let n95 = modes.modes_for(0.95);
     if let Some(n) = a.modes
@@ -556,13 +691,32 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
         } else {
             (max_modes - n95).div_ceil(MODE_STEP) + 1
         };
-        let bar = progress(
+        let bars = MultiProgress::new();
+        let bar = bars.add(progress(
             a.samples * attempts_max,
             "ships simulated (4 manoeuvres each)",
-        );
-        let run = run_target(target, &modes, &given, &opts, &|| bar.inc(1))
-            .map_err(|e| failed(anyhow::anyhow!(e)))?;
+        ));
+        let most = max_refinement_starts(NETWORKS, attempts_max) * given.len() * a.refine_evals;
+        let refinement = RefinementProgress::new(&target.name, most);
+        // No refinement (--refine-evals 0): no bar for it.
+        let rbar = if most > 0 {
+            bars.add(refinement.bar.clone())
+        } else {
+            ProgressBar::hidden()
+        };
+        let run = run_target_with_progress(
+            target,
+            &modes,
+            &given,
+            &opts,
+            &Progress {
+                ship: &|| bar.inc(1),
+                refinement: &|| refinement.tick(),
+            },
+        )
+        .map_err(|e| failed(anyhow::anyhow!(e)))?;
         bar.finish_and_clear();
+        rbar.finish_and_clear();
         let db = &run.db;
         let n_modes = run.choice.modes;
         println!(
@@ -588,6 +742,7 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
             String::from("motion,weights,mode,weight,sigma,weight_over_sigma,inside_box\n");
         let mut motion_json = Vec::new();
         let mut model_lines = String::new();
+        let mut fit_tables = String::new();
         for (i, m) in motions.iter().enumerate() {
             let e = run.ensembles.get(i);
             let d = deliver(target, &modes, m, e, &opts.checks);
@@ -640,15 +795,24 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
                 "ensemble_mismatch": e.map_or(Vec::new(), |e| e.members.iter().map(|r| r.objective).collect()),
                 "ensemble_dropped": d.dropped,
             });
+            mj["delivered"] = json!(d.source);
+            let range = db.index_range();
+            let outside = outside_range(&m.given, &range);
+            mj["target_outside_database"] = json!(outside_flags(&m.given, &range));
+            mj["database_index_min"] = json!(range.map(|r| r.0));
+            mj["database_index_max"] = json!(range.map(|r| r.1));
+            if !outside.is_empty() {
+                eprintln!(
+                    "warning: {} / {}: target indexes outside the range of the {} simulated ships \
+                     (the network extrapolates there): {}",
+                    target.name,
+                    m.name,
+                    db.samples.len(),
+                    outside.join("; ")
+                );
+            }
             match &d.model {
                 Some(model) => {
-                    let file = model_file(target, &modes, &run, m, &d, model, a.seed);
-                    let text = inverse_header(
-                        &write_mmg_model_file(&file).map_err(|e| failed(anyhow::anyhow!(e)))?,
-                    );
-                    let path = dir.join(&file_name);
-                    write_atomic(&path, text.as_bytes())
-                        .map_err(|e| crate::write_failed(&path, e))?;
                     let resim = shipid_inverse::inversion::resimulate(
                         target,
                         &modes,
@@ -656,8 +820,74 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
                         &opts.checks,
                         &d.weights,
                     );
+                    let fit = resim
+                        .as_ref()
+                        .ok()
+                        .map(|r| DeliveredFit::new(&m.given, &r.indexes, db));
+                    let file = model_file(target, &modes, &run, m, &d, model, a.seed, fit.as_ref());
+                    let mut text = inverse_header(
+                        &write_mmg_model_file(&file).map_err(|e| failed(anyhow::anyhow!(e)))?,
+                    );
+                    if let Some(fit) = &fit {
+                        text.push_str(&fit_toml_comment(&d.source, fit));
+                    }
+                    let path = dir.join(&file_name);
+                    write_atomic(&path, text.as_bytes())
+                        .map_err(|e| crate::write_failed(&path, e))?;
                     mj["model_file"] = json!(file_name);
                     mj["model_indexes"] = resim.map_or(Value::Null, |r| json!(r.indexes.0));
+                    mj["model_fit"] = fit.as_ref().map_or(Value::Null, |f| {
+                        json!({
+                            "given": f.given.0,
+                            "obtained": f.obtained.0,
+                            "relative_error": f.relative,
+                            "mean_abs_relative_error": f.mean_abs,
+                            "warn_above_mean_abs_relative_error": FIT_WARN_MEAN_RELATIVE_ERROR,
+                            "misses_targets": f.misses(),
+                        })
+                    });
+                    match &fit {
+                        Some(f) => {
+                            let _ = writeln!(
+                                model_lines,
+                                "model of {} delivered: {}; its own re-simulated indexes miss the \
+                                 targets by a mean |relative error| of {:.1} % ({})",
+                                m.name,
+                                d.source,
+                                100.0 * f.mean_abs,
+                                f.errors_text()
+                            );
+                            fit_tables
+                                .push_str(&delivered_markdown(&m.name, &file_name, &d.source, f));
+                            if f.misses() {
+                                eprintln!(
+                                    "WARNING: {} / {}: the delivered model ({}, {}) misses its \
+                                     targets by {:.1} % on average, more than {:.0} %: {}. The \
+                                     targets may lie outside what the database's ships can reach{}; \
+                                     this model is not the target's ship.",
+                                    target.name,
+                                    m.name,
+                                    path.display(),
+                                    d.source,
+                                    100.0 * f.mean_abs,
+                                    100.0 * FIT_WARN_MEAN_RELATIVE_ERROR,
+                                    f.errors_text(),
+                                    if outside.is_empty() {
+                                        String::new()
+                                    } else {
+                                        format!(" (outside its range: {})", outside.join("; "))
+                                    }
+                                );
+                            }
+                        }
+                        None => {
+                            let _ = writeln!(
+                                model_lines,
+                                "model of {} delivered: {}; its re-simulation failed",
+                                m.name, d.source
+                            );
+                        }
+                    }
                     mj["model_metrics"] = standard_metrics(model);
                     let _ = writeln!(
                         model_lines,
@@ -697,7 +927,8 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
             + &format!("Modes: {}.\n\n", run.choice.reason)
             + &motions_markdown(motions, &modes, db)
             + "\n"
-            + &model_lines;
+            + &model_lines
+            + &fit_tables;
         let csv = indexes_csv(motions);
         let figures: Vec<MotionFigure> = motions
             .iter()
