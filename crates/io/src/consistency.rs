@@ -131,6 +131,12 @@ fn worst_window(
     )
 }
 
+/// The factor of a [`factor`] fit when it explains the increments clearly and is not about 1: a unit
+/// or sign between two channels.
+fn clear_wrong_factor((k, residual): (Option<f64>, f64)) -> Option<f64> {
+    k.filter(|k| residual < CLEAR_FIT && !(FACTOR_BAND.0..=FACTOR_BAND.1).contains(k))
+}
+
 fn rms(x: &[f64]) -> f64 {
     (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
 }
@@ -200,11 +206,7 @@ fn check_heading(
             ),
         ));
     }
-    let (k, residual) = factor(&dpsi, &int_r);
-    if let Some(k) = k
-        && residual < CLEAR_FIT
-        && !(FACTOR_BAND.0..=FACTOR_BAND.1).contains(&k)
-    {
+    if let Some(k) = clear_wrong_factor(factor(&dpsi, &int_r)) {
         return Err(InputError::file(
             file,
             format!(
@@ -369,11 +371,7 @@ fn check_accelerations(
                 ),
             ));
         }
-        let (k, residual) = factor(&change, &int);
-        if let Some(k) = k
-            && residual < CLEAR_FIT
-            && !(FACTOR_BAND.0..=FACTOR_BAND.1).contains(&k)
-        {
+        if let Some(k) = clear_wrong_factor(factor(&change, &int)) {
             return Err(InputError::file(
                 file,
                 format!(
