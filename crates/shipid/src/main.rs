@@ -331,7 +331,8 @@ enum Command {
         /// Held-out test samples to re-simulate with their predicted weights.
         #[arg(long, default_value_t = 200, allow_negative_numbers = true)]
         resimulate: usize,
-        /// Simulations per start of the Nelder–Mead refinement of the network's answer (0: off).
+        /// Simulations per start of the Nelder–Mead refinement of the network's answer (0: off; at
+        /// most 10000).
         #[arg(long, default_value_t = 150, allow_negative_numbers = true)]
         refine_evals: usize,
         #[arg(long, default_value = "results/paper003")]
