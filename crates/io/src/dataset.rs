@@ -546,13 +546,20 @@ pub fn check_added_mass(path: &Path, a: &AddedMass, s: &Ship) -> Result<(), Inpu
     Ok(())
 }
 
-/// A hash of every sample of the channels that define a motion: equal for a copy of a file.
+/// A hash of every sample of the channels that define a motion: equal for a copy of a file, also
+/// when the copy's clock or track starts elsewhere (time and positions are taken from their first
+/// sample, to a micro-unit, so the subtraction's rounding does not tell copies apart).
 fn samples_fingerprint(rec: &Recording) -> u64 {
     use std::hash::{Hash, Hasher};
     let mut h = std::collections::hash_map::DefaultHasher::new();
-    for channel in [
-        &rec.t, &rec.x0, &rec.y0, &rec.psi, &rec.u, &rec.v, &rec.r, &rec.delta,
-    ] {
+    for channel in [&rec.t, &rec.x0, &rec.y0] {
+        let first = channel.first().copied().unwrap_or(0.0);
+        channel.len().hash(&mut h);
+        channel
+            .iter()
+            .for_each(|x| (((x - first) * 1e6).round() as i64).hash(&mut h));
+    }
+    for channel in [&rec.psi, &rec.u, &rec.v, &rec.r, &rec.delta] {
         channel.len().hash(&mut h);
         channel.iter().for_each(|x| x.to_bits().hash(&mut h));
     }

@@ -305,7 +305,8 @@ fn impossible_ship_proportions_are_refused_naming_the_key() {
 }
 
 /// Regression: a hard link and a byte-for-byte copy of one recording under two names were both
-/// read, the run counted twice (9602 samples with no note, the uncertainty understated).
+/// read, the run counted twice (9602 samples with no note, the uncertainty understated); so was a
+/// copy with its clock shifted.
 #[test]
 fn a_hard_link_or_a_copy_of_a_recording_is_refused() {
     let dir = TempDir::new("twice");
@@ -313,6 +314,11 @@ fn a_hard_link_or_a_copy_of_a_recording_is_refused() {
     std::fs::write(dir.0.join("a.csv"), &text).unwrap();
     std::fs::hard_link(dir.0.join("a.csv"), dir.0.join("b.csv")).unwrap();
     std::fs::write(dir.0.join("c.csv"), &text).unwrap();
+    // The same samples with the clock 1000 s later.
+    let shifted = recording_text(HEADER, |i, row| {
+        row[0] = format!("{:.1}", 1000.0 + i as f64 * 0.1)
+    });
+    std::fs::write(dir.0.join("d.csv"), shifted).unwrap();
     let entry = |f: &str| format!("[[recording]]\nfile = \"{f}\"\nkind = \"free\"\n");
     for (second, words) in [
         (
@@ -322,6 +328,10 @@ fn a_hard_link_or_a_copy_of_a_recording_is_refused() {
         (
             "c.csv",
             "`c.csv` holds the same samples as recording[0].file `a.csv` (a copy)",
+        ),
+        (
+            "d.csv",
+            "`d.csv` holds the same samples as recording[0].file `a.csv` (a copy)",
         ),
     ] {
         let ds = dir.0.join(format!("ds-{second}.toml"));
@@ -475,7 +485,7 @@ fn a_write_failing_half_way_leaves_no_dataset_toml() {
     let (file, rec) = one_recording_dataset(&["a.csv", "sub/b.csv"]);
     // Two runs, not one copied: the loader refuses a copy counted twice.
     let mut other = rec.clone();
-    other.x0.iter_mut().for_each(|x| *x += 1.0);
+    other.delta.iter_mut().for_each(|d| *d += 0.01);
     write_dataset(&out, &file, &[&rec, &other], &[]).unwrap();
     assert!(Dataset::load(&out.join("dataset.toml")).is_ok());
     // Rewrite with the second recording's folder replaced by a file: the old dataset.toml must not
