@@ -13,7 +13,7 @@ use crate::indexes::{
 use crate::modes::VariationModes;
 use crate::physical::PhysicalChecks;
 use crate::pipeline::{
-    HeldOut, InverseModel, Refined, SimulationDatabase, clip_weights, nearest, refine_counted,
+    HeldOut, InverseModel, Refined, SimulationDatabase, clip_weights, nearest, refine,
 };
 use crate::target::{TargetShip, TargetsFile};
 
@@ -133,35 +133,9 @@ pub fn resimulate(
 /// Inverts one motion: network, clipping, re-simulation, nearest database ship, and (with
 /// `refine_evals` > 0 simulations per start) the refinement from the network's and the nearest
 /// ship's weights.
+/// `on_eval` is called after each simulation of the refinement (a progress count).
 #[allow(clippy::too_many_arguments)]
 pub fn invert_motion(
-    target: &TargetShip,
-    modes: &VariationModes,
-    db: &SimulationDatabase,
-    model: &InverseModel,
-    settings: &SimSettings,
-    checks: &PhysicalChecks,
-    name: &str,
-    given: MotionIndexes,
-    refine_evals: usize,
-) -> MotionInversion {
-    invert_motion_counted(
-        target,
-        modes,
-        db,
-        model,
-        settings,
-        checks,
-        name,
-        given,
-        refine_evals,
-        &|| {},
-    )
-}
-
-/// [`invert_motion`], calling `on_eval` after each simulation of the refinement.
-#[allow(clippy::too_many_arguments)]
-pub fn invert_motion_counted(
     target: &TargetShip,
     modes: &VariationModes,
     db: &SimulationDatabase,
@@ -181,7 +155,7 @@ pub fn invert_motion_counted(
         RefineOutcome::NotAsked
     } else {
         let starts = [weights.clone(), db.samples[near].weights.clone()];
-        refine_counted(
+        refine(
             target,
             modes,
             model,

@@ -431,34 +431,10 @@ pub fn mismatch(model: &InverseModel, q: &MotionIndexes, given: &MotionIndexes) 
 /// minimises [`mismatch`] of re-simulated indexes, started from each of `starts` in turn (e.g. the
 /// network's clipped prediction and the nearest database ship) with `max_evals` simulations each. It
 /// turns the network's answer into one that is consistent with the simulator; the best result over the
-/// starts is returned, `None` when no start simulates.
+/// starts is returned, `None` when no start simulates. `on_eval` is called after each simulation (a
+/// progress count).
 #[allow(clippy::too_many_arguments)]
 pub fn refine(
-    target: &TargetShip,
-    modes: &VariationModes,
-    model: &InverseModel,
-    given: &MotionIndexes,
-    starts: &[Vec<f64>],
-    settings: &SimSettings,
-    checks: &PhysicalChecks,
-    max_evals: usize,
-) -> Option<Refined> {
-    refine_counted(
-        target,
-        modes,
-        model,
-        given,
-        starts,
-        settings,
-        checks,
-        max_evals,
-        &|| {},
-    )
-}
-
-/// [`refine`], calling `on_eval` after each simulation (a progress count).
-#[allow(clippy::too_many_arguments)]
-pub fn refine_counted(
     target: &TargetShip,
     modes: &VariationModes,
     model: &InverseModel,

@@ -20,13 +20,13 @@ pub use shipid_uncertainty::Spread;
 
 use crate::error::InverseError;
 use crate::indexes::{MotionIndexes, SimSettings};
-use crate::inversion::{MotionInversion, RefineOutcome, invert_motion_counted};
+use crate::inversion::{MotionInversion, RefineOutcome, invert_motion};
 use crate::mlp::TrainOptions;
 use crate::modes::VariationModes;
 use crate::physical::PhysicalChecks;
 use crate::pipeline::{
     HeldOut, InverseModel, Refined, SimulationDatabase, WEIGHT_RANGE_STD, build_database,
-    clip_weights, held_out, mismatch_of_relative_errors, refine_counted, sample_weights,
+    clip_weights, held_out, mismatch_of_relative_errors, refine, sample_weights,
 };
 use crate::target::TargetShip;
 
@@ -166,7 +166,7 @@ fn stage(
     let motions = given
         .iter()
         .map(|(name, q)| {
-            invert_motion_counted(
+            invert_motion(
                 target,
                 modes,
                 &db,
@@ -267,30 +267,7 @@ fn describe(a: &Attempt) -> String {
     parts.join("; ")
 }
 
-/// Inverts every motion of `target`: modes chosen (grown from `start_modes` by `mode_step` up to
-/// `max_modes` until every network answer and refined weight is interior, or `fixed_modes`), then the
-/// ensemble. `tick`
-/// is called per simulated database ship.
-pub fn run_target(
-    target: &TargetShip,
-    modes: &VariationModes,
-    given: &[(String, MotionIndexes)],
-    o: &RunOptions,
-    tick: &(dyn Fn() + Sync),
-) -> Result<TargetRun, InverseError> {
-    run_target_with_progress(
-        target,
-        modes,
-        given,
-        o,
-        &Progress {
-            ship: tick,
-            refinement: &|| {},
-        },
-    )
-}
-
-/// What [`run_target_with_progress`] reports as it goes.
+/// What [`run_target`] reports as it goes.
 pub struct Progress<'a> {
     /// Called per simulated database ship.
     pub ship: &'a (dyn Fn() + Sync),
@@ -298,8 +275,10 @@ pub struct Progress<'a> {
     pub refinement: &'a (dyn Fn() + Sync),
 }
 
-/// [`run_target`] with a count of the refinement's simulations too.
-pub fn run_target_with_progress(
+/// Inverts every motion of `target`: modes chosen (grown from `start_modes` by `mode_step` up to
+/// `max_modes` until every network answer and refined weight is interior, or `fixed_modes`), then the
+/// ensemble. `progress` says how it goes.
+pub fn run_target(
     target: &TargetShip,
     modes: &VariationModes,
     given: &[(String, MotionIndexes)],
@@ -535,7 +514,7 @@ fn ensembles(
                 }
                 tried += starts.len();
                 candidates.par_extend(starts.par_iter().filter_map(|start| {
-                    refine_counted(
+                    refine(
                         target,
                         modes,
                         &st.model,

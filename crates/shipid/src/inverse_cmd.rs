@@ -38,7 +38,7 @@ use shipid_inverse::pipeline::{
 use shipid_inverse::run::{
     Ensemble, INTERIOR_MARGIN_SIGMA, MEMBER_MISMATCH_FACTOR, Progress, RESTART_JITTER_SIGMA,
     RESTARTS_PER_NETWORK, RunOptions, Spread, TargetRun, inside_box, max_refinement_starts,
-    member_parameters, run_target_with_progress,
+    member_parameters, run_target,
 };
 use shipid_inverse::target::{TargetShip, TargetsFile};
 use shipid_io::write::write_atomic;
@@ -704,7 +704,7 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
         } else {
             ProgressBar::hidden()
         };
-        let run = run_target_with_progress(
+        let run = run_target(
             target,
             &modes,
             &given,
