@@ -186,25 +186,27 @@ fn check_heading(
     }
     let deg = 180.0 / std::f64::consts::PI;
     // One channel flat while the other turns the ship: a channel the logger did not fill.
-    if moves_r < 1e-2 * moves_psi && moves_psi > 5.0 * HEADING_SIGNIFICANT_RAD {
-        return Err(InputError::file(
-            file,
-            format!(
-                "column `r` does not move (RMS {:.3}° per window) while `psi` turns the ship by {:.2}° RMS per window of {WINDOW_L_OVER_U0} L/U0: the yaw rate channel is empty or wrong",
-                moves_r * deg,
-                moves_psi * deg
-            ),
-        ));
-    }
-    if moves_psi < 1e-2 * moves_r && moves_r > 5.0 * HEADING_SIGNIFICANT_RAD {
-        return Err(InputError::file(
-            file,
-            format!(
-                "column `psi` does not move (RMS {:.3}° per window) while `r` integrates to {:.2}° RMS per window of {WINDOW_L_OVER_U0} L/U0: the heading channel is empty or wrong",
-                moves_psi * deg,
-                moves_r * deg
-            ),
-        ));
+    for (flat, moves, turning, other, how, channel) in [
+        (
+            "r",
+            moves_r,
+            "psi",
+            moves_psi,
+            "turns the ship by",
+            "yaw rate",
+        ),
+        ("psi", moves_psi, "r", moves_r, "integrates to", "heading"),
+    ] {
+        if moves < 1e-2 * other && other > 5.0 * HEADING_SIGNIFICANT_RAD {
+            return Err(InputError::file(
+                file,
+                format!(
+                    "column `{flat}` does not move (RMS {:.3}° per window) while `{turning}` {how} {:.2}° RMS per window of {WINDOW_L_OVER_U0} L/U0: the {channel} channel is empty or wrong",
+                    moves * deg,
+                    other * deg
+                ),
+            ));
+        }
     }
     if let Some(k) = clear_wrong_factor(factor(&dpsi, &int_r)) {
         return Err(InputError::file(
