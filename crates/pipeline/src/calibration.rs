@@ -1074,8 +1074,20 @@ fn stored_factors(
     record
         .check()
         .map_err(|e| shipid_io::InputError::key(path, &e.key, e.reason))?;
+    check_factor_cap(path, &record.factors)?;
     check_stored_level(spec, record.level, level)?;
     Ok(family_factors(&record.factors))
+}
+
+/// A factor beyond [`crate::metric_family::MAX_CALIBRATION_FACTOR`] is refused, naming its key.
+pub fn check_factor_cap(
+    path: &std::path::Path,
+    factors: &BTreeMap<String, FactorRecord>,
+) -> Result<(), PipelineError> {
+    match crate::metric_family::factor_beyond_cap(factors.iter().map(|(k, f)| (k, f.factor))) {
+        Some((key, msg)) => Err(shipid_io::InputError::key(path, &key, msg).into()),
+        None => Ok(()),
+    }
 }
 
 /// A checked record's factors by family.
@@ -1135,6 +1147,7 @@ fn polynomial_calibration(
     let checked = record
         .check(&file.set.name)
         .map_err(|e| shipid_io::InputError::key(path, &e.key, e.reason))?;
+    check_factor_cap(path, &checked.factors)?;
     check_stored_level(spec, record.level, level)?;
     let effects: Vec<Effect> = file
         .effects

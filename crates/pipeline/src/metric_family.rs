@@ -42,3 +42,50 @@ impl MetricFamily {
         }
     }
 }
+
+/// The physical lower limit of a metric as `shipid_sim::metrics` defines it, which no band may
+/// pass: times are durations, the diameters and the advance are distances travelled into the turn,
+/// and an overshoot is the heading's excursion *beyond* the check angle (a peak that stays inside it
+/// is no overshoot). The transfer has none: a ship that kicks outwards before it turns has a
+/// negative one.
+pub fn physical_lower_limit(metric: &str) -> Option<f64> {
+    match metric {
+        "overshoot_1" | "overshoot_2" | "t_a" | "t_check" | "advance" | "tactical_diameter"
+        | "steady_diameter" => Some(0.0),
+        _ => None,
+    }
+}
+
+/// The largest calibration factor a model file may hold. The factors measured (docs/uncertainty.md)
+/// are 1–23: the HSVA mmg fit's 17–23 are the largest. A factor beyond 100 makes the band a hundred
+/// times the replicates' spread, whose shape then says nothing; it is a damaged file, not a
+/// calibration.
+pub const MAX_CALIBRATION_FACTOR: f64 = 100.0;
+
+/// The largest reach (√ of the run's mean leverage ratio over the training states' largest) at which
+/// a calibrated band is still given. The factors are measured on the training recordings, at reaches
+/// of 1–2, and the widening by the reach is a regression's variance growing with leverage; at a
+/// reach of 10 the run's states have on average 100 times the leverage of the farthest training
+/// state, where nothing checks that rule any longer and the band (centre ± factor · reach ·
+/// half-width) is the reach itself, not a measurement. Such a band is dropped and the reason given.
+pub const MAX_BAND_REACH: f64 = 10.0;
+
+/// The fault (key, message) of a `[calibration]` factor beyond [`MAX_CALIBRATION_FACTOR`]: the
+/// model crate's check holds them finite and at least 1.
+pub fn factor_beyond_cap<'a>(
+    factors: impl IntoIterator<Item = (&'a String, f64)>,
+) -> Option<(String, String)> {
+    factors
+        .into_iter()
+        .find(|(_, f)| *f > MAX_CALIBRATION_FACTOR)
+        .map(|(family, f)| {
+            (
+                format!("calibration.factors.{family}.factor"),
+                format!(
+                    "{} is beyond the largest factor a calibration may hold ({MAX_CALIBRATION_FACTOR}; \
+                     measured factors are 1–23): a band that wide says nothing; refit with --calibrate",
+                    shipid_io::error::number(f)
+                ),
+            )
+        })
+}

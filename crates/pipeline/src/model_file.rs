@@ -158,6 +158,7 @@ fn load_parts(
         return Ok((base, effects));
     }
     check_kind(path, table.as_ref())?;
+    check_kind_matches_tables(path, table.as_ref())?;
     // The mmg and sparse-GP formats have no `[environment]` (what a fit in a recorded wind
     // appends, read apart by `environment::model_environment`); the polynomial's has.
     let family_text = crate::environment::without_environment_table(&text);
@@ -165,10 +166,10 @@ fn load_parts(
     // as "--duration must be positive" from an option the user never gave.
     if let Some(mmg) = crate::mmg::file::load_mmg_model_if_kind(path, &family_text)? {
         shipid_io::dataset::check_ship(path, mmg.ship())?;
+        shipid_io::dataset::check_added_mass(path, mmg.added_mass(), mmg.ship())?;
         return Ok((Box::new(mmg), Vec::new()));
     }
     if let Some(gp) = load_gp_model(path, &family_text)? {
-        shipid_io::dataset::check_ship(path, gp.ship())?;
         return Ok((Box::new(gp), Vec::new()));
     }
     let file: ModelFile = toml::from_str(&text).map_err(|e| InputError::toml(path, &text, &e))?;
@@ -177,6 +178,18 @@ fn load_parts(
     let model = file
         .to_model()
         .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
+    // The optional tables are checked whichever command reads the file, not only under `--bands`.
+    if let Some(record) = &file.bootstrap {
+        record
+            .coefficient_vectors(&model.set)
+            .map_err(|e| InputError::key(path, "bootstrap", e.to_string()))?;
+    }
+    if let Some(record) = &file.calibration {
+        let checked = record
+            .check(&file.set.name)
+            .map_err(|e| InputError::key(path, &e.key, e.reason))?;
+        crate::calibration::check_factor_cap(path, &checked.factors)?;
+    }
     let effects = parse_entries(path, &file.effects)?;
     Ok((Box::new(AbkowitzDynamics(model)), effects))
 }
@@ -204,6 +217,89 @@ fn check_kind(path: &Path, table: Option<&toml::Table>) -> Result<(), PipelineEr
         )
         .into()),
     }
+}
+
+/// The top-level keys only one kind of model file has, by kind: what a file "looks like".
+const KIND_TABLES: [(&str, &[&str]); 3] = [
+    ("abkowitz", &["set", "coefficients"]),
+    (GP_KIND, &["points", "outputs", "sparsification", "inputs"]),
+    (
+        crate::mmg::file::MMG_KIND,
+        &["parameter", "propeller", "rudder"],
+    ),
+];
+
+/// A `kind` that does not match the file's tables is refused, naming `kind` and the kind the tables
+/// belong to: read with the declared kind's reader, an abkowitz file marked `mmg` failed on
+/// "unknown field `coefficients`", which points at the wrong key.
+fn check_kind_matches_tables(
+    path: &Path,
+    table: Option<&toml::Table>,
+) -> Result<(), PipelineError> {
+    let Some(table) = table else { return Ok(()) };
+    let Some(declared) = table.get("kind").and_then(|k| k.as_str()) else {
+        return Ok(());
+    };
+    let has = |keys: &[&str]| -> Vec<String> {
+        keys.iter()
+            .filter(|k| table.contains_key(**k))
+            .map(|k| format!("`{k}`"))
+            .collect()
+    };
+    let own = KIND_TABLES
+        .iter()
+        .find(|(k, _)| *k == declared)
+        .map_or(Vec::new(), |(_, keys)| has(keys));
+    if !own.is_empty() {
+        return Ok(());
+    }
+    match KIND_TABLES
+        .iter()
+        .filter(|(k, _)| *k != declared)
+        .map(|(k, keys)| (k, has(keys)))
+        .find(|(_, found)| !found.is_empty())
+    {
+        Some((other, found)) => Err(InputError::key(
+            path,
+            "kind",
+            format!(
+                "is \"{declared}\", but the file looks like a model file of kind \"{other}\": it holds \
+                 {} and none of the tables of kind \"{declared}\"; was `kind` edited? A model file's \
+                 kind is the one `shipid fit` wrote",
+                found.join(", ")
+            ),
+        )
+        .into()),
+        None => Ok(()),
+    }
+}
+
+/// A warning for a model file written by a newer shipid than this one (`shipid_version` above this
+/// build's version): it may mean something this version reads otherwise. `None` for an equal or
+/// older version, or one that is not a version (the full reader names a missing key).
+pub fn newer_version_note(spec: &str) -> Option<String> {
+    let path = Path::new(spec);
+    if !path.is_file() {
+        return None;
+    }
+    let text = std::fs::read_to_string(path).ok()?;
+    let table = toml::from_str::<toml::Table>(&text).ok()?;
+    let written = table.get("shipid_version")?.as_str()?;
+    let this = env!("CARGO_PKG_VERSION");
+    let parse = |v: &str| -> Option<Vec<u64>> {
+        v.trim()
+            .split(['-', '+'])
+            .next()?
+            .split('.')
+            .map(|p| p.parse().ok())
+            .collect()
+    };
+    (parse(written)? > parse(this)?).then(|| {
+        format!(
+            "{spec}: written by shipid {written} (key `shipid_version`), newer than this shipid {this}: \
+             a newer version may store what this one reads otherwise; use shipid {written} or later"
+        )
+    })
 }
 
 /// A path as stored in a file at `file`: relative to the file's folder, or absolute when there is no
@@ -412,9 +508,106 @@ pub fn load_gp_model(path: &Path, text: &str) -> Result<Option<GpDynamics>, Pipe
     }
     let file: GpModelFile =
         toml::from_str(text).map_err(|e| shipid_io::InputError::toml(path, text, &e))?;
+    shipid_io::dataset::check_ship(path, &file.ship)?;
+    shipid_io::dataset::check_added_mass(path, &file.added_mass, &file.ship)?;
+    if let Some((key, msg)) = gp_file_fault(&file) {
+        return Err(InputError::key(path, &key, msg).into());
+    }
     GpDynamics::from_file(&file)
         .map(Some)
         .map_err(|e| bad_input(format!("{}: {e}", path.display())))
+}
+
+/// How far a sparse point may lie from the ship's own scales: |u|, |v| up to this × U0, |r| up to
+/// this × U0/L. Manoeuvres stay within about 1 × (r′ of a tight turn is 0.5–1), so a point beyond
+/// 10 × is a unit slip or a damaged number, on which the kernel would put a training sample where
+/// no ship goes.
+pub const GP_POINT_SCALES: f64 = 10.0;
+/// The largest rudder angle [rad] of a sparse point: a quarter turn, past every rudder's stop.
+pub const GP_MAX_RUDDER_RAD: f64 = std::f64::consts::FRAC_PI_2;
+/// The shortest length scale, as a share of its input's scale (U0, U0, U0/L, 1 rad): shorter, the
+/// kernel between two sparse points a millionth of a manoeuvre apart is zero, every point is an
+/// island and the model is its constant mean everywhere else.
+pub const GP_MIN_LENGTH_SCALE_SHARE: f64 = 1e-6;
+
+/// The first fault (key, message) of a sparse-GP file's numbers that the GP's own checks do not name
+/// by key: non-finite or absurd sparse points (each input within its physical range), non-finite
+/// targets, hyper-parameters out of their domain, calibration factors. The ship must be checked.
+pub fn gp_file_fault(file: &GpModelFile) -> Option<(String, String)> {
+    use shipid_io::error::number;
+    let ship = &file.ship;
+    let input_scale = [ship.u0, ship.u0, ship.u0 / ship.lpp, 1.0];
+    let limits = [
+        (GP_POINT_SCALES * ship.u0, "m/s", "10 × U0"),
+        (GP_POINT_SCALES * ship.u0, "m/s", "10 × U0"),
+        (GP_POINT_SCALES * ship.u0 / ship.lpp, "rad/s", "10 × U0/L"),
+        (GP_MAX_RUDDER_RAD, "rad", "π/2"),
+    ];
+    for (i, row) in file.points.iter().enumerate() {
+        for (j, &v) in row.iter().enumerate() {
+            let key = format!("points[{i}][{j}]");
+            if !v.is_finite() {
+                return Some((key, format!("must be a finite number, not {v}")));
+            }
+            if let Some(&(limit, unit, what)) = limits.get(j)
+                && v.abs() > limit
+            {
+                return Some((
+                    key,
+                    format!(
+                        "{} {unit} is beyond {what} = {limit:.4} {unit} for the input {}: a unit \
+                         slip or a damaged number",
+                        number(v),
+                        file.inputs.get(j).map_or("?", String::as_str)
+                    ),
+                ));
+            }
+        }
+    }
+    for (k, o) in file.outputs.iter().enumerate() {
+        if let Some((i, v)) = o.targets.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Some((
+                format!("outputs[{k}].targets[{i}]"),
+                format!("must be a finite number, not {v}"),
+            ));
+        }
+        for (j, &l) in o.hyper.length_scales.iter().enumerate() {
+            let key = format!("outputs[{k}].hyper.length_scales[{j}]");
+            let floor = GP_MIN_LENGTH_SCALE_SHARE * input_scale.get(j).copied().unwrap_or(1.0);
+            if !(l.is_finite() && l >= floor) {
+                return Some((
+                    key,
+                    format!(
+                        "{} is not a finite length scale of at least {floor:.3e} (a millionth of the \
+                         input's scale): the kernel would tie no two points together",
+                        number(l)
+                    ),
+                ));
+            }
+        }
+        for (name, v) in [
+            ("signal_std", o.hyper.signal_std),
+            ("noise_std", o.hyper.noise_std),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Some((
+                    format!("outputs[{k}].hyper.{name}"),
+                    format!("must be a positive number, not {}", number(v)),
+                ));
+            }
+        }
+    }
+    if let Some(record) = &file.calibration {
+        if let Err(e) = record.check() {
+            return Some((e.key, e.reason));
+        }
+        if let Some(fault) = crate::metric_family::factor_beyond_cap(
+            record.factors.iter().map(|(k, f)| (k, f.factor)),
+        ) {
+            return Some(fault);
+        }
+    }
+    None
 }
 
 #[cfg(test)]

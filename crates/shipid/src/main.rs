@@ -344,6 +344,14 @@ enum Command {
 }
 
 fn run(cli: Cli) -> Result<Outcome, CliError> {
+    // A model file from a newer shipid is read (its keys are checked as any other's), with a word.
+    if let Command::Simulate { model, .. }
+    | Command::Validate { model, .. }
+    | Command::Diagnose { model, .. } = &cli.command
+        && let Some(note) = shipid_pipeline::model_file::newer_version_note(model)
+    {
+        eprintln!("warning: {note}");
+    }
     match cli.command {
         Command::Generate {
             out,

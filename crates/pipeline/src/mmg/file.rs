@@ -17,6 +17,7 @@ use super::geometry::MmgGeometry;
 use super::identify::{DETERMINED_SHARE, assemble};
 use super::thrust::INFLOW_NAMES;
 use crate::error::{PipelineError, bad_input};
+use shipid_io::error::number;
 
 /// The `kind` of an MMG model file.
 pub const MMG_KIND: &str = "mmg";
@@ -298,6 +299,58 @@ impl MmgBootstrapRecord {
     }
 }
 
+/// The largest rudder span, as a multiple of the draft, a model file may give. A rudder hangs below
+/// the waterline and ends above the keel, so its span is below the design draft (KVLCC2: 0.75 T); a
+/// ship trimmed in ballast has a shallower draft beside the same rudder, hence the margin of 2. A
+/// span beyond it is a unit slip (mm for m), and the rudder's aspect ratio, which sets its lift
+/// slope, would take it at face value.
+pub const MAX_RUDDER_SPAN_OVER_DRAFT: f64 = 2.0;
+
+/// The physically impossible propeller and rudder sizes a data set is refused for, checked alike for
+/// a model file (as (key, message)): a propeller diameter not shorter than the ship and a rudder area
+/// above half of L T (the data set's `propeller.diameter_m` and `rudder.area_m2` checks in
+/// `shipid_io::dataset`, which are private there, mirrored), and a rudder span beyond
+/// [`MAX_RUDDER_SPAN_OVER_DRAFT`] × T. Positivity is the caller's.
+pub fn hardware_fault(
+    ship: &Ship,
+    propeller: &PropellerEntry,
+    rudder: &RudderEntry,
+) -> Option<(&'static str, String)> {
+    if propeller.diameter_m >= ship.lpp {
+        return Some((
+            "propeller.diameter_m",
+            format!(
+                "{} m is not shorter than the ship (ship.lpp = {} m): a wrong unit?",
+                number(propeller.diameter_m),
+                ship.lpp
+            ),
+        ));
+    }
+    let share = rudder.area_m2 / (ship.lpp * ship.draft);
+    if share.is_finite() && share > 0.5 {
+        return Some((
+            "rudder.area_m2",
+            format!(
+                "{} m² is {share:.3} × L T (rudders have about 1/70 … 1/30 of it): a wrong unit?",
+                number(rudder.area_m2)
+            ),
+        ));
+    }
+    let span = rudder.span_m / ship.draft;
+    if span.is_finite() && span > MAX_RUDDER_SPAN_OVER_DRAFT {
+        return Some((
+            "rudder.span_m",
+            format!(
+                "{} m is {span:.3} × the draft ship.draft = {} m (a rudder's span is below the \
+                 draft; at most {MAX_RUDDER_SPAN_OVER_DRAFT} × is accepted): a wrong unit?",
+                number(rudder.span_m),
+                ship.draft
+            ),
+        ));
+    }
+    None
+}
+
 impl MmgModelFile {
     /// The lines `shipid fit --set mmg` prints below its first line: residuals, the parameters the
     /// data determine and those that stayed at their prior (with their data share).
@@ -478,7 +531,7 @@ impl MmgModelFile {
             if !p.value.is_finite() {
                 return Err(at(
                     format!("parameter[{i}].value"),
-                    format!("must be a finite number, not {}", p.value),
+                    format!("must be a finite number, not {}", number(p.value)),
                 ));
             }
             if p.value < p.lower || p.value > p.upper {
@@ -486,7 +539,10 @@ impl MmgModelFile {
                     format!("parameter[{i}].value"),
                     format!(
                         "{} = {} is outside its bounds [{}, {}]",
-                        p.name, p.value, p.lower, p.upper
+                        p.name,
+                        number(p.value),
+                        number(p.lower),
+                        number(p.upper)
                     ),
                 ));
             }
@@ -512,9 +568,12 @@ impl MmgModelFile {
             if !(value.is_finite() && value > 0.0) {
                 return Err(at(
                     key.into(),
-                    format!("must be a positive number, not {value}"),
+                    format!("must be a positive number, not {}", number(value)),
                 ));
             }
+        }
+        if let Some((key, msg)) = hardware_fault(&self.ship, &self.propeller, &self.rudder) {
+            return Err(at(key.into(), msg));
         }
         for (key, value) in [
             ("propeller.x_m", self.propeller.x_m),
@@ -524,8 +583,9 @@ impl MmgModelFile {
                 return Err(at(
                     key.into(),
                     format!(
-                        "must be a position within the ship length {} m, not {value}",
-                        self.ship.lpp
+                        "must be a position within the ship length {} m, not {}",
+                        self.ship.lpp,
+                        number(value)
                     ),
                 ));
             }
@@ -534,7 +594,7 @@ impl MmgModelFile {
         if !(rate.is_finite() && rate >= 0.0) {
             return Err(at(
                 "propeller.rate_rps".into(),
-                format!("must be a finite rate ≥ 0, not {rate}"),
+                format!("must be a finite rate ≥ 0, not {}", number(rate)),
             ));
         }
         let geometry = self.geometry();
@@ -638,6 +698,29 @@ impl MmgModelFile {
         Ok(models)
     }
 
+    /// `[bootstrap]`, `[calibration]` and `[valley]` checked as `--bands` and `simulate` use them,
+    /// whichever command reads the file: a NaN replicate read without `--bands` went unsaid while
+    /// the same file's bands were refused. A fault names the file and the key.
+    pub fn check_optional_tables(&self, path: &Path) -> Result<(), PipelineError> {
+        let at =
+            |key: String, msg: String| bad_input(format!("{}: key `{key}`: {msg}", path.display()));
+        if let Some(record) = &self.bootstrap {
+            record
+                .parameter_vectors(&self.parameters)
+                .map_err(|(key, msg)| at(key, msg))?;
+        }
+        if let Some(record) = &self.calibration {
+            record.check().map_err(|e| at(e.key, e.reason))?;
+            if let Some((key, msg)) = crate::metric_family::factor_beyond_cap(
+                record.factors.iter().map(|(k, f)| (k, f.factor)),
+            ) {
+                return Err(at(key, msg));
+            }
+        }
+        self.valley_models(path)?;
+        Ok(())
+    }
+
     /// The models of the `[bootstrap]` replicates (the file's point model must load: check it with
     /// [`MmgModelFile::to_model`] first); a fault names the file and the key.
     pub fn replicate_models(&self, path: &Path) -> Result<Vec<MmgModel>, PipelineError> {
@@ -687,9 +770,12 @@ pub fn load_mmg_model_if_kind(path: &Path, text: &str) -> Result<Option<MmgModel
     load_mmg_model(path, text).map(Some)
 }
 
-/// The model of an MMG model file's text (`path` names it in errors).
+/// The model of an MMG model file's text (`path` names it in errors). Its optional tables are checked
+/// too ([`MmgModelFile::check_optional_tables`]): every command reads them through here.
 pub fn load_mmg_model(path: &Path, text: &str) -> Result<MmgModel, PipelineError> {
     let file: MmgModelFile =
         toml::from_str(text).map_err(|e| shipid_io::InputError::toml(path, text, &e))?;
-    file.to_model(path)
+    let model = file.to_model(path)?;
+    file.check_optional_tables(path)?;
+    Ok(model)
 }
