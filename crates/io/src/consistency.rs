@@ -546,3 +546,96 @@ fn check_heading_lag(file: &Path, rec: &Recording) -> Result<(), InputError> {
     }
     Ok(())
 }
+
+/// Advance ratios J = u/(nD) of a working propeller lie between about 0.1 (heavily loaded, a tug
+/// pulling) and 1.2 (lightly loaded); below this, or above [`ADVANCE_RATIO_MAX`], the rate is in
+/// another unit than the header says (a rate in rev/min read as rev/s gives J near 0.01).
+const ADVANCE_RATIO_MIN: f64 = 0.04;
+/// See [`ADVANCE_RATIO_MIN`]: rev/s written under `n[rpm]` gives J sixty times too large.
+const ADVANCE_RATIO_MAX: f64 = 5.0;
+
+/// The propeller rate of `rec` against its diameter: the median advance ratio u/(nD) over the samples
+/// where the propeller turns ahead and the ship moves at a quarter of U0 at least must be a working
+/// propeller's. `None` when no such sample exists.
+fn median_advance_ratio(rec: &Recording, n: &[f64], diameter_m: f64, u0_m_s: f64) -> Option<f64> {
+    let mut j: Vec<f64> = rec
+        .u
+        .iter()
+        .zip(n)
+        .filter(|(u, n)| **n > 0.0 && **u > 0.25 * u0_m_s)
+        .map(|(u, n)| u / (n * diameter_m))
+        .filter(|j| j.is_finite())
+        .collect();
+    if j.is_empty() {
+        return None;
+    }
+    j.sort_by(f64::total_cmp);
+    Some(j[j.len() / 2])
+}
+
+/// What an advance ratio outside a working propeller's range most likely means.
+fn advance_ratio_cause(j: f64) -> Option<&'static str> {
+    if j < ADVANCE_RATIO_MIN {
+        Some(if (ADVANCE_RATIO_MIN..=1.5).contains(&(60.0 * j)) {
+            "the rate looks like revolutions per minute: a rate in rev/min needs the header `n[rpm]`"
+        } else {
+            "the rate is far too high for this propeller: a wrong unit, or the wrong diameter?"
+        })
+    } else if j > ADVANCE_RATIO_MAX {
+        Some(if (0.1..=ADVANCE_RATIO_MAX).contains(&(j / 60.0)) {
+            "the rate looks like revolutions per second under an rpm header (`n[rpm]`)"
+        } else {
+            "the rate is far too low for this propeller: a wrong unit, or the wrong diameter?"
+        })
+    } else {
+        None
+    }
+}
+
+/// Refuse a recorded propeller rate `n` whose advance ratio with the data set's propeller diameter
+/// is no working propeller's: it is almost always a unit (rev/min under a bare `n`), and the MMG
+/// fit would otherwise run on J ≈ 0.005 and put half its parameters on their bounds with exit 0.
+pub fn check_advance_ratio(
+    file: &Path,
+    rec: &Recording,
+    diameter_m: f64,
+    u0_m_s: f64,
+) -> Result<(), InputError> {
+    let Some(n) = &rec.n else {
+        return Ok(());
+    };
+    let Some(j) = median_advance_ratio(rec, n, diameter_m, u0_m_s) else {
+        return Ok(());
+    };
+    match advance_ratio_cause(j) {
+        None => Ok(()),
+        Some(cause) => Err(InputError::file(
+            file,
+            format!(
+                "the propeller rate `n` gives a median advance ratio J = u/(nD) of {} with the data set's propeller.diameter_m = {} m, where a working propeller runs at about 0.1–1.2: {cause}",
+                number_short(j),
+                number(diameter_m)
+            ),
+        )),
+    }
+}
+
+/// The same test for the data set's constant `propeller.rate_rps` at the approach speed U0 (`None`
+/// when it is plausible, else the message).
+pub fn rate_rps_problem(rate_rps: f64, diameter_m: f64, u0_m_s: f64) -> Option<String> {
+    let j = u0_m_s / (rate_rps * diameter_m);
+    let cause = if (ADVANCE_RATIO_MIN..=ADVANCE_RATIO_MAX).contains(&j) {
+        return None;
+    } else if j < ADVANCE_RATIO_MIN && (ADVANCE_RATIO_MIN..=1.5).contains(&(60.0 * j)) {
+        "it looks like revolutions per minute; rate_rps is in revolutions per second"
+    } else {
+        "a wrong unit, or the wrong diameter?"
+    };
+    Some(format!(
+        "{} 1/s gives an advance ratio J = U0/(nD) of {} at U0 = {} m/s with propeller.diameter_m = {} m, where a working propeller runs at about 0.1–1.2: {cause}",
+        number(rate_rps),
+        number_short(j),
+        number(u0_m_s),
+        number(diameter_m),
+    ))
+}

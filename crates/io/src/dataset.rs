@@ -224,6 +224,14 @@ impl Dataset {
                 file.ship.lpp,
                 file.ship.u0,
             )?;
+            if let Some(p) = &file.propeller {
+                crate::consistency::check_advance_ratio(
+                    &csv,
+                    &recording,
+                    p.diameter_m,
+                    file.ship.u0,
+                )?;
+            }
             recordings.push(DatasetRecording {
                 file: entry.file.clone(),
                 manoeuvre,
@@ -277,6 +285,12 @@ pub fn parse_dataset(path: &Path, text: &str) -> Result<DatasetFile, InputError>
     check_distinct_recordings(path, &file.recordings)?;
     if let Some(p) = &file.propeller {
         check_propeller(path, p, s.lpp)?;
+        if let Some(msg) = p
+            .rate_rps
+            .and_then(|n| crate::consistency::rate_rps_problem(n, p.diameter_m, s.u0))
+        {
+            return Err(InputError::key(path, "propeller.rate_rps", msg));
+        }
     }
     if let Some(r) = &file.rudder {
         check_rudder(path, r, s.lpp)?;
@@ -337,7 +351,9 @@ pub const SHIP_RANGES: [(&str, f64, f64, &str); 8] = [
     ("rho", 500.0, 2000.0, "kg/m³"),
     ("kzz", 1e-3, 1e4, "m"),
     ("u0", 1e-3, 1e3, "m/s"),
-    ("rudder_rate", 1e-3, 1e4, "deg/s"),
+    // Steering gears turn at 2.3 °/s at least at full scale (SOLAS II-1/29), faster at model scale:
+    // below 1 °/s the rate is in rad/s or a typo.
+    ("rudder_rate", 1.0, 1e4, "deg/s"),
 ];
 
 /// `origin = "point"` needs its `[reference_point]` on the hull; the table means nothing with

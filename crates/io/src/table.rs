@@ -285,10 +285,20 @@ impl Columns {
                 .unwrap_or((0, q.name().to_string()));
             let v = values[i];
             let message = if v.is_finite() {
-                let hint = if q == Quantity::Delta && !name.contains('[') {
-                    "; a rudder angle in degrees needs the header `delta[deg]`"
-                } else {
-                    ""
+                let hint = match q {
+                    Quantity::Delta if !name.contains('[') => {
+                        "; a rudder angle in degrees needs the header `delta[deg]`".to_string()
+                    }
+                    Quantity::WindFrom | Quantity::RelativeWindAngle | Quantity::CurrentFrom
+                        if !name.contains('[') =>
+                    {
+                        format!(
+                            "; a direction in degrees needs the header `{}[deg]`",
+                            q.name()
+                        )
+                    }
+                    Quantity::T => "; a clock of absolute time (Unix seconds, 1.7e9 in 2023) needs its first time subtracted: the recordings' times are seconds from any start".to_string(),
+                    _ => String::new(),
                 };
                 format!(
                     "{} {} (after unit conversion) is beyond the bound ±{} of `{}` in docs/data-format.md: a wrong unit or a corrupt value{hint}",

@@ -216,7 +216,11 @@ impl Quantity {
             Quantity::WindSpeed | Quantity::RelativeWindSpeed => 200.0,
             // Beyond any ocean current (the fastest tidal races run near 8 m/s).
             Quantity::CurrentSpeed => 50.0,
-            Quantity::WindFrom | Quantity::RelativeWindAngle | Quantity::CurrentFrom => 1e5,
+            // A direction is one turn at most either way: a logger writes 0–360° or ±180°, and a
+            // column of degrees read as radians (241.7 "rad") would otherwise pass as some angle.
+            Quantity::WindFrom | Quantity::RelativeWindAngle | Quantity::CurrentFrom => {
+                std::f64::consts::TAU * (1.0 + 1e-9)
+            }
             // Ten times the largest marine propeller's thrust (some 5 MN on a 20 m, 100 MW one).
             Quantity::Thrust => 5e7,
         }
@@ -226,6 +230,9 @@ impl Quantity {
     pub fn bound_text(self) -> String {
         match self {
             Quantity::Delta => "π rad (180°)".into(),
+            Quantity::WindFrom | Quantity::RelativeWindAngle | Quantity::CurrentFrom => {
+                "2π rad (360°)".into()
+            }
             q if q.bound_si() < 1e4 => format!("{} {}", q.bound_si(), q.si_unit()),
             q => format!("{:e} {}", q.bound_si(), q.si_unit()),
         }

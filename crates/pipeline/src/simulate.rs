@@ -249,11 +249,13 @@ pub fn simulate_on_grid_in(
 ) -> Result<SimOutput, PipelineError> {
     match env {
         Some(env) => {
-            let current = env.has_current().then(|| env.clone());
+            let flows = env.clone();
             let mut out =
                 simulate_on_grid_from(&WithEnvironment::new(model, env), m, grid, approach_m_s)?;
-            // Its metrics are taken relative to the water, as a recording's in a current are.
-            out.recording.current = current.and_then(|e| e.current_series(&out.recording.t));
+            // Its metrics are taken relative to the water, as a recording's in a current are; the
+            // wind goes with it so that the run written as a recording reads back in the same air.
+            out.recording.current = flows.current_series(&out.recording.t);
+            out.recording.wind = flows.wind_series(&out.recording.t);
             Ok(out)
         }
         None => simulate_on_grid_from(model, m, grid, approach_m_s),

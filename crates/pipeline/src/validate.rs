@@ -219,6 +219,10 @@ pub struct MetricComparison {
     /// re-simulation reversed the rudder.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub reaction_delay_s: Option<f64>,
+    /// How the re-simulation left the declared manoeuvre (turned against its rudder, a zig-zag's
+    /// heading running off course), when it did: its metrics then describe no such manoeuvre.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub left_manoeuvre: Option<String>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -421,6 +425,7 @@ pub fn compare_manoeuvre_in(
         relative_error,
         mrae,
         reaction_delay_s: recorded_reaction_delay_s(r, ship),
+        left_manoeuvre: shipid_sim::metrics::lost_manoeuvre(&sim.recording, &r.manoeuvre, ship),
     })
 }
 
@@ -534,7 +539,7 @@ pub fn validation_warnings(
         &windage,
         "the validation",
     ));
-    warnings.extend(late_reversal_notes(ds));
+    warnings.extend(declared_manoeuvre_notes(ds));
     warnings.extend(approach_notes(ds));
     warnings
 }
@@ -560,6 +565,67 @@ pub fn late_reversal_notes(ds: &shipid_io::Dataset) -> Vec<String> {
             })
         })
         .collect()
+}
+
+/// A rudder held further than this from the declared angle [deg] (or [`HELD_RUDDER_SHARE`] of it,
+/// whichever is larger) is not the manoeuvre declared: a helmsman's or a logger's rounding stays well
+/// inside, a 20° turn declared as a 35° one does not.
+const HELD_RUDDER_TOLERANCE_DEG: f64 = 2.0;
+/// See [`HELD_RUDDER_TOLERANCE_DEG`].
+const HELD_RUDDER_SHARE: f64 = 0.1;
+/// A zig-zag whose rudder reverses before the heading has turned the declared check angle less this
+/// [deg] (or [`EARLY_REVERSAL_SHARE`] of the check angle, whichever is larger) was run with a smaller
+/// check angle: the overshoots measured beyond the declared one are too small by the difference.
+const EARLY_REVERSAL_TOLERANCE_DEG: f64 = 0.5;
+/// See [`EARLY_REVERSAL_TOLERANCE_DEG`].
+const EARLY_REVERSAL_SHARE: f64 = 0.2;
+
+/// Everything the records of `ds` show about their declared manoeuvre that does not fit it: a rudder
+/// reversing implausibly late or clearly early at the checks, a rudder held at another angle than the
+/// declared one. The metrics of such a record, and a re-simulation of the declared manoeuvre, compare
+/// the model with a test that was not run; `metrics` and `validate` print these beside their numbers.
+pub fn declared_manoeuvre_notes(ds: &shipid_io::Dataset) -> Vec<String> {
+    let mut notes = late_reversal_notes(ds);
+    for r in &ds.recordings {
+        let (rudder_deg, side, check) = match r.manoeuvre {
+            Manoeuvre::ZigZag {
+                rudder_deg,
+                check_deg,
+                side,
+            } => (rudder_deg, side, Some(check_deg)),
+            Manoeuvre::Turning { rudder_deg, side } => (rudder_deg, side, None),
+            Manoeuvre::Free => continue,
+        };
+        let rec = &r.recording;
+        if let Some(held) = shipid_sim::metrics::held_rudder_deg(rec, rudder_deg, side, &ds.ship)
+            && (held - rudder_deg).abs()
+                > HELD_RUDDER_TOLERANCE_DEG.max(HELD_RUDDER_SHARE * rudder_deg)
+        {
+            notes.push(format!(
+                "{}: the rudder is held at {held:.1}° while the data set declares a {} with {rudder_deg}° rudder: is the declared rudder angle right? Its re-simulation puts the rudder to the declared angle, and the comparison then blames the model for the difference",
+                r.file,
+                r.manoeuvre.kind()
+            ));
+        }
+        let Some(check) = check else { continue };
+        let Some(turned) =
+            shipid_sim::metrics::heading_at_reversals_deg(rec, rudder_deg, side, &ds.ship)
+        else {
+            continue;
+        };
+        if turned.is_empty() {
+            continue;
+        }
+        let typical = shipid_sim::metrics::median(&turned);
+        if typical < check - EARLY_REVERSAL_TOLERANCE_DEG.max(EARLY_REVERSAL_SHARE * check) {
+            notes.push(format!(
+                "{}: the rudder reverses when the heading has turned {typical:.1}° (median of {} reversals), short of the declared check angle {check}°: is the check angle in the data set right? Overshoots are measured beyond the declared angle, so they come out too small by the difference",
+                r.file,
+                turned.len()
+            ));
+        }
+    }
+    notes
 }
 
 /// An approach speed at the first execute further than this from U0 (÷ U0) is not the steady approach
@@ -698,7 +764,7 @@ pub fn recorded_rate_notes<'a>(
             let astern = r.recording.n.as_ref()?.iter().filter(|x| **x < 0.0).count();
             (astern > 0).then(|| {
                 format!(
-                    "{}: the propeller turns astern (n < 0) in {astern} samples; the MMG propeller model is for ahead, so its forces there are an extrapolation",
+                    "{}: the propeller turns astern (n < 0) in {astern} samples; the MMG propeller model is for ahead (no astern quadrant), so its replay stops at the first of them with that reason (a stopped replay has no RMSEs)",
                     r.file
                 )
             })

@@ -597,6 +597,7 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
         let report = json!({
             "fit_time_s": fit.fit_time_s,
             "samples": fit.samples,
+            "samples_available": fit.samples_available,
             "training_extent": StateExtent::of_windows(&ds, &fit.windows),
             "set": "mmg",
             "estimator": file.estimator,
@@ -615,9 +616,10 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
         );
     } else {
         println!(
-            "fitted mmg with {} on {} samples in {:.2} ms → {}",
+            "fitted mmg with {} on {} samples{} in {:.2} ms → {}",
             file.estimator.name,
             fit.samples,
+            thinned_from(fit.samples, fit.samples_available),
             fit.fit_time_s * 1e3,
             a.out.display()
         );
@@ -787,4 +789,19 @@ fn calibrating(level: f64, over: &str) -> indicatif::ProgressBar {
     working(format!(
         "calibration at {level}: training recordings re-simulated{over}, each refit without it"
     ))
+}
+
+/// How the equation-error samples were thinned, for the fit's summary line: every k-th of the
+/// training windows' usable samples once they are more than the fit keeps (docs/mmg.md), which a
+/// long record with a short transient feels (its transient keeps few samples).
+fn thinned_from(kept: usize, available: usize) -> String {
+    if available > kept {
+        format!(
+            " (one in {} of the {available} usable samples: the fit keeps at most {})",
+            available.div_ceil(kept.max(1)),
+            shipid_pipeline::mmg::MAX_SAMPLES
+        )
+    } else {
+        String::new()
+    }
 }

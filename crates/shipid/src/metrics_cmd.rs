@@ -42,13 +42,13 @@ pub fn metrics_json(rows: &[(String, &'static str, Metrics)]) -> Value {
 
 pub fn run(dataset: &Path, as_json: bool) -> Result<Outcome, CliError> {
     use shipid_pipeline::validate::{
-        approach_notes, late_reversal_notes, require_recordings, undefined_metrics_reason,
+        approach_notes, declared_manoeuvre_notes, require_recordings, undefined_metrics_reason,
     };
     let ds = Dataset::load(dataset)?;
     require_recordings(&ds)?;
     let rows = dataset_metrics(&ds);
     // The declarations validate questions are questioned here too: the metrics rest on them.
-    let mut warnings = late_reversal_notes(&ds);
+    let mut warnings = declared_manoeuvre_notes(&ds);
     warnings.extend(approach_notes(&ds));
     for w in &warnings {
         eprintln!("warning: {w}");

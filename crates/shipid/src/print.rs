@@ -178,6 +178,18 @@ pub fn validation_with_bands(
     // An MRAE of "-" without a diverged run needs its reason: the recording, or its declaration,
     // defines no metric the re-simulation could be compared on.
     let mut no_mrae = Vec::new();
+    // A re-simulation that left its manoeuvre (turned against its rudder) is finite and "ok", and
+    // its metrics, where defined, describe no such manoeuvre: said beside every row it touches.
+    let left: Vec<String> = rows
+        .iter()
+        .filter_map(|v| {
+            let why = v.validation.manoeuvre.as_ref()?.left_manoeuvre.as_ref()?;
+            Some(format!(
+                "{}: its re-simulation left the manoeuvre: {why}",
+                v.file
+            ))
+        })
+        .collect();
     for v in &rows {
         let (Some(c), Some(r)) = (&v.validation.manoeuvre, ds.recording(&v.file)) else {
             continue;
@@ -185,7 +197,13 @@ pub fn validation_with_bands(
         if c.mrae.is_some() || v.validation.diverged() {
             continue;
         }
-        let why = shipid_pipeline::validate::undefined_metrics_reason(r, &ds.ship, &c.recorded)
+        let why = c
+            .left_manoeuvre
+            .as_ref()
+            .map(|l| format!("{}: the re-simulation left the manoeuvre: {l}", v.file))
+            .or_else(|| {
+                shipid_pipeline::validate::undefined_metrics_reason(r, &ds.ship, &c.recorded)
+            })
             .unwrap_or_else(|| {
                 format!(
                     "{}: the re-simulation defines none of the recorded metrics",
@@ -204,7 +222,8 @@ pub fn validation_with_bands(
         "identification_range": { "source": source, "outside_means": source.describe() },
         "recordings": recs,
     });
-    let warnings = shipid_pipeline::validate::validation_warnings(model_spec, Some(model), ds);
+    let mut warnings = shipid_pipeline::validate::validation_warnings(model_spec, Some(model), ds);
+    warnings.extend(left);
     for w in &warnings {
         eprintln!("warning: {w}");
     }

@@ -331,7 +331,23 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
         )?;
         add_bands(&mut value, &bands, replicates, a.json);
     }
-    if matches!(out.status, SimStatus::Ok) {
+    let left = matches!(out.status, SimStatus::Ok)
+        .then(|| shipid_sim::metrics::lost_manoeuvre(&out.recording, &m, model.ship()))
+        .flatten();
+    if let Some(why) = &left {
+        let w = format!("the run left the manoeuvre: {why}");
+        eprintln!("warning: {w}");
+        if let Value::Object(o) = &mut value {
+            o.insert("left_manoeuvre".into(), json!(why));
+            match o.get_mut("warnings") {
+                Some(Value::Array(a)) => a.push(json!(w)),
+                _ => {
+                    o.insert("warnings".into(), json!([w]));
+                }
+            }
+        }
+    }
+    if matches!(out.status, SimStatus::Ok) && left.is_none() {
         let undefined: Vec<&str> = metrics(&out.recording, &m, model.ship())
             .entries()
             .iter()
@@ -446,9 +462,11 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
         write_atomic(path, recording_csv(&out.recording, &comments).as_bytes())
             .map_err(|e| crate::not_saved(path, e, "the simulated time series"))?;
     }
-    Ok(match out.status {
-        SimStatus::Ok => Outcome::Ok,
-        SimStatus::Diverged { .. } => Outcome::SomeFailed,
+    // A run that left its manoeuvre is finite but no answer to the question asked, like a diverged
+    // one: exit 1, with the time series still written for a look at what happened.
+    Ok(match (&out.status, &left) {
+        (SimStatus::Ok, None) => Outcome::Ok,
+        _ => Outcome::SomeFailed,
     })
 }
 

@@ -87,6 +87,12 @@ pub enum DynamicsError {
     /// The model is non-dimensionalised with the instantaneous speed and undefined at rest.
     #[error("speed {speed_m_s} m/s is below the model's validity limit of {limit_m_s} m/s")]
     SpeedTooLow { speed_m_s: f64, limit_m_s: f64 },
+    /// The propeller turns astern: the MMG propeller model (an open-water curve for ahead) has no
+    /// thrust for it, and evaluating the ahead curve at n < 0 gives forward thrust.
+    #[error(
+        "the propeller turns astern (n = {n_hz} 1/s): the MMG propeller model is for ahead (its open-water curve has no astern quadrant), so it has no forces for astern"
+    )]
+    PropellerAstern { n_hz: f64 },
     /// The state is outside the model's domain for another reason.
     #[error("model cannot be evaluated: {0}")]
     OutOfDomain(String),

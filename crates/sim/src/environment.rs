@@ -379,17 +379,15 @@ impl KnownEnvironment {
     /// are taken relative to the water as the recording's are. `None` without a current.
     pub fn current_series(&self, t_s: &[f64]) -> Option<shipid_io::FlowSeries> {
         self.current.as_ref()?;
-        let (speed_m_s, from_rad) = t_s
-            .iter()
-            .map(|&t| {
-                let [n, e] = self.current_at(t);
-                (n.hypot(e), (-e).atan2(-n).rem_euclid(std::f64::consts::TAU))
-            })
-            .unzip();
-        Some(shipid_io::FlowSeries {
-            speed_m_s,
-            from_rad,
-        })
+        Some(flow_series(t_s, |t| self.current_at(t)))
+    }
+
+    /// The wind at simulation times `t_s` as a recorded true wind (speed and the direction it comes
+    /// from), so that a simulation written as a recording carries the wind it ran in. `None` without
+    /// a wind.
+    pub fn wind_series(&self, t_s: &[f64]) -> Option<shipid_io::FlowSeries> {
+        self.wind.as_ref()?;
+        Some(flow_series(t_s, |t| self.wind_at(t).unwrap_or([0.0; 2])))
     }
 
     /// Rate of change of the current velocity [north, east] [m/s²] at `t_s`: the slope of the
@@ -563,6 +561,23 @@ impl<D: Dynamics> Dynamics for WithEnvironment<D> {
     fn over_ground(&self, through_water: &State) -> State {
         self.inner
             .over_ground(&self.environment.over_ground(0.0, through_water))
+    }
+}
+
+/// A flow given by its velocity [north, east] [m/s] at times `t_s` as recorded: speed and the
+/// direction it comes from, clockwise from north in [0, 2π) (the inverse of
+/// `FlowSeries::velocity_earth`).
+fn flow_series(t_s: &[f64], velocity_at: impl Fn(f64) -> [f64; 2]) -> shipid_io::FlowSeries {
+    let (speed_m_s, from_rad) = t_s
+        .iter()
+        .map(|&t| {
+            let [n, e] = velocity_at(t);
+            (n.hypot(e), (-e).atan2(-n).rem_euclid(std::f64::consts::TAU))
+        })
+        .unzip();
+    shipid_io::FlowSeries {
+        speed_m_s,
+        from_rad,
     }
 }
 

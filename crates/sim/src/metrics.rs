@@ -410,7 +410,7 @@ pub fn missing_execute_reason(rec: &Recording, rudder_deg: f64, side: Side) -> O
 }
 
 /// Median of a non-empty slice.
-fn median(x: &[f64]) -> f64 {
+pub fn median(x: &[f64]) -> f64 {
     let mut v = x.to_vec();
     v.sort_by(f64::total_cmp);
     let n = v.len();
@@ -579,6 +579,134 @@ pub fn check_reaction_delay_s(
     // (a reversal at the check measures 1e-5 s on the default data): an immediate reversal.
     let interval = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
     Some(if median < 0.1 * interval { 0.0 } else { median })
+}
+
+/// Samples a rudder must hold its angle for before [`held_rudder_deg`] reads the angle from them.
+const HELD_MIN_SAMPLES: usize = 5;
+
+/// The rudder's value before the first execute (its neutral on the approach) [rad].
+fn approach_rudder(rec: &Recording, first: &FirstExecute) -> f64 {
+    let before = rec.t.partition_point(|&t| t < first.t_s).max(1);
+    median(&rec.delta[..before])
+}
+
+/// The rudder angle [deg] a zig-zag or turning record holds after its first execute towards `side`:
+/// the median of |δ − δ₀| (δ₀ the approach's rudder) over the samples where the rudder is within
+/// [`execute_threshold_deg`] of its largest departure and moves slower than a tenth of the ship's
+/// rudder rate. `None` when fewer than [`HELD_MIN_SAMPLES`] samples do (a rudder reversed before it
+/// reaches its angle, or a signal too noisy to tell): the declared angle can then not be checked.
+pub fn held_rudder_deg(rec: &Recording, rudder_deg: f64, side: Side, ship: &Ship) -> Option<f64> {
+    let first = first_execute(rec, rudder_deg, side, ship)?;
+    let d0 = approach_rudder(rec, &first);
+    let t = &rec.t;
+    let start = t.partition_point(|&x| x < first.t_s);
+    let largest = rec.delta[start..]
+        .iter()
+        .map(|d| (d - d0).abs())
+        .fold(0.0_f64, f64::max);
+    let near = execute_threshold_deg(rudder_deg).to_radians();
+    let rate = ship.rudder_rate_rad_s();
+    let slow = if rate.is_finite() && rate > 0.0 {
+        0.1 * rate
+    } else {
+        f64::INFINITY
+    };
+    let held: Vec<f64> = (start.max(1)..t.len().saturating_sub(1))
+        .filter(|&i| {
+            let moving = (rec.delta[i + 1] - rec.delta[i - 1]).abs() / (t[i + 1] - t[i - 1]);
+            (rec.delta[i] - d0).abs() >= largest - near && moving < slow
+        })
+        .map(|i| (rec.delta[i] - d0).abs())
+        .collect();
+    (held.len() >= HELD_MIN_SAMPLES).then(|| median(&held).to_degrees())
+}
+
+/// The heading turned [deg] at each rudder reversal of a zig-zag record, found from the rudder alone:
+/// for reversal k the heading change from the first execute towards the side the ship was being
+/// steered (positive when it has turned that way), at the last sample where the rudder still held
+/// its angle before it crossed to the other side. A standard zig-zag reverses when this reaches the
+/// check angle; much less than the declared check angle means the test used a smaller one, and every
+/// overshoot measured beyond the declared angle is then too small. `None` for a record without a
+/// first execute towards `side`; empty when the rudder never reverses.
+pub fn heading_at_reversals_deg(
+    rec: &Recording,
+    rudder_deg: f64,
+    side: Side,
+    ship: &Ship,
+) -> Option<Vec<f64>> {
+    let first = first_execute(rec, rudder_deg, side, ship)?;
+    let d0 = approach_rudder(rec, &first);
+    let s = side.sign();
+    let definite = DEFINITE_FRACTION * rudder_deg.to_radians();
+    let near = execute_threshold_deg(rudder_deg).to_radians();
+    let n = rec.t.len();
+    let mut from = rec.t.partition_point(|&x| x < first.t_s);
+    // +1 while the rudder is on the first execute's side (relative to `s`), −1 on the other.
+    let mut on = 1.0;
+    let mut turned = Vec::new();
+    while let Some(other) = (from..n).find(|&i| on * s * (rec.delta[i] - d0) < -definite) {
+        let held = rec.delta[from..other]
+            .iter()
+            .map(|d| on * s * (d - d0))
+            .fold(f64::NEG_INFINITY, f64::max);
+        let Some(departed) = (from..other)
+            .rev()
+            .find(|&i| on * s * (rec.delta[i] - d0) >= held - near)
+        else {
+            break;
+        };
+        turned.push((on * s * (rec.psi[departed] - first.psi_rad)).to_degrees());
+        from = other;
+        on = -on;
+    }
+    Some(turned)
+}
+
+/// Heading change from the original course [deg] beyond which a run has left its manoeuvre: a
+/// turning circle turned this far against its rudder, or a zig-zag's heading this far off course (a
+/// standard zig-zag stays within its check angle plus an overshoot of a few tens of degrees).
+pub const LOST_MANOEUVRE_DEG: f64 = 90.0;
+
+/// How a run of `manoeuvre` left it, in words, or `None`: a turning circle whose ship turns more than
+/// [`LOST_MANOEUVRE_DEG`] the other way than its rudder, a zig-zag whose heading runs more than that
+/// off the original course. The run itself may be finite and bounded (status ok), but its metrics
+/// then describe no such manoeuvre, and a longer run does not define the missing ones.
+pub fn lost_manoeuvre(rec: &Recording, manoeuvre: &Manoeuvre, ship: &Ship) -> Option<String> {
+    let (rudder_deg, side, zigzag) = match *manoeuvre {
+        Manoeuvre::ZigZag {
+            rudder_deg, side, ..
+        } => (rudder_deg, side, true),
+        Manoeuvre::Turning { rudder_deg, side } => (rudder_deg, side, false),
+        Manoeuvre::Free => return None,
+    };
+    let first = first_execute(rec, rudder_deg, side, ship)?;
+    let start = rec.t.partition_point(|&t| t < first.t_s);
+    let s = side.sign();
+    let side_name = |sign: f64| if sign > 0.0 { "starboard" } else { "port" };
+    let dev = |i: usize| (s * (rec.psi[i] - first.psi_rad)).to_degrees();
+    if zigzag {
+        let i = (start..rec.t.len()).find(|&i| dev(i).abs() > LOST_MANOEUVRE_DEG)?;
+        Some(format!(
+            "the heading runs more than {LOST_MANOEUVRE_DEG}° off the original course at t = {:.1} s ({:.0}° at the end): the rudder no longer brings it back, and the run is no zig-zag from there",
+            rec.t[i],
+            dev(rec.t.len() - 1).abs()
+        ))
+    } else {
+        // Against the rudder from the furthest it had turned its way (0 at the execute): a turn that
+        // winds up and then unwinds with the rudder still held is as lost as one that never wound.
+        let mut furthest = 0.0_f64;
+        let i = (start..rec.t.len()).find(|&i| {
+            furthest = furthest.max(dev(i));
+            dev(i) < furthest - LOST_MANOEUVRE_DEG
+        })?;
+        Some(format!(
+            "the ship turns back to {} with the rudder held to {} (more than {LOST_MANOEUVRE_DEG}° from its furthest heading to {} by t = {:.1} s): the model turns against its rudder — a rudder force or yaw moment of the wrong sign, or a ship too unstable for this rudder angle — and no duration defines the turning metrics",
+            side_name(-s),
+            side_name(s),
+            side_name(s),
+            rec.t[i],
+        ))
+    }
 }
 
 fn zigzag_metrics(

@@ -539,6 +539,11 @@ impl MmgModel {
         delta_rad: f64,
         n_hz: f64,
     ) -> Result<MmgForces, DynamicsError> {
+        // The quadratic thrust form below at n < 0 gives a forward thrust (an astern ship that
+        // keeps its speed better than one with the propeller stopped): no force is better than that.
+        if n_hz < 0.0 {
+            return Err(DynamicsError::PropellerAstern { n_hz });
+        }
         let p = &self.params;
         let ship = &self.ship;
         let (u, v, r) = (state.u, state.v, state.r);

@@ -33,7 +33,7 @@ fn heading_east_beam_wind(extra: &str) -> String {
             format!(
                 "0,{},90,2,0,0,0,2,90{}",
                 2.0 * t,
-                if extra.is_empty() { "" } else { ",3,10" }
+                if extra.is_empty() { "" } else { ",3,1" }
             )
         },
     )

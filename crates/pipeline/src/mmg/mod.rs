@@ -163,6 +163,8 @@ pub struct MmgFit {
     /// Propeller rate of the model: the mean recorded rate of the training samples [1/s].
     pub propeller_rate_hz: f64,
     pub samples: usize,
+    /// Usable samples before the even thinning (`samples` when none was needed).
+    pub samples_available: usize,
     pub fit_time_s: f64,
     /// The propeller inflow the recorded thrust gave, when the training windows record one.
     pub inflow: Option<thrust::InflowEstimate>,
@@ -172,6 +174,8 @@ pub struct MmgFit {
 /// recordings (one per sample group).
 pub struct TrainingData {
     pub samples: Vec<EqSample>,
+    /// Usable samples of the training windows before the even thinning to [`MAX_SAMPLES`].
+    pub samples_available: usize,
     pub windows: Vec<TrainingWindow>,
     pub recordings: Vec<Recording>,
     /// Each training recording's recorded wind and current (`None`: calm), which its replays feel.
@@ -266,6 +270,7 @@ pub fn training_samples(ds: &Dataset, opts: &MmgFitOptions) -> Result<TrainingDa
     }
     // Neighbouring samples of a smoothed acceleration carry nearly the same information; evenly
     // thinned, the problem keeps its content and the cross-validation its speed.
+    let samples_available = samples.len();
     let stride = samples.len().div_ceil(MAX_SAMPLES).max(1);
     let samples: Vec<EqSample> = samples.into_iter().step_by(stride).collect();
     if samples.len() < 40 {
@@ -277,6 +282,7 @@ pub fn training_samples(ds: &Dataset, opts: &MmgFitOptions) -> Result<TrainingDa
     }
     Ok(TrainingData {
         samples,
+        samples_available,
         windows,
         recordings,
         environments,
@@ -326,6 +332,7 @@ pub fn fit_mmg_with_priors(
     }
     let TrainingData {
         samples,
+        samples_available,
         windows,
         recordings,
         environments,
@@ -403,6 +410,7 @@ pub fn fit_mmg_with_priors(
         windows,
         propeller_rate_hz: rate,
         samples: problem.samples.len(),
+        samples_available,
         fit_time_s,
         inflow,
     })

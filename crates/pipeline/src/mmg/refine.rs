@@ -135,6 +135,7 @@ pub fn refine_mmg(
         windows: fit.windows.clone(),
         propeller_rate_hz: fit.propeller_rate_hz,
         samples: fit.samples,
+        samples_available: fit.samples_available,
         fit_time_s: fit.fit_time_s,
         inflow: fit.inflow.clone(),
     };

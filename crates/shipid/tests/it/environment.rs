@@ -80,3 +80,44 @@ fn every_family_records_the_windage_it_was_identified_with_and_loads_back() {
     check(&["--set", "mmg", "--estimator", "bounded-lsq"], 0.005);
     check(&["--estimator", "sparse-gp"], 0.02);
 }
+
+/// Regression (`simulate --wind --out` wrote no wind channels, while `--current` wrote its own): a
+/// run in a wind, written as a recording and read back as one, kept its current and lost its wind.
+/// The time series now carries the wind as recorded channels: speed [m/s] and the direction it comes
+/// from [rad], which is the asked 240°.
+#[test]
+fn simulate_in_a_wind_writes_the_wind_channels() {
+    let dir = Scratch::new("simulate-wind");
+    let out = dir.0.join("run.csv");
+    shipid_ok(&[
+        "simulate",
+        "mmg:kvlcc2",
+        "--manoeuvre",
+        "zigzag:10/10:port",
+        "--duration",
+        "5",
+        "--wind",
+        "3,240",
+        "--current",
+        "0.05,90",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let text = std::fs::read_to_string(&out).unwrap();
+    let mut rows = text.lines().filter(|l| !l.starts_with('#'));
+    let header: Vec<&str> = rows.next().unwrap().split(',').collect();
+    let first: Vec<f64> = rows
+        .next()
+        .unwrap()
+        .split(',')
+        .map(|c| c.parse().unwrap())
+        .collect();
+    let at = |name: &str| {
+        let i = header.iter().position(|h| *h == name);
+        first[i.unwrap_or_else(|| panic!("no `{name}` column in {header:?}"))]
+    };
+    assert!((at("wind_speed") - 3.0).abs() < 1e-9);
+    assert!((at("wind_from") - 240f64.to_radians()).abs() < 1e-6);
+    assert!((at("current_speed") - 0.05).abs() < 1e-9);
+    assert!((at("current_from") - 90f64.to_radians()).abs() < 1e-6);
+}

@@ -111,3 +111,22 @@ fn a_recording_without_a_usable_rate_drives_nothing() {
         assert_eq!(RecordedRate::of_recording(&rec), None, "n = {n:?}");
     }
 }
+
+/// Regression (the ahead thrust curve evaluated at n < 0 gave a forward thrust: a ship with its
+/// propeller astern at −8 rps kept its speed better than one with the propeller stopped): the model
+/// has no astern quadrant and says so instead of answering.
+#[test]
+fn a_propeller_turning_astern_has_no_forces() {
+    let m = MmgModel::kvlcc2();
+    let s = State::approach(1.179);
+    for n_hz in [-8.0, -1e-3] {
+        assert!(
+            matches!(
+                m.forces_at_rate(&s, 0.0, n_hz),
+                Err(shipid_sim::DynamicsError::PropellerAstern { .. })
+            ),
+            "n = {n_hz}"
+        );
+    }
+    assert!(m.forces_at_rate(&s, 0.0, 0.0).is_ok());
+}
