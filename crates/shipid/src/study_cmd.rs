@@ -33,6 +33,10 @@ pub fn run_and_write(
             .dataset(&study.dataset_path),
     )?;
     refuse_foreign_folder(out)?;
+    shipid_study::output::refuse_links(out)?;
+    if !force {
+        refuse_other_study(study, out)?;
+    }
     let lock = RunLock::acquire(out)?;
     if let Some(pid) = lock.taken_over_from {
         eprintln!(
@@ -147,6 +151,38 @@ fn refuse_foreign_folder(out: &Path) -> Result<(), CliError> {
     )))
 }
 
+/// A folder holding another study's results (its `study.toml` or `run.json` names another study):
+/// a run would leave the other study's cases beside its own, and its tables and page would replace
+/// the other's without a word. Refused naming both; `--force` (rerun everything) writes over it.
+fn refuse_other_study(study: &Study, out: &Path) -> Result<(), CliError> {
+    let from_toml = || {
+        let path = out.join("study.toml");
+        let text = std::fs::read_to_string(&path).ok()?;
+        let name = toml::from_str::<toml::Table>(&text)
+            .ok()?
+            .get("name")?
+            .as_str()?
+            .to_string();
+        Some((name, path))
+    };
+    let from_json = || {
+        let path = out.join("run.json");
+        let text = std::fs::read_to_string(&path).ok()?;
+        let json: serde_json::Value = serde_json::from_str(&text).ok()?;
+        Some((json.get("study")?.as_str()?.to_string(), path))
+    };
+    match from_toml().or_else(from_json) {
+        Some((other, path)) if other != study.name => Err(bad_input(format!(
+            "--out {}: holds the results of study `{other}` ({}), not of `{}`: give another --out, or --force to rerun `{}` into it (the other study's cases stay under cases/)",
+            out.display(),
+            path.display(),
+            study.name,
+            study.name
+        ))),
+        _ => Ok(()),
+    }
+}
+
 fn check_out_dir(out: &Path) -> Result<(), CliError> {
     let mut p = Some(out);
     while let Some(dir) = p {
@@ -225,9 +261,10 @@ pub fn plot(study_path: &Path, out: Option<&Path>) -> Result<Outcome, CliError> 
         &[],
         &crate::outputs::Inputs::new().file(study_path, "the study file"),
     )?;
-    // Another study's folder: its figures would be drawn from the wrong grid, and its own removed
-    // as stale.
+    // Another study's folder (or this one's before its `[test]` list changed): its figures would
+    // be drawn from the wrong grid or tests, and its own removed as stale.
     shipid_study::tables::check_output_of(&study, &out)?;
+    shipid_study::output::refuse_links(&out)?;
     // Not while a run is rewriting the tables the figures are drawn from.
     let lock = RunLock::acquire(&out)?;
     let report = shipid_figures::write_figures(&study, &out);
@@ -268,57 +305,13 @@ pub fn table(
         )));
     }
     let t = Table::read_csv(&path).map_err(|e| bad_input(e.to_string()))?;
-    check_cases_of(&t, &study, &path)?;
+    shipid_study::tables::check_output_of(&study, &dir)?;
     let md = shipid_study::tables::summary_pivot(&t, pivot).map_err(|e| {
         let hint = pivot_hint(&t, pivot, &e).unwrap_or_default();
         bad_input(format!("--pivot: {e} in {}{hint}", path.display()))
     })?;
     println!("{md}");
     Ok(Outcome::Ok)
-}
-
-/// A summary written by another study (or by an older version of this one) would be shown under this
-/// study's name: its cases must be the study's.
-fn check_cases_of(summary: &Table, study: &Study, path: &Path) -> Result<(), CliError> {
-    let Some(col) = summary.column("case") else {
-        return Err(bad_input(format!(
-            "{}: no `case` column: not a summary written by shipid run",
-            path.display()
-        )));
-    };
-    let known: std::collections::BTreeSet<&str> =
-        study.cases.iter().map(|c| c.id.as_str()).collect();
-    let foreign: std::collections::BTreeSet<String> = (0..summary.rows())
-        .map(|i| col.cell(i))
-        .filter(|id| !known.contains(id.as_str()))
-        .collect();
-    if let Some(first) = foreign.iter().next() {
-        return Err(bad_input(format!(
-            "{}: {} case(s) are not cases of {} (e.g. {first}): written by another study or an older version of it; run `shipid run {}` first",
-            path.display(),
-            foreign.len(),
-            study.path.display(),
-            study.path.display()
-        )));
-    }
-    let shown: std::collections::BTreeSet<String> =
-        (0..summary.rows()).map(|i| col.cell(i)).collect();
-    let missing: Vec<&str> = known
-        .iter()
-        .copied()
-        .filter(|id| !shown.contains(*id))
-        .collect();
-    if let Some(first) = missing.first() {
-        return Err(bad_input(format!(
-            "{}: lacks {} of the {} cases of {} (e.g. {first}): run `shipid run {}` first",
-            path.display(),
-            missing.len(),
-            known.len(),
-            study.path.display(),
-            study.path.display()
-        )));
-    }
-    Ok(())
 }
 
 /// For a pivot refused because it puts cases together: the pivot that tells them apart.
@@ -340,6 +333,13 @@ fn pivot_hint(
     ))
 }
 
+/// The tables `shipid check` compares, each with the columns that name a row (rows are paired by
+/// them, not by position).
+const COMPARED: [(&str, &[&str]); 2] = [
+    ("summary", &["case", "test"]),
+    ("coefficients", &["case", "dof", "term", "quantity"]),
+];
+
 /// Tolerances of `shipid check`: timings are ignored, everything else is compared to 1e-8 absolute plus
 /// 1e-5 relative unless the study's `[check]` table says otherwise.
 pub const DEFAULT_TOLERANCE: Tolerance = Tolerance {
@@ -360,16 +360,26 @@ pub fn check(
     // Sized from the grid's axes before any case is built (a 5 KB file can make millions).
     let study = shipid_study::load_study_within(study_path, allow_large)?;
     // Named before the run, not after minutes of it.
+    shipid_study::tables::check_tolerance_columns(&study)?;
     if bless {
         check_out_dir(reference)
             .map_err(|_| bad_input(format!("--reference {}: not a folder", reference.display())))?;
     } else {
-        for stem in ["summary", "coefficients"] {
+        for (stem, _) in COMPARED {
             let path = reference.join(format!("{stem}.csv"));
             if !path.is_file() {
                 return Err(bad_input(format!(
                     "{} not found (create it with --bless)",
                     path.display()
+                )));
+            }
+            let r = Table::read_csv(&path).map_err(|e| bad_input(e.to_string()))?;
+            // |fresh − ∞| ≤ abs + rel·∞ holds for every fresh value: such a reference passes any run.
+            if let Some((row, column, value)) = r.non_finite_cell() {
+                return Err(bad_input(format!(
+                    "{}: row {row} (line {}), column `{column}`: {value} is not a finite number; a reference holds the finite values of a run (bless it again)",
+                    path.display(),
+                    row + 1
                 )));
             }
         }
@@ -412,16 +422,14 @@ pub fn check(
         return Ok(Outcome::Ok);
     }
     let mut all = Vec::new();
-    for stem in ["summary", "coefficients"] {
+    for (stem, key) in COMPARED {
         let reference_path = reference.join(format!("{stem}.csv"));
         // A reference that cannot be read is the user's input, not a failed run.
         let r = Table::read_csv(&reference_path).map_err(|e| bad_input(e.to_string()))?;
         let f = Table::read_csv(&fresh_dir.join(format!("{stem}.csv"))).map_err(failed)?;
-        all.extend(
-            compare(&f, &r, &per_column, DEFAULT_TOLERANCE)
-                .into_iter()
-                .map(|d| format!("{stem}: {d}")),
-        );
+        let diffs = compare(&f, &r, key, &per_column, DEFAULT_TOLERANCE)
+            .map_err(|e| bad_input(format!("{}: {e}", reference_path.display())))?;
+        all.extend(diffs.into_iter().map(|d| format!("{stem}: {d}")));
     }
     drop(fresh);
     if all.is_empty() {

@@ -32,6 +32,14 @@ pub enum StudyError {
     /// The output folder holds the results of another study (or of an older version of this one).
     #[error("{}: {message}", path.display())]
     NotThisStudy { path: PathBuf, message: String },
+    /// A symbolic link inside the output folder where a run writes: followed, it would write (or
+    /// remove) outside the folder.
+    #[error(
+        "{}: a symbolic link (to {}) inside the output folder; shipid writes there and will not follow it out of the folder: remove the link or give another --out",
+        path.display(),
+        target.display()
+    )]
+    Link { path: PathBuf, target: PathBuf },
     /// A result table could not be written or read.
     #[error("{}: {message}", path.display())]
     Table { path: PathBuf, message: String },
@@ -46,6 +54,7 @@ impl StudyError {
                 | StudyError::Locked { .. }
                 | StudyError::TooLarge { .. }
                 | StudyError::NotThisStudy { .. }
+                | StudyError::Link { .. }
         )
     }
 }

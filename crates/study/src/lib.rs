@@ -5,11 +5,12 @@
 //!
 //! Module map: `study` (the file, its checks, the case grid) ← `runner` (per-case fit, validation,
 //! stored results, typed statuses and outcomes) ← `tables` (summary, coefficients, diagnostics) and
-//! `record` (`study.toml`, `run.json`); `lock` (one run per output folder), `progress` (a bar or
-//! plain lines); `error`.
+//! `record` (`study.toml`, `run.json`); `lock` (one run per output folder), `output` (no link inside
+//! the output folder followed out of it), `progress` (a bar or plain lines); `error`.
 
 pub mod error;
 pub mod lock;
+pub mod output;
 pub mod progress;
 pub mod record;
 pub mod runner;

@@ -39,6 +39,14 @@ impl RunLock {
             path: out.to_path_buf(),
             source,
         })?;
+        // Opened for writing, a link planted at the lock's name would have its target truncated
+        // and overwritten with a pid (or created): refused, never followed.
+        if std::fs::symlink_metadata(&path).is_ok_and(|m| m.file_type().is_symlink()) {
+            return Err(StudyError::Link {
+                target: std::fs::read_link(&path).unwrap_or_default(),
+                path,
+            });
+        }
         // A holder removes the file (while still locked) when it finishes; a run that opened the old
         // file just before must not take the lock of a file that is gone, so it checks and retries.
         for _ in 0..100 {
@@ -103,7 +111,9 @@ fn read_pid(file: &mut File) -> Option<u32> {
 #[cfg(unix)]
 fn same_file(file: &File, path: &Path) -> bool {
     use std::os::unix::fs::MetadataExt;
-    match (file.metadata(), std::fs::metadata(path)) {
+    // The path itself, not what it points to: a link swapped in after the check above is not the
+    // opened file, so the run retries rather than write through it.
+    match (file.metadata(), std::fs::symlink_metadata(path)) {
         (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
         _ => false,
     }

@@ -280,7 +280,7 @@ struct StoredConfig<'a> {
 }
 
 /// The text of a case's `config.toml`.
-fn stored_config(study: &Study, case: &Case) -> std::io::Result<String> {
+pub(crate) fn stored_config(study: &Study, case: &Case) -> std::io::Result<String> {
     let set_fnv1a = (shipid_model::CoefficientSet::builtin(&case.set).is_none()
         && case.set != crate::study::NO_SET)
         .then(|| std::fs::read(resolve_set(study, &case.set)).ok())
@@ -777,6 +777,11 @@ pub fn run_study(
             .par_iter()
             .map(|case| {
                 let dir = out.join("cases").join(&case.id);
+                // An error names the file: "File name too long" alone leaves the user guessing.
+                let named = |path: &Path| {
+                    let path = path.display().to_string();
+                    move |e: std::io::Error| std::io::Error::new(e.kind(), format!("{path}: {e}"))
+                };
                 let config = stored_config(study, case)?;
                 let reused = if force {
                     None
@@ -789,17 +794,21 @@ pub fn run_study(
                     None => {
                         remove_temporaries(&dir);
                         let (r, model) = run_case(study, case);
-                        write_atomic(&dir.join("config.toml"), config.as_bytes())?;
+                        let path = dir.join("config.toml");
+                        write_atomic(&path, config.as_bytes()).map_err(named(&path))?;
                         if let Some(m) = model {
-                            write_atomic(&dir.join("model.toml"), m.as_bytes())?;
+                            let path = dir.join("model.toml");
+                            write_atomic(&path, m.as_bytes()).map_err(named(&path))?;
                         }
                         // Written last: its presence marks the case as finished.
+                        let path = dir.join("result.json");
                         write_atomic(
-                            &dir.join("result.json"),
+                            &path,
                             serde_json::to_string_pretty(&r)
                                 .map_err(std::io::Error::other)?
                                 .as_bytes(),
-                        )?;
+                        )
+                        .map_err(named(&path))?;
                         r
                     }
                 };

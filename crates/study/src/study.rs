@@ -334,6 +334,7 @@ impl CheckedStudy {
         check_mmg_estimators(path, &raw.sets, &estimators)?;
         let tests = test_recordings(path, &raw.test.recordings, known)?;
         let bands = check_bands(path, &raw)?;
+        check_tolerances(path, &raw.check)?;
         let data_fnv1a = data_fingerprint(path, &dataset_path, &dataset)?;
         Ok(CheckedStudy {
             path: path.to_path_buf(),
@@ -586,6 +587,62 @@ fn check_bands(path: &Path, raw: &RawStudy) -> Result<Option<StudyBands>, InputE
         seed: 1,
         calibrate: raw.calibrate,
     }))
+}
+
+/// Most a `[check]` tolerance's `rel` may be: at 1 a value passes anywhere between zero and twice
+/// the reference, so a larger one no longer checks anything.
+pub const MAX_RELATIVE_TOLERANCE: f64 = 1.0;
+
+/// Most a `[check]` tolerance's `abs` may be. Its unit is the column's, so no one bound fits all;
+/// the tables' largest magnitudes are times and distances of a few thousand (seconds, metres), and
+/// an `abs` of a million already passes any of their values: above it, a tolerance is a typo
+/// (`1e300`), not a tolerance.
+pub const MAX_ABSOLUTE_TOLERANCE: f64 = 1e6;
+
+/// `[check]`'s tolerances are finite and not negative: an infinite (or 1e309) `abs` or `rel` lets
+/// every value pass, a negative one fails equal values, and NaN fails every comparison.
+/// `fit_time_s` is the fit's wall time, which `shipid check` never compares: a tolerance for it
+/// would read as if it were. Whether a key names a column of the tables is known only with them
+/// (`tables::check_tolerance_columns`).
+fn check_tolerances(path: &Path, check: &BTreeMap<String, Tolerance>) -> Result<(), InputError> {
+    for (column, t) in check {
+        if column == "fit_time_s" {
+            return Err(InputError::key(
+                path,
+                format!("check.{column}"),
+                "the fit's wall time varies between runs and is never compared: remove this tolerance",
+            ));
+        }
+        for (name, v) in [("abs", t.abs), ("rel", t.rel)] {
+            let most = if name == "rel" {
+                MAX_RELATIVE_TOLERANCE
+            } else {
+                MAX_ABSOLUTE_TOLERANCE
+            };
+            let why = if v.is_nan() {
+                Some("is not a number (it would fail every comparison)".to_string())
+            } else if v.is_infinite() {
+                Some("must be finite (an infinite tolerance passes every value)".to_string())
+            } else if v < 0.0 {
+                Some("must not be negative (it would fail equal values)".to_string())
+            } else if v > most {
+                Some(format!(
+                    "must be at most {} (a larger one passes any value of the tables)",
+                    shipid_io::error::number(most)
+                ))
+            } else {
+                None
+            };
+            if let Some(why) = why {
+                return Err(InputError::key(
+                    path,
+                    format!("check.{column}.{name}"),
+                    format!("{} {why}", shipid_io::error::number(v)),
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The name becomes the default results directory (`results/NAME`): one plain word.
@@ -1409,6 +1466,14 @@ fn case(set: &str, est: &EstimatorSpec, solver: &str, combo: &[String], w: Windo
     // `cases/`): a set file named `.x.toml` or `../x.toml` must not give one.
     let visible = clean.trim_start_matches('.');
     let dots = clean.len() - visible.len();
-    c.id = format!("{}{visible}-{:08x}", "_".repeat(dots), hash as u32);
+    // A file name holds at most 255 bytes, and a figure's name holds the id and a test name: long
+    // recording names (two of 121 characters trained together) cut the readable part. The hash
+    // covers the whole configuration, so cut ids stay distinct (`check_unique_ids` holds it).
+    let mut readable = format!("{}{visible}", "_".repeat(dots));
+    readable.truncate(MAX_READABLE_ID); // ASCII after cleaning: any byte is a boundary
+    c.id = format!("{readable}-{:08x}", hash as u32);
     c
 }
+
+/// Most bytes of a case id before its hash (`-` and 8 hex digits follow).
+pub const MAX_READABLE_ID: usize = 100;

@@ -2,6 +2,7 @@
 //! `diagnostics` (long tables, one row per case × DOF × term × quantity). Every row carries the columns
 //! that tell its case apart (case id, set, estimator, hyper-parameters, training).
 
+use std::collections::BTreeSet;
 use std::path::Path;
 
 use shipid_tables::{Pivot, Table, TableError};
@@ -96,8 +97,10 @@ pub fn summary_pivot(summary: &Table, pivot: Option<&str>) -> Result<String, Tab
 }
 
 /// Refuses an output folder whose `summary.csv` is not this study's run: a case the study does not
-/// have (another study, or an older version of this one, wrote it) or a case of the study missing.
-/// `shipid table` and `shipid plot` check it before showing anything under the study's name.
+/// have (another study, or an older version of this one, wrote it), a case of the study missing,
+/// other tests than the study's, or `cases/` holding other results than the summary
+/// ([`check_cases_are_of_the_summary`]). `shipid table` and `shipid plot` check it before showing
+/// anything under the study's name.
 pub fn check_output_of(study: &Study, out: &Path) -> Result<(), StudyError> {
     let path = out.join("summary.csv");
     let refuse = |message: String| StudyError::NotThisStudy {
@@ -116,10 +119,8 @@ pub fn check_output_of(study: &Study, out: &Path) -> Result<(), StudyError> {
             "no `case` column: not a summary written by shipid run".into(),
         ));
     };
-    let shown: std::collections::BTreeSet<String> =
-        (0..summary.rows()).map(|i| col.cell(i)).collect();
-    let known: std::collections::BTreeSet<&str> =
-        study.cases.iter().map(|c| c.id.as_str()).collect();
+    let shown: BTreeSet<String> = (0..summary.rows()).map(|i| col.cell(i)).collect();
+    let known: BTreeSet<&str> = study.cases.iter().map(|c| c.id.as_str()).collect();
     let run_first = format!("run `shipid run {}` first", study.path.display());
     let foreign: Vec<&String> = shown
         .iter()
@@ -142,7 +143,194 @@ pub fn check_output_of(study: &Study, out: &Path) -> Result<(), StudyError> {
             study.path.display()
         )));
     }
+    // Case ids do not hold the test list: a study whose `[test]` changed since the run has the
+    // same cases and other tests.
+    if let Some(test) = summary.column("test") {
+        let stored: BTreeSet<String> = (0..summary.rows())
+            .map(|i| test.cell(i))
+            .filter(|t| !t.is_empty())
+            .collect();
+        let wanted: BTreeSet<String> = study.tests.iter().cloned().collect();
+        // A run whose every fit failed has no test rows at all: nothing to compare.
+        if !stored.is_empty() && stored != wanted {
+            let list = |v: Vec<&String>| {
+                v.iter()
+                    .take(3)
+                    .map(|t| format!("`{t}`"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            };
+            let extra: Vec<&String> = stored.difference(&wanted).collect();
+            let lacking: Vec<&String> = wanted.difference(&stored).collect();
+            let mut parts = Vec::new();
+            if !extra.is_empty() {
+                parts.push(format!(
+                    "tests {} that the study does not test",
+                    list(extra)
+                ));
+            }
+            if !lacking.is_empty() {
+                parts.push(format!("no rows of the study's tests {}", list(lacking)));
+            }
+            return Err(refuse(format!(
+                "holds {} (the `[test]` list of {} changed since the run): {run_first}",
+                parts.join(" and "),
+                study.path.display()
+            )));
+        }
+    }
+    check_cases_are_of_the_summary(study, out, &summary, &path, &run_first)
+}
+
+/// Refuses a folder whose `cases/` no longer holds what `summary.csv` was made from: a case's
+/// stored configuration that is not this study's (an interrupted run of a changed study rewrote
+/// it), or a `result.json` whose tests or MRAEs are not the summary's rows of its case (a rerun
+/// stopped before its tables). The shipid version a case names is left out of the comparison: the
+/// report warns of that one. Contents are compared, not times: a fresh clone of a results folder
+/// has its files' times in checkout order.
+fn check_cases_are_of_the_summary(
+    study: &Study,
+    out: &Path,
+    summary: &Table,
+    summary_path: &Path,
+    run_first: &str,
+) -> Result<(), StudyError> {
+    let refuse = |message: String| StudyError::NotThisStudy {
+        path: summary_path.to_path_buf(),
+        message,
+    };
+    let without_version = |text: &str| {
+        toml::from_str::<toml::Table>(text).ok().map(|mut t| {
+            t.remove("shipid_version");
+            t
+        })
+    };
+    let rows = summary_rows_by_case(summary);
+    for case in &study.cases {
+        let dir = out.join("cases").join(&case.id);
+        let config = dir.join("config.toml");
+        if let (Ok(stored), Ok(resolved)) = (
+            std::fs::read_to_string(&config),
+            crate::runner::stored_config(study, case),
+        ) && without_version(&stored) != without_version(&resolved)
+        {
+            return Err(refuse(format!(
+                "{} is of another configuration than {} (a run of a changed study, interrupted \
+                 before its tables?): the summary is not this study's results; {run_first}",
+                config.display(),
+                study.path.display()
+            )));
+        }
+        let result = dir.join("result.json");
+        let Some(stored) = std::fs::read(&result)
+            .ok()
+            .and_then(|b| serde_json::from_slice::<CaseResult>(&b).ok())
+        else {
+            continue;
+        };
+        let from_result: Vec<(String, Option<f64>)> = if stored.tests.is_empty() {
+            vec![(String::new(), None)]
+        } else {
+            stored
+                .tests
+                .iter()
+                .map(|t| (t.test.clone(), t.mrae))
+                .collect()
+        };
+        let shown = rows.get(case.id.as_str()).cloned().unwrap_or_default();
+        if !same_rows(&from_result, &shown) {
+            return Err(refuse(format!(
+                "{} holds other results than the summary's rows of its case (a rerun stopped \
+                 before its tables?); {run_first}",
+                result.display()
+            )));
+        }
+    }
     Ok(())
+}
+
+/// Each case's (test, mrae) rows of a summary, in order.
+fn summary_rows_by_case(
+    summary: &Table,
+) -> std::collections::BTreeMap<String, Vec<(String, Option<f64>)>> {
+    let mut by_case: std::collections::BTreeMap<String, Vec<(String, Option<f64>)>> =
+        Default::default();
+    let (Some(case), Some(test)) = (summary.column("case"), summary.column("test")) else {
+        return by_case;
+    };
+    let mrae = summary.column("mrae");
+    for i in 0..summary.rows() {
+        let m = mrae.and_then(|c| c.cell(i).parse::<f64>().ok());
+        by_case
+            .entry(case.cell(i))
+            .or_default()
+            .push((test.cell(i), m));
+    }
+    by_case
+}
+
+/// The same tests with the same MRAEs (to the last bits a CSV round trip may change).
+fn same_rows(a: &[(String, Option<f64>)], b: &[(String, Option<f64>)]) -> bool {
+    a.len() == b.len()
+        && a.iter().zip(b).all(|((ta, ma), (tb, mb))| {
+            ta == tb
+                && match (ma, mb) {
+                    (Some(x), Some(y)) => (x - y).abs() <= 1e-12 * x.abs().max(y.abs()),
+                    (None, None) => true,
+                    _ => false,
+                }
+        })
+}
+
+/// `[check]`'s tolerances name columns of the compared tables (summary and coefficients): a
+/// misspelt key (`mrea`, `MRAE`) would leave its column at the default tolerance without a word.
+/// Text columns (`case`, `test`) are compared exactly, so a tolerance for one is refused too.
+pub fn check_tolerance_columns(study: &Study) -> Result<(), StudyError> {
+    let summary = summary_table(study, &[]);
+    let coefficients = coefficients_table(study, &[]);
+    let numeric: BTreeSet<&str> = summary
+        .columns
+        .iter()
+        .chain(&coefficients.columns)
+        .filter(|(n, c)| matches!(c, shipid_tables::Column::Num(_)) && n != "fit_time_s")
+        .map(|(n, _)| n.as_str())
+        .collect();
+    for column in study.check.keys() {
+        if !numeric.contains(column.as_str()) {
+            let near: Vec<&&str> = numeric
+                .iter()
+                .filter(|n| n.eq_ignore_ascii_case(column) || strsim_close(n, column))
+                .collect();
+            let hint = near
+                .first()
+                .map(|n| format!(" (did you mean `{n}`?)"))
+                .unwrap_or_default();
+            return Err(StudyError::Input(shipid_io::InputError::key(
+                &study.path,
+                format!("check.{column}"),
+                format!(
+                    "no numeric column `{column}` in the summary or coefficients table{hint}; \
+                     tolerances apply to {}",
+                    numeric.iter().copied().collect::<Vec<_>>().join(", ")
+                ),
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Two names one letter apart or with two letters swapped (`mrea` for `mrae`).
+fn strsim_close(a: &str, b: &str) -> bool {
+    let (a, b): (Vec<char>, Vec<char>) = (a.chars().collect(), b.chars().collect());
+    if a.len() != b.len() {
+        return false;
+    }
+    let differ: Vec<usize> = (0..a.len()).filter(|&i| a[i] != b[i]).collect();
+    match differ.as_slice() {
+        [_] => true,
+        [i, j] => *j == i + 1 && a[*i] == b[*j] && a[*j] == b[*i],
+        _ => false,
+    }
 }
 
 /// The cells of a `<metric>_band` value, when the summary has that metric's band columns and no

@@ -267,10 +267,11 @@ impl Table {
             };
             cells.insert((r, c), v);
         }
+        let header: Vec<String> = col_keys.iter().map(|c| md_escape(c)).collect();
         let mut out = format!(
             "| {} | {} |\n",
-            pivot.rows.join(" / "),
-            col_keys.join(" | ")
+            md_escape(&pivot.rows.join(" / ")),
+            header.join(" | ")
         );
         out.push_str(&format!("|---|{}\n", "---|".repeat(col_keys.len())));
         for r in &row_keys {
@@ -279,11 +280,11 @@ impl Table {
                 .map(|c| {
                     cells
                         .get(&(r.clone(), c.clone()))
-                        .cloned()
+                        .map(|v| md_escape(v))
                         .unwrap_or_default()
                 })
                 .collect();
-            out.push_str(&format!("| {r} | {} |\n", line.join(" | ")));
+            out.push_str(&format!("| {} | {} |\n", md_escape(r), line.join(" | ")));
         }
         Ok(out)
     }
@@ -410,6 +411,28 @@ impl Table {
     }
 }
 
+/// A name from the data as a markdown table cell: a `|` would end the cell (and split the row into
+/// more cells than the header has), and markdown renderers pass HTML through, so a recording named
+/// `<svg onload=…>` would become markup. Both are escaped (`\|`, `&lt;`, `&gt;`, `&amp;`, and `\\`
+/// so that a name's own backslash cannot unescape a pipe); a line break, which would end the row,
+/// becomes a space.
+pub fn md_escape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for ch in s.chars() {
+        match ch {
+            // A backslash first, so that a name ending in one cannot unescape the `\|` after it.
+            '\\' => out.push_str("\\\\"),
+            '|' => out.push_str("\\|"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '&' => out.push_str("&amp;"),
+            '\n' | '\r' => out.push(' '),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
 /// A temporary name beside `path`, unique per process and call: two writers of one table (two runs,
 /// two threads) must never share one, or one renames the other's half-written file into place.
 fn unique_tmp(path: &Path) -> std::path::PathBuf {
@@ -466,30 +489,52 @@ pub struct Tolerance {
     pub rel: f64,
 }
 
-/// Differences between a fresh table and a reference one. Text columns must match exactly; numeric
-/// columns within their tolerance (`default` when not listed; `None` in `per_column` ignores a column);
-/// a value present on one side only is a difference, and so is a column the reference lacks (a
-/// column added since the reference was stored would otherwise go unchecked until the next bless).
+/// Differences between a fresh table and a reference one, row by row as `key` (columns that together
+/// name a row: a case and its test) pairs them, so a reference stored in another row order still
+/// matches. Text columns must match exactly; numeric columns within their tolerance (`default` when
+/// not listed; `None` in `per_column` ignores a column); a value present on one side only is a
+/// difference, and so is a column the reference lacks (a column added since the reference was stored
+/// would otherwise go unchecked until the next bless), and a row of either side that the other lacks
+/// (named by its key). A key column missing from either table is an error.
+///
+/// The reference is trusted to hold finite numbers: |fresh − ∞| ≤ abs + rel·∞ holds for any fresh
+/// value, so callers refuse a reference with [`Table::non_finite_cell`] first. Cells that parse as
+/// numbers in a text column are compared as numbers only when both are finite, as text otherwise.
 pub fn compare(
     fresh: &Table,
     reference: &Table,
+    key: &[&str],
     per_column: &BTreeMap<String, Option<Tolerance>>,
     default: Tolerance,
-) -> Vec<String> {
+) -> Result<Vec<String>, TableError> {
     let mut diffs = Vec::new();
-    if fresh.rows() != reference.rows() {
-        diffs.push(format!(
-            "{} rows, reference has {}",
-            fresh.rows(),
-            reference.rows()
-        ));
-        return diffs;
-    }
+    let fresh_rows = keyed_rows(fresh, key)?;
+    let reference_rows = keyed_rows(reference, key)?;
     for (name, _) in &fresh.columns {
         if reference.column(name).is_none() && per_column.get(name) != Some(&None) {
             diffs.push(format!(
                 "column `{name}` is not in the reference (new since it was stored?)"
             ));
+        }
+    }
+    let fresh_index: BTreeMap<&String, usize> =
+        fresh_rows.iter().enumerate().map(|(i, k)| (k, i)).collect();
+    let reference_index: BTreeMap<&String, usize> = reference_rows
+        .iter()
+        .enumerate()
+        .map(|(i, k)| (k, i))
+        .collect();
+    for (i, k) in reference_rows.iter().enumerate() {
+        if !fresh_index.contains_key(k) {
+            diffs.push(format!(
+                "row {} ({k}) of the reference is not in the fresh run",
+                i + 1
+            ));
+        }
+    }
+    for k in &fresh_rows {
+        if !reference_index.contains_key(k) {
+            diffs.push(format!("the fresh run's row ({k}) is not in the reference"));
         }
     }
     for (name, rcol) in &reference.columns {
@@ -502,25 +547,73 @@ pub fn compare(
             diffs.push(format!("column `{name}` is missing"));
             continue;
         };
-        for i in 0..reference.rows() {
-            let (f, r) = (fcol.cell(i), rcol.cell(i));
-            let same = match (f.parse::<f64>(), r.parse::<f64>()) {
-                (Ok(a), Ok(b)) => {
-                    (a - b).abs() <= tol.abs + tol.rel * b.abs() || (a.is_nan() && b.is_nan())
-                }
+        for (ri, k) in reference_rows.iter().enumerate() {
+            let Some(&fi) = fresh_index.get(k) else {
+                continue;
+            };
+            let (f, r) = (fcol.cell(fi), rcol.cell(ri));
+            let finite = |c: &str| c.parse::<f64>().ok().filter(|x| x.is_finite());
+            let same = match (finite(&f), finite(&r)) {
+                (Some(a), Some(b)) => (a - b).abs() <= tol.abs + tol.rel * b.abs(),
                 _ => f == r,
             };
             if !same {
-                diffs.push(format!("row {}: `{name}` = {f}, reference {r}", i + 1));
+                diffs.push(format!(
+                    "row {} ({k}): `{name}` = {f}, reference {r}",
+                    ri + 1
+                ));
             }
         }
     }
-    diffs
+    Ok(diffs)
+}
+
+/// Each row's key (`case `x`, test `y``), with ` #n` added to the second and later rows of one key,
+/// so that rows repeating a key are still paired in order.
+fn keyed_rows(t: &Table, key: &[&str]) -> Result<Vec<String>, TableError> {
+    let cols = key
+        .iter()
+        .map(|n| t.get(n))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut seen: BTreeMap<String, usize> = BTreeMap::new();
+    Ok((0..t.rows())
+        .map(|i| {
+            let k = key
+                .iter()
+                .zip(&cols)
+                .map(|(n, c)| format!("{n} `{}`", c.cell(i)))
+                .collect::<Vec<_>>()
+                .join(", ");
+            let n = seen.entry(k.clone()).or_default();
+            *n += 1;
+            if *n > 1 { format!("{k} #{n}") } else { k }
+        })
+        .collect())
+}
+
+impl Table {
+    /// The first numeric cell that is infinite (`inf`, `-inf`, `Infinity`, `1e309`): its row (from
+    /// 1, the header not counted), column and value. A `NaN` is not one: it equals only a `NaN`
+    /// under [`compare`], so it cannot let a fresh value pass.
+    pub fn non_finite_cell(&self) -> Option<(usize, &str, String)> {
+        for i in 0..self.rows() {
+            for (name, c) in &self.columns {
+                if let Column::Num(v) = c
+                    && v[i].is_some_and(f64::is_infinite)
+                {
+                    return Some((i + 1, name.as_str(), c.cell(i)));
+                }
+            }
+        }
+        None
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    const KEY: [&str; 2] = ["case", "test"];
 
     fn sample() -> Table {
         let mut t = Table::default();
@@ -550,16 +643,21 @@ mod tests {
                 rel: 0.0,
             }),
         )]);
-        let d = compare(&fresh, &sample(), &tol, Tolerance { abs: 0.0, rel: 0.0 });
+        let exact = Tolerance { abs: 0.0, rel: 0.0 };
+        let d = compare(&fresh, &sample(), &KEY, &tol, exact).unwrap();
         assert_eq!(
             d,
             vec![
-                "row 2: `mrae` = 0.3, reference ".to_string(),
-                "row 3: `mrae` = 0.26, reference 0.25".to_string()
+                "row 2 (case `a`, test `tc`): `mrae` = 0.3, reference ".to_string(),
+                "row 3 (case `b`, test `zz`): `mrae` = 0.26, reference 0.25".to_string()
             ]
         );
         let ignore = BTreeMap::from([("mrae".to_string(), None)]);
-        assert!(compare(&fresh, &sample(), &ignore, Tolerance { abs: 0.0, rel: 0.0 }).is_empty());
+        assert!(
+            compare(&fresh, &sample(), &KEY, &ignore, exact)
+                .unwrap()
+                .is_empty()
+        );
     }
 
     #[test]
@@ -569,15 +667,123 @@ mod tests {
         wider.push_num("epsilon", vec![Some(1.0), None, Some(2.0)]);
         let none = BTreeMap::new();
         assert_eq!(
-            compare(&wider, &sample(), &none, exact),
+            compare(&wider, &sample(), &KEY, &none, exact).unwrap(),
             vec!["column `epsilon` is not in the reference (new since it was stored?)".to_string()]
         );
         assert_eq!(
-            compare(&sample(), &wider, &none, exact),
+            compare(&sample(), &wider, &KEY, &none, exact).unwrap(),
             vec!["column `epsilon` is missing".to_string()]
         );
         let ignore = BTreeMap::from([("epsilon".to_string(), None)]);
-        assert!(compare(&wider, &sample(), &ignore, exact).is_empty());
+        assert!(
+            compare(&wider, &sample(), &KEY, &ignore, exact)
+                .unwrap()
+                .is_empty()
+        );
+    }
+
+    /// The rows of `t` in the order `order` gives (indices into its rows).
+    fn reordered(t: &Table, order: &[usize]) -> Table {
+        let mut r = Table::default();
+        for (name, c) in &t.columns {
+            let col = match c {
+                Column::Num(v) => Column::Num(order.iter().map(|&i| v[i]).collect()),
+                Column::Text(v) => Column::Text(order.iter().map(|&i| v[i].clone()).collect()),
+            };
+            r.columns.push((name.clone(), col));
+        }
+        r
+    }
+
+    /// Regression: rows were compared by position, so a reference stored in another order gave a
+    /// difference per cell, and a missing row only "N rows, reference has M".
+    #[test]
+    fn a_reordered_reference_matches_and_a_missing_or_extra_row_is_named_by_its_key() {
+        let exact = Tolerance { abs: 0.0, rel: 0.0 };
+        let none = BTreeMap::new();
+        let shuffled = reordered(&sample(), &[2, 0, 1]);
+        assert!(
+            compare(&sample(), &shuffled, &KEY, &none, exact)
+                .unwrap()
+                .is_empty()
+        );
+        let fewer = reordered(&sample(), &[2, 0]);
+        assert_eq!(
+            compare(&sample(), &fewer, &KEY, &none, exact).unwrap(),
+            vec!["the fresh run's row (case `a`, test `tc`) is not in the reference".to_string()]
+        );
+        assert_eq!(
+            compare(&fewer, &sample(), &KEY, &none, exact).unwrap(),
+            vec![
+                "row 2 (case `a`, test `tc`) of the reference is not in the fresh run".to_string()
+            ]
+        );
+        let err = compare(&sample(), &sample(), &["case", "dof"], &none, exact).unwrap_err();
+        assert!(err.to_string().starts_with("no column `dof`"), "{err}");
+    }
+
+    /// Regression: |fresh − ∞| ≤ abs + rel·∞ holds for every fresh value, so a reference of `inf`
+    /// cells passed any run. Infinite cells are found (whatever their spelling); a number in a text
+    /// column is compared as text when either side is not finite.
+    #[test]
+    fn an_infinite_reference_cell_is_found_and_never_passes_a_comparison() {
+        let dir = tempfile::tempdir().unwrap();
+        for (cell, shown) in [
+            ("inf", "inf"),
+            ("-inf", "-inf"),
+            ("Infinity", "inf"),
+            ("1e309", "inf"),
+        ] {
+            let path = dir.path().join("summary.csv");
+            std::fs::write(&path, format!("case,test,mrae\na,zz,0.1\nb,tc,{cell}\n")).unwrap();
+            let t = Table::read_csv(&path).unwrap();
+            assert_eq!(
+                t.non_finite_cell(),
+                Some((2, "mrae", shown.into())),
+                "{cell}"
+            );
+        }
+        let mut nan = sample();
+        nan.columns[2].1 = Column::Num(vec![Some(f64::NAN), None, Some(0.25)]);
+        assert_eq!(nan.non_finite_cell(), None, "NaN equals only NaN");
+        let wide = Tolerance { abs: 1.0, rel: 1.0 };
+        let none = BTreeMap::new();
+        assert_eq!(
+            compare(&sample(), &nan, &KEY, &none, wide).unwrap().len(),
+            1
+        );
+        let mut text = Table::default();
+        text.push_text("case", vec!["a".into()]);
+        text.push_text("test", vec!["zz".into()]);
+        text.push_text("x", vec!["inf".into()]);
+        let mut fresh = text.clone();
+        fresh.columns[2].1 = Column::Text(vec!["0.5".into()]);
+        assert_eq!(
+            compare(&fresh, &text, &KEY, &none, wide).unwrap(),
+            vec!["row 1 (case `a`, test `zz`): `x` = 0.5, reference inf".to_string()]
+        );
+    }
+
+    /// Regression: `|` in a recording's name split a markdown row into more cells than its header,
+    /// and HTML in a name went into the markdown as markup.
+    #[test]
+    fn names_with_pipes_and_html_are_escaped_in_a_markdown_pivot() {
+        let mut t = Table::default();
+        t.push_text("case", vec!["a".into(), "b".into()]);
+        t.push_text(
+            "training",
+            vec!["tr|ain.csv".into(), "<svg onload=x>".into()],
+        );
+        t.push_text("test", vec!["sb|x.csv".into(), "sb|x.csv".into()]);
+        t.push_num("mrae", vec![Some(0.1), Some(0.2)]);
+        let md = t
+            .pivot_markdown(&pivot("training,test,mrae"), "case", |x| format!("{x}"))
+            .unwrap();
+        assert_eq!(
+            md,
+            "| training | sb\\|x.csv |\n|---|---|\n| tr\\|ain.csv | 0.1 |\n| &lt;svg onload=x&gt; | 0.2 |\n"
+        );
+        assert_eq!(md_escape("a\\|b & c"), "a\\\\\\|b &amp; c");
     }
 
     fn pivot(text: &str) -> Pivot {

@@ -253,9 +253,111 @@ fn check_reports_a_changed_number_and_exits_1() {
     let changed = common::shipid(&["check", &study, "--reference", reference.to_str().unwrap()]);
     assert_eq!(changed.status.code(), Some(1));
     let out = String::from_utf8_lossy(&changed.stdout);
+    let case = t.column("case").unwrap().cell(0);
+    let test = t.column("test").unwrap().cell(0);
     assert!(
-        out.contains(&format!("summary: row 1: `mrae` = {stored}, reference 0.5")),
+        out.contains(&format!(
+            "summary: row 1 (case `{case}`, test `{test}`): `mrae` = {stored}, reference 0.5"
+        )),
         "{out}"
+    );
+}
+
+/// Regression: rows were compared by position, so the same reference stored in another row order
+/// gave a difference in every cell.
+#[test]
+fn check_pairs_rows_by_case_and_test_so_a_reordered_reference_matches() {
+    let dir = tempfile::tempdir().unwrap();
+    let reference = dir.path().join("reference");
+    let study = format!("{FIXTURES}/small.toml");
+    let r = reference.to_str().unwrap();
+    assert!(
+        common::shipid(&["check", &study, "--reference", r, "--bless"])
+            .status
+            .success()
+    );
+    for stem in ["summary", "coefficients"] {
+        let path = reference.join(format!("{stem}.csv"));
+        let text = std::fs::read_to_string(&path).unwrap();
+        let mut lines: Vec<&str> = text.lines().collect();
+        lines[1..].reverse();
+        std::fs::write(&path, lines.join("\n") + "\n").unwrap();
+    }
+    let again = common::shipid(&["check", &study, "--reference", r]);
+    assert!(
+        again.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&again.stdout),
+        String::from_utf8_lossy(&again.stderr)
+    );
+}
+
+/// Regression: links planted inside the output folder were followed: a run wrote its figures into
+/// (and removed a stale figure from) the folder `figures` pointed to, its case files into the
+/// folder a `cases/<id>` link pointed to, and overwrote the file `.shipid-run.lock` pointed to;
+/// `plot` wrote through `figures` too. Each is refused, naming the link, exit 2, the target left
+/// alone.
+#[cfg(unix)]
+#[test]
+fn links_planted_in_the_output_folder_are_refused_and_never_followed() {
+    use std::os::unix::fs::symlink;
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let study = format!("{FIXTURES}/small.toml");
+    let o = out.to_str().unwrap();
+    let first = common::shipid(&["run", &study, "--out", o, "--jobs", "2"]);
+    assert!(
+        first.status.success(),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    let victim = dir.path().join("victim");
+    std::fs::create_dir_all(victim.join("figs")).unwrap();
+    std::fs::write(victim.join("figs/heading_old.svg"), "mine").unwrap();
+    std::fs::write(victim.join("lock"), "IMPORTANT").unwrap();
+    let id = std::fs::read_dir(out.join("cases"))
+        .unwrap()
+        .flatten()
+        .next()
+        .unwrap()
+        .file_name();
+    let expect_refused = |args: &[&str], link: &Path| {
+        let r = common::shipid(args);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains(&format!("{}: a symbolic link", link.display())),
+            "{err}"
+        );
+    };
+    let run = ["run", study.as_str(), "--out", o, "--force"];
+    // figures/ → elsewhere, for run and plot.
+    std::fs::rename(out.join("figures"), dir.path().join("figures.bak")).unwrap();
+    symlink(victim.join("figs"), out.join("figures")).unwrap();
+    expect_refused(&run, &out.join("figures"));
+    expect_refused(&["plot", &study, "--out", o], &out.join("figures"));
+    std::fs::remove_file(out.join("figures")).unwrap();
+    // cases/<id> → elsewhere.
+    let case = out.join("cases").join(&id);
+    std::fs::rename(&case, victim.join(&id)).unwrap();
+    symlink(victim.join(&id), &case).unwrap();
+    expect_refused(&run, &case);
+    std::fs::remove_file(&case).unwrap();
+    // The lock → a file.
+    symlink(victim.join("lock"), out.join(".shipid-run.lock")).unwrap();
+    expect_refused(&run, &out.join(".shipid-run.lock"));
+    assert_eq!(
+        std::fs::read_to_string(victim.join("lock")).unwrap(),
+        "IMPORTANT"
+    );
+    let figs: Vec<_> = std::fs::read_dir(victim.join("figs"))
+        .unwrap()
+        .flatten()
+        .collect();
+    assert_eq!(figs.len(), 1, "only the victim's own file");
+    assert_eq!(
+        std::fs::read_to_string(victim.join("figs/heading_old.svg")).unwrap(),
+        "mine"
     );
 }
 

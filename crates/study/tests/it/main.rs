@@ -366,3 +366,124 @@ fn a_fit_failed_case_adds_no_phantom_column_to_the_default_table() {
         "{md}"
     );
 }
+
+/// One concern: what a `[check]` table gives (`None`: accepted; else the first fault, without the
+/// file's name). Column names are checked against the tables the study writes.
+fn check_tolerance(check: &str, expected: Option<&str>) {
+    let (_dir, path) = study_file(&format!("{ONE_CASE}[check]\n{check}\n"));
+    let got = load_study(&path)
+        .map_err(shipid_study::StudyError::from)
+        .and_then(|s| shipid_study::tables::check_tolerance_columns(&s))
+        .map_err(|e| {
+            e.to_string()
+                .split_once(": ")
+                .map(|(_, rest)| rest.to_string())
+                .unwrap()
+        });
+    assert_eq!(got.err().as_deref(), expected, "{check}");
+}
+
+/// Regression: `abs = inf` (or 1e300) passed every value, a negative or NaN tolerance failed equal
+/// values, a misspelt column (`mrea`, `MRAE`) was ignored without a word, and a tolerance for
+/// `fit_time_s` (documented as never compared) compared it.
+#[test]
+fn check_tolerances_are_finite_bounded_and_name_numeric_columns() {
+    check_tolerance("mrae = { abs = 1e-6, rel = 1e-4 }", None);
+    check_tolerance("value = { abs = 1.0 }", None);
+    check_tolerance(
+        "mrae = { abs = inf }",
+        Some("key `check.mrae.abs`: inf must be finite (an infinite tolerance passes every value)"),
+    );
+    check_tolerance(
+        "mrae = { abs = 1e300 }",
+        Some(
+            "key `check.mrae.abs`: 1e300 must be at most 1000000 (a larger one passes any value of the tables)",
+        ),
+    );
+    check_tolerance(
+        "mrae = { rel = 2.0 }",
+        Some(
+            "key `check.mrae.rel`: 2 must be at most 1 (a larger one passes any value of the tables)",
+        ),
+    );
+    check_tolerance(
+        "mrae = { abs = -1.0 }",
+        Some("key `check.mrae.abs`: -1 must not be negative (it would fail equal values)"),
+    );
+    check_tolerance(
+        "mrae = { rel = nan }",
+        Some("key `check.mrae.rel`: NaN is not a number (it would fail every comparison)"),
+    );
+    check_tolerance(
+        "fit_time_s = { abs = 0.0 }",
+        Some(
+            "key `check.fit_time_s`: the fit's wall time varies between runs and is never compared: remove this tolerance",
+        ),
+    );
+    for (key, hint) in [
+        ("mrea", " (did you mean `mrae`?)"),
+        ("MRAE", " (did you mean `mrae`?)"),
+        ("case", ""),
+    ] {
+        let (_dir, path) = study_file(&format!("{ONE_CASE}[check]\n{key} = {{ abs = 1e-3 }}\n"));
+        let study = load_study(&path).unwrap();
+        let msg = shipid_study::tables::check_tolerance_columns(&study)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            msg.contains(&format!(
+                "key `check.{key}`: no numeric column `{key}` in the summary or coefficients table{hint}; tolerances apply to "
+            )),
+            "{msg}"
+        );
+        assert!(!msg.contains("fit_time_s"), "{msg}");
+    }
+}
+
+/// Regression: two recordings of 121 characters trained together made a case id over 255 bytes,
+/// and the run failed late with "File name too long". The id's readable part is cut; its hash
+/// (of the whole configuration) keeps cut ids apart.
+#[test]
+fn case_ids_of_long_recording_names_fit_a_file_name() {
+    let data = tempfile::tempdir().unwrap();
+    let long = |n: u32| format!("{}{n}.csv", "a".repeat(121));
+    let source = dataset();
+    let mut text = std::fs::read_to_string(&source).unwrap();
+    let from = source.parent().unwrap();
+    for (old, n) in [("zz35_35_ps.csv", 1), ("zz35_35_sb.csv", 2)] {
+        std::fs::copy(from.join(old), data.path().join(long(n))).unwrap();
+        text = text.replace(old, &long(n));
+    }
+    for other in [
+        "zz10_10_ps.csv",
+        "zz20_20_ps.csv",
+        "tc35_ps.csv",
+        "tc35_sb.csv",
+    ] {
+        std::fs::copy(from.join(other), data.path().join(other)).unwrap();
+    }
+    std::fs::write(data.path().join("dataset.toml"), text).unwrap();
+    let study = data.path().join("study.toml");
+    std::fs::write(
+        &study,
+        format!(
+            "name = \"long\"\ndataset = \"dataset.toml\"\nsets = [\"reduced32\"]\n[training]\n\
+             recordings = [[\"{a}\", \"{b}\"], [\"{a}\"]]\novershoots = [2, 3]\n[[estimator]]\n\
+             name = \"lsq\"\n[test]\nrecordings = [\"{a}\"]\n",
+            a = long(1),
+            b = long(2)
+        ),
+    )
+    .unwrap();
+    let cases = load_study(&study).unwrap().cases;
+    assert_eq!(cases.len(), 4);
+    for c in &cases {
+        assert!(
+            c.id.len() <= shipid_study::study::MAX_READABLE_ID + 9,
+            "{}",
+            c.id
+        );
+    }
+    let ids: std::collections::BTreeSet<&str> = cases.iter().map(|c| c.id.as_str()).collect();
+    assert_eq!(ids.len(), 4, "cut ids stay apart");
+}
