@@ -252,9 +252,13 @@ fn slug(s: &str) -> String {
 /// The file-name part of a set or test name, distinct for distinct names: the name itself when it
 /// is already safe (`reduced32`, or `zz20_20_ps` for `zz20_20_ps.csv`), else its safe form with a
 /// hash of the name as written, as case ids have (`a/b.toml` and `a_b.toml` both read `a_b_toml`).
+///
+/// A long name is cut to [`MAX_SLUG`] bytes and takes the hash too: a file name holds at most 255
+/// bytes, and `forces_<case id>_<test>.svg` holds a case id (up to 109 bytes) and a test name.
 fn unique_slug(s: &str) -> String {
     let safe = |x: &str| {
         !x.is_empty()
+            && x.len() <= MAX_SLUG
             && !x.ends_with("_csv")
             && x.chars()
                 .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
@@ -263,12 +267,43 @@ fn unique_slug(s: &str) -> String {
     if safe(stem) {
         stem.to_string()
     } else {
-        format!(
-            "{}-{:08x}",
-            slug(s),
-            shipid_pipeline::generate::fnv1a(s) as u32
-        )
+        let mut cut = slug(s);
+        cut.truncate(MAX_SLUG); // ASCII after `slug`: any byte is a boundary
+        format!("{cut}{}", hash_suffix(s))
     }
+}
+
+/// Most bytes of a set or test name in a figure's file name before its hash.
+const MAX_SLUG: usize = 100;
+
+/// [`unique_slug`] of each of `names`, with the hash of the name added where two of them would
+/// differ only in letter case (`ZZ20.csv` and `zz20.csv`): on a case-insensitive file system
+/// (macOS, Windows) their figures would be one file, the second drawn over the first.
+fn folded_slugs(names: &[String]) -> BTreeMap<String, String> {
+    let plain: Vec<String> = names.iter().map(|n| unique_slug(n)).collect();
+    names
+        .iter()
+        .zip(&plain)
+        .map(|(name, slug)| {
+            let folded = slug.to_ascii_lowercase();
+            let clash = plain
+                .iter()
+                .filter(|o| o.to_ascii_lowercase() == folded)
+                .count()
+                > 1;
+            let slug = if clash && !slug.ends_with(&hash_suffix(name)) {
+                format!("{slug}{}", hash_suffix(name))
+            } else {
+                slug.clone()
+            };
+            (name.clone(), slug)
+        })
+        .collect()
+}
+
+/// The `-xxxxxxxx` hash [`unique_slug`] gives a name that is not safe as it is.
+fn hash_suffix(name: &str) -> String {
+    format!("-{:08x}", shipid_pipeline::generate::fnv1a(name) as u32)
 }
 
 /// The file-name prefixes of the figures [`write_figures`] draws: an SVG of the figures folder with
@@ -319,6 +354,7 @@ pub fn write_figures(study: &Study, out: &Path) -> FigureReport {
     }
     let cases = load_cases(study, out, &mut report.warnings);
     let r = &mut report;
+    let tests = folded_slugs(&study.tests);
     for test in &study.tests {
         let Some(rec) = study.dataset.recording(test) else {
             continue;
@@ -326,12 +362,12 @@ pub fn write_figures(study: &Study, out: &Path) -> FigureReport {
         let sims = predictions(study, &cases, rec);
         attempt(
             r,
-            dir.join(format!("trajectories_{}.svg", unique_slug(test))),
+            dir.join(format!("trajectories_{}.svg", tests[test])),
             &|p: &Path| trajectories(p, study, rec, &sims).map(|_| true),
         );
         attempt(
             r,
-            dir.join(format!("heading_{}.svg", unique_slug(test))),
+            dir.join(format!("heading_{}.svg", tests[test])),
             &|p: &Path| heading(p, rec, &sims).map(|_| true),
         );
     }
@@ -341,7 +377,7 @@ pub fn write_figures(study: &Study, out: &Path) -> FigureReport {
                 for test in &study.tests {
                     attempt(
                         r,
-                        dir.join(format!("bands_{}.svg", unique_slug(test))),
+                        dir.join(format!("bands_{}.svg", tests[test])),
                         &|p: &Path| metric_bands(p, study, &summary, test),
                     );
                 }
@@ -355,10 +391,12 @@ pub fn write_figures(study: &Study, out: &Path) -> FigureReport {
             attempt(r, dir.join("coefficient_convergence.svg"), &|p: &Path| {
                 convergence(p, &rows)
             });
-            for set in distinct(rows.iter().map(|x| x.set.clone())) {
+            let sets = distinct(rows.iter().map(|x| x.set.clone()));
+            let slugs = folded_slugs(&sets);
+            for set in sets {
                 attempt(
                     r,
-                    dir.join(format!("coefficients_{}.svg", unique_slug(&set))),
+                    dir.join(format!("coefficients_{}.svg", slugs[&set])),
                     &|p: &Path| bars(p, &set, &rows, BarKind::Coefficients).map(|_| true),
                 );
             }
@@ -368,10 +406,12 @@ pub fn write_figures(study: &Study, out: &Path) -> FigureReport {
     match Table::read_csv(&out.join("diagnostics.csv")) {
         Ok(t) => {
             let rows = long_rows(&t, "vif");
-            for set in distinct(rows.iter().map(|x| x.set.clone())) {
+            let sets = distinct(rows.iter().map(|x| x.set.clone()));
+            let slugs = folded_slugs(&sets);
+            for set in sets {
                 attempt(
                     r,
-                    dir.join(format!("vif_{}.svg", unique_slug(&set))),
+                    dir.join(format!("vif_{}.svg", slugs[&set])),
                     &|p: &Path| bars(p, &set, &rows, BarKind::Vif).map(|_| true),
                 );
             }
@@ -381,7 +421,11 @@ pub fn write_figures(study: &Study, out: &Path) -> FigureReport {
     if let Some(chosen) = best_case(&cases, out)
         && let Some(test) = chosen.case.training.first()
     {
-        let name = format!("forces_{}_{}.svg", slug(&chosen.case.id), unique_slug(test));
+        let name = format!(
+            "forces_{}_{}.svg",
+            slug(&chosen.case.id),
+            folded_slugs(&chosen.case.training)[test]
+        );
         attempt(r, dir.join(name), &|p: &Path| {
             forces(p, study, chosen, test).map(|_| true)
         });
@@ -1277,5 +1321,27 @@ mod tests {
         );
         assert_ne!(a, b);
         assert!(b.ends_with(" on zz20_20_ps"), "{b}");
+    }
+
+    /// Regression: a 121-character recording name gave a force figure's name over 255 bytes
+    /// ("File name too long"), and names differing only in letter case shared one figure file on a
+    /// case-insensitive file system.
+    #[test]
+    fn figure_names_stay_short_and_apart_when_letter_case_is_folded() {
+        let long = format!("{}.csv", "a".repeat(121));
+        let cut = unique_slug(&long);
+        assert_eq!(cut.len(), MAX_SLUG + 9, "{cut}");
+        assert!(cut.ends_with(&hash_suffix(&long)));
+        let names: Vec<String> = ["ZZ20.csv", "zz20.csv", "tc35.csv"]
+            .map(String::from)
+            .to_vec();
+        let slugs = folded_slugs(&names);
+        assert_eq!(
+            slugs["tc35.csv"], "tc35",
+            "a name alone keeps its plain form"
+        );
+        let (a, b) = (&slugs["ZZ20.csv"], &slugs["zz20.csv"]);
+        assert_ne!(a.to_ascii_lowercase(), b.to_ascii_lowercase(), "{a} {b}");
+        assert!(a.starts_with("ZZ20-") && b.starts_with("zz20-"), "{a} {b}");
     }
 }
