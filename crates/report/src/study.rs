@@ -30,7 +30,8 @@ pub fn study_page(dir: &Path, meta: &RunMeta) -> Result<String, ReportError> {
 
 /// [`study_page`] and the warnings about the folder's provenance that the caller should print
 /// (shown in the page too): results computed by another shipid version than the caller's
-/// (`meta.tool_version`), as `run.json` or the cases' `config.toml` name it.
+/// (`meta.tool_version`), as `run.json` or the cases' `config.toml` name it, and case files of
+/// another run than `summary.csv`.
 pub fn study_page_with_warnings(
     dir: &Path,
     meta: &RunMeta,
@@ -128,7 +129,91 @@ pub fn study_page_with_warnings(
     }
     let status_col = summary.col("case_status");
     let test_status_col = summary.col("status").filter(|j| test_cols.contains(j));
+    let replay_status_col = summary
+        .col("replay_status")
+        .filter(|j| test_cols.contains(j));
     let test_name_col = summary.col("test");
+    // A test's status as the run counts it: a replay that diverged is a diverged prediction even
+    // when the closed-loop manoeuvre ran to its end (`shipid run`'s line and run.json say so).
+    let test_status = |i: usize, j: usize| -> String {
+        let replay = replay_status_col.map(|r| summary.rows[i][r].as_str());
+        if replay == Some("diverged") {
+            "diverged".to_string()
+        } else {
+            summary.rows[i][j].clone()
+        }
+    };
+    // Case files of another run than the summary: a rerun (of a changed study) stopped before its
+    // tables left the summary of the old run beside the new cases' files. Contents are compared,
+    // not file times (a fresh clone has its files' times in checkout order).
+    let mrae_col = summary.col("mrae");
+    // Returned to the caller too (`shipid report` prints them), as the version warnings are.
+    let mut stale: Vec<String> = Vec::new();
+    for (c, (config, result, _)) in cases.iter().zip(&configs) {
+        if c.rows.is_empty() {
+            continue;
+        }
+        let shown: Vec<(String, Option<f64>)> = c
+            .rows
+            .iter()
+            .map(|&i| {
+                let test = test_name_col.map_or(String::new(), |t| summary.rows[i][t].clone());
+                let mrae = mrae_col.and_then(|m| parse_num(summary.rows[i][m].trim()));
+                (test, mrae)
+            })
+            .collect();
+        let tested = shown.iter().any(|(t, _)| !t.is_empty());
+        let mut shown_tests: Vec<&str> = shown.iter().map(|(t, _)| t.as_str()).collect();
+        shown_tests.sort_unstable();
+        let other_tests = tested
+            && config
+                .as_ref()
+                .and_then(|(_, t)| t.get("tests"))
+                .and_then(|v| v.as_array())
+                .is_some_and(|a| {
+                    let mut stored: Vec<&str> = a.iter().filter_map(|x| x.as_str()).collect();
+                    stored.sort_unstable();
+                    stored != shown_tests
+                });
+        let other_results = result
+            .as_ref()
+            .and_then(|r| r.get("tests"))
+            .and_then(Value::as_array)
+            .is_some_and(|tests| {
+                let stored: Vec<(String, Option<f64>)> = tests
+                    .iter()
+                    .map(|t| {
+                        let name = t.get("test").and_then(Value::as_str).unwrap_or_default();
+                        (name.to_string(), t.get("mrae").and_then(Value::as_f64))
+                    })
+                    .collect();
+                let same = |(ta, ma): &(String, Option<f64>), (tb, mb): &(String, Option<f64>)| {
+                    ta == tb
+                        && match (ma, mb) {
+                            (Some(x), Some(y)) => (x - y).abs() <= 1e-12 * x.abs().max(y.abs()),
+                            (None, None) => true,
+                            _ => false,
+                        }
+                };
+                // A case without tests has one summary row with no test.
+                let stored_rows = if stored.is_empty() { 1 } else { stored.len() };
+                !(stored_rows == shown.len()
+                    && (stored.is_empty() || stored.iter().zip(&shown).all(|(a, b)| same(a, b))))
+            });
+        if other_tests || other_results {
+            stale.push(format!(
+                "case {}: cases/{}/{} is of another run than summary.csv (a rerun stopped before \
+                 its tables?): the summary and the case's details below disagree; rerun the study",
+                c.id,
+                c.id,
+                if other_tests {
+                    "config.toml (other tests)"
+                } else {
+                    "result.json"
+                }
+            ));
+        }
+    }
 
     // ---- header
     let str_of = |keys: &[&str]| -> Option<String> {
@@ -242,6 +327,7 @@ pub fn study_page_with_warnings(
 
     // ---- warnings
     let mut warnings: Vec<String> = version_warnings.clone();
+    warnings.extend(stale.iter().cloned());
     warnings.extend(meta.warnings.iter().cloned());
     if let Some(Value::Array(ws)) = run_obj.and_then(|o| o.get("warnings")) {
         for w in ws {
@@ -275,6 +361,9 @@ pub fn study_page_with_warnings(
     // ---- status counts
     let mut case_counts: BTreeMap<String, usize> = BTreeMap::new();
     let mut test_counts: BTreeMap<String, usize> = BTreeMap::new();
+    // Cases with some diverged prediction, as run.json's `some_prediction_diverged` counts them (a
+    // case's status is its fit's).
+    let mut with_diverged = 0usize;
     for c in &cases {
         let st = match (status_col, c.rows.is_empty()) {
             (Some(j), false) => first_value(c, j),
@@ -282,11 +371,17 @@ pub fn study_page_with_warnings(
         };
         *case_counts.entry(st).or_default() += 1;
         if let Some(j) = test_status_col {
+            let mut diverged = false;
             for &i in &c.rows {
                 let has_test = test_name_col.is_none_or(|t| !summary.rows[i][t].is_empty());
                 if has_test {
-                    *test_counts.entry(summary.rows[i][j].clone()).or_default() += 1;
+                    let st = test_status(i, j);
+                    diverged |= st == "diverged";
+                    *test_counts.entry(st).or_default() += 1;
                 }
+            }
+            if diverged {
+                with_diverged += 1;
             }
         }
     }
@@ -294,6 +389,14 @@ pub fn study_page_with_warnings(
     count_box(&mut b, "cases", cases.len(), "");
     for (k, v) in &case_counts {
         count_box(&mut b, &format!("cases {k}"), *v, status_class(k));
+    }
+    if with_diverged > 0 {
+        count_box(
+            &mut b,
+            "cases with a diverged prediction",
+            with_diverged,
+            "bad",
+        );
     }
     if !test_counts.is_empty() {
         count_box(&mut b, "tests", test_counts.values().sum(), "");
@@ -374,9 +477,9 @@ pub fn study_page_with_warnings(
         if let Some(j) = test_status_col {
             for &i in &c.rows {
                 if test_name_col.is_none_or(|t| !summary.rows[i][t].is_empty()) {
-                    let st = &summary.rows[i][j];
-                    worst = worse(worst, status_class(st));
-                    *tcount.entry(st.clone()).or_default() += 1;
+                    let st = test_status(i, j);
+                    worst = worse(worst, status_class(&st));
+                    *tcount.entry(st).or_default() += 1;
                 }
             }
         }
@@ -520,10 +623,9 @@ pub fn study_page_with_warnings(
     }
     b.push_str("</section>");
     b.push_str("<footer>Written by shipid-report from the files of the output folder; the page has no script and loads nothing.</footer>");
-    Ok((
-        page(&format!("{name} — shipid study report"), &b),
-        version_warnings,
-    ))
+    let mut printed = version_warnings;
+    printed.extend(stale);
+    Ok((page(&format!("{name} — shipid study report"), &b), printed))
 }
 
 fn count_box(b: &mut String, what: &str, n: usize, class: &str) {

@@ -303,3 +303,67 @@ fn a_force_figure_of_a_case_not_in_the_summary_is_left_out() {
     assert!(!html.contains("data-file=\"forces_full74"));
     assert!(html.contains("forces_full74_lsq_fast_zz35_35_ps_os4-0badcafe_zz35_35_ps.svg: a figure of a case that is not in summary.csv: left out"));
 }
+
+/// Regression: a test whose replay diverged (its closed-loop manoeuvre ran to the end) counted as
+/// "tests ok" and badged its case "2 ok", while the run said "1 with a diverged prediction".
+#[test]
+fn a_diverged_replay_counts_and_badges_as_a_diverged_test() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(
+        dir.path().join("summary.csv"),
+        "case,set,case_status,fit_time_s,test,status,diverged_at_s,replay_status,replay_diverged_at_s\n\
+         a,s,ok,0.5,zz20.csv,ok,,diverged,228.6\na,s,ok,0.5,tc35.csv,ok,,ok,\n\
+         b,s,ok,0.5,zz20.csv,ok,,ok,\nb,s,ok,0.5,tc35.csv,ok,,ok,\n",
+    )
+    .unwrap();
+    let html = study_page(dir.path(), &RunMeta::default()).unwrap();
+    for (n, what) in [
+        (2, "cases ok"),
+        (1, "cases with a diverged prediction"),
+        (4, "tests"),
+        (1, "tests diverged"),
+        (3, "tests ok"),
+    ] {
+        assert!(
+            html.contains(&format!("<span class=\"v\">{n}</span>{what}</div>")),
+            "{n} {what}"
+        );
+    }
+    assert!(
+        html.contains("data-case-id=\"a\" class=\"bad\""),
+        "a is marked"
+    );
+    assert!(html.contains("data-case-id=\"b\" class=\"good\""));
+}
+
+/// Regression: a rerun of a changed study stopped after its first case left summary.csv and
+/// run.json of the old run beside the new case's files, and the page showed them as one run.
+#[test]
+fn a_case_rewritten_after_the_summary_is_named_in_the_warnings() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(
+        dir.path().join("summary.csv"),
+        "case,set,case_status,test,status\na,s,ok,zz35.csv,ok\nb,s,ok,zz35.csv,ok\n",
+    )
+    .unwrap();
+    for (id, tests) in [("a", "zz10.csv"), ("b", "zz35.csv")] {
+        fs::create_dir_all(dir.path().join("cases").join(id)).unwrap();
+        fs::write(
+            dir.path().join(format!("cases/{id}/config.toml")),
+            format!("study = \"s\"\ntests = [\"{tests}\"]\n"),
+        )
+        .unwrap();
+    }
+    let html = study_page(dir.path(), &RunMeta::default()).unwrap();
+    let w = html.find("id=\"warnings\"").expect("warnings box");
+    let box_ = &html[w..w + html[w..].find("</section>").unwrap_or(html.len() - w)];
+    assert!(
+        box_.contains(
+            "case a: cases/a/config.toml (other tests) is of another run than summary.csv"
+        ),
+        "{box_}"
+    );
+    assert!(!box_.contains("case b:"), "{box_}");
+    // The shipped fixture's cases agree with its summary.
+    assert!(!page().contains("is of another run than summary.csv"));
+}
