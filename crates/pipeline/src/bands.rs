@@ -65,6 +65,30 @@ pub struct TrackBand {
     pub y0_m: Vec<Option<(f64, f64)>>,
     /// Heading [deg] band.
     pub psi_deg: Vec<Option<(f64, f64)>>,
+    /// Series (`x0_m`, `y0_m`, `psi_deg`) whose band was dropped, and why (their entries are all
+    /// None): a calibrated run beyond the range the calibration speaks for.
+    #[serde(skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub without_band: std::collections::BTreeMap<&'static str, String>,
+}
+
+/// `band` stretched to hold `point` (None: no band, for a point that defines no value). A band is
+/// read as the uncertainty *of the prediction shown*: replicates whose runs part from the point run
+/// (a GP's draws, which revert to the training mean where the mean run does not; a bootstrap whose
+/// replicates sit on one side of a nonlinear response) put its percentiles beside the point, and a
+/// band that excludes its own point says nothing about that point.
+pub fn holding_point(
+    band: Result<Band, UncertaintyError>,
+    point: Option<f64>,
+) -> Result<Band, UncertaintyError> {
+    let band = band?;
+    match point {
+        Some(p) if p.is_finite() => Ok(Band {
+            lo: band.lo.min(p),
+            hi: band.hi.max(p),
+            ..band
+        }),
+        _ => Err(UncertaintyError::PointUndefined),
+    }
 }
 
 /// Bands of one manoeuvre.
@@ -165,9 +189,12 @@ pub fn manoeuvre_bands_of(
         .map(|(i, &(name, value))| MetricBand {
             metric: name,
             point: value,
-            band: kind.band(
-                replicate_metrics.iter().map(|e| e.and_then(|e| e[i].1)),
-                level,
+            band: holding_point(
+                kind.band(
+                    replicate_metrics.iter().map(|e| e.and_then(|e| e[i].1)),
+                    level,
+                ),
+                value,
             ),
         })
         .collect();
@@ -213,7 +240,10 @@ fn track_band(
                         .and_then(|r| at_time(&r.recording.t, series(&r.recording), at))
                         .map(|v| v * scale)
                 });
-                kind.band(values, level).ok().map(|b| (b.lo, b.hi))
+                let own = at_time(&point.t, series(point), at).map(|v| v * scale);
+                holding_point(kind.band(values, level), own)
+                    .ok()
+                    .map(|b| (b.lo, b.hi))
             })
             .collect::<Vec<_>>()
     };
@@ -222,6 +252,7 @@ fn track_band(
         y0_m: band_of(|r| &r.y0, 1.0),
         psi_deg: band_of(|r| &r.psi, 180.0 / std::f64::consts::PI),
         t_s: times,
+        without_band: std::collections::BTreeMap::new(),
     }
 }
 

@@ -49,8 +49,8 @@ use shipid_model::design::primed_state;
 use shipid_model::{AbkowitzModel, CoefficientSet, IdentificationRange};
 use shipid_sim::metrics::metrics;
 use shipid_sim::{AbkowitzDynamics, Dynamics};
-use shipid_uncertainty::Band;
 use shipid_uncertainty::band::quantile;
+use shipid_uncertainty::{Band, UncertaintyError};
 
 use shipid_model::OutOfKindRecord;
 use shipid_model::calibration::FactorCalibrationRecord;
@@ -59,12 +59,13 @@ use shipid_sim::gp::{GP_KIND, GpDynamics, GpModelFile};
 use shipid_sim::{Effect, WithEffects};
 
 use crate::bands::{
-    BandKind, BandRun, ManoeuvreBands, gp_draws, gp_file_draws, manoeuvre_bands,
+    BandKind, BandRun, ManoeuvreBands, TrackBand, gp_draws, gp_file_draws, manoeuvre_bands,
     manoeuvre_bands_of, mmg_file_replicates, replicated_models,
 };
 use crate::bootstrap::{MmgBootstrap, bootstrap_fit, bootstrap_mmg};
 use crate::error::{PipelineError, bad_input, failed};
 use crate::fit::{EstimatorSpec, WindowSpec, fit_dataset};
+use crate::metric_family::MAX_BAND_REACH;
 use crate::mmg::file::{MMG_KIND, MmgModelFile};
 use crate::mmg::{MmgFit, MmgFitOptions, MmgGeometry};
 use crate::out_of_kind::{ModelFamily, add_out_of_kind, out_of_kind};
@@ -160,12 +161,28 @@ pub fn widen_metric(
     reach: f64,
     out_of_kind: Option<&OutOfKindRecord>,
 ) -> Band {
-    match out_of_kind_of(out_of_kind, metric) {
+    let widened = match out_of_kind_of(out_of_kind, metric) {
         Some(relative) => {
             let (lo, hi) = add_out_of_kind((band.lo, band.hi), relative);
             Band { lo, hi, ..*band }
         }
         None => widen(band, factor, reach),
+    };
+    within_physical_limits(widened, metric)
+}
+
+/// `band` with its lower end raised to `metric`'s physical limit
+/// ([`crate::metric_family::physical_lower_limit`]): widening about the centre can carry a band of
+/// a time or a diameter below zero, where no value lies (the band's replicates and its point do not:
+/// they are values of the metric).
+fn within_physical_limits(band: Band, metric: &str) -> Band {
+    match crate::metric_family::physical_lower_limit(metric) {
+        Some(limit) => Band {
+            lo: band.lo.max(limit),
+            hi: band.hi.max(limit),
+            ..band
+        },
+        None => band,
     }
 }
 
@@ -967,10 +984,20 @@ impl StoredCalibration {
     ) -> Result<CalibratedBands, PipelineError> {
         let mut bands = manoeuvre_bands(point, &self.replicates, m, ship, self.level, how)?;
         let reach = run_reach(point, self.range.as_ref(), m, ship, how);
+        let beyond = reach > MAX_BAND_REACH;
         // How much each family's bands widened in this run: the track follows it.
         let mut widened_by: BTreeMap<MetricFamily, f64> = BTreeMap::new();
         for b in &mut bands.metrics {
             if let Ok(band) = &b.band {
+                // A metric the out-of-kind term bands does not take the reach; every other one
+                // does, and past the cap the factor · reach widening is no longer a measurement.
+                if beyond && out_of_kind_of(self.out_of_kind.as_ref(), b.metric).is_none() {
+                    b.band = Err(UncertaintyError::BeyondRange {
+                        reach,
+                        cap: MAX_BAND_REACH,
+                    });
+                    continue;
+                }
                 let w = widen_metric(
                     band,
                     b.metric,
@@ -988,28 +1015,59 @@ impl StoredCalibration {
                 b.band = Ok(w);
             }
         }
-        // The track is widened like the metrics that measure the same thing: positions like the
-        // turning lengths, the heading like the overshoots (a raw track band beside widened metric
-        // bands would show its reader the narrower, untrusted one). A metric family this run has no
-        // band of widens by its factor and the reach alone.
         if let Some(track) = &mut bands.track {
-            let k = |fam| {
-                widened_by
-                    .get(&fam)
-                    .copied()
-                    .unwrap_or(self.family_factor(fam) * reach)
-            };
-            let (length, angle) = (k(MetricFamily::TurningLength), k(MetricFamily::Overshoot));
-            let widen_all = |series: &mut Vec<Option<(f64, f64)>>, k: f64| {
-                for interval in series.iter_mut().flatten() {
-                    *interval = widen_interval(*interval, k);
-                }
-            };
-            widen_all(&mut track.x0_m, length);
-            widen_all(&mut track.y0_m, length);
-            widen_all(&mut track.psi_deg, angle);
+            widen_track(track, &widened_by, |fam| self.family_factor(fam), reach);
         }
         Ok(CalibratedBands { bands, reach })
+    }
+}
+
+/// One series of a track band: [lo, hi] per time, None where it has no band.
+type TrackSeries = Vec<Option<(f64, f64)>>;
+
+/// The track band widened like the metrics of the run: positions as the turning-length bands
+/// widened, the heading as the overshoot bands (a raw track band beside widened metric bands would
+/// show its reader the narrower, untrusted one). A series whose family has no band in this run (the
+/// heading of a turning circle, the positions of a zig-zag) widens as the run's other metric bands
+/// did, the most of them: the track is the same run those metrics measure. Only a run with no metric
+/// band at all takes its family's factor times the reach, and past [`MAX_BAND_REACH`] it has no track
+/// band (the series is emptied and the reason given in `without_band`), as its metrics have none.
+/// `widened_by` holds each family's widening (widened ÷ raw width) in this run.
+pub fn widen_track(
+    track: &mut TrackBand,
+    widened_by: &BTreeMap<MetricFamily, f64>,
+    family_factor: impl Fn(MetricFamily) -> f64,
+    reach: f64,
+) {
+    let widest = widened_by.values().copied().reduce(f64::max);
+    let k = |fam: MetricFamily| -> Result<f64, String> {
+        match (widened_by.get(&fam), widest) {
+            (Some(&k), _) | (None, Some(k)) => Ok(k),
+            (None, None) if reach <= MAX_BAND_REACH => Ok(family_factor(fam) * reach),
+            (None, None) => Err(UncertaintyError::BeyondRange {
+                reach,
+                cap: MAX_BAND_REACH,
+            }
+            .to_string()),
+        }
+    };
+    let series: [(&'static str, &mut TrackSeries, MetricFamily); 3] = [
+        ("x0_m", &mut track.x0_m, MetricFamily::TurningLength),
+        ("y0_m", &mut track.y0_m, MetricFamily::TurningLength),
+        ("psi_deg", &mut track.psi_deg, MetricFamily::Overshoot),
+    ];
+    for (name, values, fam) in series {
+        match k(fam) {
+            Ok(k) => {
+                for interval in values.iter_mut().flatten() {
+                    *interval = widen_interval(*interval, k);
+                }
+            }
+            Err(why) => {
+                values.iter_mut().for_each(|v| *v = None);
+                track.without_band.insert(name, why);
+            }
+        }
     }
 }
 
@@ -1074,20 +1132,9 @@ fn stored_factors(
     record
         .check()
         .map_err(|e| shipid_io::InputError::key(path, &e.key, e.reason))?;
-    check_factor_cap(path, &record.factors)?;
+    crate::metric_family::check_factor_cap(path, &record.factors)?;
     check_stored_level(spec, record.level, level)?;
     Ok(family_factors(&record.factors))
-}
-
-/// A factor beyond [`crate::metric_family::MAX_CALIBRATION_FACTOR`] is refused, naming its key.
-pub fn check_factor_cap(
-    path: &std::path::Path,
-    factors: &BTreeMap<String, FactorRecord>,
-) -> Result<(), PipelineError> {
-    match crate::metric_family::factor_beyond_cap(factors.iter().map(|(k, f)| (k, f.factor))) {
-        Some((key, msg)) => Err(shipid_io::InputError::key(path, &key, msg).into()),
-        None => Ok(()),
-    }
 }
 
 /// A checked record's factors by family.
@@ -1147,7 +1194,7 @@ fn polynomial_calibration(
     let checked = record
         .check(&file.set.name)
         .map_err(|e| shipid_io::InputError::key(path, &e.key, e.reason))?;
-    check_factor_cap(path, &checked.factors)?;
+    crate::metric_family::check_factor_cap(path, &checked.factors)?;
     check_stored_level(spec, record.level, level)?;
     let effects: Vec<Effect> = file
         .effects

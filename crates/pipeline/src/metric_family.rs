@@ -89,3 +89,14 @@ pub fn factor_beyond_cap<'a>(
             )
         })
 }
+
+/// A factor beyond [`MAX_CALIBRATION_FACTOR`] is refused, naming its key.
+pub fn check_factor_cap(
+    path: &std::path::Path,
+    factors: &std::collections::BTreeMap<String, shipid_model::FactorRecord>,
+) -> Result<(), crate::error::PipelineError> {
+    match factor_beyond_cap(factors.iter().map(|(k, f)| (k, f.factor))) {
+        Some((key, msg)) => Err(shipid_io::InputError::key(path, &key, msg).into()),
+        None => Ok(()),
+    }
+}

@@ -188,7 +188,7 @@ fn load_parts(
         let checked = record
             .check(&file.set.name)
             .map_err(|e| InputError::key(path, &e.key, e.reason))?;
-        crate::calibration::check_factor_cap(path, &checked.factors)?;
+        crate::metric_family::check_factor_cap(path, &checked.factors)?;
     }
     let effects = parse_entries(path, &file.effects)?;
     Ok((Box::new(AbkowitzDynamics(model)), effects))

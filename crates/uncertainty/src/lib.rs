@@ -39,4 +39,15 @@ pub enum UncertaintyError {
     Ragged(usize, usize),
     #[error("no rows to resample")]
     NoRows,
+    /// A calibrated band of a run that leaves the training range further than the calibration can
+    /// speak for: its half-width would be the reach times a factor measured at reaches of 1–2.
+    #[error(
+        "no band: the run reaches {reach:.1} × beyond the training range (calibrated bands stop at \
+         a reach of {cap}; docs/uncertainty.md)"
+    )]
+    BeyondRange { reach: f64, cap: f64 },
+    /// The point prediction does not define the quantity: a band beside no value bounds nothing the
+    /// user is shown.
+    #[error("no band: the point prediction does not define it")]
+    PointUndefined,
 }
