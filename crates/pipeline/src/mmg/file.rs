@@ -135,6 +135,115 @@ impl ParamEntry {
     }
 }
 
+/// A parameter whose data share says "prior" but which lies more than this many prior standard
+/// deviations from its prior did not stay there: the prior would have held it within about 2 sd, so
+/// what moved it is the data acting through parameters it is correlated with.
+pub const PRIOR_HELD_SD: f64 = 2.0;
+
+/// What a fit says of one parameter, in the order `fit` prints them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Identifiability {
+    /// On one of its bounds ([`ParamEntry::bound_reached`]): held by the bound, whatever its data
+    /// share; its standard error describes the problem without the bound.
+    OnBound,
+    /// More than [`DETERMINED_SHARE`](super::identify::DETERMINED_SHARE) of its precision from the
+    /// data.
+    DeterminedByData,
+    /// Little precision of its own from the data, yet more than [`PRIOR_HELD_SD`] prior sd from its
+    /// prior: moved by the parameters it is correlated with.
+    MovedByCorrelated,
+    /// Little precision from the data, and near its prior: it stayed there.
+    PriorHeld,
+}
+
+impl ParamEntry {
+    /// |value − prior| in prior standard deviations (∞ for a prior of no width).
+    pub fn prior_distance_sd(&self) -> f64 {
+        (self.value - self.prior).abs() / self.prior_sd.abs()
+    }
+
+    /// Which of [`Identifiability`]'s labels the fit's numbers support.
+    pub fn identifiability(&self) -> Identifiability {
+        if self.bound_reached().is_some() {
+            Identifiability::OnBound
+        } else if self.determined_by_data {
+            Identifiability::DeterminedByData
+        } else if self.prior_distance_sd() > PRIOR_HELD_SD {
+            Identifiability::MovedByCorrelated
+        } else {
+            Identifiability::PriorHeld
+        }
+    }
+}
+
+/// A parameter value as a summary line shows it: four significant digits.
+fn short(x: f64) -> String {
+    let a = x.abs();
+    if a == 0.0 || (1e-3..1e5).contains(&a) {
+        // Rust's shortest form of the rounded value: no trailing zeros.
+        format!("{}", (x * 1e4).round() / 1e4)
+    } else {
+        format!("{x:.3e}")
+    }
+}
+
+/// How `values` (a parameter's bootstrap replicates) fail to spread around the fit `fit`, in words;
+/// `None` when they do. Two shapes: split into two groups with an empty gap between them of more
+/// than half their range, each holding at least a tenth of the replicates (resamples ending in two
+/// minima, or on a bound and off it); or the fit outside the central 90 % of the replicates (all of
+/// them on one side of the estimate). Either way their standard deviation is not the estimate's
+/// standard error. Fewer than 10 replicates say nothing about a shape.
+pub fn replicate_shape(values: &[f64], fit: f64) -> Option<String> {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.len() < 10 || !fit.is_finite() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    let range = v[n - 1] - v[0];
+    if range <= 0.0 {
+        return None;
+    }
+    let (gap_at, gap) = v
+        .windows(2)
+        .enumerate()
+        .map(|(i, w)| (i + 1, w[1] - w[0]))
+        .max_by(|a, b| a.1.total_cmp(&b.1))?;
+    let tenth = n.div_ceil(10);
+    if gap > 0.5 * range && gap_at >= tenth && n - gap_at >= tenth {
+        let (low, high) = (&v[..gap_at], &v[gap_at..]);
+        let group = |g: &[f64]| {
+            format!(
+                "{} … {} ({} %)",
+                short(g[0]),
+                short(g[g.len() - 1]),
+                (100.0 * g.len() as f64 / n as f64).round()
+            )
+        };
+        let holds = |g: &[f64]| (g[0]..=g[g.len() - 1]).contains(&fit);
+        return Some(format!(
+            "two groups, {} and {}{}",
+            group(low),
+            group(high),
+            if holds(low) || holds(high) {
+                format!(", the fit {} in one", short(fit))
+            } else {
+                format!(", neither holding the fit {}", short(fit))
+            }
+        ));
+    }
+    let q = |p: f64| shipid_uncertainty::band::quantile(&v, p);
+    let (lo, hi) = (q(0.05), q(0.95));
+    (!(lo..=hi).contains(&fit)).then(|| {
+        format!(
+            "the central 90 % [{}, {}] lies beside the fit {}",
+            short(lo),
+            short(hi),
+            short(fit)
+        )
+    })
+}
+
 /// An MMG model file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -441,7 +550,7 @@ impl MmgModelFile {
             .collect();
         if !on_bound.is_empty() {
             lines.push(format!(
-                "  on a bound ({}): {} — the data push these past the range the bounds allow; what they stand in for may be missing from the structure (docs/mmg.md, Identifiability)",
+                "  on a bound ({}): {} — the data push these past the range the bounds allow; what they stand in for may be missing from the structure, and their standard errors describe the problem without the bound, not these estimates (docs/mmg.md, Identifiability)",
                 on_bound.len(),
                 on_bound.join(", ")
             ));
@@ -461,8 +570,13 @@ impl MmgModelFile {
                 held.join(", ")
             ));
         }
-        let (data, prior): (Vec<&ParamEntry>, Vec<&ParamEntry>) =
-            self.parameters.iter().partition(|p| p.determined_by_data);
+        let of = |label: Identifiability| -> Vec<&ParamEntry> {
+            self.parameters
+                .iter()
+                .filter(|p| p.identifiability() == label)
+                .collect()
+        };
+        let data = of(Identifiability::DeterminedByData);
         lines.push(format!(
             "  determined by the data ({}): {}",
             data.len(),
@@ -471,6 +585,26 @@ impl MmgModelFile {
                 .collect::<Vec<_>>()
                 .join(", ")
         ));
+        let moved = of(Identifiability::MovedByCorrelated);
+        if !moved.is_empty() {
+            lines.push(format!(
+                "  weakly determined, moved by correlated parameters ({}): {} — the data determine a combination of these with others, not each alone: each is far from its prior although the data give it little precision of its own",
+                moved.len(),
+                moved
+                    .iter()
+                    .map(|p| format!(
+                        "{} = {} (data share {:.2}, {:.1} prior sd from its prior {})",
+                        p.name,
+                        short(p.value),
+                        p.data_share,
+                        p.prior_distance_sd(),
+                        short(p.prior)
+                    ))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
+        let prior = of(Identifiability::PriorHeld);
         lines.push(format!(
             "  prior-held ({}): {}",
             prior.len(),
@@ -484,6 +618,23 @@ impl MmgModelFile {
                     .join(", ")
             }
         ));
+        if let Some(b) = &self.bootstrap {
+            let odd: Vec<String> = self
+                .parameters
+                .iter()
+                .filter_map(|p| {
+                    let values = b.replicates.get(&p.name)?;
+                    replicate_shape(values, p.value).map(|s| format!("{}: {s}", p.name))
+                })
+                .collect();
+            if !odd.is_empty() {
+                lines.push(format!(
+                    "  bootstrap replicates that do not spread around the fit ({}): {} — their standard errors describe no spread about the estimate; the resamples end in other minima or on bounds",
+                    odd.len(),
+                    odd.join("; ")
+                ));
+            }
+        }
         lines
     }
 

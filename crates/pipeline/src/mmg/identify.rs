@@ -501,14 +501,19 @@ impl Problem {
                     determined_by_data: true,
                     at_bound: false,
                 },
-                false => ParamEstimate {
-                    spec: spec.clone(),
-                    value: theta[k],
-                    standard_error: (tau2 * inverse[k][k]).max(0.0).sqrt(),
-                    data_share: share[k],
-                    determined_by_data: share[k] > DETERMINED_SHARE,
-                    at_bound: theta[k] <= spec.lower || theta[k] >= spec.upper,
-                },
+                false => {
+                    let at_bound = theta[k] <= spec.lower || theta[k] >= spec.upper;
+                    ParamEstimate {
+                        spec: spec.clone(),
+                        value: theta[k],
+                        standard_error: (tau2 * inverse[k][k]).max(0.0).sqrt(),
+                        data_share: share[k],
+                        // A parameter on its bound is held there by the bound, not by the data:
+                        // its share and standard error describe the problem without the bound.
+                        determined_by_data: share[k] > DETERMINED_SHARE && !at_bound,
+                        at_bound,
+                    }
+                }
             })
             .collect();
         Ok(Estimate {

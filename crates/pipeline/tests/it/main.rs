@@ -1,5 +1,6 @@
 //! Integration tests of the pipeline crate: one test binary, one module per concern.
 
+mod band_limits;
 mod bands;
 mod calibration;
 mod envelope;
@@ -7,6 +8,7 @@ mod environment;
 mod family_calibration;
 mod generate_environment;
 mod mmg;
+mod mmg_identifiability;
 mod out_of_kind;
 mod propeller_rate;
 mod refine;
