@@ -236,9 +236,18 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
         .map(|level| ModelBands::of(a.model, level))
         .transpose()?;
     let valley = shipid_pipeline::bands::valley_of(a.model)?;
+    // A slower approach (another propeller rate) takes longer to the same heading changes: the
+    // default duration scales with L over the approach speed, not over U0.
+    let duration_s = a.duration_s.or_else(|| {
+        (approach_m_s > 0.0 && approach_m_s < u0).then(|| {
+            let mut ship = *model.ship();
+            ship.u0 = approach_m_s;
+            shipid_pipeline::generate::standard_duration_s(&m, &ship)
+        })
+    });
     let request = SimRequest {
         dt_s: a.dt_s,
-        duration_s: a.duration_s,
+        duration_s,
         allow_large: a.allow_large,
     };
     let grid = sim_grid(model, &m, &request)?;
@@ -365,7 +374,7 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
                     .into()
             };
             eprintln!(
-                "warning: {} undefined after {} s of simulated time (left out of the output): {why}",
+                "warning: {} undefined after {:.1} s of simulated time (left out of the output): {why}",
                 undefined.join(", "),
                 grid.duration_s
             );
