@@ -235,6 +235,10 @@ pub struct StudySize {
     /// Bootstrap replicate simulations of a study with bands: cases × replicates × tests (each
     /// replicate is also a refit); 0 without bands.
     pub replicate_simulations: usize,
+    /// Its factors besides the cases, for the message: replicates per case (0 without bands) and
+    /// test recordings.
+    pub replicates: usize,
+    pub tests: usize,
 }
 
 impl StudySize {
@@ -249,9 +253,9 @@ impl StudySize {
             ))
         } else if self.replicate_simulations > LARGE_RUN_REPLICATE_SIMULATIONS {
             Some(format!(
-                "{} bootstrap replicate simulations ({} cases ({grid}) × replicates × tests), more \
-                 than {LARGE_RUN_REPLICATE_SIMULATIONS}",
-                self.replicate_simulations, self.cases
+                "{} bootstrap replicate simulations ({} cases ({grid}) × {} replicates × {} \
+                 tests), more than {LARGE_RUN_REPLICATE_SIMULATIONS}",
+                self.replicate_simulations, self.cases, self.replicates, self.tests
             ))
         } else {
             None
@@ -375,6 +379,8 @@ impl CheckedStudy {
         StudySize {
             cases,
             replicate_simulations,
+            replicates: self.bands.map_or(0, |b| b.replicates),
+            tests: self.tests.len(),
         }
     }
 

@@ -143,6 +143,7 @@ fn a_huge_grid_is_refused_from_its_axes_without_building_its_cases() {
     }
 }
 
+/// Also the regression of the refusal that said "× replicates × tests" without their counts.
 #[test]
 fn bootstrap_replicates_count_in_the_size_of_a_run() {
     let lambdas: Vec<String> = (1..=20).map(|k| format!("{k}e-6")).collect();
@@ -156,7 +157,8 @@ fn bootstrap_replicates_count_in_the_size_of_a_run() {
     // 20 cases × 10 000 replicates × 6 tests.
     let err = load_study_within(&path, false).err().unwrap().to_string();
     assert!(
-        err.contains("1200000 bootstrap replicate simulations"),
+        err.contains("1200000 bootstrap replicate simulations (20 cases (")
+            && err.contains(" × 10000 replicates × 6 tests), more than 1000000"),
         "{err}"
     );
     assert_eq!(load_study_within(&path, true).unwrap().cases.len(), 20);
