@@ -349,9 +349,20 @@ impl Columns {
                 ));
             }
             if step > GAP_FACTOR * median {
-                return Err(self.time_cell(
-                    path,
-                    i,
+                // Many long steps are no lost samples but a logger that writes in bursts (three
+                // samples 10 ms apart every 0.5 s): "gap" would send the user looking for lost data.
+                let long = steps.iter().filter(|&&s| s > GAP_FACTOR * median).count();
+                let bursts = long * 10 >= steps.len();
+                let what = if bursts {
+                    format!(
+                        "uneven sampling: {long} of the {} steps are more than {GAP_FACTOR} × the median step {} s, the first {} s after {} s (line {}): the samples come in bursts; resample the recording to a regular step",
+                        steps.len(),
+                        fmt_sig(median),
+                        fmt_sig(step),
+                        number(t[i - 1]),
+                        self.lines[i - 1],
+                    )
+                } else {
                     format!(
                         "gap in time: {} s after {} s (line {}), a step of {} s, more than {GAP_FACTOR} × the median step {} s",
                         number(t[i]),
@@ -359,8 +370,9 @@ impl Columns {
                         self.lines[i - 1],
                         fmt_sig(step),
                         fmt_sig(median)
-                    ),
-                ));
+                    )
+                };
+                return Err(self.time_cell(path, i, what));
             }
         }
         Ok(())
