@@ -457,6 +457,13 @@ fn check_ship_proportions(path: &Path, s: &Ship) -> Result<(), InputError> {
             "ships have about 0.35 … 0.9; a mass in t or kg given as the volume in m³, or L, B, T in another unit?",
         ),
         (
+            "ship.xg",
+            s.xg / s.lpp,
+            (-0.25, 0.25),
+            "centre of gravity x_G/L",
+            "ships have about −0.05 … +0.05 (from midship, positive forward); x_G from the aft perpendicular, or in another unit?",
+        ),
+        (
             "ship.kzz",
             s.kzz / s.lpp,
             (0.05, 1.0),

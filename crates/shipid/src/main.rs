@@ -157,7 +157,7 @@ enum Command {
         jobs: Option<usize>,
         #[arg(long)]
         out: Option<PathBuf>,
-        /// Rerun finished cases too.
+        /// Rerun finished cases too, and write over another study's results in --out.
         #[arg(long)]
         force: bool,
         /// Exit 1 when a prediction diverged (by default a diverged prediction is a result of the
