@@ -274,8 +274,12 @@ pub fn parse_dataset(path: &Path, text: &str) -> Result<DatasetFile, InputError>
     }
     check_ship(path, &file.ship)?;
     let s = &file.ship;
-    if let Some(r) = &file.rudder {
-        check_rudder_area(path, s, r)?;
+    if let Some((key, message)) = hardware_fault(
+        s,
+        file.propeller.as_ref().map(|p| p.diameter_m),
+        file.rudder.as_ref().map(|r| (r.area_m2, r.span_m)),
+    ) {
+        return Err(InputError::key(path, key, message));
     }
 
     check_reference_point(path, &file)?;
@@ -488,22 +492,57 @@ fn check_ship_proportions(path: &Path, s: &Ship) -> Result<(), InputError> {
     Ok(())
 }
 
-/// A rudder of half the hull's lateral area or more is a unit slip.
-fn check_rudder_area(path: &Path, s: &Ship, r: &RudderData) -> Result<(), InputError> {
-    let share = r.area_m2 / (s.lpp * s.draft);
-    // A non-finite or non-positive area is `check_rudder`'s to name.
+/// A rudder span beyond this many drafts is a unit slip (mm for m): a rudder reaches below the keel
+/// only a little, and a ship trimmed in ballast has a shallower draft beside the same rudder, hence
+/// the margin; the rudder's aspect ratio, which sets its lift slope, would take it at face value.
+pub const MAX_RUDDER_SPAN_OVER_DRAFT: f64 = 2.0;
+
+/// Propeller and rudder sizes no ship has, as (key, message): a propeller diameter not shorter than
+/// the ship, a rudder area of half the hull's lateral area L T or more, a rudder span beyond
+/// [`MAX_RUDDER_SPAN_OVER_DRAFT`] drafts. The checks of a data set's `[propeller]` and `[rudder]`
+/// and of a model file's (the mmg family's); positivity and finiteness are the caller's.
+pub fn hardware_fault(
+    ship: &Ship,
+    propeller_diameter_m: Option<f64>,
+    rudder_area_and_span_m: Option<(f64, f64)>,
+) -> Option<(&'static str, String)> {
+    if let Some(d) = propeller_diameter_m
+        && d >= ship.lpp
+    {
+        return Some((
+            "propeller.diameter_m",
+            format!(
+                "{} m is not shorter than the ship (ship.lpp = {} m): a wrong unit?",
+                number(d),
+                number(ship.lpp)
+            ),
+        ));
+    }
+    let (area, span) = rudder_area_and_span_m?;
+    let share = area / (ship.lpp * ship.draft);
     if share.is_finite() && share > 0.5 {
-        return Err(InputError::key(
-            path,
+        return Some((
             "rudder.area_m2",
             format!(
                 "{} m² is {} × L T (rudders have about 1/70 … 1/30 of it): a wrong unit?",
-                number(r.area_m2),
+                number(area),
                 three_digits(share)
             ),
         ));
     }
-    Ok(())
+    let drafts = span / ship.draft;
+    if drafts.is_finite() && drafts > MAX_RUDDER_SPAN_OVER_DRAFT {
+        return Some((
+            "rudder.span_m",
+            format!(
+                "{} m is {} × the draft ship.draft = {} m (a rudder's span is about the draft or less; at most {MAX_RUDDER_SPAN_OVER_DRAFT} × is accepted): a wrong unit?",
+                number(span),
+                three_digits(drafts),
+                number(ship.draft)
+            ),
+        ));
+    }
+    None
 }
 
 /// A ratio as a message shows it: three significant digits.
@@ -667,16 +706,6 @@ fn position(path: &Path, key: &str, value: f64, lpp: f64) -> Result<(), InputErr
 
 fn check_propeller(path: &Path, p: &PropellerTable, lpp: f64) -> Result<(), InputError> {
     positive(path, "propeller.diameter_m", p.diameter_m)?;
-    if p.diameter_m >= lpp {
-        return Err(InputError::key(
-            path,
-            "propeller.diameter_m",
-            format!(
-                "{} m is not shorter than the ship (ship.lpp = {lpp} m)",
-                p.diameter_m
-            ),
-        ));
-    }
     position(path, "propeller.x_m", p.x_m, lpp)?;
     if let Some(n) = p.rate_rps {
         positive(path, "propeller.rate_rps", n)?;

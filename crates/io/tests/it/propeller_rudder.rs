@@ -125,7 +125,7 @@ fn non_physical_values_are_refused_with_their_key() {
         ),
         (
             PROPELLER.replace("0.204", "9.0"),
-            "ds.toml: key `propeller.diameter_m`: 9 m is not shorter than the ship (ship.lpp = 7 m)",
+            "ds.toml: key `propeller.diameter_m`: 9 m is not shorter than the ship (ship.lpp = 7 m): a wrong unit?",
         ),
         (
             PROPELLER.replace("-3.36", "-70.0"),

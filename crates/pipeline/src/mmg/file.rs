@@ -408,56 +408,18 @@ impl MmgBootstrapRecord {
     }
 }
 
-/// The largest rudder span, as a multiple of the draft, a model file may give. A rudder hangs below
-/// the waterline and ends above the keel, so its span is below the design draft (KVLCC2: 0.75 T); a
-/// ship trimmed in ballast has a shallower draft beside the same rudder, hence the margin of 2. A
-/// span beyond it is a unit slip (mm for m), and the rudder's aspect ratio, which sets its lift
-/// slope, would take it at face value.
-pub const MAX_RUDDER_SPAN_OVER_DRAFT: f64 = 2.0;
-
-/// The physically impossible propeller and rudder sizes a data set is refused for, checked alike for
-/// a model file (as (key, message)): a propeller diameter not shorter than the ship and a rudder area
-/// above half of L T (the data set's `propeller.diameter_m` and `rudder.area_m2` checks in
-/// `shipid_io::dataset`, which are private there, mirrored), and a rudder span beyond
-/// [`MAX_RUDDER_SPAN_OVER_DRAFT`] × T. Positivity is the caller's.
+/// Propeller and rudder sizes no ship has in a model file, as (key, message): the data set's checks
+/// (`shipid_io::dataset::hardware_fault`), so a model file cannot carry what a data set may not.
 pub fn hardware_fault(
     ship: &Ship,
     propeller: &PropellerEntry,
     rudder: &RudderEntry,
 ) -> Option<(&'static str, String)> {
-    if propeller.diameter_m >= ship.lpp {
-        return Some((
-            "propeller.diameter_m",
-            format!(
-                "{} m is not shorter than the ship (ship.lpp = {} m): a wrong unit?",
-                number(propeller.diameter_m),
-                ship.lpp
-            ),
-        ));
-    }
-    let share = rudder.area_m2 / (ship.lpp * ship.draft);
-    if share.is_finite() && share > 0.5 {
-        return Some((
-            "rudder.area_m2",
-            format!(
-                "{} m² is {share:.3} × L T (rudders have about 1/70 … 1/30 of it): a wrong unit?",
-                number(rudder.area_m2)
-            ),
-        ));
-    }
-    let span = rudder.span_m / ship.draft;
-    if span.is_finite() && span > MAX_RUDDER_SPAN_OVER_DRAFT {
-        return Some((
-            "rudder.span_m",
-            format!(
-                "{} m is {span:.3} × the draft ship.draft = {} m (a rudder's span is below the \
-                 draft; at most {MAX_RUDDER_SPAN_OVER_DRAFT} × is accepted): a wrong unit?",
-                number(rudder.span_m),
-                ship.draft
-            ),
-        ));
-    }
-    None
+    shipid_io::dataset::hardware_fault(
+        ship,
+        Some(propeller.diameter_m),
+        Some((rudder.area_m2, rudder.span_m)),
+    )
 }
 
 impl MmgModelFile {
