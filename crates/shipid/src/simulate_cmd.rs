@@ -514,6 +514,13 @@ fn add_bands(value: &mut Value, run: &RunBands, source: &ModelBands, with_track:
             about.insert("out_of_kind".into(), json!(o));
         }
     }
+    // The text output shows bands beside their metrics; one left out (past the reach cap, or not
+    // computable) must say why there, not only in --json.
+    if !with_track {
+        for (metric, why) in &without {
+            eprintln!("note: {metric}: {}", why.as_str().unwrap_or_default());
+        }
+    }
     if !without.is_empty() {
         about.insert("without_band".into(), Value::Object(without));
     }
