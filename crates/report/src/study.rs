@@ -369,7 +369,7 @@ pub fn study_page_with_warnings(
             (Some(j), false) => first_value(c, j),
             _ => "no row".into(),
         };
-        *case_counts.entry(st).or_default() += 1;
+        *case_counts.entry(st.clone()).or_default() += 1;
         if let Some(j) = test_status_col {
             let mut diverged = false;
             for &i in &c.rows {
@@ -382,9 +382,18 @@ pub fn study_page_with_warnings(
             }
             if diverged {
                 with_diverged += 1;
+                // "cases ok" are those whose every prediction is ok, as run.json counts them: a
+                // case whose fit is ok and one of whose predictions diverged is counted once, in
+                // the tile of cases with a diverged prediction.
+                if st == "ok"
+                    && let Some(n) = case_counts.get_mut("ok")
+                {
+                    *n -= 1;
+                }
             }
         }
     }
+    case_counts.retain(|_, n| *n > 0);
     b.push_str("<section id=\"status\"><h2>Status</h2><div class=\"counts\">");
     count_box(&mut b, "cases", cases.len(), "");
     for (k, v) in &case_counts {
