@@ -290,7 +290,8 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
             let bar = calibrating(*level, "");
             let record = calibrate(&a, &ds, &out, (n, seed), *level, others);
             bar.finish_and_clear();
-            file.calibration = Some(record?);
+            let record = record?;
+            file.calibration = within_factor_cap(&record.factors).then_some(record);
         }
     }
     shipid_pipeline::model_file::anchor_training(&mut file.training, a.out);
@@ -586,7 +587,7 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
                 &record.factors,
                 record.out_of_kind.as_ref(),
             );
-            file.calibration = Some(record);
+            file.calibration = within_factor_cap(&record.factors).then_some(record);
         }
     }
     shipid_pipeline::model_file::anchor_training(&mut file.training, a.out);
@@ -686,7 +687,7 @@ pub fn run_gp(
             &record.factors,
             record.out_of_kind.as_ref(),
         );
-        file.calibration = Some(record);
+        file.calibration = within_factor_cap(&record.factors).then_some(record);
     }
     report
         .warnings
@@ -803,5 +804,27 @@ fn thinned_from(kept: usize, available: usize) -> String {
         )
     } else {
         String::new()
+    }
+}
+
+/// Whether a calibration's factors are within what a model file may hold: one beyond the cap would
+/// make the file unreadable (the loader refuses it as damaged), so the calibration is left out with a
+/// warning and the rest of the fit, its replicates included, is kept.
+fn within_factor_cap(
+    factors: &std::collections::BTreeMap<String, shipid_model::FactorRecord>,
+) -> bool {
+    use shipid_pipeline::metric_family::MAX_CALIBRATION_FACTOR;
+    match factors
+        .iter()
+        .find(|(_, f)| f.factor > MAX_CALIBRATION_FACTOR)
+    {
+        None => true,
+        Some((family, f)) => {
+            eprintln!(
+                "warning: the calibration is left out of the model file: its {family} factor {} is beyond the {MAX_CALIBRATION_FACTOR} a band may be widened by (measured factors are 1–25): such a band says nothing; the model keeps its replicates, and --bands gives their raw band",
+                shipid_io::error::number(f.factor)
+            );
+            false
+        }
     }
 }
