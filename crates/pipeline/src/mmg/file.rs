@@ -484,9 +484,16 @@ impl MmgModelFile {
         if let Some(t) = &e.thrust_inflow {
             let measured = |name: &String, v: &f64| {
                 let se = t.standard_errors.get(name).copied().unwrap_or(f64::NAN);
+                // A thrust record without the drift that sets C₁ and C₂ (a straight run, a few
+                // samples) leaves them undetermined: "± inf" would read as a number.
+                let value = if se.is_finite() {
+                    format!("{name} {v:.3} ± {se:.3}")
+                } else {
+                    format!("{name} {v:.3} (undetermined: no standard error)")
+                };
                 match (t.held, self.parameters.iter().find(|p| &p.name == name)) {
-                    (false, Some(p)) => format!("{name} {v:.3} ± {se:.3} (fit {:.3})", p.value),
-                    _ => format!("{name} {v:.3} ± {se:.3}"),
+                    (false, Some(p)) => format!("{value} (fit {:.3})", p.value),
+                    _ => value,
                 }
             };
             lines.push(format!(
