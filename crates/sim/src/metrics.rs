@@ -113,6 +113,9 @@ pub struct FirstExecute {
     pub x0_m: f64,
     /// East position of midship [m].
     pub y0_m: f64,
+    /// The rudder's neutral on the approach [rad]: the median before the stroke, from which the
+    /// execute is measured.
+    pub rudder_rad: f64,
 }
 
 /// An overshoot peak of a zig-zag.
@@ -264,6 +267,7 @@ pub fn first_execute(
         psi_rad: interp(&rec.t, &rec.psi, t_s),
         x0_m: interp(&rec.t, &rec.x0, t_s),
         y0_m: interp(&rec.t, &rec.y0, t_s),
+        rudder_rad: d0,
     })
 }
 
@@ -584,20 +588,14 @@ pub fn check_reaction_delay_s(
 /// Samples a rudder must hold its angle for before [`held_rudder_deg`] reads the angle from them.
 const HELD_MIN_SAMPLES: usize = 5;
 
-/// The rudder's value before the first execute (its neutral on the approach) [rad].
-fn approach_rudder(rec: &Recording, first: &FirstExecute) -> f64 {
-    let before = rec.t.partition_point(|&t| t < first.t_s).max(1);
-    median(&rec.delta[..before])
-}
-
 /// The rudder angle [deg] a zig-zag or turning record holds after its first execute towards `side`:
-/// the median of |δ − δ₀| (δ₀ the approach's rudder) over the samples where the rudder is within
+/// the median of |δ − δ₀| (δ₀ the approach's rudder, [`FirstExecute::rudder_rad`]) over the samples where the rudder is within
 /// [`execute_threshold_deg`] of its largest departure and moves slower than a tenth of the ship's
 /// rudder rate. `None` when fewer than [`HELD_MIN_SAMPLES`] samples do (a rudder reversed before it
 /// reaches its angle, or a signal too noisy to tell): the declared angle can then not be checked.
 pub fn held_rudder_deg(rec: &Recording, rudder_deg: f64, side: Side, ship: &Ship) -> Option<f64> {
     let first = first_execute(rec, rudder_deg, side, ship)?;
-    let d0 = approach_rudder(rec, &first);
+    let d0 = first.rudder_rad;
     let t = &rec.t;
     let start = t.partition_point(|&x| x < first.t_s);
     let largest = rec.delta[start..]
@@ -635,7 +633,7 @@ pub fn heading_at_reversals_deg(
     ship: &Ship,
 ) -> Option<Vec<f64>> {
     let first = first_execute(rec, rudder_deg, side, ship)?;
-    let d0 = approach_rudder(rec, &first);
+    let d0 = first.rudder_rad;
     let s = side.sign();
     let definite = DEFINITE_FRACTION * rudder_deg.to_radians();
     let near = execute_threshold_deg(rudder_deg).to_radians();
