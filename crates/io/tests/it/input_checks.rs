@@ -516,11 +516,7 @@ fn an_import_copies_the_open_water_table_beside_the_data_set() {
         "J,Kt,10Kq\n0,0.3,0.4\n0.2,0.25,0.35\n0.4,0.18,0.3\n0.6,0.1,0.2\n",
     )
     .unwrap();
-    let columns: String = HEADER
-        .split(',')
-        .enumerate()
-        .map(|(i, q)| format!("[[column]]\nindex = {}\nquantity = \"{q}\"\n", i + 1))
-        .collect();
+    let columns = header_columns();
     let ship = SHIP.replace("name = \"d\"\n[ship]", "[dataset.ship]");
     let mapping = format!(
         "source_dir = \"raw\"\n[format]\ndelimiter = \"whitespace\"\nskip_lines = 1\n{columns}[dataset]\nname = \"i\"\n{ship}[dataset.propeller]\ndiameter_m = 0.2\nx_m = -3.3\nopen_water = \"tables/ow.csv\"\nrate_rps = 10.0\n[dataset.rudder]\narea_m2 = 0.05\nspan_m = 0.3\nx_m = -3.5\n[[recording]]\nsource = \"a.dat\"\nfile = \"a.csv\"\nkind = \"free\"\n"
@@ -664,13 +660,18 @@ fn a_failed_atomic_write_leaves_no_temporary_file() {
     assert_eq!(left, ["model.toml"], "{left:?}");
 }
 
-/// A minimal whitespace mapping of `HEADER`'s columns (plus `extra` column entries) over `raw/a.dat`.
-fn whitespace_mapping(dir: &Path, extra: &str) -> PathBuf {
-    let columns: String = HEADER
+/// The `[[column]]` entries of an import mapping for `HEADER`'s columns, in order.
+fn header_columns() -> String {
+    HEADER
         .split(',')
         .enumerate()
         .map(|(i, q)| format!("[[column]]\nindex = {}\nquantity = \"{q}\"\n", i + 1))
-        .collect();
+        .collect()
+}
+
+/// A minimal whitespace mapping of `HEADER`'s columns (plus `extra` column entries) over `raw/a.dat`.
+fn whitespace_mapping(dir: &Path, extra: &str) -> PathBuf {
+    let columns = header_columns();
     let ship = SHIP.replace("name = \"d\"\n[ship]", "[dataset.ship]");
     let mapping = format!(
         "source_dir = \"raw\"\n[format]\ndelimiter = \"whitespace\"\nskip_lines = 1\n{columns}{extra}[dataset]\nname = \"i\"\n{ship}[[recording]]\nsource = \"a.dat\"\nfile = \"a.csv\"\nkind = \"free\"\n"
