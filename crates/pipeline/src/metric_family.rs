@@ -70,24 +70,31 @@ pub const MAX_CALIBRATION_FACTOR: f64 = 100.0;
 /// half-width) is the reach itself, not a measurement. Such a band is dropped and the reason given.
 pub const MAX_BAND_REACH: f64 = 10.0;
 
-/// The fault (key, message) of a `[calibration]` factor beyond [`MAX_CALIBRATION_FACTOR`]: the
-/// model crate's check holds them finite and at least 1.
+/// The first family (in the map's order) whose `[calibration]` factor is beyond
+/// [`MAX_CALIBRATION_FACTOR`], with that factor.
 pub fn factor_beyond_cap<'a>(
     factors: impl IntoIterator<Item = (&'a String, f64)>,
-) -> Option<(String, String)> {
+) -> Option<(&'a String, f64)> {
     factors
         .into_iter()
         .find(|(_, f)| *f > MAX_CALIBRATION_FACTOR)
-        .map(|(family, f)| {
-            (
-                format!("calibration.factors.{family}.factor"),
-                format!(
-                    "{} is beyond the largest factor a calibration may hold ({MAX_CALIBRATION_FACTOR}; \
-                     measured factors are 1–23): a band that wide says nothing; refit with --calibrate",
-                    shipid_io::error::number(f)
-                ),
-            )
-        })
+}
+
+/// The fault (key, message) of a loaded file's `[calibration]` factor beyond
+/// [`MAX_CALIBRATION_FACTOR`]: the model crate's check holds them finite and at least 1.
+pub fn factor_cap_fault<'a>(
+    factors: impl IntoIterator<Item = (&'a String, f64)>,
+) -> Option<(String, String)> {
+    factor_beyond_cap(factors).map(|(family, f)| {
+        (
+            format!("calibration.factors.{family}.factor"),
+            format!(
+                "{} is beyond the largest factor a calibration may hold ({MAX_CALIBRATION_FACTOR}; \
+                 measured factors are 1–23): a band that wide says nothing; refit with --calibrate",
+                shipid_io::error::number(f)
+            ),
+        )
+    })
 }
 
 /// A factor beyond [`MAX_CALIBRATION_FACTOR`] is refused, naming its key.
@@ -95,7 +102,7 @@ pub fn check_factor_cap(
     path: &std::path::Path,
     factors: &std::collections::BTreeMap<String, shipid_model::FactorRecord>,
 ) -> Result<(), crate::error::PipelineError> {
-    match factor_beyond_cap(factors.iter().map(|(k, f)| (k, f.factor))) {
+    match factor_cap_fault(factors.iter().map(|(k, f)| (k, f.factor))) {
         Some((key, msg)) => Err(shipid_io::InputError::key(path, &key, msg).into()),
         None => Ok(()),
     }

@@ -601,7 +601,7 @@ pub fn gp_file_fault(file: &GpModelFile) -> Option<(String, String)> {
         if let Err(e) = record.check() {
             return Some((e.key, e.reason));
         }
-        if let Some(fault) = crate::metric_family::factor_beyond_cap(
+        if let Some(fault) = crate::metric_family::factor_cap_fault(
             record.factors.iter().map(|(k, f)| (k, f.factor)),
         ) {
             return Some(fault);

@@ -813,16 +813,15 @@ fn thinned_from(kept: usize, available: usize) -> String {
 fn within_factor_cap(
     factors: &std::collections::BTreeMap<String, shipid_model::FactorRecord>,
 ) -> bool {
-    use shipid_pipeline::metric_family::MAX_CALIBRATION_FACTOR;
-    match factors
-        .iter()
-        .find(|(_, f)| f.factor > MAX_CALIBRATION_FACTOR)
-    {
+    match shipid_pipeline::metric_family::factor_beyond_cap(
+        factors.iter().map(|(family, f)| (family, f.factor)),
+    ) {
         None => true,
-        Some((family, f)) => {
+        Some((family, factor)) => {
             eprintln!(
-                "warning: the calibration is left out of the model file: its {family} factor {} is beyond the {MAX_CALIBRATION_FACTOR} a band may be widened by (measured factors are 1–25): such a band says nothing; the model keeps its replicates, and --bands gives their raw band",
-                shipid_io::error::number(f.factor)
+                "warning: the calibration is left out of the model file: its {family} factor {} is beyond the {} a band may be widened by (measured factors are 1–23): such a band says nothing; the model keeps its replicates, and --bands gives their raw band",
+                shipid_io::error::number(factor),
+                shipid_pipeline::metric_family::MAX_CALIBRATION_FACTOR
             );
             false
         }

@@ -831,7 +831,7 @@ impl MmgModelFile {
         }
         if let Some(record) = &self.calibration {
             record.check().map_err(|e| at(e.key, e.reason))?;
-            if let Some((key, msg)) = crate::metric_family::factor_beyond_cap(
+            if let Some((key, msg)) = crate::metric_family::factor_cap_fault(
                 record.factors.iter().map(|(k, f)| (k, f.factor)),
             ) {
                 return Err(at(key, msg));

@@ -6,7 +6,9 @@ use std::collections::BTreeMap;
 
 use shipid_pipeline::bands::{TrackBand, holding_point};
 use shipid_pipeline::calibration::{widen_metric, widen_track};
-use shipid_pipeline::metric_family::{MAX_BAND_REACH, MetricFamily};
+use shipid_pipeline::metric_family::{
+    MAX_BAND_REACH, MAX_CALIBRATION_FACTOR, MetricFamily, factor_beyond_cap, factor_cap_fault,
+};
 use shipid_uncertainty::{Band, UncertaintyError};
 
 fn band(lo: f64, hi: f64) -> Band {
@@ -146,4 +148,33 @@ fn heading_track_band_takes_the_overshoot_factor_times_the_reach() {
     check_track(&[], 2.0, 1.5, [Some(3.0), Some(3.0), Some(3.0)]);
     // No metric band, beyond the cap: dropped.
     check_track(&[], 2.0, MAX_BAND_REACH * 1.5, [None, None, None]);
+}
+
+fn check_cap(factors: &[(&str, f64)], expected: Option<(&str, f64)>) {
+    let names: Vec<String> = factors.iter().map(|(k, _)| k.to_string()).collect();
+    let got = factor_beyond_cap(names.iter().zip(factors.iter().map(|(_, f)| *f)));
+    assert_eq!(
+        got.map(|(k, f)| (k.as_str(), f)),
+        expected,
+        "factors {factors:?}"
+    );
+}
+
+/// `fit --calibrate` leaves out a calibration that the loader would refuse (a file it cannot read
+/// back); both ask the same question of the factors.
+#[test]
+fn factor_beyond_cap_names_the_first_family_past_the_cap() {
+    check_cap(&[("overshoot", 23.0), ("turning_length", 1.0)], None);
+    check_cap(&[("overshoot", MAX_CALIBRATION_FACTOR)], None);
+    check_cap(
+        &[
+            ("overshoot", 2.0),
+            ("turning_length", 150.0),
+            ("zigzag_time", 400.0),
+        ],
+        Some(("turning_length", 150.0)),
+    );
+    let fault = factor_cap_fault([(&"overshoot".to_string(), 1e3)]).unwrap();
+    assert_eq!(fault.0, "calibration.factors.overshoot.factor");
+    assert!(fault.1.contains("1000"), "{}", fault.1);
 }
