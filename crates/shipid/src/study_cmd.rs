@@ -478,7 +478,10 @@ impl ScratchDir {
                 std::process::id()
             ));
             match std::fs::create_dir(&dir) {
-                Ok(()) => return Ok(ScratchDir(dir)),
+                Ok(()) => {
+                    remove_when_interrupted(&dir);
+                    return Ok(ScratchDir(dir));
+                }
                 Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => last = Some(dir),
                 Err(e) => return Err(failed(anyhow::anyhow!("{}: {e}", dir.display()))),
             }
@@ -490,8 +493,36 @@ impl ScratchDir {
     }
 }
 
+/// The scratch folder an interrupt (Ctrl-C, SIGTERM) removes before the process exits with 130:
+/// without it an interrupted `check` left its fresh run under the temporary folder (`Drop` does not
+/// run when a signal ends the process).
+static INTERRUPT_SCRATCH: std::sync::Mutex<Option<PathBuf>> = std::sync::Mutex::new(None);
+
+fn remove_when_interrupted(dir: &std::path::Path) {
+    static HANDLER: std::sync::Once = std::sync::Once::new();
+    if let Ok(mut slot) = INTERRUPT_SCRATCH.lock() {
+        *slot = Some(dir.to_path_buf());
+    }
+    HANDLER.call_once(|| {
+        // Without a handler (another one installed, no signal support) an interrupt leaves the
+        // folder as before; the check itself is unaffected.
+        let _ = ctrlc::set_handler(|| {
+            if let Ok(slot) = INTERRUPT_SCRATCH.lock()
+                && let Some(dir) = slot.as_ref()
+            {
+                let _ = std::fs::remove_dir_all(dir);
+            }
+            eprintln!("interrupted: the check's scratch folder is removed");
+            std::process::exit(130);
+        });
+    });
+}
+
 impl Drop for ScratchDir {
     fn drop(&mut self) {
+        if let Ok(mut slot) = INTERRUPT_SCRATCH.lock() {
+            *slot = None;
+        }
         let _ = std::fs::remove_dir_all(&self.0);
     }
 }

@@ -922,3 +922,51 @@ fn finished_cases_are_reused_for_the_same_data_from_anywhere_and_never_for_chang
         "{changed}"
     );
 }
+
+/// Regression: an interrupted `check` (Ctrl-C) left its scratch run under the temporary folder:
+/// `Drop` does not run when a signal ends the process.
+#[cfg(unix)]
+#[test]
+fn an_interrupted_check_removes_its_scratch_folder() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scratch = || {
+        std::fs::read_dir(tmp.path())
+            .unwrap()
+            .flatten()
+            .filter(|e| e.file_name().to_string_lossy().starts_with("shipid-check-"))
+            .count()
+    };
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_shipid"))
+        .args([
+            "check",
+            "studies/estimators.toml",
+            "--reference",
+            "results/reference/estimators",
+        ])
+        .current_dir(common::root())
+        .env("TMPDIR", tmp.path())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    while scratch() == 0 {
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the check ended before its scratch folder was seen"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    let kill = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(130),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(scratch(), 0, "the scratch folder is left behind");
+}
