@@ -44,8 +44,20 @@ use shipid_sim::{Dynamics, MmgModel, SimOptions, SimStatus, State, controller_fo
 use crate::error::{PipelineError, failed};
 use crate::spec::manoeuvre_stem;
 
-/// Steady approach before the first rudder execute [s].
+/// Steady approach before the first rudder execute of the KVLCC2 model [s] (0.84 L/U0); other ships
+/// take the same time in units of L/U0 ([`execute_time_s`]).
 pub const T_EXECUTE_S: f64 = 5.0;
+
+/// The first execute of a standard manoeuvre of `ship` [s]: [`T_EXECUTE_S`] at the KVLCC2 model's
+/// L/U0, the same fraction of L/U0 for any other ship. A model not in equilibrium with the rudder
+/// amidships (a polynomial set's constant terms, a sparse GP) drifts during the approach; a fixed
+/// time in seconds let that drift, and with it the metrics, depend on the ship's absolute size (the
+/// same model at full scale put the rudder over after 0.12 L/U0 instead of 0.84).
+pub fn execute_time_s(ship: &Ship) -> f64 {
+    let reference = kvlcc2_ship();
+    // The ratio first: the KVLCC2 model's own L/U0 gives exactly T_EXECUTE_S.
+    T_EXECUTE_S * ((ship.lpp / ship.u0) / (reference.lpp / reference.u0))
+}
 /// RK4 step [s] (model scale; reproduces the published KVLCC2 check values of the MMG reference).
 pub const DT_S: f64 = 0.05;
 /// Sampling interval of the written recordings [s] (10 Hz).
@@ -137,7 +149,7 @@ pub fn standard_duration_s(m: &Manoeuvre, ship: &Ship) -> f64 {
         Manoeuvre::Turning { .. } => 75.0,
         Manoeuvre::Free => 20.0,
     };
-    T_EXECUTE_S + units * l_over_u0
+    execute_time_s(ship) + units * l_over_u0
 }
 
 /// What `generate` produces: the data set file and its recordings, same order.
@@ -278,7 +290,7 @@ fn generate_by(
             )));
         }
         let m = *m;
-        let mut controller = controller_for(&m, T_EXECUTE_S).map_err(failed)?;
+        let mut controller = controller_for(&m, execute_time_s(&ship)).map_err(failed)?;
         let options =
             SimOptions::new(standard_duration_s(&m, &ship)).with_step(DT_S, SAMPLE_INTERVAL_S);
         let flows = match recorded {

@@ -9,7 +9,7 @@ use shipid_sim::{
 use crate::environment::{ChosenWindage, WindageSource};
 
 use crate::error::{PipelineError, bad_input};
-use crate::generate::{DT_S, SAMPLE_INTERVAL_S, T_EXECUTE_S, standard_duration_s};
+use crate::generate::{DT_S, SAMPLE_INTERVAL_S, execute_time_s, standard_duration_s};
 
 /// RK4 steps a simulation may take unless the user insists (`--allow-large`): about ten seconds of
 /// work, some 4000 times a standard manoeuvre of the KVLCC2 model at the default step.
@@ -138,7 +138,7 @@ pub fn simulate_on_grid_from(
     grid: &SimGrid,
     approach_m_s: f64,
 ) -> Result<SimOutput, PipelineError> {
-    let mut controller = controller_for(m, T_EXECUTE_S).map_err(bad_input)?;
+    let mut controller = controller_for(m, execute_time_s(model.ship())).map_err(bad_input)?;
     let options = SimOptions::new(grid.duration_s).with_step(grid.dt_s, grid.sample_interval_s);
     shipid_sim::simulate(
         model,

@@ -5,6 +5,7 @@ mod bands;
 mod calibration;
 mod envelope;
 mod environment;
+mod execute_time;
 mod family_calibration;
 mod generate_environment;
 mod mmg;
