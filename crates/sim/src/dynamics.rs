@@ -238,6 +238,14 @@ pub trait Dynamics {
             .map_or(*through_water, |m| m.over_ground(through_water))
     }
 
+    /// Velocity [north, east] [m/s] at simulation time `t_s` of the uniform current this model carries
+    /// the ship in (a `current` effect, a recorded or given current), summed over the wrappers that
+    /// add one; `None` when the model has none. A simulation records it, so that its metrics are
+    /// taken relative to the water (`docs/conventions.md`, "Wind and current").
+    fn current_velocity_earth(&self, t_s: f64) -> Option<[f64; 2]> {
+        self.wrapped().and_then(|m| m.current_velocity_earth(t_s))
+    }
+
     /// The identification range this model carries with it (a sparse GP's coverage by its sparse
     /// points); `None` for models whose range needs their training data (a polynomial's leverage,
     /// computed from the data its model file names) or that have none (the reference model).
@@ -311,6 +319,9 @@ macro_rules! forward_dynamics {
             }
             fn over_ground(&self, through_water: &State) -> State {
                 (**self).over_ground(through_water)
+            }
+            fn current_velocity_earth(&self, t_s: f64) -> Option<[f64; 2]> {
+                (**self).current_velocity_earth(t_s)
             }
         }
     )*};

@@ -752,7 +752,12 @@ impl<D: Dynamics> Dynamics for WithEffects<D> {
     }
 
     fn over_ground(&self, through_water: &State) -> State {
-        WithEffects::over_ground(self, through_water)
+        self.inner
+            .over_ground(&WithEffects::over_ground(self, through_water))
+    }
+
+    fn current_velocity_earth(&self, t_s: f64) -> Option<[f64; 2]> {
+        add_currents(self.current, self.inner.current_velocity_earth(t_s))
     }
 
     fn linear_hull_derivatives(&self) -> Option<LinearHullDerivatives> {
@@ -766,6 +771,14 @@ impl<D: Dynamics> Dynamics for WithEffects<D> {
             }),
             None => lin,
         }
+    }
+}
+
+/// The sum of two optional currents [north, east] (`None` when neither is there).
+pub(crate) fn add_currents(a: Option<[f64; 2]>, b: Option<[f64; 2]>) -> Option<[f64; 2]> {
+    match (a, b) {
+        (Some([an, ae]), Some([bn, be])) => Some([an + bn, ae + be]),
+        (a, b) => a.or(b),
     }
 }
 

@@ -562,12 +562,23 @@ impl<D: Dynamics> Dynamics for WithEnvironment<D> {
         self.inner
             .over_ground(&self.environment.over_ground(0.0, through_water))
     }
+
+    fn current_velocity_earth(&self, t_s: f64) -> Option<[f64; 2]> {
+        let own = self
+            .environment
+            .has_current()
+            .then(|| self.environment.current_at(t_s));
+        crate::effects::add_currents(own, self.inner.current_velocity_earth(t_s))
+    }
 }
 
 /// A flow given by its velocity [north, east] [m/s] at times `t_s` as recorded: speed and the
 /// direction it comes from, clockwise from north in [0, 2π) (the inverse of
 /// `FlowSeries::velocity_earth`).
-fn flow_series(t_s: &[f64], velocity_at: impl Fn(f64) -> [f64; 2]) -> shipid_io::FlowSeries {
+pub(crate) fn flow_series(
+    t_s: &[f64],
+    velocity_at: impl Fn(f64) -> [f64; 2],
+) -> shipid_io::FlowSeries {
     let (speed_m_s, from_rad) = t_s
         .iter()
         .map(|&t| {

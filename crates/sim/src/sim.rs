@@ -385,8 +385,13 @@ pub fn simulate_filtered(
             break;
         }
     }
-    Ok(SimOutput {
-        recording: out.rec,
-        status,
-    })
+    // A model that carries the ship in a current records it, as a recording in a current does, so
+    // that the run's metrics are taken relative to the water (`metrics::relative_to_water`).
+    let mut recording = out.rec;
+    if model.current_velocity_earth(0.0).is_some() {
+        recording.current = Some(crate::environment::flow_series(&recording.t, |t| {
+            model.current_velocity_earth(t).unwrap_or([0.0; 2])
+        }));
+    }
+    Ok(SimOutput { recording, status })
 }

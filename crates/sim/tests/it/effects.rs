@@ -304,3 +304,94 @@ fn effects_compose_and_reject_duplicates() {
         })
     ));
 }
+
+/// Regression (probe11 finding 3): a model carrying a `current` effect (the augmented model `shipid
+/// diagnose` writes) gave other manoeuvre metrics than the calm model and than the same current given
+/// to `simulate --current`: its simulated run did not carry the current, so a turning circle was
+/// measured over ground (35° transfer 0.96 L instead of 1.33 L for 0.1 m/s from 90°), and its approach
+/// was looked for over ground. A uniform current only carries the ship along (docs/conventions.md): from
+/// the calm approach through the water, the metrics are the calm-water ones.
+#[test]
+fn current_effect_model_starts_from_the_calm_approach_and_gives_the_calm_metrics() {
+    let m = kvlcc2();
+    let calm_zz = run(&m, &[], ZZ20, 120.0);
+    let calm_tc = run(&m, &[], TC35, 300.0);
+    // (speed [m/s], from [deg]): along, against and across the approach course, and the diagnosed one.
+    for (speed_m_s, from_deg) in [(0.1, 0.0), (0.1, 180.0), (0.1, 90.0), (0.03, 120.8)] {
+        let current = Current {
+            speed_m_s,
+            from_deg,
+        };
+        let case = format!("current {speed_m_s} m/s from {from_deg}°");
+        let model = WithEffects::new(&m, &[Effect::Current(current)]).unwrap();
+        check_steady_approach_through_the_water(&model, &m, &case);
+        check_run_carries_the_current(&model, current, &case);
+        for (man, calm, duration_s) in [(ZZ20, &calm_zz, 120.0), (TC35, &calm_tc, 300.0)] {
+            let mut c = controller_for(&man, 2.0).unwrap();
+            let start = model.over_ground(&State::approach(m.ship().u0));
+            let opts = SimOptions::new(duration_s);
+            let out = simulate(&model, c.as_mut(), start, &opts).unwrap();
+            check_same_metrics(&out, calm, &man, &m, &case);
+        }
+    }
+}
+
+/// The approach of the wrapped model, over ground, is the calm one through the water: its accelerations
+/// there are the calm model's at the calm approach (the straight run at U0 stays one).
+fn check_steady_approach_through_the_water(model: &dyn Dynamics, calm: &dyn Dynamics, case: &str) {
+    let u0 = calm.ship().u0;
+    let start = model.over_ground(&State::approach(u0));
+    let got = model.accelerations(&start, 0.0).unwrap();
+    let want = calm.accelerations(&State::approach(u0), 0.0).unwrap();
+    for i in 0..3 {
+        assert!(
+            (got[i] - want[i]).abs() < 1e-12,
+            "{case}: start accelerations {got:?}, calm {want:?}"
+        );
+    }
+}
+
+/// The run records the model's current in every sample, as a run in a given current does.
+fn check_run_carries_the_current(model: &dyn Dynamics, current: Current, case: &str) {
+    let mut c = controller_for(&ZZ20, 2.0).unwrap();
+    let start = model.over_ground(&State::approach(model.ship().u0));
+    let rec = simulate(model, c.as_mut(), start, &SimOptions::new(10.0))
+        .unwrap()
+        .recording;
+    let flow = rec
+        .current
+        .as_ref()
+        .unwrap_or_else(|| panic!("{case}: no current recorded"));
+    assert_eq!(flow.speed_m_s.len(), rec.len(), "{case}");
+    let want = current.velocity_earth();
+    for i in 0..rec.len() {
+        let got = flow.velocity_earth(i);
+        assert!(
+            (got[0] - want[0]).abs() < 1e-12 && (got[1] - want[1]).abs() < 1e-12,
+            "{case}: sample {i}: {got:?} vs {want:?}"
+        );
+    }
+}
+
+/// Every metric of `out` equals the calm run's to numerical precision.
+fn check_same_metrics(
+    out: &SimOutput,
+    calm: &SimOutput,
+    man: &Manoeuvre,
+    model: &MmgModel,
+    case: &str,
+) {
+    let ship = model.ship();
+    let got = metrics(&out.recording, man, ship);
+    let want = metrics(&calm.recording, man, ship);
+    for ((key, g), (_, w)) in got.entries().into_iter().zip(want.entries()) {
+        match (g, w) {
+            (Some(g), Some(w)) => assert!(
+                (g - w).abs() <= 1e-6 * w.abs().max(1.0),
+                "{case}, {man:?}: {key} = {g}, calm {w}"
+            ),
+            (None, None) => {}
+            _ => panic!("{case}, {man:?}: {key} = {g:?}, calm {w:?}"),
+        }
+    }
+}
