@@ -69,8 +69,8 @@ pub fn fit_gp_dataset(
             "--similarity must be in (0, 1], not {similarity_threshold}"
         )));
     }
-    let mut inputs = Vec::new();
-    let mut targets: [Vec<f64>; 3] = Default::default();
+    // One block of inputs and targets per recording, walked in a canonical order below.
+    let mut blocks: Vec<(Vec<f64>, [Vec<f64>; 3])> = Vec::new();
     let mut windows = Vec::new();
     for r in crate::fit::chosen_recordings(ds, recordings)? {
         let range = window_range(r, ds, window)?;
@@ -81,12 +81,15 @@ pub fn fit_gp_dataset(
             crate::environment::hydrodynamic_recording(ds, r, &ds.added_mass.unwrap_or_default())?;
         let (acc, estimated) = (&hydro.accelerations, hydro.estimated);
         let rec = &hydro.recording;
+        let mut inputs = Vec::new();
+        let mut targets: [Vec<f64>; 3] = Default::default();
         for i in range.clone() {
             inputs.extend_from_slice(&[rec.u[i], rec.v[i], rec.r[i], rec.delta[i]]);
             targets[0].push(acc.u_dot[i]);
             targets[1].push(acc.v_dot[i]);
             targets[2].push(acc.r_dot[i]);
         }
+        blocks.push((inputs, targets));
         windows.push(training_window(
             ds,
             r,
@@ -98,6 +101,7 @@ pub fn fit_gp_dataset(
             estimated,
         ));
     }
+    let (inputs, targets) = in_walk_order(blocks);
     let all = Points::new(GP_INPUTS.len(), inputs)
         .map_err(|e| bad_input(format!("training inputs: {e}")))?;
     for (k, t) in targets.iter().enumerate() {
@@ -221,6 +225,62 @@ pub fn fit_gp_dataset(
             outputs: reports,
         },
     ))
+}
+
+/// The recordings' blocks (inputs row-major by [`GP_INPUTS`], targets per output) concatenated in
+/// the order the similarity walk takes them: the walk is greedy, so the points it keeps depend on
+/// the order it meets the samples, and the same data listed in another order (the data set's or
+/// `--recordings`') gave another model (426 or 445 points from the HSVA runs, a 35° turn 4.44 or
+/// 3.83 L tactical). Each recording keeps its time order (paper 001's walk along a record); the
+/// recordings go by decreasing spread of their states (the sum over inputs of max − min, each ÷ the
+/// inputs' half range over all blocks: the widest manoeuvre first, the others then add what it
+/// lacks), ties by their content, never by their name or place in a list.
+fn in_walk_order(mut blocks: Vec<(Vec<f64>, [Vec<f64>; 3])>) -> (Vec<f64>, [Vec<f64>; 3]) {
+    let dims = GP_INPUTS.len();
+    let range = |x: &[f64], d: usize| {
+        x.chunks_exact(dims)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), row| {
+                (lo.min(row[d]), hi.max(row[d]))
+            })
+    };
+    let scales: Vec<f64> = (0..dims)
+        .map(|d| {
+            let (lo, hi) = blocks.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |acc, b| {
+                let (l, h) = range(&b.0, d);
+                (acc.0.min(l), acc.1.max(h))
+            });
+            let half = 0.5 * (hi - lo);
+            if half.is_finite() && half > 0.0 { half } else { 1.0 }
+        })
+        .collect();
+    let spread = |x: &[f64]| -> f64 {
+        (0..dims)
+            .map(|d| {
+                let (lo, hi) = range(x, d);
+                if hi >= lo { (hi - lo) / scales[d] } else { 0.0 }
+            })
+            .sum()
+    };
+    let content = |b: &(Vec<f64>, [Vec<f64>; 3])| -> Vec<u64> {
+        b.0.iter()
+            .chain(b.1.iter().flatten())
+            .map(|v| v.to_bits())
+            .collect()
+    };
+    let mut keyed: Vec<(f64, Vec<u64>, (Vec<f64>, [Vec<f64>; 3]))> = blocks
+        .drain(..)
+        .map(|b| (spread(&b.0), content(&b), b))
+        .collect();
+    keyed.sort_by(|a, b| b.0.total_cmp(&a.0).then_with(|| a.1.cmp(&b.1)));
+    let mut inputs = Vec::new();
+    let mut targets: [Vec<f64>; 3] = Default::default();
+    for (_, _, (x, t)) in keyed {
+        inputs.extend(x);
+        for (all, one) in targets.iter_mut().zip(t) {
+            all.extend(one);
+        }
+    }
+    (inputs, targets)
 }
 
 /// Outputs whose RMS residual over the training samples exceeds the RMS of their targets: the GP
