@@ -14,7 +14,7 @@ use shipid_io::{
 use shipid_pipeline::environment::ChosenWindage;
 use shipid_pipeline::range::outside_count;
 use shipid_pipeline::replay::{differentiator_margin, replay_segment_in, segments};
-use shipid_pipeline::validate::interp;
+use shipid_pipeline::validate::{interp, replay_errors, replay_in};
 use shipid_sim::{
     Dynamics, Effect, KnownEnvironment, RudderFilter, State, WithEffects, WithEnvironment,
 };
@@ -397,6 +397,27 @@ pub(crate) fn replay_scores<M: Dynamics + Sync>(
     idx.par_iter()
         .map(|&i| replay_score(model, prep[i].env.as_ref(), &prep[i].rec, horizon_s))
         .collect()
+}
+
+/// Position RMSE ÷ L of the whole-record replay of `model` (what `shipid validate` reports): `rec`
+/// replayed from its first sample with its recorded rudder, wind and current (`env`). A replay that
+/// stops short (diverges) is infinitely bad; a recording too short to replay is `None`.
+pub(crate) fn whole_replay(
+    model: &dyn Dynamics,
+    rec: &Recording,
+    env: Option<&KnownEnvironment>,
+) -> Option<f64> {
+    if rec.len() < 20 {
+        return None;
+    }
+    let sim = replay_in(model, rec, env.cloned());
+    let e = replay_errors(&sim, rec, model.ship());
+    let completed = matches!(sim.status, shipid_sim::SimStatus::Ok);
+    Some(if completed && e.position_rmse_over_l.is_finite() {
+        e.position_rmse_over_l
+    } else {
+        f64::INFINITY
+    })
 }
 
 /// Position RMSE ÷ L of segment replays expected from the recordings' noise alone: the position noise

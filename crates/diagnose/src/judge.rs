@@ -41,6 +41,9 @@ pub(crate) struct Judged {
     pub families: Vec<Family>,
     pub assessed: Assessed,
     pub cross: CrossFit,
+    /// Why a candidate that passed the held-out rules is nevertheless not accepted (the evidence
+    /// that it is not what differs), for the report.
+    pub held_back: Option<String>,
 }
 
 impl<'a> Judge<'a> {
@@ -182,6 +185,7 @@ impl<'a> Judge<'a> {
     /// (see [`Judge::pair_lead`]): the candidates, and the index of the winner if any.
     pub fn candidates(&self, mismatch_is_real: bool) -> (Vec<Judged>, Option<usize>) {
         let mut judged = self.singles();
+        self.hold_back_one_sided(&mut judged);
         let best = best_accepted(&judged);
         let order = by_score(&judged);
         let Some((lead, none_passed)) = self.pair_lead(&judged, &order, best, mismatch_is_real)
@@ -190,8 +194,30 @@ impl<'a> Judge<'a> {
         };
         let pairs = self.pairs(&judged, &order, lead, none_passed);
         judged.extend(pairs);
+        self.hold_back_one_sided(&mut judged);
         let best = best_accepted(&judged);
         (judged, best)
+    }
+
+    /// An `asymmetry` (a port/starboard bias), alone or in a pair, is not accepted (nor named as the
+    /// closest) on recordings that turn to one side
+    /// only (see [`turns_both_ways`]): there a constant side force, yaw moment or rudder offset is the
+    /// same to the fit as a ship that answers its rudder differently (a smaller rudder, other
+    /// damping), and the recordings cannot tell the two apart.
+    fn hold_back_one_sided(&self, judged: &mut [Judged]) {
+        if turns_both_ways(&self.baseline.prep, &self.baseline.ship) {
+            return;
+        }
+        for j in judged.iter_mut() {
+            let named = j.families.iter().any(|f| f.verdict() == Verdict::Asymmetry);
+            if named && j.held_back.is_none() {
+                j.assessed.accepted = false;
+                j.held_back = Some(
+                    "the recordings turn to one side only, where a port/starboard bias cannot be told from a ship that answers its rudder differently (rudder size, damping): runs turning to both sides would tell"
+                        .to_string(),
+                );
+            }
+        }
     }
 
     /// Every family alone, judged held-out (in parallel).
@@ -206,6 +232,7 @@ impl<'a> Judge<'a> {
                 families: vec![f],
                 assessed: self.assess(f.dim(), &cross.0),
                 cross,
+                held_back: None,
             })
             .collect()
     }
@@ -286,6 +313,7 @@ impl<'a> Judge<'a> {
                     families: fams,
                     assessed: a,
                     cross,
+                    held_back: None,
                 }
             })
             .collect()
@@ -299,6 +327,7 @@ impl<'a> Judge<'a> {
             families: families.to_vec(),
             assessed: self.assess(families.iter().map(|f| f.dim()).sum(), &cross.0),
             cross,
+            held_back: None,
         }
     }
 
@@ -358,6 +387,7 @@ impl<'a> Judge<'a> {
                 families: family.to_vec(),
                 assessed,
                 cross: (scores, fitted),
+                held_back: None,
             },
             finals,
         )
@@ -432,8 +462,41 @@ pub(crate) fn halved_recordings(ds: &Dataset) -> impl Iterator<Item = &DatasetRe
         .filter(|r| r.recording.len() >= shipid_io::table::MIN_SAMPLES)
 }
 
+/// Smallest share of the turning samples (|r'| > [`TURNING_R_PRIME`]) that must turn to each side for a
+/// port/starboard bias to be told from a change in how the ship answers its rudder.
+const TURNING_SHARE_EACH_SIDE: f64 = 0.1;
+
+/// Non-dimensional yaw rate r' = r L / U0 beyond which a sample is turning (the regimes' limit).
+const TURNING_R_PRIME: f64 = 0.1;
+
+/// Share of all samples that must turn for the recordings' turning to count (below it they run mostly
+/// straight, where a change in how the ship answers its rudder hardly acts and a bias stands out).
+const TURNING_SHARE_TO_COUNT: f64 = 0.2;
+
+/// Whether the recordings turn to both sides (or hardly turn): of their samples that turn, at least
+/// [`TURNING_SHARE_EACH_SIDE`] to port and as many to starboard (a zig-zag does; a turning circle
+/// alone does not). A bias is the same whichever way the ship turns; a changed rudder or damping
+/// acts with the turn: only turns both ways separate them.
+pub(crate) fn turns_both_ways(prep: &[crate::compare::Prepared], ship: &shipid_io::Ship) -> bool {
+    let (mut port, mut starboard, mut all) = (0usize, 0usize, 0usize);
+    for p in prep {
+        all += p.rec.r.len();
+        for &r in &p.rec.r {
+            let r_prime = r * ship.lpp / ship.u0;
+            if r_prime < -TURNING_R_PRIME {
+                port += 1;
+            } else if r_prime > TURNING_R_PRIME {
+                starboard += 1;
+            }
+        }
+    }
+    let turning = (port + starboard) as f64;
+    turning < TURNING_SHARE_TO_COUNT * all as f64
+        || port.min(starboard) as f64 >= TURNING_SHARE_EACH_SIDE * turning
+}
+
 /// The accepted candidate with the highest score.
-fn best_accepted(judged: &[Judged]) -> Option<usize> {
+pub(crate) fn best_accepted(judged: &[Judged]) -> Option<usize> {
     judged
         .iter()
         .enumerate()

@@ -54,6 +54,10 @@ pub struct Candidate {
     pub held_out_position_rmse_over_l: f64,
     pub n_parameters: usize,
     pub accepted: bool,
+    /// Why a candidate that passed the held-out rules is not accepted: the evidence that it is not
+    /// what differs (whole-record replays made worse, a port/starboard bias on runs turning one way).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub held_back: Option<String>,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -160,30 +164,63 @@ pub fn diagnose(
     let real_threshold = baseline.real_threshold(input.model_level_over_l, opts);
     let judge = Judge::new(input, &baseline, opts);
     let mismatch_is_real = baseline.before_l > real_threshold;
-    let (judged, best) = judge.candidates(mismatch_is_real);
+    let (mut judged, best) = judge.candidates(mismatch_is_real);
     let finals = judge.final_fits(&judged);
+    let own_misfit = input
+        .model_level_over_l
+        .is_some_and(|level| baseline.before_l <= OWN_MISFIT_FACTOR * level);
+    let best = if own_misfit {
+        best
+    } else {
+        whole_checked(input, whole, &baseline, &mut judged, &finals, best)
+    };
     // A wind of its own on each run is tried only where a real mismatch needs explaining: runs whose
     // winds are recorded (or calm) keep `none` without a family of many parameters being fitted, and
     // a winner that leaves no real mismatch (one wind for all, say) leaves nothing for it.
     let left_is_real = best.is_none_or(|b| judged[b].assessed.after_l > real_threshold);
-    let own = if mismatch_is_real && left_is_real && !cut && baseline.prep.len() >= 2 {
+    let mut own = if mismatch_is_real && left_is_real && !cut && baseline.prep.len() >= 2 {
         own_winds(input, ds, opts, &judged, best)?
     } else {
         None
     };
+    // Each run's own wind, too, must make its whole-record replay better, not only the halves.
+    if let Some(o) = own.as_mut().filter(|o| o.chosen) {
+        let check = WholeCheck::of(input, whole, &baseline.windage, |file| {
+            o.effects
+                .iter()
+                .filter(|(f, _)| f == file)
+                .map(|(_, e)| e.clone())
+                .collect()
+        });
+        if !check.improves() {
+            o.chosen = false;
+            o.judged.held_back = Some(check.reason());
+        }
+    }
     let conclusion = match (own.as_ref().filter(|o| o.chosen), best) {
         (Some(o), _) => conclude_own_winds(&baseline, o),
         (None, Some(b)) => match input.model_level_over_l {
-            Some(level) if baseline.before_l <= OWN_MISFIT_FACTOR * level => {
-                conclude_own_misfit(&baseline, &judged, b, level)
-            }
+            Some(level) if own_misfit => conclude_own_misfit(&baseline, &judged, b, level),
             _ => conclude_effect(&baseline, &judged, &finals, b),
         },
         (None, None) => conclude_nothing(&baseline, &judged, real_threshold, opts),
     };
     let mut conclusion = conclusion;
-    if let Some(sentence) = own.as_ref().and_then(|o| o.agreement.as_ref()) {
+    // "They were in one wind" backs a verdict of one wind for all; beside any other verdict it would
+    // assert a wind the diagnosis did not find.
+    if let Some(sentence) = own.as_ref().and_then(|o| o.agreement.as_ref())
+        && conclusion.verdict == Verdict::Wind
+    {
         conclusion.explanation = format!("{}; {sentence}", conclusion.explanation);
+    }
+    if let Some(o) = own.as_ref().filter(|o| !o.chosen)
+        && let Some(why) = &o.judged.held_back
+    {
+        conclusion.explanation = format!(
+            "{}; {} is not taken either: {why}",
+            conclusion.explanation,
+            Family::WindPerRecording.describe()
+        );
     }
     let mut report = assemble(
         input,
@@ -355,6 +392,20 @@ fn conclude_own_misfit(
 /// or `unexplained` verdict: the recordings' noise, not the effect's absence, may be what held it back.
 const NEAR_MISS_EXPLAINS: f64 = 0.5;
 
+/// The best of `candidates` by the report's ranking: the highest score, then the lowest held-out
+/// position RMSE (not clipped, unlike `explains`), then fewer parameters.
+fn closest<'a>(candidates: impl Iterator<Item = &'a Judged>) -> Option<&'a Judged> {
+    candidates.min_by(|x, y| ranking(&x.assessed, &y.assessed))
+}
+
+/// The report's ranking of two assessments: `Less` when `x` ranks before `y`.
+fn ranking(x: &crate::judge::Assessed, y: &crate::judge::Assessed) -> std::cmp::Ordering {
+    y.score
+        .total_cmp(&x.score)
+        .then(x.after_l.total_cmp(&y.after_l))
+        .then(x.n_parameters.cmp(&y.n_parameters))
+}
+
 fn conclude_nothing(
     baseline: &Baseline,
     judged: &[Judged],
@@ -363,27 +414,44 @@ fn conclude_nothing(
 ) -> Conclusion {
     let before_l = baseline.before_l;
     let real = before_l > real_threshold;
-    let near_miss = judged
-        .iter()
-        .filter(|j| j.assessed.explains >= NEAR_MISS_EXPLAINS)
-        .max_by(|a, b| a.assessed.explains.total_cmp(&b.assessed.explains))
+    let name = |j: &Judged| {
+        j.families
+            .iter()
+            .map(|f| match f.variant() {
+                Some(v) => format!("{} [{v}]", f.word()),
+                None => f.word().to_string(),
+            })
+            .collect::<Vec<_>>()
+            .join(" + ")
+    };
+    // Candidates that passed the held-out rules but were held back by other evidence: said first,
+    // with that evidence (the best by the report's ranking).
+    let held_back = closest(judged.iter().filter(|j| j.held_back.is_some()))
         .map_or(String::new(), |j| {
-            let name = j
-                .families
-                .iter()
-                .map(|f| match f.variant() {
-                    Some(v) => format!("{} [{v}]", f.word()),
-                    None => f.word().to_string(),
-                })
-                .collect::<Vec<_>>()
-                .join(" + ");
             format!(
-                ". Closest: {name} explains {:.0} % of it held out ({before_l:.4} → {:.4} L) but was not accepted: its gain is within what the recordings' noise (floor {:.4} L) can make; more or cleaner recordings would tell whether it is there",
+                ". {} explains {:.0} % of the held-out segment mismatch ({before_l:.4} → {:.4} L) but is not the verdict: {}",
+                name(j),
                 100.0 * j.assessed.explains,
                 j.assessed.after_l,
-                baseline.noise_floor
+                j.held_back.as_deref().unwrap_or_default()
             )
         });
+    let near_miss = closest(
+        judged
+            .iter()
+            .filter(|j| j.held_back.is_none() && j.assessed.explains >= NEAR_MISS_EXPLAINS),
+    )
+    .map_or(String::new(), |j| {
+        format!(
+            ". Closest: {} explains {:.0} % of it held out ({before_l:.4} → {:.4} L) but was not accepted: its gain is within what the recordings' noise (floor {:.4} L) can make; more or cleaner recordings would tell whether it is there",
+            name(j),
+            100.0 * j.assessed.explains,
+            j.assessed.after_l,
+            baseline.noise_floor
+        )
+    });
+    let near_miss = format!("{held_back}{near_miss}");
+    let any_held_back = judged.iter().any(|j| j.held_back.is_some());
     Conclusion {
         verdict: if real {
             Verdict::Unexplained
@@ -395,10 +463,16 @@ fn conclude_nothing(
         before_scores: baseline.before_each.clone(),
         after_scores: baseline.before_each.clone(),
         explanation: if real {
-            format!(
-                "held-out position RMSE {before_l:.4} L exceeds the model's own level and the noise ({real_threshold:.4} L), and no effect of the library reduces it by {:.0} % in both halves{near_miss}",
-                100.0 * opts.min_gain
-            )
+            if !any_held_back {
+                format!(
+                    "held-out position RMSE {before_l:.4} L exceeds the model's own level and the noise ({real_threshold:.4} L), and no effect of the library reduces it by {:.0} % in both halves{near_miss}",
+                    100.0 * opts.min_gain
+                )
+            } else {
+                format!(
+                    "held-out position RMSE {before_l:.4} L exceeds the model's own level and the noise ({real_threshold:.4} L), and no effect of the library explains it{near_miss}"
+                )
+            }
         } else {
             format!(
                 "no effect reduces the mismatch beyond the noise; position RMSE {before_l:.4} L is within the model's own level and the noise ({real_threshold:.4} L = {:.0} × the model's own level + 3 × the noise floor + what replays resolve){near_miss}",
@@ -449,6 +523,7 @@ fn candidates(judged: &[Judged], finals: &[(Vec<Effect>, FitResult)]) -> Vec<Can
                 held_out_position_rmse_over_l: a.after_l,
                 n_parameters: a.n_parameters,
                 accepted: a.accepted,
+                held_back: j.held_back.clone(),
             }
         })
         .collect()
@@ -569,6 +644,8 @@ struct OwnWinds {
     halves: Baseline,
     /// Per recording (in the order of the diagnosed recordings), its wind.
     winds: Vec<RecordingWind>,
+    /// Per recording, its file and its wind as an effect.
+    effects: Vec<(String, Effect)>,
     /// The best rival on the same halves: its description and held-out position RMSE ÷ L.
     rival: (String, f64),
     /// Accepted on its own and clearly better than every rival.
@@ -632,6 +709,11 @@ fn own_winds(
         .collect::<Vec<RecordingWind>>();
     // Runs that all found about one wind were in one wind: the per-recording form's extra gain is what
     // the wind-force model lacks (another ship's wind coefficients), taken up run by run.
+    let effects = finals
+        .iter()
+        .zip(halved_recordings(ds))
+        .map(|((e, _), r)| (r.file.clone(), e.clone()))
+        .collect();
     let agreement = winds_agree(&winds);
     let chosen = own.assessed.accepted
         && own.assessed.after_l < OWN_WINDS_CLEARLY_BETTER * rival.1
@@ -641,6 +723,7 @@ fn own_winds(
         judged: own,
         halves,
         winds,
+        effects,
         rival,
         chosen,
     }))
@@ -708,6 +791,7 @@ impl OwnWinds {
             held_out_position_rmse_over_l: a.after_l,
             n_parameters: a.n_parameters,
             accepted: self.chosen,
+            held_back: self.judged.held_back.clone(),
         }
     }
 
@@ -739,6 +823,160 @@ fn conclude_own_winds(baseline: &Baseline, o: &OwnWinds) -> Conclusion {
             o.rival.0,
             baseline.noise_floor
         ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn winds(pairs: &[(f64, f64)]) -> Vec<RecordingWind> {
+        pairs
+            .iter()
+            .enumerate()
+            .map(|(i, &(speed_m_s, from_deg))| RecordingWind {
+                recording: format!("r{i}.csv"),
+                speed_m_s,
+                from_deg,
+                speed_standard_error_m_s: Some(0.08),
+                from_standard_error_deg: Some(1.0),
+                before_position_rmse_over_l: 0.2,
+                after_position_rmse_over_l: 0.1,
+            })
+            .collect()
+    }
+
+    /// Regression (a probe's ship in one steady wind of 4 m/s from 240° with its own wind-force
+    /// model): the per-recording form explained 57 % against one wind's 32 % and was the verdict,
+    /// with eight winds of 3.4–4.1 m/s from 234–248° (each ±1°: the spread is the force model's,
+    /// not the weather's). Runs that found about one wind were in one wind.
+    #[test]
+    fn runs_that_found_about_one_wind_were_in_one_wind() {
+        let probe = [
+            (4.07, 234.5),
+            (4.03, 235.5),
+            (3.87, 240.1),
+            (3.80, 240.8),
+            (3.94, 248.2),
+            (3.93, 248.1),
+            (3.41, 237.9),
+            (3.44, 239.4),
+        ];
+        let sentence = winds_agree(&winds(&probe)).expect("one wind");
+        assert!(sentence.contains("they were in one wind"), "{sentence}");
+        // Through north the mean direction wraps, and the runs still agree.
+        assert!(winds_agree(&winds(&[(3.0, 355.0), (3.2, 5.0), (3.1, 0.0)])).is_some());
+        // Winds from different sides, or of different strength, are each run's own.
+        assert!(winds_agree(&winds(&[(3.5, 10.0), (3.5, 80.0), (3.5, 200.0)])).is_none());
+        assert!(winds_agree(&winds(&[(1.5, 240.0), (4.5, 240.0)])).is_none());
+        assert!(winds_agree(&winds(&[(3.0, 240.0)])).is_none());
+    }
+}
+
+/// The winner by the held-out rules, if its effects fitted on all recordings also make the
+/// whole-record replays better ([`WholeCheck`]); else the next accepted one that does, the others
+/// held back with the evidence. A segment replay restarts from the recorded state every 10 L/U0, so an
+/// effect can take out a short-term misfit of another cause (a smaller rudder shows as a tail wind on
+/// zig-zags) while its force, acting the whole run, drives the ship off: a real effect brings the whole
+/// run closer too.
+fn whole_checked(
+    input: &DiagnoseInput,
+    whole: &Dataset,
+    baseline: &Baseline,
+    judged: &mut [Judged],
+    finals: &[(Vec<Effect>, FitResult)],
+    mut best: Option<usize>,
+) -> Option<usize> {
+    while let Some(b) = best {
+        let check = WholeCheck::of(input, whole, &baseline.windage, |_| finals[b].0.clone());
+        if check.improves() {
+            return Some(b);
+        }
+        judged[b].assessed.accepted = false;
+        judged[b].held_back = Some(check.reason());
+        best = crate::judge::best_accepted(judged);
+    }
+    None
+}
+
+/// Whole-record replays (what `shipid validate` reports) of the base and of the base with a
+/// candidate's effects, per recording: (file, before, after) position RMSE ÷ L.
+struct WholeCheck {
+    pairs: Vec<(String, f64, f64)>,
+}
+
+/// A candidate must bring the typical recording's whole-record replay (geometric mean of
+/// after/before) below this share of the base's.
+const WHOLE_TYPICAL_RATIO: f64 = 1.0;
+
+impl WholeCheck {
+    /// Each recording of `whole` replayed whole by the base and by the base with `effects_of(file)`.
+    fn of(
+        input: &DiagnoseInput,
+        whole: &Dataset,
+        windage: &shipid_pipeline::environment::ChosenWindage,
+        effects_of: impl Fn(&str) -> Vec<Effect>,
+    ) -> WholeCheck {
+        let n = whole.recordings.len();
+        let envs = crate::compare::environments(whole, windage)
+            .ok()
+            .filter(|e| e.len() == n)
+            .unwrap_or_else(|| vec![None; n]);
+        let base = crate::compare::Composite {
+            base: input.base,
+            effects: input.base_effects.to_vec(),
+        };
+        let pairs = whole
+            .recordings
+            .iter()
+            .zip(&envs)
+            .filter_map(|(r, env)| {
+                let with = crate::compare::Composite {
+                    base: input.base,
+                    effects: crate::compare::combine(input.base_effects, &effects_of(&r.file)),
+                };
+                let (m0, m1) = (base.model()?, with.model()?);
+                let before = crate::compare::whole_replay(&m0, &r.recording, env.as_ref())?;
+                let after = crate::compare::whole_replay(&m1, &r.recording, env.as_ref())?;
+                Some((r.file.clone(), before, after))
+            })
+            .collect();
+        WholeCheck { pairs }
+    }
+
+    /// Geometric mean over recordings of after/before (recordings the base cannot replay left out;
+    /// 1 when none is left).
+    fn typical_ratio(&self) -> f64 {
+        let logs: Vec<f64> = self
+            .pairs
+            .iter()
+            .filter(|p| p.1.is_finite())
+            .map(|p| (p.2.max(1e-12) / p.1.max(1e-12)).ln())
+            .collect();
+        if logs.is_empty() {
+            return 1.0;
+        }
+        (logs.iter().sum::<f64>() / logs.len() as f64).exp()
+    }
+
+    /// Whether the typical whole-record replay gets better (nothing to replay: no evidence against).
+    fn improves(&self) -> bool {
+        self.pairs.is_empty() || self.typical_ratio() < WHOLE_TYPICAL_RATIO
+    }
+
+    /// The evidence against, in prose.
+    fn reason(&self) -> String {
+        let worse: Vec<String> = self
+            .pairs
+            .iter()
+            .filter(|p| !(p.2 <= p.1))
+            .map(|p| format!("{} {:.2} → {:.2} L", p.0, p.1, p.2))
+            .collect();
+        format!(
+            "with it the whole-record replays get worse, not better (typical recording × {:.2}; {}), so it takes out a short-term misfit in the segments without being what differs: these recordings cannot tell what the model lacks",
+            self.typical_ratio(),
+            worse.join(", ")
+        )
     }
 }
 
