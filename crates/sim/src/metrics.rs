@@ -19,7 +19,11 @@
 //!   (+, −, +, …), interpolated linearly. Overshoot k is the extreme deviation beyond the check angle
 //!   between execute k+1 and execute k+2 (or the end of the record). It is defined only for a real peak:
 //!   the heading must turn back afterwards (execute k+2 exists, or a later sample of the record is
-//!   smaller). The peak is refined by a parabola through the three samples around the extreme sample.
+//!   smaller). The peak is the plateau of samples within 1.5 heading resolutions of the extreme one
+//!   (the heading's smallest step near the peak, at least the last of 6 significant digits), refined by
+//!   the least-squares parabola through it and the sample either side: a single extreme sample gets
+//!   the usual three-point parabola, and a flat-topped peak is not taken at the first or last sample
+//!   of a tie that a change below the data's resolution makes or breaks.
 //!   t_a = execute 2 − execute 1 and t_check = first overshoot peak − execute 2, both × U0/L.
 //! - **Turning circle**: along-course and lateral (positive towards the turn) distances of midship from
 //!   the first-execute position. Advance and transfer are taken where the heading change first reaches
@@ -449,6 +453,106 @@ fn parabola_peak(t: [f64; 3], y: [f64; 3]) -> (f64, f64) {
     (t[1], y[1])
 }
 
+/// Significant digits of a heading written as text that the overshoot peak's resolution assumes at
+/// least (`%g`-like output: six). Data written with fewer digits show a coarser step, which
+/// [`heading_resolution_rad`] finds in the samples.
+pub const HEADING_SIGNIFICANT_DIGITS: i32 = 6;
+
+/// The heading's resolution [rad] around a peak: the larger of its smallest non-zero step between
+/// consecutive samples of `window` (the quantum of a rounded or encoded heading) and the last of
+/// [`HEADING_SIGNIFICANT_DIGITS`] significant digits of the heading `psi_peak_rad` (the rounding that
+/// writing the data leaves). Differences below it cannot order two samples.
+pub fn heading_resolution_rad(
+    psi: &[f64],
+    window: std::ops::Range<usize>,
+    psi_peak_rad: f64,
+) -> f64 {
+    let quantum = psi[window]
+        .windows(2)
+        .map(|w| (w[1] - w[0]).abs())
+        .filter(|d| *d > 0.0 && d.is_finite())
+        .fold(f64::INFINITY, f64::min);
+    let quantum = if quantum.is_finite() { quantum } else { 0.0 };
+    let magnitude = psi_peak_rad.abs();
+    let digits = if magnitude > 0.0 && magnitude.is_finite() {
+        10f64.powi(magnitude.log10().floor() as i32 + 1 - HEADING_SIGNIFICANT_DIGITS)
+    } else {
+        0.0
+    };
+    quantum.max(digits)
+}
+
+/// Time [s] and value [rad] of the peak of `sigma · dev` at sample `i_max`, the largest in `window`.
+///
+/// The peak is the plateau around `i_max`: the contiguous samples of the window within 1.5 heading
+/// resolutions ([`heading_resolution_rad`]) of the largest. Rounded values differ by whole steps, so
+/// half a step of margin takes in the samples one step below (before the rounding they may have been
+/// the larger) and none further; a creep below the resolution is a tie. A single-sample plateau is
+/// refined by the parabola through it and its two neighbours ([`parabola_peak`]); a longer one by the
+/// least-squares parabola through the plateau and its two neighbours, which is exact on a smooth peak
+/// and takes a flat-topped one at the vertex over its whole run, not at its first or last sample, so
+/// that a change of the data below their resolution moves it by less than a sample.
+fn refined_peak(
+    t: &[f64],
+    dev: &[f64],
+    psi: &[f64],
+    sigma: f64,
+    window: std::ops::Range<usize>,
+    i_max: usize,
+) -> (f64, f64) {
+    let peak_value = sigma * dev[i_max];
+    let tol = 1.5 * heading_resolution_rad(psi, window.clone(), psi[i_max]);
+    let on_plateau = |j: usize| window.contains(&j) && sigma * dev[j] >= peak_value - tol;
+    let mut first = i_max;
+    while first > 0 && on_plateau(first - 1) {
+        first -= 1;
+    }
+    let mut last = i_max;
+    while on_plateau(last + 1) {
+        last += 1;
+    }
+    let middle = 0.5 * (t[first] + t[last]);
+    if first == 0 || last + 1 >= t.len() {
+        return (middle, peak_value);
+    }
+    if first == last {
+        return parabola_peak(
+            [t[i_max - 1], t[i_max], t[i_max + 1]],
+            [sigma * dev[i_max - 1], peak_value, sigma * dev[i_max + 1]],
+        );
+    }
+    least_squares_peak(&t[first - 1..=last + 1], &dev[first - 1..=last + 1], sigma)
+        .unwrap_or((middle, peak_value))
+}
+
+/// Vertex of the least-squares parabola through `(t, sigma · y)` when it is a maximum inside their
+/// span; `None` otherwise (or when the fit is singular).
+fn least_squares_peak(t: &[f64], y: &[f64], sigma: f64) -> Option<(f64, f64)> {
+    let (t_lo, t_hi) = (*t.first()?, *t.last()?);
+    let (tc, half) = (0.5 * (t_lo + t_hi), 0.5 * (t_hi - t_lo));
+    if half.is_nan() || half <= 0.0 {
+        return None;
+    }
+    // Normal equations in x = (t − tc)/half ∈ [−1, 1]: y ≈ c0 + c1 x + c2 x².
+    let (mut m, mut b) = ([[0.0; 3]; 3], [0.0; 3]);
+    for (&ti, &yi) in t.iter().zip(y) {
+        let x = (ti - tc) / half;
+        let phi = [1.0, x, x * x];
+        for r in 0..3 {
+            for c in 0..3 {
+                m[r][c] += phi[r] * phi[c];
+            }
+            b[r] += phi[r] * sigma * yi;
+        }
+    }
+    let [c0, c1, c2] = solve3(m, b)?;
+    if c2.is_nan() || c2 >= 0.0 {
+        return None;
+    }
+    let x = -c1 / (2.0 * c2);
+    (x.abs() <= 1.0).then(|| (tc + x * half, c0 - c1 * c1 / (4.0 * c2)))
+}
+
 /// Executes and overshoots of a zig-zag `rudder_deg`/`check_deg` to `side` (see the module docs).
 pub fn zigzag_events(
     rec: &Recording,
@@ -496,14 +600,7 @@ pub fn zigzag_events(
         if !turned_back {
             break;
         }
-        let (t_peak, value) = if i_max >= 1 && i_max + 1 < n {
-            parabola_peak(
-                [t[i_max - 1], t[i_max], t[i_max + 1]],
-                [sigma * dev[i_max - 1], peak_value, sigma * dev[i_max + 1]],
-            )
-        } else {
-            (t[i_max], peak_value)
-        };
+        let (t_peak, value) = refined_peak(t, &dev, &rec.psi, sigma, lo..hi, i_max);
         overshoots.push(Overshoot {
             t_s: t_peak,
             angle_deg: (value - check).to_degrees(),

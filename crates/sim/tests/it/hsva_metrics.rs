@@ -74,3 +74,64 @@ fn hsva_zigzag_overshoots_match_source_md() {
         }
     }
 }
+
+/// Regression (probe13 finding 3), on the tank data: the heading of z20_10_sb creeps by 3e-5° along a
+/// plateau at its first overshoot (15.80–16.25 s), so written with 6 significant digits it ties and
+/// t_check jumped from the plateau's last sample to its first (1.3736 → 1.3062 L/U0; −1.6 % to −4.4 %
+/// on the other starboard zig-zags). Rounding the heading to 6 significant digits now moves t_check by
+/// less than one sample interval on every record.
+#[test]
+fn hsva_t_check_does_not_depend_on_the_seventh_digit_of_the_heading() {
+    let cases = [
+        ("HSVA_CPMC_KVLCC2_Z_20_10_S.dat", 20.0, 10.0),
+        ("HSVA_CPMC_KVLCC2_Z_10_10_S.dat", 10.0, 10.0),
+        ("HSVA_CPMC_KVLCC2_Z_10_05.dat", 10.0, 5.0),
+        ("HSVA_CPMC_KVLCC2_Z_15_05.dat", 15.0, 5.0),
+        ("HSVA_CPMC_KVLCC2_Z_20_05.dat", 20.0, 5.0),
+    ];
+    for (file, rudder_deg, check_deg) in cases {
+        let Some(rec) = common::read_hsva(file) else {
+            common::skip_missing(file);
+            return;
+        };
+        let man = Manoeuvre::ZigZag {
+            rudder_deg,
+            check_deg,
+            side: Side::Starboard,
+        };
+        let mut rounded = rec.clone();
+        rounded
+            .psi
+            .iter_mut()
+            .for_each(|p| *p = round_significant(*p, 6));
+        check_t_check_within_a_sample(file, &rec, &rounded, &man);
+    }
+}
+
+/// `x` rounded to `digits` significant digits, as data written with `%.{digits}g` read back.
+fn round_significant(x: f64, digits: i32) -> f64 {
+    if x == 0.0 || !x.is_finite() {
+        return x;
+    }
+    let scale = 10f64.powi(digits - 1 - x.abs().log10().floor() as i32);
+    (x * scale).round() / scale
+}
+
+/// t_check of `a` and `b` differ by at most one of `a`'s sample intervals (× U0/L).
+fn check_t_check_within_a_sample(
+    case: &str,
+    a: &shipid_io::Recording,
+    b: &shipid_io::Recording,
+    man: &Manoeuvre,
+) {
+    let ship = ship();
+    let (ma, mb) = (metrics(a, man, &ship), metrics(b, man, &ship));
+    let (Some(ta), Some(tb)) = (ma.t_check, mb.t_check) else {
+        panic!("{case}: t_check {:?} vs {:?}", ma.t_check, mb.t_check);
+    };
+    let sample = (a.t[1] - a.t[0]) * ship.u0 / ship.lpp;
+    assert!(
+        (ta - tb).abs() <= sample,
+        "{case}: t_check {ta} vs {tb} rounded (one sample = {sample} L/U0)"
+    );
+}

@@ -678,3 +678,105 @@ fn the_approach_change_is_told_from_the_noise() {
     check(&noisy, false);
     check(&accelerating, true);
 }
+
+/// `x` rounded to `digits` significant digits, as data written with `%.{digits}g` read back.
+fn round_significant(x: f64, digits: i32) -> f64 {
+    if x == 0.0 || !x.is_finite() {
+        return x;
+    }
+    let scale = 10f64.powi(digits - 1 - x.abs().log10().floor() as i32);
+    (x * scale).round() / scale
+}
+
+/// The reference model's 20°/10° zig-zag (sampled every 0.1 s) with the top of its first overshoot cut
+/// flat over `half_width` samples either side of the peak sample and `shape(k)` added to the k-th
+/// sample of that plateau (k = 0, 1, …): a heading that creeps along a plateau, as the HSVA z20_10_sb
+/// record does around its first overshoot.
+fn zigzag_with_a_plateau(half_width: usize, shape: impl Fn(usize) -> f64) -> Recording {
+    let m = MmgModel::kvlcc2();
+    let man = Manoeuvre::ZigZag {
+        rudder_deg: 20.0,
+        check_deg: 10.0,
+        side: Side::Starboard,
+    };
+    let opts = SimOptions::new(60.0).with_step(0.05, 0.1);
+    let mut rec = simulate_manoeuvre(&m, &man, &opts).recording;
+    rec.accelerations = None;
+    let ev = zigzag_events(&rec, 20.0, 10.0, Side::Starboard, m.ship()).unwrap();
+    let i_peak = rec.t.partition_point(|&t| t < ev.overshoots[0].t_s);
+    let top = rec.psi[i_peak - 1].max(rec.psi[i_peak]);
+    let first = i_peak - half_width;
+    for k in 0..=2 * half_width {
+        rec.psi[first + k] = top + shape(k);
+    }
+    rec
+}
+
+/// Regression (probe13 finding 3): on a flat-topped heading peak the first overshoot's time took the
+/// first sample of a tie and the last of a creep a few 1e-7 rad high, so t_check moved by the plateau's
+/// length (−4.9 % on HSVA z20_10_sb) when the data were written with 6 significant digits. The peak is
+/// now the vertex over the whole plateau: ties, creeps below the heading's resolution and rounding to 6
+/// significant digits move t_check by less than a sample interval.
+#[test]
+fn t_check_of_a_flat_topped_peak_does_not_depend_on_the_seventh_digit() {
+    let ship = kvlcc2_ship();
+    let man = Manoeuvre::ZigZag {
+        rudder_deg: 20.0,
+        check_deg: 10.0,
+        side: Side::Starboard,
+    };
+    let creep = 3e-7; // rad over the plateau, as HSVA's 3e-5° over 0.45 s
+    let flat = zigzag_with_a_plateau(5, |_| 0.0);
+    let variants: [(&str, Recording); 5] = [
+        (
+            "creeping up",
+            zigzag_with_a_plateau(5, |k| creep * k as f64 / 10.0),
+        ),
+        (
+            "creeping down",
+            zigzag_with_a_plateau(5, |k| -creep * k as f64 / 10.0),
+        ),
+        (
+            "creeping up, saturating",
+            zigzag_with_a_plateau(5, |k| -creep * (-(k as f64) / 3.0).exp()),
+        ),
+        (
+            "wider by a tie",
+            zigzag_with_a_plateau(5, |k| if k == 0 { -1e-8 } else { 0.0 }),
+        ),
+        ("rounded to 6 significant digits", {
+            let mut r = zigzag_with_a_plateau(5, |k| creep * k as f64 / 10.0);
+            r.psi.iter_mut().for_each(|p| *p = round_significant(*p, 6));
+            r
+        }),
+    ];
+    let base = metrics(&flat, &man, &ship);
+    for (case, rec) in &variants {
+        check_peak_moves_less_than_a_sample(case, &base, &metrics(rec, &man, &ship), 0.1, &ship);
+    }
+}
+
+/// t_check of `got` is within one sample interval `dt_s` of `base`'s, and overshoot_1 within 1e-3°.
+fn check_peak_moves_less_than_a_sample(
+    case: &str,
+    base: &Metrics,
+    got: &Metrics,
+    dt_s: f64,
+    ship: &shipid_io::Ship,
+) {
+    let (Some(t0), Some(t1)) = (base.t_check, got.t_check) else {
+        panic!("{case}: t_check {:?} vs {:?}", base.t_check, got.t_check);
+    };
+    let sample = dt_s * ship.u0 / ship.lpp;
+    assert!(
+        (t1 - t0).abs() <= sample,
+        "{case}: t_check {t1} vs {t0} (one sample = {sample} L/U0)"
+    );
+    let (Some(o0), Some(o1)) = (base.overshoot_1, got.overshoot_1) else {
+        panic!(
+            "{case}: overshoot_1 {:?} vs {:?}",
+            base.overshoot_1, got.overshoot_1
+        );
+    };
+    assert!((o1 - o0).abs() <= 1e-3, "{case}: overshoot_1 {o1} vs {o0}");
+}
