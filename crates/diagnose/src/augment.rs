@@ -21,13 +21,20 @@ impl Report {
     /// several effects, the errors keyed `<kind>.<key>` in the report go to their effect's entry).
     pub fn effect_entries(&self, source: &str) -> Vec<EffectEntry> {
         let multi = self.effects.len() > 1;
+        // What the standard errors cover goes with them into the model file.
+        let source = match &self.standard_error_basis {
+            Some(b) if !self.standard_errors.is_empty() => {
+                format!("{source}; standard errors: {}", b.sentence())
+            }
+            _ => source.to_string(),
+        };
         self.effects
             .iter()
             .map(|e| {
                 let kind = e.split(':').next().unwrap_or("");
                 EffectEntry {
                     effect: e.clone(),
-                    source: source.to_string(),
+                    source: source.clone(),
                     standard_error: self
                         .standard_errors
                         .iter()

@@ -424,15 +424,21 @@ pub(crate) fn whole_replay(
 /// plus the drift from the remaining initial-velocity noise over a segment.
 fn noise_floor_over_l(prep: &[Prepared], horizon_s: f64, lpp: f64) -> f64 {
     let (mut sp, mut sv) = (0.0, 0.0);
+    // A recording shorter than the horizon is one segment as long as the recording: its drift is
+    // that of its own length.
     for p in prep {
         let t = &p.rec.t;
+        let span = t.last().unwrap_or(&0.0) - t.first().unwrap_or(&0.0);
+        let segment_s = horizon_s.min(span.max(0.0));
         sp += noise_sigma(t, &p.rec.x0).powi(2) + noise_sigma(t, &p.rec.y0).powi(2);
-        sv += noise_sigma(t, &p.rec.u).powi(2) + noise_sigma(t, &p.rec.v).powi(2);
+        sv += (noise_sigma(t, &p.rec.u).powi(2) + noise_sigma(t, &p.rec.v).powi(2))
+            * segment_s.powi(2);
     }
     let n = prep.len() as f64;
     let sigma_pos = (sp / n).sqrt();
-    let sigma_vel_init = (sv / n).sqrt() / 11f64.sqrt();
-    (sigma_pos.powi(2) + (sigma_vel_init * horizon_s / 3f64.sqrt()).powi(2)).sqrt() / lpp
+    // Initial-velocity noise (a local fit of about 11 samples) times the segment's length.
+    let drift = (sv / n).sqrt() / 11f64.sqrt();
+    (sigma_pos.powi(2) + (drift / 3f64.sqrt()).powi(2)).sqrt() / lpp
 }
 
 /// The model as given against the recordings: what every candidate is measured against.

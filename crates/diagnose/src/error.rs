@@ -8,6 +8,11 @@ pub enum DiagnoseError {
     /// No recording has the 20 samples a replay segment and the differentiator need.
     #[error("no recording with at least 20 samples to diagnose")]
     NothingToDiagnose,
+    /// Every recording is shorter than the shortest replay horizon.
+    #[error(
+        "every recording is too short to replay in segments: the longest lasts {longest_s:.1} s, a segment needs at least {needed_s:.1} s (0.5 L/U0)"
+    )]
+    TooShort { longest_s: f64, needed_s: f64 },
     /// The model with its own effects cannot be built.
     #[error("the model with its own effects cannot be built")]
     Model,

@@ -33,6 +33,52 @@ impl Default for DiagnoseOptions {
     }
 }
 
+impl DiagnoseOptions {
+    /// These options with the replay horizon fitted to the recordings of `ds`: when every recording
+    /// is shorter than the horizon, a segment would be a whole recording while the noise floor and the
+    /// model's own level were those of full-length segments (a 6-s recording judged against the drift
+    /// of 59-s segments hides a strong current), so the horizon is shortened to the longest recording
+    /// and a note says so. `Err` when even that is below [`MIN_HORIZON_L_OVER_U0`].
+    pub fn fitted_to(
+        self,
+        ds: &shipid_io::Dataset,
+    ) -> Result<(DiagnoseOptions, Option<String>), crate::DiagnoseError> {
+        let l_over_u0_s = ds.ship.lpp / ds.ship.u0;
+        let longest_s = ds
+            .recordings
+            .iter()
+            .filter(|r| r.recording.len() >= shipid_io::table::MIN_SAMPLES)
+            .map(|r| r.recording.t.last().unwrap_or(&0.0) - r.recording.t.first().unwrap_or(&0.0))
+            .fold(0.0, f64::max);
+        let longest = longest_s / l_over_u0_s;
+        if !(longest.is_finite() && longest > 0.0) || self.horizon_l_over_u0 <= longest {
+            return Ok((self, None));
+        }
+        if longest < MIN_HORIZON_L_OVER_U0 {
+            return Err(crate::DiagnoseError::TooShort {
+                longest_s,
+                needed_s: MIN_HORIZON_L_OVER_U0 * l_over_u0_s,
+            });
+        }
+        let note = format!(
+            "{}: every recording is shorter than the replay horizon {:.1} L/U0 ({:.0} s; the longest lasts {longest_s:.1} s): the horizon is shortened to {longest:.2} L/U0 ({longest_s:.1} s), so that the noise floor and the model's own level are those of segments as long as the recordings",
+            ds.path.display(),
+            self.horizon_l_over_u0,
+            self.horizon_l_over_u0 * l_over_u0_s,
+        );
+        Ok((
+            DiagnoseOptions {
+                horizon_l_over_u0: longest,
+                ..self
+            },
+            Some(note),
+        ))
+    }
+}
+
+/// Shortest replay horizon ÷ (L/U0) a diagnosis works with (the command's smallest `--horizon`).
+pub const MIN_HORIZON_L_OVER_U0: f64 = 0.5;
+
 /// Everything the diagnosis needs besides the data.
 pub struct DiagnoseInput<'a> {
     /// The model without its own effects.

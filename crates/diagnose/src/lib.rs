@@ -67,7 +67,7 @@ pub use environment::{
 };
 pub use error::DiagnoseError;
 pub use families::{Family, depth_for_factor};
-pub use input::{BaseRange, DiagnoseInput, DiagnoseOptions};
+pub use input::{BaseRange, DiagnoseInput, DiagnoseOptions, MIN_HORIZON_L_OVER_U0};
 pub use locate::{Located, Regime};
-pub use report::{Candidate, Fit, RecordingFit, Report, diagnose};
+pub use report::{Candidate, Fit, RecordingFit, Report, StandardErrorBasis, diagnose};
 pub use verdict::Verdict;

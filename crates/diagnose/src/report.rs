@@ -91,6 +91,9 @@ pub struct Report {
     pub effects: Vec<String>,
     /// One standard error of each chosen parameter.
     pub standard_errors: BTreeMap<String, f64>,
+    /// What `standard_errors` cover and what they leave out (absent when there are none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub standard_error_basis: Option<StandardErrorBasis>,
     /// With the verdict `wind` in its per-recording form: each recording's own wind (the runs'
     /// environment, not the model's, so `effects` is empty and no augmented model is written).
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -129,6 +132,49 @@ pub struct Report {
     /// `diagnose --reveal`: the verdict against the recorded channels that were concealed.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub reveal: Option<RevealCheck>,
+    /// The model diagnosed, as given to the command (set by the caller; absent from the library).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub model: Option<String>,
+    /// The data set diagnosed, as given to the command (set by the caller).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dataset: Option<String>,
+}
+
+/// What the standard errors of a found effect cover: the recordings' scatter about the fit, with the
+/// base model held fixed. The base model's own error is left out: a base that misfits its own training
+/// data (a sparse GP at 0.0034 L) passes a bias on to the parameters that these errors do not show
+/// (h/T 1.669 ± 0.008 for a true 1.6).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StandardErrorBasis {
+    /// What they cover.
+    pub covers: &'static str,
+    /// What they leave out.
+    pub leaves_out: &'static str,
+    /// The base model's own level on its training data (position RMSE ÷ L), when known: the size of
+    /// what is left out.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub base_model_level_over_l: Option<f64>,
+}
+
+impl StandardErrorBasis {
+    fn of(base_model_level_over_l: Option<f64>) -> StandardErrorBasis {
+        StandardErrorBasis {
+            covers: "the recordings' scatter about the fit, the base model held fixed",
+            leaves_out: "the base model's own error, which a base that misfits its own training data passes on to the parameters as a bias these errors do not show",
+            base_model_level_over_l,
+        }
+    }
+
+    /// The basis in one sentence (printed, and in the augmented model's `source`).
+    pub fn sentence(&self) -> String {
+        let level = self.base_model_level_over_l.map_or(String::new(), |l| {
+            format!(" (its own level on its training data: {l:.4} L)")
+        });
+        format!(
+            "covers {}; leaves out {}{level}",
+            self.covers, self.leaves_out
+        )
+    }
 }
 
 /// The explanation mentions the identification range when at least this fraction of the recorded
@@ -146,6 +192,8 @@ pub fn diagnose(
     // Candidates are fitted on one half of the recordings and judged on the other: a single
     // recording is judged in two halves of its time instead (the judge's time-halves folds), so
     // that one run (with its own wind, say) can be diagnosed on its own.
+    let (fitted, horizon_note) = opts.fitted_to(ds)?;
+    let opts = &fitted;
     let halves;
     // Warnings and the recorded environment are the whole recording's.
     let whole = ds;
@@ -255,6 +303,7 @@ pub fn diagnose(
     for a in &report.against_recorded {
         report.explanation = format!("{}; {}", report.explanation, a.sentence());
     }
+    report.warnings.extend(horizon_note);
     report.recorded_environment = RecordedEnvironment::of(whole);
     let wind_used = report
         .recorded_environment
@@ -602,7 +651,14 @@ fn assemble(
     Report {
         verdict: c.verdict,
         candidates: candidates(judged, finals),
-        located: locate(prep, &baseline.residuals, &baseline.scale, ship),
+        // Windows locate a mismatch: where there is none (the held-out error within the model's own
+        // level and the noise), the running mean's excursions are the residual's own texture (on
+        // noise-free data, the differentiator's), not a mismatch, and none is listed.
+        located: if baseline.before_l > real_threshold {
+            locate(prep, &baseline.residuals, &baseline.scale, ship)
+        } else {
+            Vec::new()
+        },
         fit_before: Fit {
             position_rmse_over_l: before.position_rmse() / lpp,
             heading_rmse_deg: before.heading_rmse_rad().to_degrees(),
@@ -612,6 +668,8 @@ fn assemble(
             heading_rmse_deg: after.heading_rmse_rad().to_degrees(),
         },
         effects: c.effects.iter().map(|e| e.to_string()).collect(),
+        standard_error_basis: (!c.standard_errors.is_empty())
+            .then(|| StandardErrorBasis::of(input.model_level_over_l)),
         standard_errors: c.standard_errors,
         per_recording_wind: Vec::new(),
         per_recording,
@@ -626,6 +684,8 @@ fn assemble(
         recorded_environment: None,
         against_recorded: Vec::new(),
         reveal: None,
+        model: None,
+        dataset: None,
     }
 }
 
@@ -888,6 +948,12 @@ fn whole_checked(
     mut best: Option<usize>,
 ) -> Option<usize> {
     while let Some(b) = best {
+        if let Some(why) = along_the_course_of_one_run(whole, &finals[b].0) {
+            judged[b].assessed.accepted = false;
+            judged[b].held_back = Some(why);
+            best = crate::judge::best_accepted(judged);
+            continue;
+        }
         let check = WholeCheck::of(input, whole, &baseline.windage, |_| finals[b].0.clone());
         if check.improves() {
             return Some(b);
@@ -899,6 +965,50 @@ fn whole_checked(
     None
 }
 
+/// A wind within this angle [deg] of the approach course's axis (from ahead or astern) is
+/// symmetric to port and starboard.
+const ALONG_THE_COURSE_DEG: f64 = 10.0;
+
+/// Heading sweep [deg] below which a run keeps near its approach course (a zig-zag; a turning circle
+/// turns through every heading).
+const NEAR_THE_COURSE_SWEEP_DEG: f64 = 180.0;
+
+/// On one run that keeps near its approach course (a zig-zag), a wind from ahead or astern is the one
+/// wind that is the same to port and starboard, and so the one a change of the ship that is the same
+/// to both sides (its rudder, its damping) can pass for: a tail wind of a few m/s takes out much of a
+/// smaller rudder's zig-zag misfit, and the whole-record replay gets better with it too. Other runs
+/// (whose whole-record replays it would make worse) or a run through every heading tell them apart;
+/// one zig-zag cannot. The reason, when `effects` hold such a wind on such a run.
+fn along_the_course_of_one_run(whole: &Dataset, effects: &[Effect]) -> Option<String> {
+    let [run] = whole.recordings.as_slice() else {
+        return None;
+    };
+    let psi = &run.recording.psi;
+    let (lo, hi) = psi
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        });
+    let course = psi.first()?.to_degrees();
+    if !((hi - lo).to_degrees() < NEAR_THE_COURSE_SWEEP_DEG) {
+        return None;
+    }
+    effects.iter().find_map(|e| {
+        let Effect::Wind(w) = e else { return None };
+        let off = crate::angle_difference_deg(w.from_deg, course)
+            .abs()
+            .min(crate::angle_difference_deg(w.from_deg, course + 180.0).abs());
+        (off <= ALONG_THE_COURSE_DEG).then(|| {
+            format!(
+                "a wind from {:.0}°, within {off:.0}° of {}'s approach course ({:.0}°), is the same to port and starboard, and on one run that keeps near its course a change of the ship that is the same to both sides (rudder size, damping) passes for it: one run cannot tell them apart; runs with other manoeuvres (a turning circle) would",
+                w.from_deg,
+                run.file,
+                course.rem_euclid(360.0)
+            )
+        })
+    })
+}
+
 /// Whole-record replays (what `shipid validate` reports) of the base and of the base with a
 /// candidate's effects, per recording: (file, before, after) position RMSE ÷ L.
 struct WholeCheck {
@@ -906,8 +1016,10 @@ struct WholeCheck {
 }
 
 /// A candidate must bring the typical recording's whole-record replay (geometric mean of
-/// after/before) below this share of the base's.
-const WHOLE_TYPICAL_RATIO: f64 = 1.0;
+/// after/before) below this share of the base's: at least 10 % better, as each held-out half must be.
+/// On the concealed-effect benchmark real effects bring it to 0.03–0.75; a tail wind standing in for
+/// a smaller rudder on zig-zags made it 1.6–2.1 (several recordings) or 0.92 (shallow water on one run).
+const WHOLE_TYPICAL_RATIO: f64 = 0.9;
 
 impl WholeCheck {
     /// Each recording of `whole` replayed whole by the base and by the base with `effects_of(file)`.

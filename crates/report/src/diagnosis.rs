@@ -9,7 +9,9 @@ use crate::html::{badge, esc, facts, id_of, json_html, num, page, toml_block, wa
 use crate::{DiagnosisFiles, ReportError, RunMeta};
 
 /// Keys of the report that the page shows in their own place; any other key is listed as it is.
-const KNOWN: [&str; 20] = [
+const KNOWN: [&str; 22] = [
+    "model",
+    "dataset",
     "warnings",
     "per_recording_wind",
     "windage",
@@ -58,20 +60,38 @@ pub fn diagnosis_page(files: &DiagnosisFiles, meta: &RunMeta) -> Result<String, 
     };
     let mut notes: Vec<String> = Vec::new();
 
-    let title = meta.name.clone().unwrap_or_else(|| "Diagnosis".into());
+    // The model and data set as the report names them, for a page rebuilt from the folder alone
+    // (`shipid report DIR`), where the caller knows neither.
+    let named = |key: &str| r.get(key).and_then(Value::as_str).map(str::to_string);
+    let title = meta
+        .name
+        .clone()
+        .or_else(|| named("model").map(|m| format!("diagnosis of {m}")))
+        .unwrap_or_else(|| "Diagnosis".into());
     let mut header: Vec<(String, String)> = vec![(
         "tool version".into(),
         meta.tool_version
             .as_ref()
             .map_or("unknown".into(), |v| format!("shipid {v}")),
     )];
-    if let Some(d) = &meta.dataset {
-        header.push(("data set".into(), d.display().to_string()));
+    if let Some(d) = meta
+        .dataset
+        .as_ref()
+        .map(|d| d.display().to_string())
+        .or_else(|| named("dataset"))
+    {
+        header.push(("data set".into(), d));
     }
     if let Some(f) = &meta.study_file {
         header.push(("study file".into(), f.display().to_string()));
     }
     header.extend(meta.details.iter().cloned());
+    if let (false, Some(m)) = (
+        meta.details.iter().any(|(k, _)| k == "model"),
+        named("model"),
+    ) {
+        header.push(("model".into(), m));
+    }
     header.push(("report".into(), path.display().to_string()));
     if let Some((p, _)) = &model {
         header.push(("augmented model".into(), p.display().to_string()));

@@ -163,10 +163,14 @@ pub fn run(args: &DiagnoseArgs) -> Result<Outcome, CliError> {
         )));
     }
     let training = training_for_diagnosis(model_spec)?;
-    let opts = DiagnoseOptions {
+    // Recordings all shorter than the horizon: the horizon is shortened to them, before the model's
+    // own level is measured with it, and a warning says so.
+    let (opts, horizon_note) = DiagnoseOptions {
         horizon_l_over_u0,
         ..DiagnoseOptions::default()
-    };
+    }
+    .fitted_to(&ds)
+    .map_err(|e| refused(dataset, e))?;
     let mut input = DiagnoseInput {
         base: base.as_ref(),
         base_effects: &base_effects,
@@ -185,6 +189,10 @@ pub fn run(args: &DiagnoseArgs) -> Result<Outcome, CliError> {
         base.own_range(),
     );
     let mut report = diagnose(&input, &ds, &opts).map_err(|e| refused(dataset, e))?;
+    // What was diagnosed against what, for a page rebuilt later from the report alone.
+    report.model = Some(model_spec.to_string());
+    report.dataset = Some(dataset.display().to_string());
+    report.warnings.extend(horizon_note);
     // A base without a propeller-rate input replays every recording at the rate it was identified
     // at: a recording made at another rate is a mismatch the diagnosis should not be blamed for.
     if !base.takes_propeller_rate() {
@@ -412,10 +420,8 @@ fn print_summary(r: &Report, model: &str, dataset: &Path, level_from: Option<&st
     for e in &r.effects {
         println!("  effect: {}", effect_with_units(e, &r.standard_errors));
     }
-    if !r.effects.is_empty() && !r.standard_errors.is_empty() {
-        println!(
-            "    (± one standard error from the recordings' scatter about the fit; it leaves out the base model's own error, which a base that misfits its own training data passes on to these values)"
-        );
+    if let (false, Some(basis)) = (r.effects.is_empty(), &r.standard_error_basis) {
+        println!("    (± one standard error: {})", basis.sentence());
     }
     if !r.per_recording_wind.is_empty() {
         println!(
