@@ -232,9 +232,10 @@ pub fn fit_gp_dataset(
 /// the order it meets the samples, and the same data listed in another order (the data set's or
 /// `--recordings`') gave another model (426 or 445 points from the HSVA runs, a 35° turn 4.44 or
 /// 3.83 L tactical). Each recording keeps its time order (paper 001's walk along a record); the
-/// recordings go by decreasing spread of their states (the sum over inputs of max − min, each ÷ the
-/// inputs' half range over all blocks: the widest manoeuvre first, the others then add what it
-/// lacks), ties by their content, never by their name or place in a list.
+/// recordings go by increasing spread of their states (the sum over inputs of max − min, each ÷ the
+/// inputs' half range over all blocks), as paper 001 lists its training runs (15/5, 20/5, 30/5,
+/// 35/5): the small manoeuvres' dense states first, the larger ones then add their outer states.
+/// Ties go by content, never by a name or a place in a list.
 fn in_walk_order(mut blocks: Vec<(Vec<f64>, [Vec<f64>; 3])>) -> (Vec<f64>, [Vec<f64>; 3]) {
     let dims = GP_INPUTS.len();
     let range = |x: &[f64], d: usize| {
@@ -245,12 +246,18 @@ fn in_walk_order(mut blocks: Vec<(Vec<f64>, [Vec<f64>; 3])>) -> (Vec<f64>, [Vec<
     };
     let scales: Vec<f64> = (0..dims)
         .map(|d| {
-            let (lo, hi) = blocks.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |acc, b| {
-                let (l, h) = range(&b.0, d);
-                (acc.0.min(l), acc.1.max(h))
-            });
+            let (lo, hi) = blocks
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |acc, b| {
+                    let (l, h) = range(&b.0, d);
+                    (acc.0.min(l), acc.1.max(h))
+                });
             let half = 0.5 * (hi - lo);
-            if half.is_finite() && half > 0.0 { half } else { 1.0 }
+            if half.is_finite() && half > 0.0 {
+                half
+            } else {
+                1.0
+            }
         })
         .collect();
     let spread = |x: &[f64]| -> f64 {
@@ -271,7 +278,7 @@ fn in_walk_order(mut blocks: Vec<(Vec<f64>, [Vec<f64>; 3])>) -> (Vec<f64>, [Vec<
         .drain(..)
         .map(|b| (spread(&b.0), content(&b), b))
         .collect();
-    keyed.sort_by(|a, b| b.0.total_cmp(&a.0).then_with(|| a.1.cmp(&b.1)));
+    keyed.sort_by(|a, b| a.0.total_cmp(&b.0).then_with(|| a.1.cmp(&b.1)));
     let mut inputs = Vec::new();
     let mut targets: [Vec<f64>; 3] = Default::default();
     for (_, _, (x, t)) in keyed {

@@ -73,7 +73,10 @@ fn check_scale_free(m: Manoeuvre, lambda: f64) {
         ship: froude_scaled(kvlcc2_ship(), lambda),
     };
     for t_nondim in [0.5, 2.0, 5.0, 10.0] {
-        let (a, b) = (heading_at(&model, &m, t_nondim), heading_at(&full, &m, t_nondim));
+        let (a, b) = (
+            heading_at(&model, &m, t_nondim),
+            heading_at(&full, &m, t_nondim),
+        );
         assert!(
             (a - b).abs() < 2e-3 * a.abs().max(1e-3),
             "{m:?} at λ = {lambda}, t U0/L = {t_nondim}: heading {a} rad at model scale, {b} rad at full scale"

@@ -261,12 +261,17 @@ fn the_sparse_gp_does_not_depend_on_the_order_recordings_are_listed_in() {
         shipid_io::Dataset::load(&common::root().join("data/kvlcc2-mmg/dataset.toml")).unwrap();
     let fit = |names: &[&str]| {
         let names: Vec<String> = names.iter().map(|s| s.to_string()).collect();
-        fit_gp_dataset(&ds, &names, WindowSpec::Whole, 0.96).unwrap().0
+        fit_gp_dataset(&ds, &names, WindowSpec::Whole, 0.96)
+            .unwrap()
+            .0
     };
     let given = fit(&TRAINING);
     let mut reversed = TRAINING;
     reversed.reverse();
-    for other in [fit(&reversed), fit(&[TRAINING[1], TRAINING[0], TRAINING[2]])] {
+    for other in [
+        fit(&reversed),
+        fit(&[TRAINING[1], TRAINING[0], TRAINING[2]]),
+    ] {
         assert_eq!(other.points, given.points);
         for (a, b) in other.outputs.iter().zip(&given.outputs) {
             assert_eq!(a.targets, b.targets, "{}", a.name);
