@@ -15,7 +15,7 @@
 
 use serde::Deserialize;
 
-use crate::error::InverseError;
+use crate::error::{InverseError, readable};
 
 /// Number of hull derivatives (4 in X, 6 in Y, 6 in N).
 pub const N_HULL: usize = 16;
@@ -186,7 +186,42 @@ pub fn behaviour(c: &Coefficients) -> Vec<f64> {
     h
 }
 
-/// Checks a database: at least two ships, all values finite, unique ids.
+/// Largest magnitude of a database coefficient. The coefficients are nondimensional (hull
+/// derivatives ÷ ½ρLdU² or ½ρL²dU², interaction coefficients and lengths over L): the 20 ships of
+/// paper 003 Tab. 1 lie within ±2.7. Beyond ±100 a value is a typo or a wrong unit, and its square
+/// in the SVD would swamp (or overflow) every other ship's variation.
+pub const MAX_COEFFICIENT_MAGNITUDE: f64 = 100.0;
+
+/// Two ships whose 24 coefficients agree to this relative tolerance are copies: they differ by
+/// rounding at most.
+pub const DUPLICATE_RELATIVE_TOLERANCE: f64 = 1e-9;
+
+/// Whether two coefficient sets agree within [`DUPLICATE_RELATIVE_TOLERANCE`].
+fn same_coefficients(a: &Coefficients, b: &Coefficients) -> bool {
+    a.0.iter()
+        .zip(b.0)
+        .all(|(x, y)| (x - y).abs() <= DUPLICATE_RELATIVE_TOLERANCE * x.abs().max(y.abs()))
+}
+
+/// Ids listed in a message: all of them up to this many, then a count.
+const LISTED_IDS: usize = 40;
+
+fn list_ids(ids: &[&str]) -> String {
+    if ids.len() <= LISTED_IDS {
+        ids.join(", ")
+    } else {
+        format!(
+            "{} and {} more",
+            ids[..LISTED_IDS].join(", "),
+            ids.len() - LISTED_IDS
+        )
+    }
+}
+
+/// Checks a database: at least two ships, unique ids, all values finite, every coefficient within
+/// ±[`MAX_COEFFICIENT_MAGNITUDE`] and the interaction coefficients within their physical ranges, and
+/// no ship a copy of another under another id (same 24 coefficients: a copy adds no variation, weighs
+/// its ship twice in the SVD, and a database of copies has no variation but rounding noise).
 pub fn validate(ships: &[DatabaseShip]) -> Result<(), InverseError> {
     if ships.len() < 2 {
         return Err(InverseError::Database(format!(
@@ -201,11 +236,38 @@ pub fn validate(ships: &[DatabaseShip]) -> Result<(), InverseError> {
                 s.id
             )));
         }
+        for (name, v) in [
+            ("l_over_b", s.l_over_b),
+            ("b_over_d", s.b_over_d),
+            ("cb", s.cb),
+            ("xg_over_l_percent", s.xg_over_l_percent),
+            ("dp_over_d", s.dp_over_d),
+            ("ar_over_ld_percent", s.ar_over_ld_percent),
+            ("dp_over_h", s.dp_over_h),
+        ] {
+            if !v.is_finite() {
+                return Err(InverseError::Database(format!(
+                    "ship {}: {name} = {} is not finite",
+                    s.id,
+                    readable(&v)
+                )));
+            }
+        }
         for (name, v) in COEF_NAMES.iter().zip(s.coefficients().0) {
             if !v.is_finite() {
                 return Err(InverseError::Database(format!(
-                    "ship {}: {name} = {v} is not finite",
-                    s.id
+                    "ship {}: {name} = {} is not finite",
+                    s.id,
+                    readable(&v)
+                )));
+            }
+            if v.abs() > MAX_COEFFICIENT_MAGNITUDE {
+                return Err(InverseError::Database(format!(
+                    "ship {}: {name} = {} is beyond ±{MAX_COEFFICIENT_MAGNITUDE}: the database's \
+                     coefficients are nondimensional (the 20 ships of paper 003 lie within ±2.7); \
+                     a typo or a wrong unit?",
+                    s.id,
+                    readable(&v)
                 )));
             }
         }
@@ -226,11 +288,60 @@ pub fn validate(ships: &[DatabaseShip]) -> Result<(), InverseError> {
         ] {
             if !ok {
                 return Err(InverseError::Database(format!(
-                    "ship {}: {name} = {v} must be in {range}",
-                    s.id
+                    "ship {}: {name} = {} must be in {range}",
+                    s.id,
+                    readable(&v)
                 )));
             }
         }
+    }
+    // Copies under other ids, grouped by the first ship they copy.
+    let coefs: Vec<Coefficients> = ships.iter().map(|s| s.coefficients()).collect();
+    let mut copy_of: Vec<Option<usize>> = vec![None; ships.len()];
+    let mut groups: Vec<(usize, Vec<usize>)> = Vec::new();
+    for i in 0..ships.len() {
+        if copy_of[i].is_some() {
+            continue;
+        }
+        let copies: Vec<usize> = (i + 1..ships.len())
+            .filter(|&j| copy_of[j].is_none() && same_coefficients(&coefs[i], &coefs[j]))
+            .collect();
+        for &j in &copies {
+            copy_of[j] = Some(i);
+        }
+        if !copies.is_empty() {
+            groups.push((i, copies));
+        }
+    }
+    if !groups.is_empty() {
+        let copies: usize = groups.iter().map(|(_, c)| c.len()).sum();
+        let distinct = ships.len() - copies;
+        let text = groups
+            .iter()
+            .map(|(i, c)| {
+                let ids: Vec<&str> = c.iter().map(|&j| ships[j].id.as_str()).collect();
+                format!(
+                    "{} {} {} the same 24 coefficients as ship {}",
+                    if c.len() > 1 { "ships" } else { "ship" },
+                    list_ids(&ids),
+                    if c.len() > 1 { "have" } else { "has" },
+                    ships[*i].id
+                )
+            })
+            .collect::<Vec<_>>()
+            .join("; ");
+        return Err(InverseError::Database(format!(
+            "{copies} of the {} ships are copies of another under another id ({text}): a copy adds \
+             no variation and weighs its ship twice in the SVD{}; remove the copies",
+            ships.len(),
+            if distinct < 2 {
+                format!(
+                    ", and with {distinct} distinct ship the variation modes would be rounding noise"
+                )
+            } else {
+                String::new()
+            }
+        )));
     }
     Ok(())
 }

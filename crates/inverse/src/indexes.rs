@@ -60,6 +60,23 @@ pub const FINAL_SPEED_HEADING_DEG: f64 = 540.0;
 /// Index 3 (the speed ratio) is the only one not log-transformed (paper 003 §2.2).
 pub const SPEED_RATIO: usize = 2;
 
+/// Largest advance or tactical diameter of a 35° turn accepted, in ship lengths: ships turn within
+/// 2 … 6 L (IMO's criteria: advance 4.5 L, tactical diameter 5 L); beyond 100 L the number is no
+/// turning circle's.
+pub const MAX_TURN_LENGTH_OVER_L: f64 = 100.0;
+/// Largest ψ_peak/ψ_check of a 20/20 zig-zag accepted: 10 is an overshoot of 180°, past which the
+/// ship turns in circles instead of zig-zagging.
+pub const MAX_HEADING_PEAK_RATIO: f64 = 10.0;
+/// Largest overshoot peak time accepted, × U0/L: ships peak within 3 … 15 ship lengths of
+/// travel (Tab. 3: 4.06 and 11.05); 100 L is no zig-zag's.
+pub const MAX_PEAK_TIME_U_OVER_L: f64 = 100.0;
+const TURN_LENGTH: &str =
+    "a 35° turn's advance and tactical diameter are a few ship lengths (2 … 6 L)";
+const HEADING_PEAK: &str = "ψ_peak/ψ_check = 1 + overshoot/20°; beyond 10 the overshoot exceeds 180° \
+                            and the ship turns in circles instead of zig-zagging";
+const PEAK_TIME: &str = "a 20/20 zig-zag's overshoots peak within a few ship lengths of travel \
+                         (3 … 15 U/L)";
+
 /// The nine motion indexes in [`INDEX_KEYS`] order.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MotionIndexes(pub [f64; N_INDEXES]);
@@ -115,7 +132,7 @@ impl MotionTarget {
                     motion: self.name.clone(),
                     key,
                     value: v,
-                    reason: "must be finite and non-zero",
+                    reason: "must be finite and non-zero".into(),
                 });
             }
         }
@@ -139,7 +156,8 @@ impl MotionTarget {
                         "must be positive (lengths, times and ψ_peak/ψ_check of the same sign)"
                     } else {
                         "must be negative (the port turn's tactical diameter is signed, negative to port)"
-                    },
+                    }
+                    .into(),
                 });
             }
         }
@@ -156,7 +174,8 @@ impl MotionTarget {
                     key,
                     value: v,
                     reason: "must be at least 1: ψ_peak/ψ_check, the first overshoot's heading \
-                             over the check heading, which a zig-zag reaches before it peaks",
+                             over the check heading, which a zig-zag reaches before it peaks"
+                        .into(),
                 });
             }
         }
@@ -165,7 +184,76 @@ impl MotionTarget {
                 motion: self.name.clone(),
                 key: "speed_ratio_p35",
                 value: self.speed_ratio_p35,
-                reason: "must be in (0, 1]",
+                reason: "must be in (0, 1]".into(),
+            });
+        }
+        // Beyond what any ship's manoeuvre gives: a wrong unit or a typo, which the network (it sees
+        // ln|q|) would invert all the same.
+        for (key, v, limit, what) in [
+            (
+                "advance_p35",
+                self.advance_p35,
+                MAX_TURN_LENGTH_OVER_L,
+                TURN_LENGTH,
+            ),
+            (
+                "tactical_diameter_p35",
+                self.tactical_diameter_p35,
+                MAX_TURN_LENGTH_OVER_L,
+                TURN_LENGTH,
+            ),
+            (
+                "advance_m35",
+                self.advance_m35,
+                MAX_TURN_LENGTH_OVER_L,
+                TURN_LENGTH,
+            ),
+            (
+                "tactical_diameter_m35",
+                self.tactical_diameter_m35,
+                MAX_TURN_LENGTH_OVER_L,
+                TURN_LENGTH,
+            ),
+            (
+                "heading_peak_p20",
+                self.heading_peak_p20,
+                MAX_HEADING_PEAK_RATIO,
+                HEADING_PEAK,
+            ),
+            (
+                "heading_peak_m20",
+                self.heading_peak_m20,
+                MAX_HEADING_PEAK_RATIO,
+                HEADING_PEAK,
+            ),
+            ("t1_p20", self.t1_p20, MAX_PEAK_TIME_U_OVER_L, PEAK_TIME),
+            ("t2_m20", self.t2_m20, MAX_PEAK_TIME_U_OVER_L, PEAK_TIME),
+        ] {
+            if v.abs() > limit {
+                return Err(InverseError::Index {
+                    motion: self.name.clone(),
+                    key,
+                    value: v,
+                    reason: format!(
+                        "{}above {limit}: {what}; a wrong unit or a typo?",
+                        if v < 0.0 { "in magnitude " } else { "" }
+                    ),
+                });
+            }
+        }
+        // The second overshoot of a zig-zag comes after its first, and the ±20° zig-zags of one
+        // ship are near mirror images (its hull forces are symmetric): t2 of the −20° zig-zag
+        // before t1 of the +20° one is no ship's.
+        if self.t2_m20 <= self.t1_p20 {
+            return Err(InverseError::Index {
+                motion: self.name.clone(),
+                key: "t2_m20",
+                value: self.t2_m20,
+                reason: format!(
+                    "must be later than t1_p20 = {}: t2 is the time of a zig-zag's second \
+                     overshoot peak, which follows its first (t1, Tab. 3: 4.06 and 11.05 U/L)",
+                    crate::error::readable(&self.t1_p20)
+                ),
             });
         }
         Ok(q)

@@ -28,20 +28,45 @@ pub enum InputFault {
     Targets(String),
 }
 
+/// A target ship checked with its motions: the particulars valid, the target simulable (a
+/// self-propulsion point), at least one motion and every motion's indexes checked, motion names
+/// unique.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CheckedTarget {
+    pub ship: TargetShip,
+    /// The motions to invert: name and checked indexes, in file order.
+    pub motions: Vec<(String, MotionIndexes)>,
+}
+
 /// The variation modes of the ships file and the targets, checked: the database's ships, every target
-/// and every motion's indexes, and at least one target.
+/// (particulars, a self-propulsion point with the database's mean ship, at least one motion) and
+/// every motion's indexes, and at least one target. Nothing is simulated beyond the straight run of
+/// one ship per target.
 pub fn check_inputs(
     ships: &ShipsFile,
     targets: TargetsFile,
-) -> Result<(VariationModes, Vec<TargetShip>), InputFault> {
+) -> Result<(VariationModes, Vec<CheckedTarget>), InputFault> {
     validate(&ships.ship).map_err(|e| InputFault::Ships(e.to_string()))?;
     let modes = VariationModes::new(&ships.ship).map_err(|e| InputFault::Ships(e.to_string()))?;
-    for target in &targets.target {
+    if targets.target.is_empty() {
+        return Err(InputFault::Targets("no [[target]]".into()));
+    }
+    let mut checked = Vec::with_capacity(targets.target.len());
+    for target in targets.target {
         target
             .validate()
             .map_err(|e| InputFault::Targets(e.to_string()))?;
+        if target.motion.is_empty() {
+            return Err(InputFault::Targets(format!(
+                "target {}: no [[target.motion]] (key `motion`): no motion to invert; give at \
+                 least one with its nine indexes",
+                target.name
+            )));
+        }
+        let mut motions = Vec::with_capacity(target.motion.len());
         for (i, m) in target.motion.iter().enumerate() {
-            m.indexes()
+            let q = m
+                .indexes()
                 .map_err(|e| InputFault::Targets(format!("target {}: {e}", target.name)))?;
             // Rows of the tables are named by motion: two of one name could not be told apart.
             if target.motion[..i].iter().any(|o| o.name == m.name) {
@@ -50,12 +75,17 @@ pub fn check_inputs(
                     target.name, m.name
                 )));
             }
+            motions.push((m.name.clone(), q));
         }
+        target
+            .check_straight_run(&modes.mean)
+            .map_err(|e| InputFault::Targets(e.to_string()))?;
+        checked.push(CheckedTarget {
+            ship: target,
+            motions,
+        });
     }
-    if targets.target.is_empty() {
-        return Err(InputFault::Targets("no [[target]]".into()));
-    }
-    Ok((modes, targets.target))
+    Ok((modes, checked))
 }
 
 /// Manoeuvres simulated with a set of weights, and their indexes.
@@ -223,21 +253,32 @@ pub fn header_markdown(
         model.split.validation.len(),
         model.split.test.len()
     );
+    let resimulation = match (&held.index_mare, held.resimulated) {
+        (Some(mare), _) => format!(
+            "{} re-simulated ({} failed), mean |relative error| per index: {}",
+            held.resimulated,
+            held.resim_failed,
+            INDEX_LABELS
+                .iter()
+                .zip(mare)
+                .map(|(l, e)| format!("{l} {:.1} %", 100.0 * e))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+        (None, 0) => "none re-simulated (--resimulate 0): the held-out index errors were not \
+                      measured"
+            .to_string(),
+        (None, n) => {
+            format!("{n} re-simulated, all failed: the held-out index errors were not measured")
+        }
+    };
     let _ = writeln!(
         md,
         "Held-out test ({} samples): weight RMSE / σ per mode {} (predicting the mean: {}); \
-         {} re-simulated ({} failed), mean |relative error| per index: {}.\n",
+         {resimulation}.\n",
         held.n,
         fmt_list(&held.weight_rmse_sigma, 2),
         fmt_list(&held.baseline_rmse_sigma, 2),
-        held.resimulated,
-        held.resim_failed,
-        INDEX_LABELS
-            .iter()
-            .zip(held.index_mare)
-            .map(|(l, e)| format!("{l} {:.1} %", 100.0 * e))
-            .collect::<Vec<_>>()
-            .join(", ")
     );
     md
 }
@@ -469,8 +510,8 @@ pub fn outside_range(given: &MotionIndexes, range: &[(f64, f64); N_INDEXES]) -> 
         .filter(|&i| flags[i])
         .map(|i| {
             let (lo, hi) = range[i];
-            let v = given.0[i];
-            if v > hi {
+            let v = crate::error::readable(&given.0[i]);
+            if given.0[i] > hi {
                 format!(
                     "{} = {v} above the database's largest {hi:.4}",
                     crate::indexes::INDEX_KEYS[i]

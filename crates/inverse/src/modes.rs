@@ -12,7 +12,7 @@
 use faer::Mat;
 
 use crate::database::{Coefficients, DatabaseShip, N_COEF, behaviour, behaviour_len, validate};
-use crate::error::InverseError;
+use crate::error::{InverseError, readable};
 
 /// The variation modes of a database.
 #[derive(Debug, Clone, PartialEq)]
@@ -35,6 +35,23 @@ pub struct VariationModes {
     pub weight_std: Vec<f64>,
     /// Weights of each database ship, `ship_weights[ship][mode]` (C transposed).
     pub ship_weights: Vec<Vec<f64>>,
+    /// The singular values left out as rounding noise (at most
+    /// [`NOISE_RELATIVE_SINGULAR_VALUE`] × the norm of the ships' behaviour vectors): one for the
+    /// subtracted mean, more when ships are linear combinations of others.
+    pub noise_singular_values: Vec<f64>,
+}
+
+/// A singular value at most this fraction of the norm of the ships' behaviour vectors (their
+/// Frobenius norm) is rounding noise, not variation: subtracting the mean leaves relative errors of
+/// about 1e-16, and the smallest real mode of paper 003's database is 1e-3 of that norm.
+pub const NOISE_RELATIVE_SINGULAR_VALUE: f64 = 1e-9;
+
+impl VariationModes {
+    /// Whether the ships span fewer independent variations than n − 1 (some ships are linear
+    /// combinations of others): the modes beyond are left out as noise.
+    pub fn rank_deficient(&self) -> bool {
+        self.singular_values.len() + 1 < self.ship_ids.len()
+    }
 }
 
 impl VariationModes {
@@ -58,14 +75,34 @@ impl VariationModes {
             .thin_svd()
             .map_err(|e| InverseError::Svd(format!("{e:?}")))?;
         let (u, s, v) = (svd.U(), svd.S().column_vector(), svd.V());
-        let k = s.nrows();
-        let singular_values: Vec<f64> = (0..k).map(|i| s[i]).collect();
-        let total: f64 = singular_values.iter().map(|x| x * x).sum();
-        if !(total > 0.0 && total.is_finite()) {
+        // Singular values at rounding level are no variation of the ships: n ships give at most
+        // n − 1 modes (the mean is subtracted), and copies or linear combinations of ships fewer.
+        // Such a mode's direction is noise; a network trained on its weight learns noise.
+        let scale = hs
+            .iter()
+            .map(|h| h.iter().map(|x| x * x).sum::<f64>())
+            .sum::<f64>()
+            .sqrt();
+        let noise_level = NOISE_RELATIVE_SINGULAR_VALUE * scale;
+        let all: Vec<f64> = (0..s.nrows()).map(|i| s[i]).collect();
+        if all.iter().any(|x| !x.is_finite()) || !scale.is_finite() {
             return Err(InverseError::Database(
-                "all ships have the same behaviour vector".into(),
+                "the variation matrix is not finite (a coefficient too large?)".into(),
             ));
         }
+        let k = all.iter().take_while(|&&x| x > noise_level).count();
+        if k == 0 {
+            return Err(InverseError::Database(format!(
+                "the {n} ships do not vary: the largest singular value of their variation matrix \
+                 is {} against {} for the ships' behaviour vectors, rounding noise, so there \
+                 is no variation mode to generate ships from",
+                readable(&all.first().copied().unwrap_or(0.0)),
+                readable(&scale)
+            )));
+        }
+        let noise_singular_values = all[k..].to_vec();
+        let singular_values: Vec<f64> = all[..k].to_vec();
+        let total: f64 = singular_values.iter().map(|x| x * x).sum();
         let contribution = singular_values.iter().map(|x| x * x / total).collect();
         let behaviour_modes = (0..k)
             .map(|i| (0..rows).map(|r| u[(r, i)]).collect())
@@ -103,6 +140,7 @@ impl VariationModes {
             coefficient_modes,
             weight_std,
             ship_weights,
+            noise_singular_values,
         })
     }
 

@@ -298,8 +298,10 @@ pub struct HeldOut {
     pub resimulated: usize,
     /// Re-simulations that failed.
     pub resim_failed: usize,
-    /// Mean absolute relative error per index of the re-simulated indexes against the true ones [-].
-    pub index_mare: [f64; N_INDEXES],
+    /// Mean absolute relative error per index of the re-simulated indexes against the true ones [-];
+    /// `None` when none was re-simulated (`max_resim` 0) or every re-simulation failed: not
+    /// measured.
+    pub index_mare: Option<[f64; N_INDEXES]>,
 }
 
 /// Inverts the test part of `db`, compares the weights, and re-simulates up to `max_resim` of them to
@@ -347,7 +349,7 @@ pub fn held_out(
         baseline_rmse_sigma,
         resimulated: m,
         resim_failed: m - ok,
-        index_mare: sum.map(|s| if ok > 0 { s / ok as f64 } else { f64::NAN }),
+        index_mare: (ok > 0).then(|| sum.map(|s| s / ok as f64)),
     }
 }
 

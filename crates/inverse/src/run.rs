@@ -465,10 +465,11 @@ fn ensembles(
             // A ship whose indexes miss the target by the network's own held-out errors matches it
             // as well as the method can tell: a best member far better than that is luck, not
             // information, and 4 × its mismatch would keep too few.
-            let precision = if held.index_mare.iter().all(|e| e.is_finite()) {
-                mismatch_of_relative_errors(&st.model, q, &held.index_mare)
-            } else {
-                0.0
+            let precision = match &held.index_mare {
+                Some(mare) if mare.iter().all(|e| e.is_finite()) => {
+                    mismatch_of_relative_errors(&st.model, q, mare)
+                }
+                _ => 0.0,
             };
             let mut candidates: Vec<Refined> = Vec::new();
             if let RefineOutcome::Done { refined, .. } = &m.refined {

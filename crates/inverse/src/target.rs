@@ -13,7 +13,7 @@ use shipid_io::Ship;
 use shipid_sim::{MmgModel, MmgParameters};
 
 use crate::database::Coefficients;
-use crate::error::InverseError;
+use crate::error::{InverseError, readable};
 use crate::indexes::MotionTarget;
 
 /// Sea water density [kg/m³] for the full-scale targets of paper 003.
@@ -34,6 +34,9 @@ pub const MAX_APPENDAGE_OVER_DRAFT: f64 = 2.0;
 /// A rudder area at most this fraction of L × T: ships have A_R/(L T) ≈ 1/70 … 1/30; a tenth is
 /// three times the largest.
 pub const MAX_RUDDER_AREA_RATIO: f64 = 0.1;
+
+/// Largest added mass accepted, as a multiple of the ship's own mass (a data set's bound).
+pub const MAX_ADDED_MASS_OVER_MASS: f64 = 100.0;
 
 /// Added masses in the MMG primes: m'_x, m'_y ÷ ½ρL²d, J'_z ÷ ½ρL⁴d.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
@@ -285,12 +288,29 @@ impl TargetShip {
                 ));
             }
         }
+        // As a data set's `propeller.k_t`: a propeller pushes ahead at J = 0 (bollard pull). With
+        // K_T ≤ 0 there no rate balances the resistance, and every simulated ship has no MMG model.
+        if self.k_t[0] <= 0.0 {
+            return Err(bad(
+                "k_t[0]",
+                self.k_t[0],
+                "K_T at J = 0 (the first coefficient of k_t = [k0, k1, k2], K_T = k0 + k1 J + \
+                 k2 J²) must be positive: a propeller pushes ahead at the bollard (a data set's \
+                 propeller.k_t requires k0 > 0)"
+                    .into(),
+            ));
+        }
         if let Some(f) = self.f_alpha
             && !(f.is_finite() && f > 0.0)
         {
             return Err(bad("f_alpha", f, "must be finite and positive".into()));
         }
         if let Some(a) = self.added_mass {
+            // The ship's own mass and moment of inertia in the same primes (m ÷ ½ρL²d, and
+            // m L² ÷ ½ρL⁴d, the scale a data set's N_rdot is bounded by): an added mass beyond
+            // [`MAX_ADDED_MASS_OVER_MASS`] times it is a wrong unit (kg for the prime), as a data
+            // set's `added_mass` is checked.
+            let m_prime = 2.0 * self.cb * self.beam_m / self.lpp_m;
             for (key, v) in [
                 ("added_mass.m_x", a.m_x),
                 ("added_mass.m_y", a.m_y),
@@ -299,9 +319,71 @@ impl TargetShip {
                 if !(v.is_finite() && v >= 0.0) {
                     return Err(bad(key, v, "must be finite and non-negative".into()));
                 }
+                let limit = MAX_ADDED_MASS_OVER_MASS * m_prime;
+                if v > limit {
+                    return Err(bad(
+                        key,
+                        v,
+                        format!(
+                            "more than {MAX_ADDED_MASS_OVER_MASS} × the ship's own mass in the same \
+                             primes (m' = 2 C_B B/L = {}, so at most {}); real hulls have 0.02 … 1 \
+                             times: a wrong unit (kg instead of the prime ÷ ½ρL²d)?",
+                            readable(&m_prime),
+                            readable(&limit)
+                        ),
+                    ));
+                }
             }
         }
         Ok(())
+    }
+
+    /// Whether the target can be simulated at all with database coefficients `c` (its mean ship):
+    /// a self-propulsion point at U0 depends on the straight-run resistance, k_t, t_p and the fixed
+    /// wake only, not on the hull derivatives, so a target without one gives no usable ship however
+    /// the modes are drawn. Refused before any simulation, with the keys that decide it.
+    pub fn check_straight_run(&self, c: &Coefficients) -> Result<(), InverseError> {
+        let bad = |key: &'static str, value: f64, reason: String| InverseError::Target {
+            target: self.name.clone(),
+            key,
+            value,
+            reason,
+        };
+        match MmgModel::new(self.ship(), self.mmg_parameters(c)) {
+            Ok(_) => Ok(()),
+            Err(shipid_sim::MmgError::NoSelfPropulsionPoint { .. }) => Err(bad(
+                "u0_m_s",
+                self.u0_m_s,
+                format!(
+                    "no self-propulsion point: the propeller (k_t = [{}], t_p = {}, \
+                     propeller_diameter_m = {}) cannot balance the straight-run resistance at this \
+                     speed for any rate, so no ship of this target can be simulated; check k_t and t_p",
+                    self.k_t.iter().map(readable).collect::<Vec<_>>().join(", "),
+                    readable(&self.t_p),
+                    readable(&self.propeller_diameter_m)
+                ),
+            )),
+            Err(shipid_sim::MmgError::InvalidParameter { name, value }) => {
+                let key = match name {
+                    "m_y" | "m_x" | "j_z" => "added_mass",
+                    "propeller_diameter_m" => "propeller_diameter_m",
+                    "rudder_span_m" => "rudder_span_m",
+                    "rudder_area_m2" => "rudder_area_m2",
+                    "xg" => "xg_m",
+                    "u0" => "u0_m_s",
+                    _ => "lpp_m",
+                };
+                Err(bad(
+                    key,
+                    value,
+                    format!(
+                        "gives the MMG parameter {name} = {}, which no MMG model accepts, so no \
+                         ship of this target can be simulated",
+                        readable(&value)
+                    ),
+                ))
+            }
+        }
     }
 
     /// The ship in the sim crate's form: ∇ = C_B L B d, ρ of sea water, k_zz = 0.25 L (paper 003 §3.2).

@@ -25,9 +25,9 @@ use shipid_figures::inverse::{MotionFigure, motions_figure, write_modes};
 use shipid_inverse::database::{PAPER003_SHIPS_TOML, ShipsFile};
 use shipid_inverse::indexes::{INDEX_KEYS, MotionIndexes, SimSettings};
 use shipid_inverse::inversion::{
-    DeliveredFit, FIT_WARN_MEAN_RELATIVE_ERROR, InputFault, MotionInversion, RefineOutcome,
-    check_inputs, delivered_markdown, fit_toml_comment, header_markdown, indexes_csv,
-    motions_markdown, outside_flags, outside_range,
+    CheckedTarget, DeliveredFit, FIT_WARN_MEAN_RELATIVE_ERROR, InputFault, MotionInversion,
+    RefineOutcome, check_inputs, delivered_markdown, fit_toml_comment, header_markdown,
+    indexes_csv, motions_markdown, outside_flags, outside_range,
 };
 use shipid_inverse::modes::VariationModes;
 use shipid_inverse::physical::{Bound, MODEL_FILE_NAMES, PhysicalChecks, model_file_values};
@@ -86,11 +86,23 @@ fn parse_toml<T: serde::de::DeserializeOwned>(text: &str, name: &str) -> Result<
 /// How the built-in database is named in messages.
 const BUILT_IN_SHIPS: &str = "the built-in ships database (data/paper003/ships.toml)";
 
-/// The variation modes of the database (`ships`, or the built-in one) and the checked targets.
+/// The variation modes of the database (`ships`, or the built-in one) and the checked targets'
+/// particulars (see [`load_checked`]).
 pub fn load(
     ships: Option<&Path>,
     targets: &Path,
 ) -> Result<(VariationModes, Vec<TargetShip>), CliError> {
+    let (modes, checked) = load_checked(ships, targets)?;
+    Ok((modes, checked.into_iter().map(|t| t.ship).collect()))
+}
+
+/// The variation modes of the database (`ships`, or the built-in one) and the checked targets with
+/// their motions; a database whose ships span fewer variations than n − 1 is warned about (its
+/// noise modes are left out).
+pub fn load_checked(
+    ships: Option<&Path>,
+    targets: &Path,
+) -> Result<(VariationModes, Vec<CheckedTarget>), CliError> {
     let (db, ships_name): (ShipsFile, String) = match ships {
         Some(p) => (read_toml(p)?, p.display().to_string()),
         None => (
@@ -106,6 +118,7 @@ pub fn load(
     // Each target writes into a folder named after it: two names of one folder would overwrite
     // each other's tables, and an empty one would write into --out itself.
     for (i, t) in targets_checked.iter().enumerate() {
+        let t = &t.ship;
         let s = slug(&t.name);
         if s.is_empty() {
             return Err(bad_input(format!(
@@ -113,14 +126,35 @@ pub fn load(
                 targets.display()
             )));
         }
-        if let Some(o) = targets_checked[..i].iter().find(|o| slug(&o.name) == s) {
+        if let Some(o) = targets_checked[..i]
+            .iter()
+            .find(|o| slug(&o.ship.name) == s)
+        {
             return Err(bad_input(format!(
                 "{}: targets `{}` and `{}` would both write into the folder `{s}`",
                 targets.display(),
-                o.name,
+                o.ship.name,
                 t.name
             )));
         }
+    }
+    if modes.rank_deficient() {
+        let n = modes.ship_ids.len();
+        let k = modes.singular_values.len();
+        eprintln!(
+            "warning: {ships_name}: the {n} ships span only {k} independent variation{} (n ships \
+             give up to {}): some ships are linear combinations of others, and the singular values \
+             of modes {}–{n} ({}) are rounding noise, left out; the inverse uses at most {k} modes",
+            if k == 1 { "" } else { "s" },
+            n - 1,
+            k + 1,
+            modes
+                .noise_singular_values
+                .iter()
+                .map(|v| format!("{v:.1e}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
     }
     Ok((modes, targets_checked))
 }
@@ -629,19 +663,20 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
             starts as f64 * a.refine_evals as f64 * 1e-3 / 3600.0
         )));
     }
-    let (modes, targets) = load(a.ships, a.targets)?;
+    let (modes, targets) = load_checked(a.ships, a.targets)?;
     let n95 = modes.modes_for(0.95);
     if let Some(n) = a.modes
         && (n == 0 || n > modes.singular_values.len())
     {
-        return Err(bad_input(format!(
-            "--modes {n}: the database has {} modes; give 1–{}",
-            modes.singular_values.len(),
-            modes.singular_values.len()
-        )));
+        let k = modes.singular_values.len();
+        return Err(bad_input(if k == 1 {
+            format!("--modes {n}: the database has 1 mode; give 1")
+        } else {
+            format!("--modes {n}: the database has {k} modes; give 1–{k}")
+        }));
     }
     for target in &targets {
-        check_fixed(target, a.targets)?;
+        check_fixed(&target.ship, a.targets)?;
     }
     let max_modes = MAX_MODES.clamp(n95, modes.singular_values.len());
     std::fs::create_dir_all(a.out).map_err(|e| crate::write_failed(a.out, e))?;
@@ -662,17 +697,9 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
     let settings = SimSettings::default();
     let mut outcome = Outcome::Ok;
     let mut summary_targets = Vec::new();
-    for target in &targets {
-        let given: Vec<(String, MotionIndexes)> = target
-            .motion
-            .iter()
-            .map(|m| {
-                Ok((
-                    m.name.clone(),
-                    m.indexes().map_err(|e| bad_input(e.to_string()))?,
-                ))
-            })
-            .collect::<Result<_, CliError>>()?;
+    for checked in &targets {
+        let target = &checked.ship;
+        let given: &[(String, MotionIndexes)] = &checked.motions;
         let opts = RunOptions {
             samples: a.samples,
             seed: a.seed,
@@ -707,14 +734,20 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
         let run = run_target(
             target,
             &modes,
-            &given,
+            given,
             &opts,
             &Progress {
                 ship: &|| bar.inc(1),
                 refinement: &|| refinement.tick(),
             },
         )
-        .map_err(|e| failed(anyhow::anyhow!(e)))?;
+        .map_err(|e| {
+            failed(anyhow::anyhow!(
+                "{}: target {}: {e}",
+                a.targets.display(),
+                target.name
+            ))
+        })?;
         bar.finish_and_clear();
         rbar.finish_and_clear();
         let db = &run.db;
