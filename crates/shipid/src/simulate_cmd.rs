@@ -19,6 +19,30 @@ use shipid_sim::{Dynamics, RecordedRate, SimOutput, SimStatus, WithPropellerRate
 
 use crate::{CliError, Outcome, bad_input};
 
+/// For `--bands` on a model file written by `shipid inverse` that has no `[bootstrap]` (no ensemble):
+/// the advice that applies to it. `fit --bootstrap` cannot reproduce an inverse model (it has no
+/// `[training]`); its band is the ensemble `inverse` writes when it refines. `None` for any other
+/// file (or one that does not parse: the loader says what is wrong with it).
+fn inverse_without_ensemble(model: &str) -> Option<String> {
+    let text = std::fs::read_to_string(model).ok()?;
+    let table: toml::Table = toml::from_str(&text).ok()?;
+    let inverse = table
+        .get("estimator")
+        .and_then(|e| e.get("name"))
+        .and_then(|n| n.as_str())
+        == Some("inverse-network");
+    (inverse && !table.contains_key("bootstrap")).then(|| {
+        format!(
+            "{model}: key `bootstrap`: missing: --bands needs the replicates of an ensemble, and this model \
+             was written by `shipid inverse` without one (with --refine-evals 0 it is the network's \
+             answer alone; with refinement, fewer than two members were kept). Rerun `shipid inverse` \
+             on its targets file with refinement on (--refine-evals above 0; the default is 150): the \
+             ensemble of networks and refinement restarts is written under [bootstrap] and gives the \
+             band"
+        )
+    })
+}
+
 /// The JSON of a simulated manoeuvre: `"status"` and the metric keys, or the divergence instead.
 pub fn outcome_json(out: &SimOutput, m: &Manoeuvre, model: &dyn Dynamics) -> Value {
     let mut o = Map::new();
@@ -231,6 +255,11 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
     }
     // Before the simulation: a model without replicates (or with a damaged calibration or valley) is
     // refused at once.
+    if a.bands.is_some()
+        && let Some(advice) = inverse_without_ensemble(a.model)
+    {
+        return Err(bad_input(advice));
+    }
     let replicates = a
         .bands
         .map(|level| ModelBands::of(a.model, level))
