@@ -326,10 +326,9 @@ impl TargetShip {
                         v,
                         format!(
                             "more than {MAX_ADDED_MASS_OVER_MASS} × the ship's own mass in the same \
-                             primes (m' = 2 C_B B/L = {}, so at most {}); real hulls have 0.02 … 1 \
-                             times: a wrong unit (kg instead of the prime ÷ ½ρL²d)?",
-                            readable(&m_prime),
-                            readable(&limit)
+                             primes (m' = 2 C_B B/L = {m_prime:.4}, so at most {limit:.2}); real \
+                             hulls have 0.02 … 1 times: a wrong unit (kg instead of the prime \
+                             ÷ ½ρL²d)?"
                         ),
                     ));
                 }
