@@ -365,8 +365,12 @@ pub fn closed_loop_in(
         .unwrap_or_else(|e| failed_output(format!("cannot simulate: {e}"))),
         Err(e) => failed_output(format!("no controller: {e}")),
     };
-    // The re-simulation's metrics are taken relative to the water, as the recording's are.
-    out.recording.current = current.and_then(|e| e.current_series(&out.recording.t));
+    // The re-simulation's metrics are taken relative to the water, as the recording's are: the
+    // current the simulation recorded (a model that carries one, with the environment it runs in),
+    // else the recording's.
+    if out.recording.current.is_none() {
+        out.recording.current = current.and_then(|e| e.current_series(&out.recording.t));
+    }
     Some(out)
 }
 

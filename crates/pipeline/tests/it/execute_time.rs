@@ -105,3 +105,57 @@ fn a_biased_model_gives_the_same_manoeuvre_at_model_and_full_scale() {
     }
     assert_eq!(execute_time_s(&kvlcc2_ship()), T_EXECUTE_S);
 }
+
+/// Regression: `simulate` of a model carrying a current (the model file `diagnose` writes) looked
+/// for its straight run over ground, found U0 plus the current along the course (0.1 m/s from ahead:
+/// 1.079 m/s, 0.92 U0), started there and blamed the propeller rate; its 20°/20° first overshoot was
+/// 13.04° where the calm model and `--current` give 13.66°. A uniform current only carries the ship
+/// along: the manoeuvre is the calm one.
+#[test]
+fn a_model_carrying_a_current_approaches_and_manoeuvres_as_in_calm_water() {
+    use shipid_pipeline::simulate::straight_run_speed;
+    use shipid_sim::effects::Current;
+    use shipid_sim::{Effect, MmgModel, WithEffects, metrics};
+    let calm = MmgModel::kvlcc2();
+    let m = Manoeuvre::ZigZag {
+        rudder_deg: 20.0,
+        check_deg: 20.0,
+        side: Side::Port,
+    };
+    let ship = *calm.ship();
+    let calm_metrics = metrics(
+        &simulate_manoeuvre(&calm, &m, None, None).unwrap().recording,
+        &m,
+        &ship,
+    );
+    let calm_speed = straight_run_speed(&calm).unwrap();
+    for from_deg in [0.0, 90.0, 180.0] {
+        let current = Current {
+            speed_m_s: 0.1,
+            from_deg,
+        };
+        let model = WithEffects::new(&calm, &[Effect::Current(current)]).unwrap();
+        let speed = straight_run_speed(&model).unwrap();
+        assert!(
+            (speed - calm_speed).abs() < 1e-9,
+            "current from {from_deg}°: straight run at {speed} m/s, calm {calm_speed} m/s"
+        );
+        let got = metrics(
+            &simulate_manoeuvre(&model, &m, None, None)
+                .unwrap()
+                .recording,
+            &m,
+            &ship,
+        );
+        for (name, a, b) in [
+            ("overshoot_1", got.overshoot_1, calm_metrics.overshoot_1),
+            ("t_a", got.t_a, calm_metrics.t_a),
+        ] {
+            let (a, b) = (a.unwrap(), b.unwrap());
+            assert!(
+                (a - b).abs() < 1e-6 * b.abs(),
+                "current from {from_deg}°: {name} {a}, calm {b}"
+            );
+        }
+    }
+}
