@@ -70,7 +70,7 @@ pub fn fit_gp_dataset(
         )));
     }
     // One block of inputs and targets per recording, walked in a canonical order below.
-    let mut blocks: Vec<(Vec<f64>, [Vec<f64>; 3])> = Vec::new();
+    let mut blocks: Vec<Block> = Vec::new();
     let mut windows = Vec::new();
     for r in crate::fit::chosen_recordings(ds, recordings)? {
         let range = window_range(r, ds, window)?;
@@ -227,6 +227,9 @@ pub fn fit_gp_dataset(
     ))
 }
 
+/// One recording's training samples: inputs row-major by [`GP_INPUTS`], targets per output.
+type Block = (Vec<f64>, [Vec<f64>; 3]);
+
 /// The recordings' blocks (inputs row-major by [`GP_INPUTS`], targets per output) concatenated in
 /// the order the similarity walk takes them: the walk is greedy, so the points it keeps depend on
 /// the order it meets the samples, and the same data listed in another order (the data set's or
@@ -236,7 +239,7 @@ pub fn fit_gp_dataset(
 /// inputs' half range over all blocks), as paper 001 lists its training runs (15/5, 20/5, 30/5,
 /// 35/5): the small manoeuvres' dense states first, the larger ones then add their outer states.
 /// Ties go by content, never by a name or a place in a list.
-fn in_walk_order(mut blocks: Vec<(Vec<f64>, [Vec<f64>; 3])>) -> (Vec<f64>, [Vec<f64>; 3]) {
+fn in_walk_order(mut blocks: Vec<Block>) -> Block {
     let dims = GP_INPUTS.len();
     let range = |x: &[f64], d: usize| {
         x.chunks_exact(dims)
@@ -268,13 +271,13 @@ fn in_walk_order(mut blocks: Vec<(Vec<f64>, [Vec<f64>; 3])>) -> (Vec<f64>, [Vec<
             })
             .sum()
     };
-    let content = |b: &(Vec<f64>, [Vec<f64>; 3])| -> Vec<u64> {
+    let content = |b: &Block| -> Vec<u64> {
         b.0.iter()
             .chain(b.1.iter().flatten())
             .map(|v| v.to_bits())
             .collect()
     };
-    let mut keyed: Vec<(f64, Vec<u64>, (Vec<f64>, [Vec<f64>; 3]))> = blocks
+    let mut keyed: Vec<(f64, Vec<u64>, Block)> = blocks
         .drain(..)
         .map(|b| (spread(&b.0), content(&b), b))
         .collect();
