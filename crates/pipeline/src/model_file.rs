@@ -543,6 +543,66 @@ pub fn gp_file_fault(file: &GpModelFile) -> Option<(String, String)> {
         (GP_POINT_SCALES * ship.u0 / ship.lpp, "rad/s", "10 × U0/L"),
         (GP_MAX_RUDDER_RAD, "rad", "π/2"),
     ];
+    // The shapes first: a short row or a deleted point otherwise surfaced as a length mismatch of
+    // the GP library, numbers reversed and blamed on `targets`.
+    let dims = shipid_sim::gp::GP_INPUTS.len();
+    if let Some((i, row)) = file
+        .points
+        .iter()
+        .enumerate()
+        .find(|(_, r)| r.len() != dims)
+    {
+        return Some((
+            format!("points[{i}]"),
+            format!(
+                "has {} numbers; every sparse point has one per input ({dims}: {})",
+                row.len(),
+                shipid_sim::gp::GP_INPUTS.join(", ")
+            ),
+        ));
+    }
+    for (k, o) in file.outputs.iter().enumerate() {
+        if o.targets.len() != file.points.len() {
+            return Some((
+                format!("outputs[{k}].targets"),
+                format!(
+                    "has {} values but `points` has {} rows: each sparse point has one target per output",
+                    o.targets.len(),
+                    file.points.len()
+                ),
+            ));
+        }
+    }
+    for (k, o) in file.outputs.iter().enumerate() {
+        if o.hyper.length_scales.len() != dims {
+            return Some((
+                format!("outputs[{k}].hyper.length_scales"),
+                format!(
+                    "has {} values; the kernel has one length scale per input ({dims})",
+                    o.hyper.length_scales.len()
+                ),
+            ));
+        }
+    }
+    if file.sparsification.scales.len() != dims {
+        return Some((
+            "sparsification.scales".into(),
+            format!(
+                "has {} values; the similarity has one scale per input ({dims})",
+                file.sparsification.scales.len()
+            ),
+        ));
+    }
+    if file.sparsification.kept != file.points.len() {
+        return Some((
+            "sparsification.kept".into(),
+            format!(
+                "is {} but the file holds {} sparse points: the file contradicts itself (edited or damaged)",
+                file.sparsification.kept,
+                file.points.len()
+            ),
+        ));
+    }
     for (i, row) in file.points.iter().enumerate() {
         for (j, &v) in row.iter().enumerate() {
             let key = format!("points[{i}][{j}]");
