@@ -44,6 +44,8 @@ pub(crate) struct Judged {
     /// Why a candidate that passed the held-out rules is nevertheless not accepted (the evidence
     /// that it is not what differs), for the report.
     pub held_back: Option<String>,
+    /// Whether it had passed the held-out rules when it was held back (what the explanation says).
+    pub passed_held_out: bool,
 }
 
 impl<'a> Judge<'a> {
@@ -211,6 +213,7 @@ impl<'a> Judge<'a> {
         for j in judged.iter_mut() {
             let named = j.families.iter().any(|f| f.verdict() == Verdict::Asymmetry);
             if named && j.held_back.is_none() {
+                j.passed_held_out = j.assessed.accepted;
                 j.assessed.accepted = false;
                 j.held_back = Some(
                     "the recordings turn to one side only, where a port/starboard bias cannot be told from a ship that answers its rudder differently (rudder size, damping): runs turning to both sides would tell"
@@ -233,6 +236,7 @@ impl<'a> Judge<'a> {
                 assessed: self.assess(f.dim(), &cross.0),
                 cross,
                 held_back: None,
+                passed_held_out: false,
             })
             .collect()
     }
@@ -314,6 +318,7 @@ impl<'a> Judge<'a> {
                     assessed: a,
                     cross,
                     held_back: None,
+                    passed_held_out: false,
                 }
             })
             .collect()
@@ -328,6 +333,7 @@ impl<'a> Judge<'a> {
             assessed: self.assess(families.iter().map(|f| f.dim()).sum(), &cross.0),
             cross,
             held_back: None,
+            passed_held_out: false,
         }
     }
 
@@ -388,6 +394,7 @@ impl<'a> Judge<'a> {
                 assessed,
                 cross: (scores, fitted),
                 held_back: None,
+                passed_held_out: false,
             },
             finals,
         )

@@ -102,6 +102,9 @@ pub struct Report {
     pub regimes: Vec<Regime>,
     /// Replay segment length [s] of every position/heading RMSE here.
     pub horizon_s: f64,
+    /// When every recording is shorter than the asked horizon: that it was shortened to them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub horizon_note: Option<String>,
     /// Position RMSE ÷ L expected from the recordings' noise alone.
     pub noise_floor_position_rmse_over_l: f64,
     /// The model's own held-out-style level on its training recordings, when known.
@@ -303,7 +306,7 @@ pub fn diagnose(
     for a in &report.against_recorded {
         report.explanation = format!("{}; {}", report.explanation, a.sentence());
     }
-    report.warnings.extend(horizon_note);
+    report.horizon_note = horizon_note;
     report.recorded_environment = RecordedEnvironment::of(whole);
     let wind_used = report
         .recorded_environment
@@ -475,7 +478,11 @@ fn conclude_nothing(
     };
     // Candidates that passed the held-out rules but were held back by other evidence: said first,
     // with that evidence (the best by the report's ranking).
-    let held_back = closest(judged.iter().filter(|j| j.held_back.is_some()))
+    let held_back = closest(
+        judged
+            .iter()
+            .filter(|j| j.held_back.is_some() && j.passed_held_out),
+    )
         .map_or(String::new(), |j| {
             format!(
                 ". {} explains {:.0} % of the held-out segment mismatch ({before_l:.4} → {:.4} L) but is not the verdict: {}",
@@ -500,7 +507,9 @@ fn conclude_nothing(
         )
     });
     let near_miss = format!("{held_back}{near_miss}");
-    let any_held_back = judged.iter().any(|j| j.held_back.is_some());
+    let any_held_back = judged
+        .iter()
+        .any(|j| j.held_back.is_some() && j.passed_held_out);
     Conclusion {
         verdict: if real {
             Verdict::Unexplained
@@ -675,6 +684,7 @@ fn assemble(
         per_recording,
         regimes: regimes(prep, &baseline.residuals, &baseline.scale, ship),
         horizon_s: baseline.horizon_s,
+        horizon_note: None,
         noise_floor_position_rmse_over_l: baseline.noise_floor,
         model_level_position_rmse_over_l: input.model_level_over_l,
         outside_identification_range: outside_all,
@@ -886,53 +896,6 @@ fn conclude_own_winds(baseline: &Baseline, o: &OwnWinds) -> Conclusion {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn winds(pairs: &[(f64, f64)]) -> Vec<RecordingWind> {
-        pairs
-            .iter()
-            .enumerate()
-            .map(|(i, &(speed_m_s, from_deg))| RecordingWind {
-                recording: format!("r{i}.csv"),
-                speed_m_s,
-                from_deg,
-                speed_standard_error_m_s: Some(0.08),
-                from_standard_error_deg: Some(1.0),
-                before_position_rmse_over_l: 0.2,
-                after_position_rmse_over_l: 0.1,
-            })
-            .collect()
-    }
-
-    /// Regression (a probe's ship in one steady wind of 4 m/s from 240° with its own wind-force
-    /// model): the per-recording form explained 57 % against one wind's 32 % and was the verdict,
-    /// with eight winds of 3.4–4.1 m/s from 234–248° (each ±1°: the spread is the force model's,
-    /// not the weather's). Runs that found about one wind were in one wind.
-    #[test]
-    fn runs_that_found_about_one_wind_were_in_one_wind() {
-        let probe = [
-            (4.07, 234.5),
-            (4.03, 235.5),
-            (3.87, 240.1),
-            (3.80, 240.8),
-            (3.94, 248.2),
-            (3.93, 248.1),
-            (3.41, 237.9),
-            (3.44, 239.4),
-        ];
-        let sentence = winds_agree(&winds(&probe)).expect("one wind");
-        assert!(sentence.contains("they were in one wind"), "{sentence}");
-        // Through north the mean direction wraps, and the runs still agree.
-        assert!(winds_agree(&winds(&[(3.0, 355.0), (3.2, 5.0), (3.1, 0.0)])).is_some());
-        // Winds from different sides, or of different strength, are each run's own.
-        assert!(winds_agree(&winds(&[(3.5, 10.0), (3.5, 80.0), (3.5, 200.0)])).is_none());
-        assert!(winds_agree(&winds(&[(1.5, 240.0), (4.5, 240.0)])).is_none());
-        assert!(winds_agree(&winds(&[(3.0, 240.0)])).is_none());
-    }
-}
-
 /// The winner by the held-out rules, if its effects fitted on all recordings also make the
 /// whole-record replays better ([`WholeCheck`]); else the next accepted one that does, the others
 /// held back with the evidence. A segment replay restarts from the recorded state every 10 L/U0, so an
@@ -950,6 +913,7 @@ fn whole_checked(
     while let Some(b) = best {
         if let Some(why) = along_the_course_of_one_run(whole, &finals[b].0) {
             judged[b].assessed.accepted = false;
+            judged[b].passed_held_out = true;
             judged[b].held_back = Some(why);
             best = crate::judge::best_accepted(judged);
             continue;
@@ -959,6 +923,7 @@ fn whole_checked(
             return Some(b);
         }
         judged[b].assessed.accepted = false;
+        judged[b].passed_held_out = true;
         judged[b].held_back = Some(check.reason());
         best = crate::judge::best_accepted(judged);
     }
@@ -1110,6 +1075,58 @@ mod tests {
                 after_position_rmse_over_l: 0.1,
             })
             .collect()
+    }
+
+    /// `(name, score, held-out RMSE ÷ L, parameters)` ranked by the report's ranking: the names in
+    /// order.
+    fn check_ranking(candidates: &[(&str, f64, f64, usize)], expected: &[&str]) {
+        let mut got: Vec<(&str, crate::judge::Assessed)> = candidates
+            .iter()
+            .map(|&(name, score, after_l, n_parameters)| {
+                let a = crate::judge::Assessed {
+                    n_parameters,
+                    after_l,
+                    score,
+                    explains: 1.0,
+                    accepted: false,
+                };
+                (name, a)
+            })
+            .collect();
+        got.sort_by(|x, y| ranking(&x.1, &y.1));
+        let names: Vec<&str> = got.iter().map(|(n, _)| *n).collect();
+        assert_eq!(names, expected, "{candidates:?}");
+    }
+
+    /// Probe finding 5: "Closest:" named the first of the candidates whose clipped `explains` was 1
+    /// (asymmetry, 0.0021 L, score 0.543) over the better current (0.0018 L, score 0.600), and a pair
+    /// of four parameters (score 0.467) over a single effect (0.537). The closest is the best by
+    /// score, then held-out RMSE, then fewer parameters.
+    #[test]
+    fn closest_is_the_best_by_score_then_held_out_rmse_then_parameters() {
+        check_ranking(
+            &[
+                ("asymmetry", 0.543, 0.0021, 2),
+                ("current", 0.600, 0.0018, 2),
+            ],
+            &["current", "asymmetry"],
+        );
+        check_ranking(
+            &[
+                ("current+wind", 0.467, 0.0900, 4),
+                ("current", 0.537, 0.0980, 2),
+            ],
+            &["current", "current+wind"],
+        );
+        // Equal scores: the lower held-out error; then fewer parameters.
+        check_ranking(
+            &[("wind", 0.5, 0.0030, 2), ("current", 0.5, 0.0020, 2)],
+            &["current", "wind"],
+        );
+        check_ranking(
+            &[("pair", 0.5, 0.0020, 4), ("single", 0.5, 0.0020, 1)],
+            &["single", "pair"],
+        );
     }
 
     /// Regression (a probe's ship in one steady wind of 4 m/s from 240° with its own wind-force

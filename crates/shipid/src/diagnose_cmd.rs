@@ -164,7 +164,7 @@ pub fn run(args: &DiagnoseArgs) -> Result<Outcome, CliError> {
     }
     let training = training_for_diagnosis(model_spec)?;
     // Recordings all shorter than the horizon: the horizon is shortened to them, before the model's
-    // own level is measured with it, and a warning says so.
+    // own level is measured with it, and a note says so.
     let (opts, horizon_note) = DiagnoseOptions {
         horizon_l_over_u0,
         ..DiagnoseOptions::default()
@@ -192,7 +192,7 @@ pub fn run(args: &DiagnoseArgs) -> Result<Outcome, CliError> {
     // What was diagnosed against what, for a page rebuilt later from the report alone.
     report.model = Some(model_spec.to_string());
     report.dataset = Some(dataset.display().to_string());
-    report.warnings.extend(horizon_note);
+    report.horizon_note = horizon_note;
     // A base without a propeller-rate input replays every recording at the rate it was identified
     // at: a recording made at another rate is a mismatch the diagnosis should not be blamed for.
     if !base.takes_propeller_rate() {
@@ -398,6 +398,9 @@ fn print_summary(r: &Report, model: &str, dataset: &Path, level_from: Option<&st
         r.fit_after.position_rmse_over_l,
         r.noise_floor_position_rmse_over_l
     );
+    if let Some(note) = &r.horizon_note {
+        println!("  note: {note}");
+    }
     if let Some(f) = r.outside_identification_range {
         let each: Vec<String> = r
             .per_recording

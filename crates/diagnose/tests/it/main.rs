@@ -3,3 +3,4 @@
 mod known_wind;
 mod own_misfit;
 mod own_winds;
+mod probe11;

@@ -454,3 +454,65 @@ fn augmented_models_name_their_base_and_data_relative_to_themselves() {
         "aug.toml: key `base_hash`",
     );
 }
+
+/// `text` holds every one of `needles` (`what` names the text in the message).
+fn check_has(what: &str, text: &str, needles: &[&str]) {
+    for n in needles {
+        assert!(text.contains(n), "{what} lacks {n:?}:\n{text}");
+    }
+}
+
+/// Probe finding 6: the caveat on the standard errors (they leave out the base model's own error,
+/// which put h/T at 1.669 ± 0.008 for a true 1.6) was printed only: the JSON report and the augmented
+/// model carried the bare numbers. Probe finding 9: `shipid report DIR` on a diagnosis folder lost the
+/// model and data set (report.json held neither).
+#[test]
+fn standard_errors_say_what_they_cover_and_a_rebuilt_page_keeps_model_and_data_set() {
+    let dir = common::root().join("target/test-diagnose-probe11");
+    let _ = std::fs::remove_dir_all(&dir);
+    write_dataset(&dir, "shallow_water:h_over_t=1.6");
+    let ds = dir.join("dataset.toml");
+    let plots = dir.join("page");
+    let out = common::shipid_ok(&[
+        "diagnose",
+        "mmg:kvlcc2",
+        ds.to_str().unwrap(),
+        "--plots",
+        plots.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    check_has(
+        "stdout",
+        &stdout,
+        &["verdict: shallow_water", "± one standard error: covers"],
+    );
+    let report = std::fs::read_to_string(plots.join("report.json")).unwrap();
+    let v: Value = serde_json::from_str(&report).unwrap();
+    let basis = &v["standard_error_basis"];
+    for key in ["covers", "leaves_out"] {
+        assert!(
+            basis[key].is_string(),
+            "standard_error_basis.{key}: {report}"
+        );
+    }
+    assert_eq!(v["model"], "mmg:kvlcc2");
+    assert_eq!(v["dataset"], ds.to_str().unwrap());
+    let model = std::fs::read_to_string(plots.join("report.model.toml")).unwrap();
+    check_has(
+        "augmented model",
+        &model,
+        &["standard errors: covers", "leaves out"],
+    );
+    // Rebuilt from the folder alone, the page names what was diagnosed as the first one did.
+    common::shipid_ok(&["report", plots.to_str().unwrap()]);
+    let page = std::fs::read_to_string(plots.join("report.html")).unwrap();
+    check_has(
+        "rebuilt page",
+        &page,
+        &[
+            "Diagnosis of mmg:kvlcc2",
+            "<dt>data set</dt>",
+            "<dt>model</dt><dd>mmg:kvlcc2</dd>",
+        ],
+    );
+}
