@@ -1323,6 +1323,35 @@ impl ModelBands {
         }
     }
 
+    /// Why `level` asks more than these replicates resolve, or `None`: n replicates' interpolated
+    /// percentiles reach their extremes once the level passes (n − 1)/(n + 1), the probability that
+    /// their range holds one more draw; a band asked beyond it is that range labelled with a level
+    /// it does not have (200 posterior draws called a 99.9999 % band). An inverse ensemble's order
+    /// statistics say so in their own description.
+    pub fn beyond_resolution(&self, level: f64) -> Option<String> {
+        if matches!(
+            self,
+            ModelBands::Raw {
+                kind: BandKind::Ensemble,
+                ..
+            }
+        ) {
+            return None;
+        }
+        let n = self.replicates() as f64;
+        let resolved = (n - 1.0) / (n + 1.0);
+        (level > resolved).then(|| {
+            format!(
+                "{} {} resolve bands up to about {:.1} %: beyond it a band is their range, which holds one more draw with probability {:.1} %, not the {} % asked; ask a lower level or store more replicates",
+                self.replicates(),
+                self.noun(),
+                100.0 * resolved,
+                100.0 * resolved,
+                shipid_io::error::number(100.0 * level)
+            )
+        })
+    }
+
     pub fn replicates(&self) -> usize {
         match self {
             ModelBands::Calibrated(c) => c.replicates.len(),

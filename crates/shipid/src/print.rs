@@ -268,6 +268,12 @@ pub fn validation_with_bands(
             "what": check.source.what(),
             "recordings": per,
         });
+        if let (Value::Object(a), Some(note)) =
+            (&mut about, check.source.beyond_resolution(check.level))
+        {
+            eprintln!("warning: --bands {}: {note}", check.level);
+            a.insert("resolution".into(), json!(note));
+        }
         if let Value::Object(a) = &mut about
             && !reaches.is_empty()
         {

@@ -536,6 +536,10 @@ fn add_bands(value: &mut Value, run: &RunBands, source: &ModelBands, with_track:
     }
     about.insert("kind".into(), json!(source.kind()));
     about.insert("what".into(), json!(source.what()));
+    if let Some(note) = source.beyond_resolution(bands.level) {
+        eprintln!("warning: --bands {}: {note}", bands.level);
+        about.insert("resolution".into(), json!(note));
+    }
     if let Some(reach) = run.reach {
         about.insert("reach".into(), json!(reach));
         about.insert("factors".into(), json!(source.factors()));
