@@ -955,7 +955,8 @@ fn along_the_course_of_one_run(whole: &Dataset, effects: &[Effect]) -> Option<St
             (lo.min(p), hi.max(p))
         });
     let course = psi.first()?.to_degrees();
-    if !((hi - lo).to_degrees() < NEAR_THE_COURSE_SWEEP_DEG) {
+    let sweep_deg = (hi - lo).to_degrees();
+    if sweep_deg.is_nan() || sweep_deg >= NEAR_THE_COURSE_SWEEP_DEG {
         return None;
     }
     effects.iter().find_map(|e| {
@@ -1046,7 +1047,7 @@ impl WholeCheck {
         let worse: Vec<String> = self
             .pairs
             .iter()
-            .filter(|p| !(p.2 <= p.1))
+            .filter(|p| p.2.is_nan() || p.2 > p.1)
             .map(|p| format!("{} {:.2} → {:.2} L", p.0, p.1, p.2))
             .collect();
         format!(

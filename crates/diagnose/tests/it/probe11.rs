@@ -117,7 +117,7 @@ fn recordings_shorter_than_the_horizon_shorten_it() {
     for (seed, samples) in [(5, 60), (6, 150)] {
         let ds = first_samples(
             to_dataset(
-                generate_with(Some(seed), &[effect.clone()]).unwrap(),
+                generate_with(Some(seed), std::slice::from_ref(&effect)).unwrap(),
                 "short",
             ),
             samples,
