@@ -312,10 +312,19 @@ fn generate_by(
             )));
         }
         let mut rec = out.recording;
-        if let Some((template, _)) = flows {
-            // The output is sampled on the template's grid from its start: the same samples.
-            rec.wind = template.wind.map(|w| w.slice(0..rec.len()));
-            rec.current = template.current.map(|c| c.slice(0..rec.len()));
+        // A simulation records the current its model carries, a concealed one included; only what
+        // was asked to be recorded may reach the files (a concealed current written as columns is a
+        // known input to every fit and diagnosis, concealed no more).
+        match flows {
+            Some((template, _)) => {
+                // The output is sampled on the template's grid from its start: the same samples.
+                rec.wind = template.wind.map(|w| w.slice(0..rec.len()));
+                rec.current = template.current.map(|c| c.slice(0..rec.len()));
+            }
+            None => {
+                rec.wind = None;
+                rec.current = None;
+            }
         }
         if let Some(seed) = noise_seed {
             NoiseModel::TANK.apply(&mut rec, &ship, seed, &file);

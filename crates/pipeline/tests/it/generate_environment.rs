@@ -113,3 +113,29 @@ fn runs_draw_their_own_wind_from_the_seed() {
     assert!(runs[0] != runs[1] && runs[1] != runs[2], "{runs:?}");
     assert_eq!(runs[0], w.run("a.csv"));
 }
+
+/// Regression: once a simulation recorded the current its model carries, `generate --effect
+/// current:…` wrote the concealed current as columns, and `diagnose` took it as a known input (its
+/// benchmark's twelve current cases fell to `none` or `unexplained`). A concealed effect leaves no
+/// channel; a recorded one is written.
+#[test]
+fn a_concealed_current_is_not_written_and_a_recorded_wind_still_is() {
+    use shipid_pipeline::generate::{generate_manoeuvres, generate_recorded};
+    use shipid_sim::Effect;
+    let current: Effect = "current:speed=0.05,from=120".parse().unwrap();
+    let concealed = generate_manoeuvres(None, std::slice::from_ref(&current), &[ZZ20]).unwrap();
+    for rec in &concealed.recordings {
+        assert!(rec.current.is_none(), "a concealed current was written");
+        assert!(rec.wind.is_none());
+    }
+    let wind = RecordedEnvironment {
+        wind: Some("mean=4,from=90".parse::<RecordedWind>().unwrap()),
+        current: None,
+        windage: default_windage(),
+    };
+    let both = generate_recorded(None, &[current], &[ZZ20], Some(&wind)).unwrap();
+    for rec in &both.recordings {
+        assert!(rec.wind.is_some(), "the recorded wind is written");
+        assert!(rec.current.is_none(), "the concealed current is not");
+    }
+}
