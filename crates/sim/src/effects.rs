@@ -757,7 +757,7 @@ impl<D: Dynamics> Dynamics for WithEffects<D> {
     }
 
     fn current_velocity_earth(&self, t_s: f64) -> Option<[f64; 2]> {
-        add_currents(self.current, self.inner.current_velocity_earth(t_s))
+        crate::flow::add_currents(self.current, self.inner.current_velocity_earth(t_s))
     }
 
     fn linear_hull_derivatives(&self) -> Option<LinearHullDerivatives> {
@@ -771,14 +771,6 @@ impl<D: Dynamics> Dynamics for WithEffects<D> {
             }),
             None => lin,
         }
-    }
-}
-
-/// The sum of two optional currents [north, east] (`None` when neither is there).
-pub(crate) fn add_currents(a: Option<[f64; 2]>, b: Option<[f64; 2]>) -> Option<[f64; 2]> {
-    match (a, b) {
-        (Some([an, ae]), Some([bn, be])) => Some([an + bn, ae + be]),
-        (a, b) => a.or(b),
     }
 }
 

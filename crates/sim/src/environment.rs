@@ -379,7 +379,7 @@ impl KnownEnvironment {
     /// are taken relative to the water as the recording's are. `None` without a current.
     pub fn current_series(&self, t_s: &[f64]) -> Option<shipid_io::FlowSeries> {
         self.current.as_ref()?;
-        Some(flow_series(t_s, |t| self.current_at(t)))
+        Some(crate::flow::flow_series(t_s, |t| self.current_at(t)))
     }
 
     /// The wind at simulation times `t_s` as a recorded true wind (speed and the direction it comes
@@ -387,7 +387,9 @@ impl KnownEnvironment {
     /// a wind.
     pub fn wind_series(&self, t_s: &[f64]) -> Option<shipid_io::FlowSeries> {
         self.wind.as_ref()?;
-        Some(flow_series(t_s, |t| self.wind_at(t).unwrap_or([0.0; 2])))
+        Some(crate::flow::flow_series(t_s, |t| {
+            self.wind_at(t).unwrap_or([0.0; 2])
+        }))
     }
 
     /// Rate of change of the current velocity [north, east] [m/s²] at `t_s`: the slope of the
@@ -568,27 +570,7 @@ impl<D: Dynamics> Dynamics for WithEnvironment<D> {
             .environment
             .has_current()
             .then(|| self.environment.current_at(t_s));
-        crate::effects::add_currents(own, self.inner.current_velocity_earth(t_s))
-    }
-}
-
-/// A flow given by its velocity [north, east] [m/s] at times `t_s` as recorded: speed and the
-/// direction it comes from, clockwise from north in [0, 2π) (the inverse of
-/// `FlowSeries::velocity_earth`).
-pub(crate) fn flow_series(
-    t_s: &[f64],
-    velocity_at: impl Fn(f64) -> [f64; 2],
-) -> shipid_io::FlowSeries {
-    let (speed_m_s, from_rad) = t_s
-        .iter()
-        .map(|&t| {
-            let [n, e] = velocity_at(t);
-            (n.hypot(e), (-e).atan2(-n).rem_euclid(std::f64::consts::TAU))
-        })
-        .unzip();
-    shipid_io::FlowSeries {
-        speed_m_s,
-        from_rad,
+        crate::flow::add_currents(own, self.inner.current_velocity_earth(t_s))
     }
 }
 

@@ -44,6 +44,7 @@ pub mod control;
 pub mod dynamics;
 pub mod effects;
 pub mod environment;
+mod flow;
 pub mod gp;
 pub mod metrics;
 pub mod mmg;

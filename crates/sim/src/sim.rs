@@ -389,7 +389,7 @@ pub fn simulate_filtered(
     // that the run's metrics are taken relative to the water (`metrics::relative_to_water`).
     let mut recording = out.rec;
     if model.current_velocity_earth(0.0).is_some() {
-        recording.current = Some(crate::environment::flow_series(&recording.t, |t| {
+        recording.current = Some(crate::flow::flow_series(&recording.t, |t| {
             model.current_velocity_earth(t).unwrap_or([0.0; 2])
         }));
     }
