@@ -566,8 +566,9 @@ pub fn gp_file_fault(file: &GpModelFile) -> Option<(String, String)> {
             return Some((
                 format!("outputs[{k}].targets"),
                 format!(
-                    "has {} values but `points` has {} rows: each sparse point has one target per output",
+                    "has {} values of {} but `points` has {} rows: each sparse point has one target per output",
                     o.targets.len(),
+                    o.name,
                     file.points.len()
                 ),
             ));
