@@ -19,7 +19,7 @@ use shipid_model::{
 };
 use shipid_sim::metrics::{missing_execute_reason, zigzag_events};
 
-use crate::error::{PipelineError, bad_input};
+use crate::error::{PipelineError, bad_input, failed};
 use crate::refine::{RefineOptions, refine_output_error};
 
 /// A set by shipped name or by path to a set file.
@@ -101,12 +101,28 @@ impl EstimatorSpec {
                 Some(x) if flag == "c" && x == 0.0 => {
                     Err(bad_input("--c must be > 0, got 0 (C = 0 ignores the data)"))
                 }
+                // The SVR's C weighs the data term: a large C is weak regularisation, and beyond
+                // the cap the solver's arithmetic, not the data, decides the fit.
+                Some(x)
+                    if x > shipid_estimators::MAX_HYPER_PARAMETER
+                        && x.is_finite()
+                        && flag == "c" =>
+                {
+                    Err(bad_input(format!(
+                        "--c {x:e} is beyond {:e}: C weighs the data against the regularisation, and a C this large swamps the solver's arithmetic in rounding (the fit would be the solver's, not the data's); for no regularisation use --estimator lsq, or --tune",
+                        shipid_estimators::MAX_HYPER_PARAMETER
+                    )))
+                }
                 Some(x) if x > shipid_estimators::MAX_HYPER_PARAMETER && x.is_finite() => {
                     Err(bad_input(format!(
                         "--{flag} {x:e} is beyond {:e}: the regularisation would drown the data in rounding (the fit would ignore them)",
                         shipid_estimators::MAX_HYPER_PARAMETER
                     )))
                 }
+                // --tune would choose the value given and drop it without a word.
+                Some(_) if self.tune => Err(bad_input(format!(
+                    "give --{flag} or --tune, not both (--tune chooses {flag} by cross-validation)"
+                ))),
                 Some(x) if x.is_finite() && x >= 0.0 => Ok(()),
                 Some(x) => Err(bad_input(format!(
                     "--{flag} must be a non-negative number, not {x}"
@@ -183,6 +199,14 @@ impl EstimatorSpec {
                 {
                     return Err(bad_input(format!(
                         "--epsilon must be a non-negative number, not {e}"
+                    )));
+                }
+                if let Some(e) = self.epsilon
+                    && e > shipid_estimators::MAX_HYPER_PARAMETER
+                {
+                    return Err(bad_input(format!(
+                        "--epsilon {e:e} is beyond {:e}: the SVR's ε-tube (prime units, the same for X, Y and N) would hold every sample and the fit would ignore the data; give ε about the noise level, or --tune",
+                        shipid_estimators::MAX_HYPER_PARAMETER
                     )));
                 }
                 Ok(())
@@ -412,6 +436,32 @@ pub(crate) fn chosen_recordings<'a>(
     Ok(chosen)
 }
 
+/// The least spread [deg] of the recorded rudder over the training samples below which the data
+/// cannot determine a rudder derivative. Exact constancy is caught by the design's rank, but a tank
+/// recording holds its rudder at a small offset with sensor noise (0.0002 rad on the HSVA runs), and
+/// column scaling made that noise look like a well-conditioned regressor: a reduced32 fit on the
+/// first second of a run, before the rudder moved, said "status ok" and diverged in every replay.
+/// Half a degree is below every manoeuvre's stroke (the smallest zig-zag moves it by 10°) and above
+/// any sensor's noise or neutral drift.
+pub const MIN_RUDDER_SPREAD_DEG: f64 = 0.5;
+
+/// The rudder's spread [deg] over `delta_rad` when it is below [`MIN_RUDDER_SPREAD_DEG`].
+pub fn rudder_unexcited(delta_rad: &[f64]) -> Option<f64> {
+    let (lo, hi) = delta_rad
+        .iter()
+        .filter(|d| d.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &d| {
+            (lo.min(d), hi.max(d))
+        });
+    let spread_deg = if hi >= lo {
+        (hi - lo).to_degrees()
+    } else {
+        0.0
+    };
+    // Exact constancy is left to the design's rank check, whose message names the regressors.
+    (spread_deg > 0.0 && spread_deg < MIN_RUDDER_SPREAD_DEG).then_some(spread_deg)
+}
+
 /// The training samples of the chosen recordings and window, and the windows used.
 pub fn training_samples(
     ds: &Dataset,
@@ -533,6 +583,16 @@ pub fn fit_dataset(
         ))
     })?;
     let (samples, windows) = training_samples(ds, recordings, window)?;
+    if let Some(spread_deg) = rudder_unexcited(&samples.delta) {
+        return Err(failed(format!(
+            "rank-deficient: the training window ({}) carries no information on the rudder: it spans {spread_deg:.2}° there, below the {MIN_RUDDER_SPREAD_DEG}° a rudder derivative needs (e.g. the window ends before the rudder first moves): widen the window or choose other recordings",
+            windows
+                .iter()
+                .map(|w| format!("{} {}–{} s", w.recording, w.t_start_s, w.t_end_s))
+                .collect::<Vec<_>>()
+                .join("; ")
+        )));
+    }
     let inertia = PrimeInertia::new(&ds.ship, &added, &set);
     let folds = if windows.len() > 1 {
         Folds::Groups(samples.group.clone())

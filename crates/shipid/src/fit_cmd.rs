@@ -194,25 +194,22 @@ fn explains_nothing(d: &shipid_pipeline::fit::DofReport) -> bool {
     shipid_estimators::explains_nothing(&d.fit.coefficients, d.residual_rms, d.target_rms)
 }
 
-/// The fit's summary on stdout: the JSON report, or one line per DOF; `out` is the model file
-/// written, if any.
+/// The fit's summary: with `as_json` the JSON report, returned for [`emit_json`] to print (alone, or
+/// beside the validation's); else one line per DOF on stdout. `out` is the model file written, if
+/// any.
 fn print_summary(
     out: &FitOutput,
     written: Option<&Path>,
     as_json: bool,
     warnings: &[String],
     extent: Option<&StateExtent>,
-) {
+) -> Option<Value> {
     if as_json {
         let mut report = report_json(out, warnings);
         if let (Value::Object(o), Some(e)) = (&mut report, extent) {
             o.insert("training_extent".into(), json!(e));
         }
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&report).unwrap_or_default()
-        );
-        return;
+        return Some(report);
     }
     println!(
         "fitted {} with {} on {} samples in {:.2} ms → {}",
@@ -251,6 +248,28 @@ fn print_summary(
             );
         }
     }
+    None
+}
+
+/// `fit --json` on stdout: the fit's report alone, or with `--validate` ONE document
+/// `{"fit": …, "validation": …}` whose `validation` is what `shipid validate MODEL DATASET --json`
+/// prints (the same library call, so the two never drift apart). The model is read back from the
+/// file written, as `validate` would read it. The outcome is the validation's (a diverged
+/// re-simulation: some failed).
+fn emit_json(fit: Value, validate: Option<(&Path, &Dataset)>) -> Result<Outcome, CliError> {
+    let Some((model_path, ds)) = validate else {
+        println!("{}", serde_json::to_string_pretty(&fit).unwrap_or_default());
+        return Ok(Outcome::Ok);
+    };
+    let spec = model_path.to_string_lossy();
+    let model = load_model(&spec)?;
+    let (validation, outcome) = crate::print::validation_value(model.as_ref(), &spec, ds);
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&json!({ "fit": fit, "validation": validation }))
+            .unwrap_or_default()
+    );
+    Ok(outcome)
 }
 
 pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
@@ -269,7 +288,9 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     if let Some(none) = out.no_information() {
         // No model file: a model whose coefficients the data never saw would validate as if it
         // were one.
-        print_summary(&out, None, a.json, &warnings, None);
+        if let Some(report) = print_summary(&out, None, a.json, &warnings, None) {
+            emit_json(report, None)?;
+        }
         return Err(crate::failed_msg(none));
     }
     // The data set's path relative to the model file, so the model reads it from anywhere.
@@ -306,7 +327,7 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
         .map_err(|e| crate::not_saved(a.out, e, "the fitted model"))?;
     let all_solved = out.dofs.iter().all(|d| d.fit.status.is_solved());
     let extent = StateExtent::of_windows(&ds, &out.file.training);
-    print_summary(&out, Some(a.out), a.json, &warnings, extent.as_ref());
+    let report = print_summary(&out, Some(a.out), a.json, &warnings, extent.as_ref());
     if !a.json {
         print_training_extent(extent.as_ref());
     }
@@ -315,7 +336,11 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     } else {
         Outcome::SomeFailed
     };
-    if a.validate {
+    if let Some(report) = report {
+        if emit_json(report, a.validate.then_some((a.out, &ds)))? == Outcome::SomeFailed {
+            outcome = Outcome::SomeFailed;
+        }
+    } else if a.validate {
         let spec = a.out.to_string_lossy();
         let model = load_model(&spec)?;
         if crate::print::validation(model.as_ref(), &spec, &ds, a.json) == Outcome::SomeFailed {
@@ -329,8 +354,8 @@ pub fn run(a: FitArgs<'_>) -> Result<Outcome, CliError> {
 /// `--bootstrap` (the replicates it widens), `--structures` of the mmg family (one structure, its
 /// own), a refined polynomial fit (the ensemble is fitted in the equation-error sense, so its
 /// replicates would not be centred on the refined model; an mmg fit's replicates are shifted onto
-/// it and every refit is refined too), an unknown structure, and fewer than 2 replicates per
-/// structure.
+/// it and every refit is refined too), an unknown or repeated structure, and fewer replicates per
+/// structure than a band needs.
 fn check_calibrate(a: &FitArgs<'_>, level: f64) -> Result<(), CliError> {
     check_level(level)?;
     let Some((n, _)) = a.bootstrap else {
@@ -352,18 +377,34 @@ fn check_calibrate(a: &FitArgs<'_>, level: f64) -> Result<(), CliError> {
             "--calibrate does not apply with --refine: the ensemble is fitted in the equation-error sense and would not be centred on the refined model",
         ));
     }
-    let mut names = vec![a.set.to_string()];
+    let fitted = load_set(a.set)?.name;
+    let mut names = vec![fitted.clone()];
     for name in others {
         let set = load_set(name).map_err(|e| crate::bad_input(format!("--structures: {e}")))?;
-        if !names.contains(&set.name) {
-            names.push(set.name);
+        // The list is the user's: a repeated name would be merged without a word.
+        if set.name == fitted {
+            return Err(crate::bad_input(format!(
+                "--structures names {name}, the fitted --set {}, which is always the ensemble's first structure: drop it from --structures",
+                a.set
+            )));
         }
+        if names.contains(&set.name) {
+            return Err(crate::bad_input(format!(
+                "--structures names {name} twice: give each structure once"
+            )));
+        }
+        names.push(set.name);
     }
-    if n < 2 * names.len() {
+    // Each structure is bootstrapped with its share of the N replicates; fewer than a band needs
+    // would leave every calibrated band empty.
+    let per = shipid_pipeline::bands::MIN_FINITE_REPLICATES;
+    if n / names.len() < per {
         return Err(crate::bad_input(format!(
-            "--bootstrap {n} is too few for {} structures ({}): each needs at least 2 replicates",
+            "--bootstrap {n} is too few for {} structures ({}): each gets {} replicates and a band needs at least {per}: give --bootstrap {} or more",
             names.len(),
-            names.join(", ")
+            names.join(", "),
+            n / names.len(),
+            per * names.len()
         )));
     }
     Ok(())
@@ -611,10 +652,7 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
                 .collect::<Vec<_>>(),
             "warnings": warnings,
         });
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&report).unwrap_or_default()
-        );
+        return emit_json(report, a.validate.then_some((a.out, &ds)));
     } else {
         println!(
             "fitted mmg with {} on {} samples{} in {:.2} ms → {}",
@@ -701,10 +739,7 @@ pub fn run_gp(
         if let (Value::Object(o), Some(e)) = (&mut value, &extent) {
             o.insert("training_extent".into(), json!(e));
         }
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&value).unwrap_or_default()
-        );
+        return emit_json(value, validate.then_some((out, &ds)));
     } else {
         println!(
             "sparse GP: kept {} of {} samples (d_gen {threshold}) in {:.1} ms; trained 3 GPs in {:.3} s → {}",

@@ -106,9 +106,10 @@ enum Command {
         /// Time window START:END [s] of each training recording.
         #[arg(long, value_name = "START:END", allow_hyphen_values = true)]
         window: Option<String>,
-        /// qp (clarabel reference) or fast.
-        #[arg(long, default_value = "fast")]
-        solver: String,
+        /// qp (clarabel reference) or fast (default). Polynomial sets only: the sparse GP and --set
+        /// mmg have their own solvers.
+        #[arg(long)]
+        solver: Option<String>,
         #[arg(long)]
         out: PathBuf,
         #[arg(long)]
@@ -117,7 +118,8 @@ enum Command {
         #[arg(long)]
         validate: bool,
         /// Store N moving-block bootstrap replicates of the coefficients in the model file (the
-        /// replicates `simulate --bands` draws its bands from; docs/uncertainty.md).
+        /// replicates `simulate --bands` draws its bands from; 20 to 10 000, a band needs at least
+        /// 20; docs/uncertainty.md).
         #[arg(long, value_name = "N", allow_negative_numbers = true)]
         bootstrap: Option<i64>,
         /// Seed of the bootstrap draws.
@@ -470,18 +472,37 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                     "lsq".into()
                 }
             });
+            // Fewer replicates than a band needs would be fitted and then refused: refused up front.
+            let min_replicates = shipid_pipeline::bands::MIN_FINITE_REPLICATES;
             let bootstrap = match bootstrap {
                 None => None,
-                Some(n) if (2..=shipid_pipeline::bootstrap::MAX_REPLICATES as i64).contains(&n) => {
+                Some(n)
+                    if (min_replicates as i64
+                        ..=shipid_pipeline::bootstrap::MAX_REPLICATES as i64)
+                        .contains(&n) =>
+                {
                     Some(n as usize)
                 }
                 Some(n) => {
                     return Err(shipid::bad_input(format!(
-                        "--bootstrap must be between 2 and {} replicates, got {n}",
+                        "--bootstrap must be between {min_replicates} and {} replicates (a band needs at least {min_replicates}), got {n}",
                         shipid_pipeline::bootstrap::MAX_REPLICATES
                     )));
                 }
             };
+            // A solver the family does not use would be ignored without a word.
+            if solver.is_some() {
+                if estimator == shipid_pipeline::fit::GP {
+                    return Err(shipid::bad_input(
+                        "--solver does not apply to --estimator sparse-gp (it trains its Gaussian processes by its own optimiser): drop --solver",
+                    ));
+                }
+                if set == shipid_pipeline::mmg::SET_NAME {
+                    return Err(shipid::bad_input(
+                        "--solver does not apply to --set mmg (its bounded fit has its own solver): drop --solver",
+                    ));
+                }
+            }
             let window = match (overshoots, window) {
                 (Some(_), Some(_)) => {
                     return Err(shipid::bad_input("give --overshoots or --window, not both"));
@@ -527,9 +548,10 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                     validate,
                 );
             }
-            let solver: shipid_estimators::Solver = solver
-                .parse()
-                .map_err(|e: shipid_estimators::EstimatorError| shipid::bad_input(e.to_string()))?;
+            let solver: shipid_estimators::Solver =
+                solver.as_deref().unwrap_or("fast").parse().map_err(
+                    |e: shipid_estimators::EstimatorError| shipid::bad_input(e.to_string()),
+                )?;
             shipid::fit_cmd::run(shipid::fit_cmd::FitArgs {
                 dataset: &dataset,
                 set: &set,

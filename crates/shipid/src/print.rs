@@ -39,6 +39,22 @@ pub fn validation(model: &dyn Dynamics, model_spec: &str, ds: &Dataset, as_json:
     validation_with_bands(model, model_spec, ds, as_json, None, None)
 }
 
+/// The JSON report `shipid validate MODEL DATASET --json` prints, returned instead of printed (for a
+/// command that puts it beside its own report), with the validation's outcome.
+pub fn validation_value(model: &dyn Dynamics, model_spec: &str, ds: &Dataset) -> (Value, Outcome) {
+    let mut value = Value::Null;
+    let outcome = validation_into(model, model_spec, ds, Emit::Into(&mut value), None, None);
+    (value, outcome)
+}
+
+/// Where a validation's report goes: the table on stdout, the JSON on stdout, or the JSON into a
+/// value for the caller.
+enum Emit<'a> {
+    Text,
+    Json,
+    Into(&'a mut Value),
+}
+
 /// Each recorded metric against the valley's range: `(recording, metric, recorded, predicted, (lo,
 /// hi), inside)`.
 type ValleyRow = (String, &'static str, f64, f64, (f64, f64), bool);
@@ -105,25 +121,28 @@ type BandRow = (
     Option<bool>,
 );
 
-/// The band rows of every recording with a standard manoeuvre, the replicate runs that diverged,
-/// and each recording's reach (calibrated bands only).
-fn band_rows(
-    model: &dyn Dynamics,
-    model_spec: &str,
-    ds: &Dataset,
-    check: &BandCheck,
-) -> (Vec<BandRow>, usize, Map<String, Value>) {
+/// The band rows of every recording with a standard manoeuvre ([`BandRows`]).
+fn band_rows(model: &dyn Dynamics, model_spec: &str, ds: &Dataset, check: &BandCheck) -> BandRows {
     let mut rows = Vec::new();
+    let mut unbanded = Vec::new();
     let mut diverged = 0;
     // Once: the model file's windage is read from disk.
     let windage = shipid_pipeline::validate::validation_windage(model_spec, ds);
     let mut reaches = Map::new();
-    for r in &ds.recordings {
-        if matches!(r.manoeuvre, shipid_io::Manoeuvre::Free) {
-            continue;
-        }
+    let banded: Vec<_> = ds
+        .recordings
+        .iter()
+        .filter(|r| !matches!(r.manoeuvre, shipid_io::Manoeuvre::Free))
+        .collect();
+    // Every recording re-simulates all the replicates (a sparse GP's 200 draws over six recordings
+    // take half a minute): a bar on stderr says how far it is (indicatif draws it only on a
+    // terminal, so stdout and --json stay clean).
+    let bar = band_progress(banded.len(), check.source.replicates(), check.source.noun());
+    for r in banded {
+        bar.set_message(r.file.clone());
+        bar.inc(0);
         let env = shipid_pipeline::validate::validation_environment(&windage, ds, r);
-        let Ok(run) = check.source.bands(
+        let run = check.source.bands(
             model,
             &r.manoeuvre,
             &ds.ship,
@@ -132,8 +151,14 @@ fn band_rows(
             // from its recorded initial state (in its recorded wind and current), not a standard
             // approach at U0.
             shipid_pipeline::bands::BandRun::Recording(r, env.as_ref()),
-        ) else {
-            continue;
+        );
+        bar.inc(1);
+        let run = match run {
+            Ok(run) => run,
+            Err(e) => {
+                unbanded.push(format!("{}: {e}", r.file));
+                continue;
+            }
         };
         if let Some(reach) = run.reach {
             reaches.insert(r.file.clone(), json!(reach));
@@ -155,7 +180,71 @@ fn band_rows(
             rows.push((r.file.clone(), b.metric, value, band, inside));
         }
     }
-    (rows, diverged, reaches)
+    bar.finish_and_clear();
+    BandRows {
+        rows,
+        diverged,
+        reaches,
+        unbanded,
+    }
+}
+
+/// The progress of `validate --bands` on stderr: one step per recording, each re-simulating
+/// `replicates` models (`noun`: what they are), with the recording running as its message.
+pub fn band_progress(recordings: usize, replicates: usize, noun: &str) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(recordings as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(&format!(
+            "{{spinner}} bands: {{pos}}/{{len}} recordings re-simulated with their {replicates} {noun} (now {{msg}})  elapsed {{elapsed}}"
+        ))
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+    );
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    bar
+}
+
+/// The band rows of [`band_rows`], the replicate runs that diverged, each recording's reach
+/// (calibrated bands only), and the recordings that gave no band at all, with why.
+struct BandRows {
+    rows: Vec<BandRow>,
+    diverged: usize,
+    reaches: Map<String, Value>,
+    unbanded: Vec<String>,
+}
+
+/// A recording and the metrics of it that one reason holds for.
+type MetricsOfFile = (String, Vec<&'static str>);
+
+/// The reasons the rows without a band have, each once with the metrics it holds for
+/// (`file metric, metric; file metric`), in the order they first appear.
+fn no_band_reasons(rows: &[BandRow]) -> Vec<(String, String)> {
+    let mut reasons: Vec<(String, Vec<MetricsOfFile>)> = Vec::new();
+    for (file, metric, _, band, _) in rows {
+        let Err(why) = band else { continue };
+        let i = reasons
+            .iter()
+            .position(|(w, _)| w == why)
+            .unwrap_or_else(|| {
+                reasons.push((why.clone(), Vec::new()));
+                reasons.len() - 1
+            });
+        let files = &mut reasons[i].1;
+        match files.iter_mut().find(|(f, _)| f == file) {
+            Some((_, metrics)) => metrics.push(metric),
+            None => files.push((file.clone(), vec![metric])),
+        }
+    }
+    reasons
+        .into_iter()
+        .map(|(why, files)| {
+            let which = files
+                .iter()
+                .map(|(f, m)| format!("{f} {}", m.join(", ")))
+                .collect::<Vec<_>>()
+                .join("; ");
+            (why, which)
+        })
+        .collect()
 }
 
 /// [`validation`], and with `bands` each recorded metric checked against its band over the model's
@@ -168,6 +257,19 @@ pub fn validation_with_bands(
     bands: Option<BandCheck>,
     valley: Option<&shipid_pipeline::bands::Valley>,
 ) -> Outcome {
+    let emit = if as_json { Emit::Json } else { Emit::Text };
+    validation_into(model, model_spec, ds, emit, bands, valley)
+}
+
+fn validation_into(
+    model: &dyn Dynamics,
+    model_spec: &str,
+    ds: &Dataset,
+    emit: Emit<'_>,
+    bands: Option<BandCheck>,
+    valley: Option<&shipid_pipeline::bands::Valley>,
+) -> Outcome {
+    let as_json = !matches!(emit, Emit::Text);
     let (rows, source) = validate_dataset(model, model_spec, ds);
     let dataset = &ds.path;
     let any_failed = rows.iter().any(|r| r.validation.diverged());
@@ -235,9 +337,42 @@ pub fn validation_with_bands(
     let band_check = bands
         .as_ref()
         .map(|b| (b, band_rows(model, model_spec, ds, b)));
-    if let (Some((check, (band_rows, diverged, reaches))), Value::Object(o)) =
-        (&band_check, &mut value)
-    {
+    // A request for bands that yielded none (every recorded metric without one, or no recording to
+    // band) must not read as success: warned, with why, and exit 1.
+    let no_band_at_all = band_check.as_ref().and_then(|(check, b)| {
+        if b.rows.iter().any(|r| r.3.is_ok()) {
+            return None;
+        }
+        let mut why: Vec<String> = no_band_reasons(&b.rows)
+            .into_iter()
+            .map(|(why, _)| why)
+            .collect();
+        why.extend(b.unbanded.iter().cloned());
+        if b.rows.is_empty() && b.unbanded.is_empty() {
+            why.push(format!(
+                "{} has no recording with a standard manoeuvre and recorded metrics to band",
+                dataset.display()
+            ));
+        }
+        Some(format!(
+            "--bands {}: no recorded metric got a band ({}): the request yielded no band",
+            check.level,
+            why.join("; ")
+        ))
+    });
+    if let Some(w) = &no_band_at_all {
+        eprintln!("warning: {w}");
+        if let Value::Object(o) = &mut value {
+            match o.get_mut("warnings") {
+                Some(Value::Array(a)) => a.push(json!(w)),
+                _ => {
+                    o.insert("warnings".into(), json!([w]));
+                }
+            }
+        }
+    }
+    if let (Some((check, b)), Value::Object(o)) = (&band_check, &mut value) {
+        let (band_rows, diverged, reaches) = (&b.rows, b.diverged, &b.reaches);
         let mut per: Map<String, Value> = Map::new();
         for (file, metric, recorded, band, inside) in band_rows {
             let entry = per
@@ -283,6 +418,11 @@ pub fn validation_with_bands(
                 a.insert("out_of_kind".into(), json!(o));
             }
         }
+        if let Value::Object(a) = &mut about
+            && !b.unbanded.is_empty()
+        {
+            a.insert("recordings_without_band".into(), json!(b.unbanded));
+        }
         o.insert("bands".into(), about);
     }
     let valley_check = valley
@@ -313,7 +453,9 @@ pub fn validation_with_bands(
             }),
         );
     }
-    if as_json {
+    if let Emit::Into(sink) = emit {
+        *sink = value;
+    } else if as_json {
         println!(
             "{}",
             serde_json::to_string_pretty(&value).unwrap_or_default()
@@ -395,7 +537,8 @@ pub fn validation_with_bands(
             ),
         }
     }
-    if !as_json && let Some((check, (band_rows, diverged, reaches))) = &band_check {
+    if !as_json && let Some((check, b)) = &band_check {
+        let (band_rows, diverged, reaches) = (&b.rows, b.diverged, &b.reaches);
         // Diverged runs are summed over the recordings: say of how many, or "200 diverged" of 200
         // replicates reads as all of them.
         let recordings = band_rows
@@ -439,6 +582,14 @@ pub fn validation_with_bands(
             };
             println!("{file:<16} {metric:<18} {recorded:>10.4} {band:>22} {inside:>7}");
         }
+        // Why a row says "no band": each reason once, with the metrics it holds for (--json gives
+        // it per metric as `no_band`).
+        for (why, which) in no_band_reasons(band_rows) {
+            println!("no band: {which}: {why}");
+        }
+        for why in &b.unbanded {
+            println!("no band: {why}");
+        }
         let checked = band_rows.iter().filter(|r| r.4.is_some()).count();
         let inside = band_rows.iter().filter(|r| r.4 == Some(true)).count();
         println!(
@@ -472,7 +623,7 @@ pub fn validation_with_bands(
             rows.len()
         );
     }
-    if any_failed {
+    if any_failed || no_band_at_all.is_some() {
         Outcome::SomeFailed
     } else {
         Outcome::Ok
