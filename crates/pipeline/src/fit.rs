@@ -445,8 +445,14 @@ pub(crate) fn chosen_recordings<'a>(
 /// any sensor's noise or neutral drift.
 pub const MIN_RUDDER_SPREAD_DEG: f64 = 0.5;
 
-/// The rudder's spread [deg] over `delta_rad` when it is below [`MIN_RUDDER_SPREAD_DEG`].
-pub fn rudder_unexcited(delta_rad: &[f64]) -> Option<f64> {
+/// The rank-deficiency of training windows whose rudder `delta_rad` spans more than nothing but less
+/// than [`MIN_RUDDER_SPREAD_DEG`] (exact constancy is left to the design's rank check, whose message
+/// names the regressors); `what` is what the rudder's information was needed for.
+pub fn rudder_unexcited(
+    delta_rad: &[f64],
+    windows: &[TrainingWindow],
+    what: &str,
+) -> Result<(), PipelineError> {
     let (lo, hi) = delta_rad
         .iter()
         .filter(|d| d.is_finite())
@@ -458,8 +464,17 @@ pub fn rudder_unexcited(delta_rad: &[f64]) -> Option<f64> {
     } else {
         0.0
     };
-    // Exact constancy is left to the design's rank check, whose message names the regressors.
-    (spread_deg > 0.0 && spread_deg < MIN_RUDDER_SPREAD_DEG).then_some(spread_deg)
+    if spread_deg > 0.0 && spread_deg < MIN_RUDDER_SPREAD_DEG {
+        return Err(failed(format!(
+            "rank-deficient: the training window ({}) carries no information on the rudder: it spans {spread_deg:.2}° there, below the {MIN_RUDDER_SPREAD_DEG}° {what} needs (e.g. the window ends before the rudder first moves): widen the window or choose other recordings",
+            windows
+                .iter()
+                .map(|w| format!("{} {}–{} s", w.recording, w.t_start_s, w.t_end_s))
+                .collect::<Vec<_>>()
+                .join("; ")
+        )));
+    }
+    Ok(())
 }
 
 /// The training samples of the chosen recordings and window, and the windows used.
@@ -583,16 +598,7 @@ pub fn fit_dataset(
         ))
     })?;
     let (samples, windows) = training_samples(ds, recordings, window)?;
-    if let Some(spread_deg) = rudder_unexcited(&samples.delta) {
-        return Err(failed(format!(
-            "rank-deficient: the training window ({}) carries no information on the rudder: it spans {spread_deg:.2}° there, below the {MIN_RUDDER_SPREAD_DEG}° a rudder derivative needs (e.g. the window ends before the rudder first moves): widen the window or choose other recordings",
-            windows
-                .iter()
-                .map(|w| format!("{} {}–{} s", w.recording, w.t_start_s, w.t_end_s))
-                .collect::<Vec<_>>()
-                .join("; ")
-        )));
-    }
+    rudder_unexcited(&samples.delta, &windows, "a rudder derivative")?;
     let inertia = PrimeInertia::new(&ds.ship, &added, &set);
     let folds = if windows.len() > 1 {
         Folds::Groups(samples.group.clone())

@@ -113,17 +113,7 @@ pub fn fit_gp_dataset(
         }
     }
     let delta: Vec<f64> = (0..all.len()).map(|i| all.row(i)[3]).collect();
-    if let Some(spread_deg) = crate::fit::rudder_unexcited(&delta) {
-        return Err(failed(format!(
-            "rank-deficient: the training window ({}) carries no information on the rudder: it spans {spread_deg:.2}° there, below the {}° a model of the rudder's effect needs (e.g. the window ends before the rudder first moves): widen the window or choose other recordings",
-            windows
-                .iter()
-                .map(|w| format!("{} {}–{} s", w.recording, w.t_start_s, w.t_end_s))
-                .collect::<Vec<_>>()
-                .join("; "),
-            crate::fit::MIN_RUDDER_SPREAD_DEG
-        )));
-    }
+    crate::fit::rudder_unexcited(&delta, &windows, "a model of the rudder's effect")?;
     let scales = half_ranges(&all);
     // An input without spread carries no information (the similarity walk then keeps a single
     // point and the GPs predict a constant): the GP counterpart of a rank-deficient design.
