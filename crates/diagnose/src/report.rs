@@ -254,7 +254,13 @@ pub fn diagnose(
             Some(level) if own_misfit => conclude_own_misfit(&baseline, &judged, b, level),
             _ => conclude_effect(&baseline, &judged, &finals, b),
         },
-        (None, None) => conclude_nothing(&baseline, &judged, real_threshold, opts),
+        (None, None) => conclude_nothing(
+            &baseline,
+            &judged,
+            real_threshold,
+            input.model_level_over_l,
+            opts,
+        ),
     };
     let mut conclusion = conclusion;
     // "They were in one wind" backs a verdict of one wind for all; beside any other verdict it would
@@ -439,6 +445,10 @@ fn conclude_own_misfit(
     }
 }
 
+/// A model's own level beyond this many noise floors is a misfit of its training data, not their
+/// noise.
+const OWN_MISFIT_BEYOND_NOISE: f64 = 5.0;
+
 /// No candidate accepted: `unexplained` when the mismatch is real, else `none`.
 /// A rejected candidate that explains at least this share of the mismatch is named beside a `none`
 /// or `unexplained` verdict: the recordings' noise, not the effect's absence, may be what held it back.
@@ -462,6 +472,7 @@ fn conclude_nothing(
     baseline: &Baseline,
     judged: &[Judged],
     real_threshold: f64,
+    model_level_over_l: Option<f64>,
     opts: &DiagnoseOptions,
 ) -> Conclusion {
     let before_l = baseline.before_l;
@@ -532,8 +543,21 @@ fn conclude_nothing(
                 )
             }
         } else {
+            // A model that does not reproduce its own training data makes the threshold its own:
+            // "none" then says only that nothing larger than that misfit is there. A model exact but
+            // for the noise has a level of a few noise floors (the reference on noisy runs: 2.5).
+            let own_bound = model_level_over_l
+                .filter(|level| {
+                    *level > OWN_MISFIT_BEYOND_NOISE * baseline.noise_floor
+                        && opts.real_mismatch_factor * level >= 0.5 * real_threshold
+                })
+                .map_or(String::new(), |level| {
+                    format!(
+                        ". Most of that threshold is the model's own misfit of its training data ({level:.4} L): an effect that moves these recordings by less cannot be told from it, and a model that reproduces its training data better would resolve smaller effects"
+                    )
+                });
             format!(
-                "no effect reduces the mismatch beyond the noise; position RMSE {before_l:.4} L is within the model's own level and the noise ({real_threshold:.4} L = {:.0} × the model's own level + 3 × the noise floor + what replays resolve){near_miss}",
+                "no effect reduces the mismatch beyond the noise; position RMSE {before_l:.4} L is within the model's own level and the noise ({real_threshold:.4} L = {:.0} × the model's own level + 3 × the noise floor + what replays resolve){near_miss}{own_bound}",
                 opts.real_mismatch_factor
             )
         },

@@ -445,6 +445,21 @@ pub(crate) fn chosen_recordings<'a>(
 /// any sensor's noise or neutral drift.
 pub const MIN_RUDDER_SPREAD_DEG: f64 = 0.5;
 
+/// The spread [deg] of the finite values of `delta_rad` (0 for none).
+pub fn rudder_spread_deg(delta_rad: &[f64]) -> f64 {
+    let (lo, hi) = delta_rad
+        .iter()
+        .filter(|d| d.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &d| {
+            (lo.min(d), hi.max(d))
+        });
+    if hi >= lo {
+        (hi - lo).to_degrees()
+    } else {
+        0.0
+    }
+}
+
 /// The rank-deficiency of training windows whose rudder `delta_rad` spans more than nothing but less
 /// than [`MIN_RUDDER_SPREAD_DEG`] (exact constancy is left to the design's rank check, whose message
 /// names the regressors); `what` is what the rudder's information was needed for.
@@ -453,28 +468,27 @@ pub fn rudder_unexcited(
     windows: &[TrainingWindow],
     what: &str,
 ) -> Result<(), PipelineError> {
-    let (lo, hi) = delta_rad
-        .iter()
-        .filter(|d| d.is_finite())
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &d| {
-            (lo.min(d), hi.max(d))
-        });
-    let spread_deg = if hi >= lo {
-        (hi - lo).to_degrees()
-    } else {
-        0.0
-    };
+    let spread_deg = rudder_spread_deg(delta_rad);
     if spread_deg > 0.0 && spread_deg < MIN_RUDDER_SPREAD_DEG {
-        return Err(failed(format!(
-            "rank-deficient: the training window ({}) carries no information on the rudder: it spans {spread_deg:.2}° there, below the {MIN_RUDDER_SPREAD_DEG}° {what} needs (e.g. the window ends before the rudder first moves): widen the window or choose other recordings",
-            windows
-                .iter()
-                .map(|w| format!("{} {}–{} s", w.recording, w.t_start_s, w.t_end_s))
-                .collect::<Vec<_>>()
-                .join("; ")
-        )));
+        return Err(rudder_unexcited_error(spread_deg, windows, what));
     }
     Ok(())
+}
+
+/// The error of training windows whose rudder spans only `spread_deg`.
+pub fn rudder_unexcited_error(
+    spread_deg: f64,
+    windows: &[TrainingWindow],
+    what: &str,
+) -> PipelineError {
+    failed(format!(
+        "rank-deficient: the training window ({}) carries no information on the rudder: it spans {spread_deg:.2}° there, below the {MIN_RUDDER_SPREAD_DEG}° {what} (e.g. the window ends before the rudder first moves): widen the window or choose other recordings",
+        windows
+            .iter()
+            .map(|w| format!("{} {}–{} s", w.recording, w.t_start_s, w.t_end_s))
+            .collect::<Vec<_>>()
+            .join("; ")
+    ))
 }
 
 /// The training samples of the chosen recordings and window, and the windows used.
@@ -598,7 +612,7 @@ pub fn fit_dataset(
         ))
     })?;
     let (samples, windows) = training_samples(ds, recordings, window)?;
-    rudder_unexcited(&samples.delta, &windows, "a rudder derivative")?;
+    rudder_unexcited(&samples.delta, &windows, "a rudder derivative needs")?;
     let inertia = PrimeInertia::new(&ds.ship, &added, &set);
     let folds = if windows.len() > 1 {
         Folds::Groups(samples.group.clone())

@@ -113,7 +113,7 @@ pub fn fit_gp_dataset(
         }
     }
     let delta: Vec<f64> = (0..all.len()).map(|i| all.row(i)[3]).collect();
-    crate::fit::rudder_unexcited(&delta, &windows, "a model of the rudder's effect")?;
+    crate::fit::rudder_unexcited(&delta, &windows, "a model of the rudder's effect needs")?;
     let scales = half_ranges(&all);
     // An input without spread carries no information (the similarity walk then keeps a single
     // point and the GPs predict a constant): the GP counterpart of a rank-deficient design.

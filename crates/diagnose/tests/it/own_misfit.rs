@@ -65,3 +65,59 @@ fn an_effect_in_the_training_data_as_much_is_the_models_own_misfit_not_a_verdict
     let alone = diagnose(&input(None), &runs(2), &opts).unwrap();
     assert_eq!(alone.verdict, Verdict::Asymmetry, "{}", alone.explanation);
 }
+
+/// Runs of the reference ship in a concealed current of `speed_m_s` from 120°.
+fn runs_in_current(seed: u64, speed_m_s: f64) -> shipid_io::Dataset {
+    let m: Vec<Manoeuvre> = [Side::Port, Side::Starboard]
+        .into_iter()
+        .map(|side| Manoeuvre::ZigZag {
+            rudder_deg: 20.0,
+            check_deg: 20.0,
+            side,
+        })
+        .collect();
+    let current = Effect::Current(shipid_sim::effects::Current {
+        speed_m_s,
+        from_deg: 120.0,
+    });
+    generate_manoeuvres(Some(seed), &[current], &m)
+        .unwrap()
+        .in_memory(&m, "current")
+}
+
+/// Regression (probe of the mmg family): a model that did not reproduce its own training data
+/// (own level 0.38 L, fitted on a straight run) said `none`, "within the model's own level", as if
+/// model and recordings agreed. `none` is all such a model allows, and the explanation now says the
+/// misfit is what bounds it; a model that reproduces its training data keeps the plain wording.
+#[test]
+fn none_from_a_model_that_misfits_its_own_training_data_says_that_misfit_bounds_it() {
+    let model = MmgModel::kvlcc2();
+    let opts = DiagnoseOptions::default();
+    let input = |level| DiagnoseInput {
+        base: &model,
+        base_effects: &[],
+        model_level_over_l: level,
+        identification_range: None,
+    };
+    let calm = runs_in_current(3, 0.0);
+    let misfit = diagnose(&input(Some(0.3)), &calm, &opts).unwrap();
+    assert_eq!(misfit.verdict, Verdict::None, "{}", misfit.explanation);
+    assert!(
+        misfit.explanation.contains(
+            "Most of that threshold is the model's own misfit of its training data (0.3000 L)"
+        ),
+        "{}",
+        misfit.explanation
+    );
+    let level = model_level(&input(None), &runs_in_current(4, 0.0), &opts);
+    let plain = diagnose(&input(Some(level)), &calm, &opts).unwrap();
+    assert_eq!(plain.verdict, Verdict::None, "{}", plain.explanation);
+    assert!(
+        !plain.explanation.contains("Most of that threshold"),
+        "{}",
+        plain.explanation
+    );
+    // An effect whose held-out mismatch exceeds that level is still found.
+    let current = diagnose(&input(Some(0.3)), &runs_in_current(3, 0.05), &opts).unwrap();
+    assert_eq!(current.verdict, Verdict::Current, "{}", current.explanation);
+}

@@ -268,6 +268,19 @@ pub fn training_samples(ds: &Dataset, opts: &MmgFitOptions) -> Result<TrainingDa
             estimated,
         ));
     }
+    // No rank check guards the mmg fit (the priors keep it well posed), so a window without rudder
+    // action, exactly constant or not, would be fitted: a straight run "determined" resistance,
+    // thrust deduction and wake with zero standard errors from one force balance, and its model
+    // carried no identification range to warn with.
+    let delta: Vec<f64> = samples.iter().map(|s| s.delta_rad).collect();
+    let spread_deg = crate::fit::rudder_spread_deg(&delta);
+    if spread_deg < crate::fit::MIN_RUDDER_SPREAD_DEG {
+        return Err(crate::fit::rudder_unexcited_error(
+            spread_deg,
+            &windows,
+            "the rudder and hull parameters need",
+        ));
+    }
     // Neighbouring samples of a smoothed acceleration carry nearly the same information; evenly
     // thinned, the problem keeps its content and the cross-validation its speed.
     let samples_available = samples.len();
