@@ -445,6 +445,10 @@ fn conclude_own_misfit(
     }
 }
 
+/// A held-out position RMSE [÷ L] below which there is no mismatch to explain (exact data replay
+/// within integration error, about 1e-7 L).
+const NOTHING_TO_EXPLAIN_L: f64 = 1e-5;
+
 /// A model's own level beyond this many noise floors is a misfit of its training data, not their
 /// noise.
 const OWN_MISFIT_BEYOND_NOISE: f64 = 5.0;
@@ -503,11 +507,14 @@ fn conclude_nothing(
                 j.held_back.as_deref().unwrap_or_default()
             )
         });
-    let near_miss = closest(
-        judged
-            .iter()
-            .filter(|j| j.held_back.is_none() && j.assessed.explains >= NEAR_MISS_EXPLAINS),
-    )
+    // A share of nothing is no evidence: on exact data "explains 100 % (0.0000 → 0.0000 L)" read as
+    // a near miss.
+    let something_to_explain = before_l > NOTHING_TO_EXPLAIN_L.max(baseline.noise_floor);
+    let near_miss = closest(judged.iter().filter(|j| {
+        something_to_explain
+            && j.held_back.is_none()
+            && j.assessed.explains >= NEAR_MISS_EXPLAINS
+    }))
     .map_or(String::new(), |j| {
         format!(
             ". Closest: {} explains {:.0} % of it held out ({before_l:.4} → {:.4} L) but was not accepted: its gain is within what the recordings' noise (floor {:.4} L) can make; more or cleaner recordings would tell whether it is there",

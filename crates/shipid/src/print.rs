@@ -504,6 +504,10 @@ fn validation_into(
                 status
             );
         }
+        // The columns' header names quantities and units only: what the numbers are is said once.
+        println!(
+            "pos/L … r[deg/s]: RMS errors of an open-loop replay of each recording's rudder from its initial state (position ÷ L); MRAE: mean relative absolute error of the closed-loop manoeuvre's IMO metrics"
+        );
         for why in &no_mrae {
             println!("MRAE -: {why}");
         }
@@ -567,10 +571,11 @@ fn validation_into(
             );
         }
         println!(
-            "{:<16} {:<18} {:>10} {:>22} {:>7}",
-            "recording", "metric", "recorded", "band", "inside"
+            "{:<16} {:<18} {:>5} {:>10} {:>22} {:>7}",
+            "recording", "metric", "unit", "recorded", "band", "inside"
         );
         for (file, metric, recorded, band, inside) in band_rows {
+            let unit = shipid_sim::metrics::metric_unit(metric).unwrap_or("");
             let band = match band {
                 Ok((lo, hi)) => format!("[{lo:.4}, {hi:.4}]"),
                 Err(_) => "no band".into(),
@@ -580,7 +585,7 @@ fn validation_into(
                 Some(false) => "no",
                 None => "-",
             };
-            println!("{file:<16} {metric:<18} {recorded:>10.4} {band:>22} {inside:>7}");
+            println!("{file:<16} {metric:<18} {unit:>5} {recorded:>10.4} {band:>22} {inside:>7}");
         }
         // Why a row says "no band": each reason once, with the metrics it holds for (--json gives
         // it per metric as `no_band`).
@@ -607,12 +612,13 @@ fn validation_into(
             v.what()
         );
         println!(
-            "{:<16} {:<18} {:>10} {:>10} {:>22} {:>7}",
-            "recording", "metric", "recorded", "predicted", "valley", "inside"
+            "{:<16} {:<18} {:>5} {:>10} {:>10} {:>22} {:>7}",
+            "recording", "metric", "unit", "recorded", "predicted", "valley", "inside"
         );
         for (file, metric, recorded, predicted, (lo, hi), inside) in rows {
+            let unit = shipid_sim::metrics::metric_unit(metric).unwrap_or("");
             println!(
-                "{file:<16} {metric:<18} {recorded:>10.4} {predicted:>10.4} {:>22} {:>7}",
+                "{file:<16} {metric:<18} {unit:>5} {recorded:>10.4} {predicted:>10.4} {:>22} {:>7}",
                 format!("[{lo:.4}, {hi:.4}]"),
                 if *inside { "yes" } else { "no" }
             );
