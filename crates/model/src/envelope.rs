@@ -73,7 +73,10 @@ impl DofRange {
 #[derive(Debug, Clone)]
 pub struct IdentificationRange {
     set: CoefficientSet,
-    dofs: [DofRange; 3],
+    /// `None` for training states that span no ellipsoid ([`IdentificationRange::nowhere`]).
+    dofs: Option<[DofRange; 3]>,
+    /// Why the training states span none, in words (`None` for a range that has an ellipsoid).
+    degenerate: Option<String>,
 }
 
 /// A diagonal of R below this fraction of the largest marks a rank-deficient design.
@@ -107,8 +110,26 @@ impl IdentificationRange {
         let dofs = [range(Dof::X)?, range(Dof::Y)?, range(Dof::N)?];
         Ok(IdentificationRange {
             set: set.clone(),
-            dofs,
+            dofs: Some(dofs),
+            degenerate: None,
         })
+    }
+
+    /// The range of training states that span no ellipsoid (a straight run: no rudder, drift or yaw;
+    /// fewer states than terms): every state lies outside it, since the model was identified on
+    /// none of the state space around them. `why` says which quantity did not vary.
+    pub fn nowhere(set: &CoefficientSet, why: impl Into<String>) -> IdentificationRange {
+        IdentificationRange {
+            set: set.clone(),
+            dofs: None,
+            degenerate: Some(why.into()),
+        }
+    }
+
+    /// Why the training states span no ellipsoid (`None` when they do): a
+    /// [`IdentificationRange::nowhere`] range.
+    pub fn degenerate(&self) -> Option<&str> {
+        self.degenerate.as_deref()
     }
 
     /// max over X, Y, N of h(x)/h_max at the primed state (Δu′, v′, r′, δ [rad]): above 1 the state
@@ -118,12 +139,15 @@ impl IdentificationRange {
         if ![du, v, r, delta].iter().all(|x| x.is_finite()) {
             return f64::NAN;
         }
+        let Some(dofs) = &self.dofs else {
+            return f64::INFINITY;
+        };
         let pw = Powers::new(du, v, r, delta);
         // One row and one scratch buffer for the three equations (called once per sample).
         let p = self.set.terms.iter().map(Vec::len).max().unwrap_or(0);
         let (mut row, mut w) = (Vec::with_capacity(p), vec![0.0; p]);
         let mut worst = 0.0f64;
-        for (terms, range) in self.set.terms.iter().zip(&self.dofs) {
+        for (terms, range) in self.set.terms.iter().zip(dofs) {
             row.clear();
             row.extend(terms.iter().map(|t| t.eval_powers(&pw)));
             worst = worst.max(range.leverage(&row, &mut w) / range.h_max);
@@ -240,6 +264,15 @@ mod tests {
             .collect();
         let top = ratios.iter().cloned().fold(0.0f64, f64::max);
         assert!((top - 1.0).abs() < 1e-9, "largest training ratio {top}");
+    }
+
+    #[test]
+    fn a_range_of_no_ellipsoid_puts_every_state_outside() {
+        let set = CoefficientSet::builtin("reduced32").unwrap();
+        let range = IdentificationRange::nowhere(&set, "the rudder angle is constant");
+        assert_eq!(range.degenerate(), Some("the rudder angle is constant"));
+        assert_eq!(range.leverage_ratio(0.0, 0.0, 0.0, 0.0), f64::INFINITY);
+        assert!(range.leverage_ratio(f64::NAN, 0.0, 0.0, 0.0).is_nan());
     }
 
     #[test]

@@ -147,7 +147,7 @@ fn load_parts(
     let table = toml::from_str::<toml::Table>(&text).ok();
     if table.as_ref().is_some_and(|t| t.contains_key("base")) {
         let file: AugmentedModelFile =
-            toml::from_str(&text).map_err(|e| InputError::toml(path, &text, &e))?;
+            toml::from_str(&text).map_err(|e| toml_error(path, &text, &e))?;
         let base_spec = resolve_base(path, &file, chain)?;
         chain.push(absolute_path(path));
         let (base, mut effects) = load_parts(&base_spec, chain)?;
@@ -172,7 +172,7 @@ fn load_parts(
     if let Some(gp) = load_gp_model(path, &family_text)? {
         return Ok((Box::new(gp), Vec::new()));
     }
-    let file: ModelFile = toml::from_str(&text).map_err(|e| InputError::toml(path, &text, &e))?;
+    let file: ModelFile = toml::from_str(&text).map_err(|e| toml_error(path, &text, &e))?;
     shipid_io::dataset::check_ship(path, &file.ship)?;
     shipid_io::dataset::check_added_mass(path, &file.added_mass, &file.ship)?;
     let model = file
@@ -197,9 +197,12 @@ fn load_parts(
 /// A `kind` the loader does not know is refused: read as a polynomial it would simulate some other
 /// model without a word.
 fn check_kind(path: &Path, table: Option<&toml::Table>) -> Result<(), PipelineError> {
-    let Some(kind) = table.and_then(|t| t.get("kind")) else {
-        // Missing or not TOML: the full reader names the fault.
+    let Some(table) = table else {
+        // Not TOML: the full reader names the fault.
         return Ok(());
+    };
+    let Some(kind) = table.get("kind") else {
+        return missing_kind(path, table);
     };
     match kind.as_str() {
         Some(k) if MODEL_KINDS.contains(&k) => Ok(()),
@@ -217,6 +220,70 @@ fn check_kind(path: &Path, table: Option<&toml::Table>) -> Result<(), PipelineEr
         )
         .into()),
     }
+}
+
+/// A file without `kind` is read as a polynomial (files before `kind` existed were all polynomials):
+/// one whose tables are another kind's is refused naming `kind`. Read as a polynomial, an mmg file
+/// with its `kind` line deleted failed on "unknown field `estimator.determined_share`", a valid key.
+fn missing_kind(path: &Path, table: &toml::Table) -> Result<(), PipelineError> {
+    let found = |keys: &[&str]| -> Vec<String> {
+        keys.iter()
+            .filter(|k| table.contains_key(**k))
+            .map(|k| format!("`{k}`"))
+            .collect()
+    };
+    let Some((kind, tables)) = KIND_TABLES
+        .iter()
+        .filter(|(k, _)| *k != "abkowitz")
+        .map(|(k, keys)| (k, found(keys)))
+        .find(|(_, f)| !f.is_empty())
+    else {
+        return Ok(());
+    };
+    Err(InputError::key(
+        path,
+        "kind",
+        format!(
+            "missing: the file holds {}, the tables of a model of kind \"{kind}\": add `kind = \"{kind}\"` at the top (as `shipid fit` writes it)",
+            tables.join(", ")
+        ),
+    )
+    .into())
+}
+
+/// A TOML error of a model file's reader, as [`InputError::toml`] gives it, except that an unknown
+/// table is named as one: `[foo]` was reported as "key `foo.foo`: unknown field `foo`", a doubled
+/// key for what is a table.
+pub fn toml_error(path: &Path, text: &str, err: &toml::de::Error) -> InputError {
+    let plain = InputError::toml(path, text, err);
+    let message = err.message().trim();
+    let Some(field) = message
+        .strip_prefix("unknown field `")
+        .and_then(|m| m.split('`').next())
+    else {
+        return plain;
+    };
+    let shipid_io::error::Location::Toml { line, .. } = plain.location else {
+        return plain;
+    };
+    let Some(header) = text.lines().nth(line.saturating_sub(1)).and_then(|l| {
+        let l = l.trim();
+        l.strip_prefix("[[")
+            .and_then(|x| x.split("]]").next())
+            .or_else(|| l.strip_prefix('[').and_then(|x| x.split(']').next()))
+            .map(str::trim)
+    }) else {
+        return plain;
+    };
+    // The header names the unknown field itself (`[foo]`, `[[foo]]`, `[propeller.foo]`), not a
+    // table whose key is unknown.
+    if header.rsplit('.').next() != Some(field) {
+        return plain;
+    }
+    let expected = message
+        .split_once(", expected")
+        .map_or(String::new(), |(_, rest)| format!(": expected{rest}"));
+    InputError::line(path, line, format!("unknown table `[{header}]`{expected}"))
 }
 
 /// The top-level keys only one kind of model file has, by kind: what a file "looks like".
@@ -506,8 +573,7 @@ pub fn load_gp_model(path: &Path, text: &str) -> Result<Option<GpDynamics>, Pipe
     if !is_gp {
         return Ok(None);
     }
-    let file: GpModelFile =
-        toml::from_str(text).map_err(|e| shipid_io::InputError::toml(path, text, &e))?;
+    let file: GpModelFile = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
     shipid_io::dataset::check_ship(path, &file.ship)?;
     shipid_io::dataset::check_added_mass(path, &file.added_mass, &file.ship)?;
     if let Some((key, msg)) = gp_file_fault(&file) {

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use shipid_io::{Dataset, PrimeScale, Recording};
 use shipid_model::design::primed_state;
 use shipid_model::{
-    AugmentedModelFile, CoefficientSet, IdentificationRange, ModelFile, TrainingWindow,
+    AugmentedModelFile, CoefficientSet, IdentificationRange, ModelFile, RangeError, TrainingWindow,
 };
 use shipid_sim::metrics::relative_to_water;
 
@@ -207,7 +207,60 @@ pub fn identification_range((file, ds, _): &TrainingData) -> Option<Identificati
         return None;
     }
     let set = CoefficientSet::from_file(file.set.clone()).ok()?;
-    IdentificationRange::new(&set, &window_states(ds, &file.training)).ok()
+    range_or_nowhere(&set, &window_states(ds, &file.training))
+}
+
+/// The range of `set` over `states`; a range outside which every state lies when the states span
+/// none (a straight run: no rudder, drift or yaw), with the quantities that did not vary. `None`
+/// only for a non-finite state, which no loaded recording has. `None` for states that span nothing
+/// read as "no range known", and every caller then said nothing of a 35° turn predicted from a
+/// straight run.
+fn range_or_nowhere(set: &CoefficientSet, states: &[[f64; 4]]) -> Option<IdentificationRange> {
+    match IdentificationRange::new(set, states) {
+        Ok(range) => Some(range),
+        Err(RangeError::NonFinite) => None,
+        Err(e) => Some(IdentificationRange::nowhere(
+            set,
+            no_span_reason(states, &e),
+        )),
+    }
+}
+
+/// A quantity whose training values spread by no more than this (primed, or rad for δ) did not
+/// vary: far below any manoeuvre's, and above the rounding of a recorded constant.
+const CONSTANT_SPREAD: f64 = 1e-6;
+
+/// Why `states` span no range, in words: the quantities that stay constant, else what the range's
+/// construction found (`err`); a warning puts it after "the training states do not span the state
+/// space".
+pub fn no_span_reason(states: &[[f64; 4]], err: &RangeError) -> String {
+    if states.is_empty() {
+        return "the training windows hold no states".into();
+    }
+    let names = ["Δu′ (speed)", "v′ (drift)", "r′ (yaw rate)", "δ (rudder)"];
+    let constant: Vec<String> = (0..4)
+        .filter_map(|k| {
+            let (lo, hi) = states
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| {
+                    (lo.min(s[k]), hi.max(s[k]))
+                });
+            (hi - lo <= CONSTANT_SPREAD).then(|| {
+                let value = if k == 3 {
+                    format!("{:.1}°", lo.to_degrees())
+                } else {
+                    format!("{lo:.3}")
+                };
+                format!("{} = {value} throughout", names[k])
+            })
+        })
+        .collect();
+    let what = if constant.is_empty() {
+        err.to_string()
+    } else {
+        constant.join(", ")
+    };
+    format!("{what}, over {} training states", states.len())
 }
 
 /// How many of the samples `idx` of `rec` lie outside `range`, and how many there are.
@@ -266,6 +319,9 @@ pub enum RangeSource {
     StateEllipsoid,
     /// A sparse GP's coverage by its sparse points.
     Coverage,
+    /// Training states that span no range (a straight run: a quantity that never varied): every
+    /// state lies outside ([`IdentificationRange::nowhere`]).
+    Degenerate,
     /// Not known (the model's training data cannot be read, or the reference model).
     Unknown,
 }
@@ -277,6 +333,7 @@ impl RangeSource {
             RangeSource::Leverage => "its regression's leverage",
             RangeSource::StateEllipsoid => "the ellipsoid of its training states",
             RangeSource::Coverage => "its sparse points' coverage",
+            RangeSource::Degenerate => "training states that span no range",
             RangeSource::Unknown => "unknown",
         }
     }
@@ -293,6 +350,9 @@ impl RangeSource {
             RangeSource::Coverage => {
                 "no sparse point d_gen-similar (paper 001's test that every training state passes): there the GP's mean reverts towards its constant"
             }
+            RangeSource::Degenerate => {
+                "every state: the training states do not span the state space (a quantity among Δu′, v′, r′, δ never varied), so the model was identified on no neighbourhood of any state"
+            }
             RangeSource::Unknown => "not available",
         }
     }
@@ -303,11 +363,12 @@ impl RangeSource {
 /// states' own ellipsoid. The same for every such family, so that their reaches compare.
 pub const STATE_RANGE_SET: &str = "reduced32";
 
-/// The [`STATE_RANGE_SET`] range over primed states; `None` when it cannot be formed (too few or
-/// degenerate states).
+/// The [`STATE_RANGE_SET`] range over primed states: for states that span no ellipsoid (too few,
+/// or a quantity that never varies) one outside which every state lies
+/// ([`IdentificationRange::degenerate`] says why); `None` only for a non-finite state.
 pub fn state_range_of(states: &[[f64; 4]]) -> Option<IdentificationRange> {
     let set = CoefficientSet::builtin(STATE_RANGE_SET)?;
-    IdentificationRange::new(&set, states).ok()
+    range_or_nowhere(&set, states)
 }
 
 /// Each window of `windows` whose recording `ds` has, with the indices of its samples.
@@ -374,7 +435,7 @@ pub const EXTREME_MARGIN: f64 = 0.05;
 
 /// The extent of a set of states, as a user reads it first: the largest drift angle, non-dimensional
 /// yaw rate (both from samples faster than [`SLOW_SPEED_OVER_U0`]) and rudder angle, and the lowest
-/// speed.
+/// and highest speed.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct StateExtent {
     /// Largest |β| = |atan2(−v, u)| [deg].
@@ -385,6 +446,9 @@ pub struct StateExtent {
     pub max_rudder_deg: f64,
     /// Lowest U / U0.
     pub min_speed_over_u0: f64,
+    /// Highest U / U0: a run at a higher propeller rate than the training's goes faster than any
+    /// training state, which drift and r′ (ratios to the speed) do not show.
+    pub max_speed_over_u0: f64,
 }
 
 impl StateExtent {
@@ -419,6 +483,7 @@ impl StateExtent {
             max_yaw_rate_prime: 0.0,
             max_rudder_deg: 0.0,
             min_speed_over_u0: f64::INFINITY,
+            max_speed_over_u0: 0.0,
         };
         let rec = relative_to_water(rec);
         // A recording's extremes are the motion's, not its measurement noise's: velocities averaged
@@ -446,6 +511,7 @@ impl StateExtent {
             }
             e.max_rudder_deg = e.max_rudder_deg.max(rec.delta[i].to_degrees().abs());
             e.min_speed_over_u0 = e.min_speed_over_u0.min(speed / ship.u0);
+            e.max_speed_over_u0 = e.max_speed_over_u0.max(speed / ship.u0);
         }
         any.then_some(e)
     }
@@ -459,6 +525,7 @@ impl StateExtent {
                 max_yaw_rate_prime: a.max_yaw_rate_prime.max(b.max_yaw_rate_prime),
                 max_rudder_deg: a.max_rudder_deg.max(b.max_rudder_deg),
                 min_speed_over_u0: a.min_speed_over_u0.min(b.min_speed_over_u0),
+                max_speed_over_u0: a.max_speed_over_u0.max(b.max_speed_over_u0),
             })
     }
 }
@@ -511,21 +578,26 @@ pub fn model_envelope(model_spec: &str, model: &dyn shipid_sim::Dynamics) -> Opt
     }
     let (data, windows) = read?;
     let (source, range) = match data.0 {
-        Some(_) => (RangeSource::Leverage, identification_range(&data)),
+        Some(_) => (RangeSource::Leverage, identification_range(&data)?),
         None => (
             RangeSource::StateEllipsoid,
-            state_range_of(&window_states(&data.1, &windows)),
+            state_range_of(&window_states(&data.1, &windows))?,
         ),
+    };
+    let source = if range.degenerate().is_some() {
+        RangeSource::Degenerate
+    } else {
+        source
     };
     Some(Envelope {
         source,
-        range: Some(range?),
+        range: Some(range),
         training,
     })
 }
 
 /// How far a run of a model goes beyond where the model was identified.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct RunReach {
     pub source: RangeSource,
     /// Share of the run's samples outside the identification range.
@@ -534,7 +606,17 @@ pub struct RunReach {
     pub run: StateExtent,
     /// The training states' extent (`None` when the training data cannot be read).
     pub training: Option<StateExtent>,
+    /// Why the training states span no range ([`RangeSource::Degenerate`]: every state is outside).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub degenerate: Option<String>,
 }
+
+/// Relative excess over a training extreme below which [`RunReach::beyond`] does not name the
+/// quantity: within the rounding of its printed value and the smoothing of the training extent.
+pub const NAMED_MARGIN: f64 = 0.01;
+/// Absolute excess (degrees, r′, U/U0) below which a quantity whose training extreme is 0 is not
+/// named: the noise of a straight run.
+const NAMED_FLOOR: f64 = 1e-3;
 
 /// Share of a simulated run outside the model's identification range above which `simulate` warns
 /// that the run is an extrapolation (a run inside it still grazes the edge of the training states).
@@ -557,6 +639,16 @@ impl RunReach {
         } else {
             "its metrics are an extrapolation"
         };
+        if let Some(why) = &self.degenerate {
+            return Some(format!(
+                "{model_spec}: the training states do not span the state space ({why}): the model was identified on no neighbourhood of any state, and every state of this run is an extrapolation{}: {ending}",
+                if beyond.is_empty() {
+                    String::new()
+                } else {
+                    format!(" ({})", beyond.join(", "))
+                }
+            ));
+        }
         if self.outside <= EXTRAPOLATION_WARNING_SHARE {
             return Some(format!(
                 "{model_spec}: this run goes past the extremes of the states the model was identified on ({}), though only {:.0} % of it lies outside {}, which reaches far along the training states: {ending}",
@@ -579,7 +671,8 @@ impl RunReach {
     }
 
     /// Whether the run goes past a training extreme by more than [`EXTREME_MARGIN`] (drift, r′, or
-    /// speed below the lowest): what a simulation a little beyond the recorded peaks does not.
+    /// speed below the lowest or above the highest): what a simulation a little beyond the recorded
+    /// peaks does not.
     pub fn clearly_beyond(&self) -> bool {
         let (run, Some(tr)) = (&self.run, &self.training) else {
             return false;
@@ -587,22 +680,34 @@ impl RunReach {
         run.max_drift_deg > (1.0 + EXTREME_MARGIN) * tr.max_drift_deg
             || run.max_yaw_rate_prime > (1.0 + EXTREME_MARGIN) * tr.max_yaw_rate_prime
             || run.min_speed_over_u0 < (1.0 - EXTREME_MARGIN) * tr.min_speed_over_u0
+            || run.max_speed_over_u0 > (1.0 + EXTREME_MARGIN) * tr.max_speed_over_u0
     }
 
-    /// The quantities of the run beyond the training states' extent, in words (empty when none is).
+    /// The quantities of the run beyond the training states' extent by more than [`NAMED_MARGIN`],
+    /// in words (empty when none is).
     pub fn beyond(&self) -> Vec<String> {
         let run = &self.run;
         let mut out = Vec::new();
         let Some(tr) = &self.training else {
             return out;
         };
-        if run.max_drift_deg > tr.max_drift_deg {
+        // A run at 2.5 U0 was said to reach "drift up to 19.2° (training ≤ 19.2°)": past by a
+        // rounding, and not what put it outside. Only a real excess is named.
+        let above = |run: f64, training: f64| run > training * (1.0 + NAMED_MARGIN) + NAMED_FLOOR;
+        let below = |run: f64, training: f64| run < training * (1.0 - NAMED_MARGIN) - NAMED_FLOOR;
+        if above(run.max_speed_over_u0, tr.max_speed_over_u0) {
+            out.push(format!(
+                "speed up to {:.2} U0 (training ≤ {:.2} U0)",
+                run.max_speed_over_u0, tr.max_speed_over_u0
+            ));
+        }
+        if above(run.max_drift_deg, tr.max_drift_deg) {
             out.push(format!(
                 "drift up to {:.1}° (training ≤ {:.1}°)",
                 run.max_drift_deg, tr.max_drift_deg
             ));
         }
-        if run.max_yaw_rate_prime > tr.max_yaw_rate_prime {
+        if above(run.max_yaw_rate_prime, tr.max_yaw_rate_prime) {
             out.push(format!(
                 "r′ up to {:.2} (training ≤ {:.2})",
                 run.max_yaw_rate_prime, tr.max_yaw_rate_prime
@@ -614,7 +719,7 @@ impl RunReach {
                 run.max_rudder_deg, tr.max_rudder_deg
             ));
         }
-        if run.min_speed_over_u0 < tr.min_speed_over_u0 {
+        if below(run.min_speed_over_u0, tr.min_speed_over_u0) {
             out.push(format!(
                 "speed down to {:.2} U0 (training ≥ {:.2} U0)",
                 run.min_speed_over_u0, tr.min_speed_over_u0
@@ -625,6 +730,11 @@ impl RunReach {
 }
 
 impl Envelope {
+    /// Why the training states span no range ([`RangeSource::Degenerate`]), in words.
+    pub fn degenerate(&self) -> Option<&str> {
+        self.range.as_ref().and_then(|r| r.degenerate())
+    }
+
     /// The leverage range (a polynomial's own, or the ellipsoid of an mmg model's training states);
     /// `None` for a sparse GP, whose coverage the model carries.
     pub fn leverage(&self) -> Option<&IdentificationRange> {
@@ -653,6 +763,7 @@ impl Envelope {
             outside: self.outside_share(model, run)?,
             run: StateExtent::of(run, model.ship(), 0..run.len())?,
             training: self.training,
+            degenerate: self.degenerate().map(str::to_string),
         })
     }
 }

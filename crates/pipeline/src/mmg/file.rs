@@ -711,11 +711,21 @@ impl MmgModelFile {
             }
         }
         let rate = self.propeller.rate_rps;
-        if !(rate.is_finite() && rate >= 0.0) {
+        // A model runs at its own rate wherever `--propeller-rate` is not given: 0 cannot run
+        // straight at all, and a rate in rpm diverged with exit 1 where the data set refuses it.
+        if !(rate.is_finite() && rate > 0.0) {
             return Err(at(
                 "propeller.rate_rps".into(),
-                format!("must be a finite rate ≥ 0, not {}", number(rate)),
+                format!("must be a finite rate > 0, not {}", number(rate)),
             ));
+        }
+        if let Some(msg) =
+            shipid_io::consistency::rate_rps_problem(rate, self.propeller.diameter_m, self.ship.u0)
+        {
+            return Err(at("propeller.rate_rps".into(), msg));
+        }
+        if let Some((key, msg)) = self.metadata_fault() {
+            return Err(at(key, msg));
         }
         let geometry = self.geometry();
         geometry.check(
@@ -734,7 +744,140 @@ impl MmgModelFile {
     }
 }
 
+/// Whether `v` is a version as shipid writes it: up to three numbers separated by dots, with an
+/// optional `-pre` or `+build` suffix.
+pub fn is_version(v: &str) -> bool {
+    let core = v.split(['-', '+']).next().unwrap_or("");
+    let parts: Vec<&str> = core.split('.').collect();
+    parts.len() <= 3
+        && parts
+            .iter()
+            .all(|p| !p.is_empty() && p.bytes().all(|b| b.is_ascii_digit()))
+}
+
 impl MmgModelFile {
+    /// The first fault (key, message) of what the file says about its fit rather than its model:
+    /// the version, the estimator's weights and each parameter's uncertainty statements, which
+    /// reports and users read as the fit's identifiability. The rules are those the writers keep
+    /// (`fit` and `inverse`); a hand edit that breaks one passed on a wrong uncertainty statement.
+    fn metadata_fault(&self) -> Option<(String, String)> {
+        if !is_version(&self.shipid_version) {
+            return Some((
+                "shipid_version".into(),
+                format!(
+                    "\"{}\" is not a version (MAJOR.MINOR.PATCH, as `shipid fit` writes it)",
+                    self.shipid_version
+                ),
+            ));
+        }
+        let e = &self.estimator;
+        // Written by `fit` (whose estimators these are), rather than `inverse` or by hand.
+        let fitted = super::MmgEstimator::parse(&e.name).is_ok();
+        if !(e.prior_weight.is_finite() && e.prior_weight >= 0.0) {
+            return Some((
+                "estimator.prior_weight".into(),
+                format!(
+                    "must be a finite weight λ ≥ 0, not {}",
+                    number(e.prior_weight)
+                ),
+            ));
+        }
+        if !(0.0..=1.0).contains(&e.determined_share) {
+            return Some((
+                "estimator.determined_share".into(),
+                format!(
+                    "must be a share in [0, 1], not {}",
+                    number(e.determined_share)
+                ),
+            ));
+        }
+        for (i, p) in self.parameters.iter().enumerate() {
+            let key = |field: &str| format!("parameter[{i}].{field}");
+            let name = &p.name;
+            // +∞ is an undetermined parameter (a held inflow whose recorded thrust lacked the
+            // drift that sets it); NaN or a negative error is no statement at all.
+            if p.standard_error.is_nan() || p.standard_error < 0.0 {
+                return Some((
+                    key("standard_error"),
+                    format!(
+                        "{name}: must be a standard error ≥ 0, not {}",
+                        number(p.standard_error)
+                    ),
+                ));
+            }
+            // A fit's priors all have a width (a held inflow's at least 1e-9); a file that was not
+            // fitted with priors (`inverse`, a published model) writes 0 for "no prior" and +∞ for
+            // a prior of no weight.
+            let floor_ok = if fitted {
+                p.prior_sd > 0.0
+            } else {
+                p.prior_sd >= 0.0
+            };
+            if p.prior_sd.is_nan() || !floor_ok {
+                return Some((
+                    key("prior_sd"),
+                    format!(
+                        "{name}: must be a prior standard deviation {} (estimator `{}`), not {}",
+                        if fitted { "> 0" } else { "≥ 0" },
+                        e.name,
+                        number(p.prior_sd)
+                    ),
+                ));
+            }
+            if p.prior_sd.is_finite()
+                && !(p.prior.is_finite() && (p.lower..=p.upper).contains(&p.prior))
+            {
+                return Some((
+                    key("prior"),
+                    format!(
+                        "{name}: prior {} is outside the bounds [{}, {}]: the fit holds a prior within them",
+                        number(p.prior),
+                        number(p.lower),
+                        number(p.upper)
+                    ),
+                ));
+            }
+            if !(0.0..=1.0).contains(&p.data_share) {
+                return Some((
+                    key("data_share"),
+                    format!(
+                        "{name}: must be a share of the precision in [0, 1], not {}",
+                        number(p.data_share)
+                    ),
+                ));
+            }
+            if p.determined_by_data && p.data_share <= e.determined_share {
+                return Some((
+                    key("determined_by_data"),
+                    format!(
+                        "{name}: true, but its data_share {} is not above estimator.determined_share = {}: the data do not determine it",
+                        number(p.data_share),
+                        number(e.determined_share)
+                    ),
+                ));
+            }
+            // Without a refinement the values are the equation error's, whose flag is share above
+            // determined_share and off the bounds; a refinement moves values (off a bound, too)
+            // and keeps the equation error's flags.
+            let off_bounds = p.lower < p.value && p.value < p.upper;
+            if e.refinement.is_none()
+                && !p.determined_by_data
+                && p.data_share > e.determined_share
+                && off_bounds
+            {
+                return Some((
+                    key("determined_by_data"),
+                    format!(
+                        "{name}: false, but its data_share {} is above estimator.determined_share = {} and it is off its bounds: the data determine it",
+                        number(p.data_share),
+                        number(e.determined_share)
+                    ),
+                ));
+            }
+        }
+        None
+    }
+
     /// The model of this file's ship, added masses, propeller and rudder with the parameter values
     /// `values` (in the order of `[[parameter]]`); `key` names them in a fault.
     fn model_with(
@@ -894,7 +1037,7 @@ pub fn load_mmg_model_if_kind(path: &Path, text: &str) -> Result<Option<MmgModel
 /// too ([`MmgModelFile::check_optional_tables`]): every command reads them through here.
 pub fn load_mmg_model(path: &Path, text: &str) -> Result<MmgModel, PipelineError> {
     let file: MmgModelFile =
-        toml::from_str(text).map_err(|e| shipid_io::InputError::toml(path, text, &e))?;
+        toml::from_str(text).map_err(|e| crate::model_file::toml_error(path, text, &e))?;
     let model = file.to_model(path)?;
     file.check_optional_tables(path)?;
     Ok(model)

@@ -1,14 +1,18 @@
 //! What `simulate` says about a run outside where its model was identified: the warning's threshold
 //! and the quantities named beyond the training states' extent.
 
-use shipid_pipeline::range::{EXTRAPOLATION_WARNING_SHARE, RangeSource, RunReach, StateExtent};
+use shipid_pipeline::range::{
+    EXTRAPOLATION_WARNING_SHARE, RangeSource, RunReach, StateExtent, state_range_of,
+};
 
+/// An extent whose highest speed is U0 (every run and training here approaches at U0).
 fn extent(drift_deg: f64, r_prime: f64, rudder_deg: f64, speed: f64) -> StateExtent {
     StateExtent {
         max_drift_deg: drift_deg,
         max_yaw_rate_prime: r_prime,
         max_rudder_deg: rudder_deg,
         min_speed_over_u0: speed,
+        max_speed_over_u0: 1.0,
     }
 }
 
@@ -19,6 +23,7 @@ fn check(outside: f64, run: StateExtent, training: Option<StateExtent>, expected
         outside,
         run,
         training,
+        degenerate: None,
     };
     match (reach.warning("m.toml", false), expected) {
         (None, None) => {}
@@ -90,6 +95,7 @@ fn a_run_outside_the_training_states_is_warned_about_with_what_lies_beyond() {
         outside: 0.7,
         run: extent(170.0, 1.5, 35.0, 0.2),
         training: Some(training),
+        degenerate: None,
     };
     let w = diverged.warning("m.toml", true).unwrap();
     assert!(
@@ -192,4 +198,111 @@ fn a_recordings_extent_is_not_widened_by_its_noise() {
             && (recorded.max_yaw_rate_prime / exact.max_yaw_rate_prime - 1.0).abs() < 0.03,
         "noisy, averaged: {recorded:?}; exact: {exact:?}"
     );
+}
+
+/// `expected` fragments of the warning that must be there, `absent` those that must not.
+fn check_named(
+    outside: f64,
+    run: StateExtent,
+    training: StateExtent,
+    expected: &[&str],
+    absent: &[&str],
+) {
+    let reach = RunReach {
+        source: RangeSource::StateEllipsoid,
+        outside,
+        run,
+        training: Some(training),
+        degenerate: None,
+    };
+    let w = reach.warning("m.toml", false).expect("a warning");
+    for f in expected {
+        assert!(w.contains(f), "`{f}` not in: {w}");
+    }
+    for f in absent {
+        assert!(!w.contains(f), "`{f}` in: {w}");
+    }
+}
+
+/// Regression (probe-mmg §15): `simulate --propeller-rate 30` approached at 2.5 U0 and the warning
+/// named "drift up to 19.2° (training ≤ 19.2°), r′ up to 0.89 (training ≤ 0.89)", both inside their
+/// training range, and not the speed that put the run outside.
+#[test]
+fn the_extrapolation_warning_names_the_speed_above_the_training_and_not_what_is_within() {
+    let training = extent(19.2, 0.89, 35.0, 0.45);
+    let fast = StateExtent {
+        max_speed_over_u0: 2.53,
+        ..extent(19.23, 0.8904, 35.0, 0.5)
+    };
+    check_named(
+        1.0,
+        fast,
+        training,
+        &[
+            "100 % of this run",
+            "speed up to 2.53 U0 (training ≤ 1.00 U0)",
+        ],
+        &["drift up to", "r′ up to", "in combinations"],
+    );
+    // Nothing single past its extreme: the combination is what lies outside.
+    check_named(
+        0.4,
+        extent(19.2, 0.89, 35.0, 0.45),
+        training,
+        &["in combinations the training did not visit"],
+        &["drift up to", "speed up to"],
+    );
+    // Past the highest speed by more than the margin: warned about at any share.
+    let reach = RunReach {
+        source: RangeSource::StateEllipsoid,
+        outside: 0.0,
+        run: fast,
+        training: Some(training),
+        degenerate: None,
+    };
+    assert!(reach.clearly_beyond());
+}
+
+/// Regression (probe-mmg §1): a model fitted on a straight run has training states that span no
+/// ellipsoid; the range was `None`, read as "no range known", and a 35° turn from it got no
+/// extrapolation warning. The range is now one outside which every state lies, saying why.
+#[test]
+fn a_straight_run_gives_a_range_outside_which_every_state_lies() {
+    let straight: Vec<[f64; 4]> = (0..300).map(|_| [0.0, 0.0, 0.0, 0.0]).collect();
+    let range = state_range_of(&straight).expect("a range");
+    let why = range.degenerate().expect("degenerate");
+    assert!(why.contains("δ (rudder) = 0.0° throughout"), "{why}");
+    assert!(why.contains("300 training states"), "{why}");
+    assert_eq!(range.leverage_ratio(0.0, 0.0, 0.0, 0.0), f64::INFINITY);
+    assert_eq!(range.leverage_ratio(-0.3, 0.1, 0.5, 0.6), f64::INFINITY);
+    let reach = RunReach {
+        source: RangeSource::Degenerate,
+        outside: 1.0,
+        run: extent(18.1, 1.26, 35.0, 0.33),
+        training: Some(extent(0.0, 0.0, 0.0, 1.0)),
+        degenerate: Some(why.to_string()),
+    };
+    let w = reach.warning("m.toml", false).expect("a warning");
+    for f in [
+        "the training states do not span the state space",
+        "δ (rudder) = 0.0° throughout",
+        "every state of this run is an extrapolation",
+        "rudder up to 35.0° (training ≤ 0.0°)",
+    ] {
+        assert!(w.contains(f), "`{f}` not in: {w}");
+    }
+    // A manoeuvre's states still form an ellipsoid.
+    let turn: Vec<[f64; 4]> = (0..2000)
+        .map(|i| {
+            let ph = i as f64 / 2000.0 * 12.0;
+            let r = 0.4 * ph.sin() + 0.05 * (3.0 * ph).cos();
+            [
+                -0.05 * r * r + 0.01 * (7.0 * ph).cos(),
+                -0.3 * r + 0.01 * (5.0 * ph).sin(),
+                r,
+                0.6 * (ph + 0.4).sin(),
+            ]
+        })
+        .collect();
+    assert!(state_range_of(&turn).unwrap().degenerate().is_none());
 }
