@@ -48,6 +48,7 @@ pub fn check_channels(
     u0_m_s: f64,
 ) -> Result<(), InputError> {
     check_spikes(file, rec)?;
+    check_rate_dropouts(file, rec)?;
     check_heading_lag(file, rec)?;
     let windows = windows(rec, WINDOW_L_OVER_U0 * lpp_m / u0_m_s);
     if windows.len() >= 4 {
@@ -451,7 +452,8 @@ fn check_spikes(file: &Path, rec: &Recording) -> Result<(), InputError> {
         ("v", &rec.v, "m/s"),
         ("r", &rec.r, "rad/s"),
     ];
-    for (name, x, unit) in channels {
+    let rate = rec.n.as_deref().map(|n| ("n", n, "1/s"));
+    for (name, x, unit) in channels.into_iter().chain(rate) {
         let mut sorted = x.to_vec();
         sorted.sort_by(f64::total_cmp);
         let spread =
@@ -472,6 +474,78 @@ fn check_spikes(file: &Path, rec: &Recording) -> Result<(), InputError> {
                     number(rec.t[i]),
                     number_short(x[i]),
                     off.abs() / spread
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Longest run of samples, as a share of the recording, that [`check_rate_dropouts`] takes for a
+/// dropout rather than a change of the propeller's rate.
+const DROPOUT_SHARE: f64 = 0.05;
+
+/// A propeller rate that leaves its level by more than half of it within one sample and returns
+/// within one sample, a few samples later, is a logger's dropout or a corrupt value: no propeller
+/// stops (or doubles its rate) and recovers between two samples. The spread test of
+/// [`check_spikes`] cannot see it in the usual constant `n`, whose spread is 0 (one `n` = 9999, or
+/// 5 s of `n` = 0, fitted with exit 0 and put the model's own rate 18 % off).
+fn check_rate_dropouts(file: &Path, rec: &Recording) -> Result<(), InputError> {
+    let Some(n) = rec.n.as_deref() else {
+        return Ok(());
+    };
+    let len = n.len();
+    if len < 50 || n.len() != rec.t.len() {
+        return Ok(());
+    }
+    let mut sorted = n.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let level = sorted[len / 2];
+    if !(level.is_finite() && level != 0.0) {
+        return Ok(());
+    }
+    let jump = 0.5 * level.abs();
+    let far = |i: usize| (n[i] - level).abs() > jump;
+    let longest = ((DROPOUT_SHARE * len as f64) as usize).max(1);
+    let mut i = 0;
+    while i < len {
+        if !far(i) {
+            i += 1;
+            continue;
+        }
+        let a = i;
+        while i < len && far(i) {
+            i += 1;
+        }
+        let b = i - 1;
+        let abrupt =
+            a > 0 && i < len && (n[a] - n[a - 1]).abs() > jump && (n[i] - n[b]).abs() > jump;
+        if abrupt && b - a < longest {
+            let (lo, hi) = n[a..=b]
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
+                    (lo.min(x), hi.max(x))
+                });
+            let values = if lo == hi {
+                number_short(lo)
+            } else {
+                format!("{} … {}", number_short(lo), number_short(hi))
+            };
+            let what = if a == b {
+                format!("the sample at t = {} s is {values} 1/s", number(rec.t[a]))
+            } else {
+                format!(
+                    "the {} samples from t = {} to {} s are {values} 1/s",
+                    b - a + 1,
+                    number(rec.t[a]),
+                    number(rec.t[b])
+                )
+            };
+            return Err(InputError::file(
+                file,
+                format!(
+                    "column `n`: {what}, against the channel's level (median) of {} 1/s, and the rate jumps there and back within one sample: a logger's dropout or a corrupt value (a propeller does not stop or race and recover between two samples); fill the gap or cut the recording",
+                    number_short(level)
                 ),
             ));
         }
@@ -551,8 +625,10 @@ fn check_heading_lag(file: &Path, rec: &Recording) -> Result<(), InputError> {
 /// pulling) and 1.2 (lightly loaded); below this, or above [`ADVANCE_RATIO_MAX`], the rate is in
 /// another unit than the header says (a rate in rev/min read as rev/s gives J near 0.01).
 const ADVANCE_RATIO_MIN: f64 = 0.04;
-/// See [`ADVANCE_RATIO_MIN`]: rev/s written under `n[rpm]` gives J sixty times too large.
-const ADVANCE_RATIO_MAX: f64 = 5.0;
+/// See [`ADVANCE_RATIO_MIN`]: rev/s written under `n[rpm]` gives J sixty times too large, and a
+/// diameter ten times too small ten times (J 4.6 passed at a limit of 5, and the fitted model ran
+/// straight at 4 % of U0). No propeller thrusts ahead at J 2: even lightly loaded ones stop at ~1.5.
+const ADVANCE_RATIO_MAX: f64 = 2.0;
 
 /// The propeller rate of `rec` against its diameter: the median advance ratio u/(nD) over the samples
 /// where the propeller turns ahead and the ship moves at a quarter of U0 at least must be a working
@@ -585,7 +661,7 @@ fn advance_ratio_cause(j: f64) -> Option<&'static str> {
         Some(if (0.1..=ADVANCE_RATIO_MAX).contains(&(j / 60.0)) {
             "the rate looks like revolutions per second under an rpm header (`n[rpm]`)"
         } else {
-            "the rate is far too low for this propeller: a wrong unit, or the wrong diameter?"
+            "the rate is too low or the diameter too small for a working propeller: check propeller.diameter_m (a diameter in another unit, or a tenth of it?) and the unit of the `n` channel"
         })
     } else {
         None
@@ -637,5 +713,150 @@ pub fn rate_rps_problem(rate_rps: f64, diameter_m: f64, u0_m_s: f64) -> Option<S
         number_short(j),
         number(u0_m_s),
         number(diameter_m),
+    ))
+}
+
+/// Below this share of K_T(0), a recorded thrust's median K_T = T/(ρ n² D⁴) is no working
+/// propeller's: the thrust is in another unit (kN under a bare header gives a thousandth).
+const THRUST_K_T_LOW: f64 = 0.01;
+/// Above this multiple of K_T(0) the recorded thrust is more than the propeller gives at bollard
+/// pull: a unit, the wrong diameter or the wrong curve (2 × the thrust passed and was then dropped
+/// by the inflow inversion without a word). A propeller moving ahead stays below K_T(0); the margin
+/// is for a curve measured on another propeller or at another scale (the HSVA runs reach 0.88 × on
+/// the median, 0.99 × in the tightest turn).
+const THRUST_K_T_HIGH: f64 = 1.25;
+/// Wake fraction no hull exceeds: the propeller runs at J_P = (1 − w_P) J ≥ this share of the
+/// ship's advance ratio J = u/(nD).
+const LEAST_INFLOW_SHARE: f64 = 0.5;
+
+/// The propeller of a data set against a recording that drives it (its `n`, or the data set's
+/// constant `propeller.rate_rps`) at samples where it turns ahead and the ship moves at a quarter
+/// of U0 at least:
+///
+/// - the open-water curve must give thrust at the recording's median advance ratio, even with a
+///   wake fraction of [`LEAST_INFLOW_SHARE`] (a diameter ten times too small runs at J ≈ 4.6, where
+///   K_T is strongly negative);
+/// - a recorded `thrust` must be a thrust of this propeller: positive in most samples, and its
+///   median K_T = T/(ρ n² D⁴) between [`THRUST_K_T_LOW`] and [`THRUST_K_T_HIGH`] times K_T(0).
+///   The mmg fit inverts K_T for the inflow; outside these it either put every wake parameter on its
+///   bounds (thrust in kN) or dropped the channel silently (negative, doubled).
+pub fn check_propeller_loading(
+    file: &Path,
+    rec: &Recording,
+    propeller: &crate::types::PropellerData,
+    rho: f64,
+    u0_m_s: f64,
+) -> Result<(), InputError> {
+    let d = propeller.diameter_m;
+    let rate_at = |i: usize| match &rec.n {
+        Some(n) => n.get(i).copied(),
+        None => propeller.rate_rps,
+    };
+    let working: Vec<(usize, f64)> = (0..rec.len())
+        .filter_map(|i| rate_at(i).map(|n| (i, n)))
+        .filter(|&(i, n)| n.is_finite() && n > 0.0 && rec.u[i] > 0.25 * u0_m_s)
+        .collect();
+    if working.is_empty() {
+        return Ok(());
+    }
+    let rate_word = if rec.n.is_some() {
+        "the `n` channel"
+    } else {
+        "propeller.rate_rps"
+    };
+    let mut j: Vec<f64> = working
+        .iter()
+        .map(|&(i, n)| rec.u[i] / (n * d))
+        .filter(|j| j.is_finite())
+        .collect();
+    if !j.is_empty() {
+        j.sort_by(f64::total_cmp);
+        let j_median = j[j.len() / 2];
+        let j_p = LEAST_INFLOW_SHARE * j_median;
+        if propeller.k_t_at(j_p) <= 0.0 {
+            return Err(InputError::file(
+                file,
+                format!(
+                    "the propeller gives no thrust at this recording's advance ratio: the median J = u/(nD) is {} with propeller.diameter_m = {} m and {rate_word}, and the open-water curve's K_T is {} ≤ 0 already at J = {} (a wake fraction of {}); check propeller.diameter_m (a tenth of it?), the unit of {rate_word}, or the curve",
+                    number_short(j_median),
+                    number(d),
+                    number_short(propeller.k_t_at(j_p)),
+                    number_short(j_p),
+                    1.0 - LEAST_INFLOW_SHARE
+                ),
+            ));
+        }
+    }
+    let Some(thrust) = &rec.thrust else {
+        return Ok(());
+    };
+    let mut k_t: Vec<f64> = working
+        .iter()
+        .filter_map(|&(i, n)| thrust.get(i).map(|t| t / (rho * n * n * d.powi(4))))
+        .filter(|k| k.is_finite())
+        .collect();
+    if k_t.len() < 10 {
+        return Ok(());
+    }
+    let k0 = propeller.k_t[0];
+    let count = k_t.len();
+    let not_ahead = k_t.iter().filter(|&&k| k <= 0.0).count();
+    if 2 * not_ahead > count {
+        let cause = if k_t.iter().all(|&k| k == 0.0) {
+            "an empty channel? Leave the column out when the thrust was not measured"
+        } else {
+            "the other sign? Thrust is positive when it pushes the ship ahead"
+        };
+        return Err(InputError::file(
+            file,
+            format!(
+                "column `thrust` is ≤ 0 in {not_ahead} of the {count} samples where the propeller turns ahead and the ship moves ({cause})"
+            ),
+        ));
+    }
+    k_t.sort_by(f64::total_cmp);
+    let median = k_t[count / 2];
+    let share = median / k0;
+    let beyond = |above: bool| {
+        k_t.iter()
+            .filter(|&&k| {
+                if above {
+                    k > k0
+                } else {
+                    k < THRUST_K_T_LOW * k0
+                }
+            })
+            .count()
+    };
+    let cause = if share < THRUST_K_T_LOW {
+        let kilo = 1000.0 * share;
+        let hint = if (THRUST_K_T_LOW..=THRUST_K_T_HIGH).contains(&kilo) {
+            "the thrust in kN under a bare header? Write `thrust[kN]`"
+        } else {
+            "the thrust in another unit (write it in the header, e.g. `thrust[kN]`), or the wrong diameter or curve?"
+        };
+        format!(
+            "{} × the curve's K_T(0) = {}, below it in {} of {count} samples; {hint}",
+            number_short(share),
+            number_short(k0),
+            beyond(false)
+        )
+    } else if share > THRUST_K_T_HIGH {
+        format!(
+            "{} × the open-water curve's K_T(0) = {}, above it in {} of {count} samples, more than the propeller gives at bollard pull; the thrust in another unit, or the wrong propeller.diameter_m or curve?",
+            number_short(share),
+            number_short(k0),
+            beyond(true)
+        )
+    } else {
+        return Ok(());
+    };
+    Err(InputError::file(
+        file,
+        format!(
+            "column `thrust` gives a median K_T = T/(ρ n² D⁴) of {} with propeller.diameter_m = {} m and {rate_word}: {cause}",
+            number_short(median),
+            number(d)
+        ),
     ))
 }

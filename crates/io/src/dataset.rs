@@ -232,6 +232,15 @@ impl Dataset {
                     file.ship.u0,
                 )?;
             }
+            if let Some(p) = &propeller {
+                crate::consistency::check_propeller_loading(
+                    &csv,
+                    &recording,
+                    p,
+                    file.ship.rho,
+                    file.ship.u0,
+                )?;
+            }
             recordings.push(DatasetRecording {
                 file: entry.file.clone(),
                 manoeuvre,
@@ -244,7 +253,7 @@ impl Dataset {
             Origin::Midship | Origin::Point => a,
             Origin::Cg => added_mass_cg_to_midship(a, file.ship.xg),
         });
-        Ok(Dataset {
+        let ds = Dataset {
             path: path.to_path_buf(),
             name: file.name,
             ship: file.ship,
@@ -253,13 +262,62 @@ impl Dataset {
             rudder: file.rudder,
             windage: file.windage,
             recordings,
-        })
+        };
+        // What loading notices but does not refuse ([`load_notes`]) is for the command that uses it
+        // to say: the library prints nothing.
+        Ok(ds)
     }
 
     /// The recording with this file name.
     pub fn recording(&self, file: &str) -> Option<&DatasetRecording> {
         self.recordings.iter().find(|r| r.file == file)
     }
+}
+
+/// What loading `ds` noticed that does not make it unusable, one message each (naming the data set
+/// file and the key): a `[propeller] rate_rps` that no recording uses because every one records `n`
+/// (a rate 5 1/s beside a recorded 11.85 1/s was ignored without a word).
+pub fn load_notes(ds: &Dataset) -> Vec<String> {
+    let mut notes = Vec::new();
+    if let Some(rate) = ds.propeller.as_ref().and_then(|p| p.rate_rps)
+        && !ds.recordings.is_empty()
+        && ds.recordings.iter().all(|r| r.recording.n.is_some())
+    {
+        let mut recorded: Vec<f64> = ds
+            .recordings
+            .iter()
+            .filter_map(|r| r.recording.n.as_ref())
+            .flatten()
+            .copied()
+            .filter(|n| n.is_finite())
+            .collect();
+        recorded.sort_by(f64::total_cmp);
+        let median = recorded
+            .get(recorded.len() / 2)
+            .copied()
+            .unwrap_or(f64::NAN);
+        let differs = if (rate / median - 1.0).abs() > 0.02 {
+            ", a different rate: check which one is the ship's"
+        } else {
+            ""
+        };
+        notes.push(format!(
+            "{}: key `propeller.rate_rps` = {} 1/s is not used: every recording has an `n` column (median {} 1/s){differs}",
+            ds.path.display(),
+            number(rate),
+            number(four_digits(median))
+        ));
+    }
+    notes
+}
+
+/// `x` rounded to four significant digits, for a message.
+fn four_digits(x: f64) -> f64 {
+    if x == 0.0 || !x.is_finite() {
+        return x;
+    }
+    let scale = 10f64.powi(3 - x.abs().log10().floor() as i32);
+    (x * scale).round() / scale
 }
 
 /// Parse and check a data set file's text; `path` names it in errors.
@@ -274,10 +332,10 @@ pub fn parse_dataset(path: &Path, text: &str) -> Result<DatasetFile, InputError>
     }
     check_ship(path, &file.ship)?;
     let s = &file.ship;
-    if let Some((key, message)) = hardware_fault(
+    if let Some((key, message)) = hardware_fault_placed(
         s,
-        file.propeller.as_ref().map(|p| p.diameter_m),
-        file.rudder.as_ref().map(|r| (r.area_m2, r.span_m)),
+        file.propeller.as_ref().map(|p| (p.diameter_m, p.x_m)),
+        file.rudder.as_ref().map(|r| (r.area_m2, r.span_m, r.x_m)),
     ) {
         return Err(InputError::key(path, key, message));
     }
@@ -498,9 +556,11 @@ fn check_ship_proportions(path: &Path, s: &Ship) -> Result<(), InputError> {
 pub const MAX_RUDDER_SPAN_OVER_DRAFT: f64 = 2.0;
 
 /// Propeller and rudder sizes no ship has, as (key, message): a propeller diameter not shorter than
-/// the ship, a rudder area of half the hull's lateral area L T or more, a rudder span beyond
-/// [`MAX_RUDDER_SPAN_OVER_DRAFT`] drafts. The checks of a data set's `[propeller]` and `[rudder]`
-/// and of a model file's (the mmg family's); positivity and finiteness are the caller's.
+/// the ship or beyond [`MAX_RUDDER_SPAN_OVER_DRAFT`] drafts, a rudder area of half the hull's lateral
+/// area L T or more, a rudder span beyond [`MAX_RUDDER_SPAN_OVER_DRAFT`] drafts or below the
+/// propeller's diameter. The checks of a data set's `[propeller]` and `[rudder]` and of a model
+/// file's (the mmg family's); positivity and finiteness are the caller's. With the positions at
+/// hand, call [`hardware_fault_placed`], which adds theirs.
 pub fn hardware_fault(
     ship: &Ship,
     propeller_diameter_m: Option<f64>,
@@ -515,6 +575,21 @@ pub fn hardware_fault(
                 "{} m is not shorter than the ship (ship.lpp = {} m): a wrong unit?",
                 number(d),
                 number(ship.lpp)
+            ),
+        ));
+    }
+    // A propeller works below the waterline: one several drafts across is a unit slip, and it
+    // would be taken for the rudder span's fault below.
+    if let Some(d) = propeller_diameter_m
+        && d / ship.draft > MAX_RUDDER_SPAN_OVER_DRAFT
+    {
+        return Some((
+            "propeller.diameter_m",
+            format!(
+                "{} m is {} × the draft ship.draft = {} m (a propeller's diameter is about 0.5 … 0.8 × the draft; at most {MAX_RUDDER_SPAN_OVER_DRAFT} × is accepted): a wrong unit?",
+                number(d),
+                three_digits(d / ship.draft),
+                number(ship.draft)
             ),
         ));
     }
@@ -539,6 +614,79 @@ pub fn hardware_fault(
                 number(span),
                 three_digits(drafts),
                 number(ship.draft)
+            ),
+        ));
+    }
+    // η = D/H_R is the share of the rudder span in the propeller's slipstream: above 1 the MMG
+    // rudder inflow takes more than the whole slipstream (a 0.05 m span behind a 0.216 m propeller
+    // turned in 0.89 L with "status ok").
+    if let Some(d) = propeller_diameter_m
+        && span < d
+    {
+        return Some((
+            "rudder.span_m",
+            format!(
+                "{} m is smaller than the propeller's diameter propeller.diameter_m = {} m: the share of the rudder in the slipstream, η = D/H_R = {}, would exceed 1 (a rudder's span is about 1.2 … 2 × the diameter); rudder.span_m or propeller.diameter_m in another unit?",
+                number(span),
+                number(d),
+                three_digits(d / span)
+            ),
+        ));
+    }
+    None
+}
+
+/// [`hardware_fault`] with the positions of the propeller (diameter, x) and the rudder (area, span,
+/// x), forward of midship: the MMG structure is a stern propeller with the rudder behind it in its
+/// slipstream, so a propeller or rudder at or forward of midship is a sign slip (aft is negative; a
+/// rudder at +3.5 m instead of −3.5 m doubled the predicted turn), and a rudder forward of the
+/// propeller gets no slipstream. Positions within the ship are the caller's.
+pub fn hardware_fault_placed(
+    ship: &Ship,
+    propeller: Option<(f64, f64)>,
+    rudder: Option<(f64, f64, f64)>,
+) -> Option<(&'static str, String)> {
+    if let Some(fault) = hardware_fault(
+        ship,
+        propeller.map(|(d, _)| d),
+        rudder.map(|(area, span, _)| (area, span)),
+    ) {
+        return Some(fault);
+    }
+    // A position off the hull has its own message at the caller.
+    let on_hull = |x: f64| x.is_finite() && x.abs() <= ship.lpp;
+    let propeller = propeller.filter(|p| on_hull(p.1));
+    let rudder = rudder.filter(|r| on_hull(r.2));
+    for (key, x, what) in [
+        ("propeller.x_m", propeller.map(|p| p.1), "propeller"),
+        ("rudder.x_m", rudder.map(|r| r.2), "rudder"),
+    ] {
+        if let Some(x) = x
+            && x >= 0.0
+        {
+            return Some((
+                key,
+                format!(
+                    "{} m is at or forward of midship, where the MMG model has no {what}: positions are forward of midship, aft is negative ({})",
+                    number(x),
+                    if x == 0.0 {
+                        "0 is midship itself".to_string()
+                    } else {
+                        format!("a sign slip? write {}", number(-x))
+                    }
+                ),
+            ));
+        }
+    }
+    if let (Some((_, x_p)), Some((_, _, x_r))) = (propeller, rudder)
+        && x_r >= x_p
+    {
+        return Some((
+            "rudder.x_m",
+            format!(
+                "{} m puts the rudder forward of the propeller (propeller.x_m = {} m): the MMG rudder sits behind the propeller, in its slipstream (aft is more negative; the two positions swapped?)",
+                number(x_r),
+                number(x_p)
             ),
         ));
     }
@@ -745,6 +893,11 @@ fn check_propeller(path: &Path, p: &PropellerTable, lpp: f64) -> Result<(), Inpu
                         k[0]
                     ),
                 ));
+            }
+            let k = [k[0], k[1], k[2]];
+            let (lo, hi) = crate::open_water::thrusting_range(&k);
+            if let Some(problem) = crate::open_water::k_t_problem(&k, lo, hi) {
+                return Err(InputError::key(path, "propeller.k_t", problem));
             }
             Ok(())
         }

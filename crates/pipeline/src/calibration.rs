@@ -260,6 +260,11 @@ pub fn reach(range: &IdentificationRange, rec: &Recording, ship: &Ship) -> f64 {
     for i in 0..rec.len() {
         let [du, v, r, d] = primed_state(rec, &scale, i);
         let ratio = range.leverage_ratio(du, v, r, d);
+        // A training range of no extent (a straight run) holds no state: the recording lies
+        // wholly beyond it, not within it.
+        if ratio == f64::INFINITY {
+            return f64::INFINITY;
+        }
         if ratio.is_finite() {
             sum += ratio.max(1.0);
             n += 1;

@@ -188,12 +188,26 @@ impl Generated {
     }
 }
 
-/// Parse `--effect` arguments (`current:speed=0.05,from=120`, …).
+/// Parse `--effect` arguments (`current:speed=0.05,from=120`, …). A concealed wind or current is
+/// held to the bounds of a recorded one ([`MAX_RECORDED_WIND_M_S`], [`MAX_RECORDED_CURRENT_M_S`]):
+/// beyond them the reference "diverges" and the user's typo reads as the model's failure.
 pub fn parse_effects(args: &[String]) -> Result<Vec<Effect>, PipelineError> {
     args.iter()
         .map(|a| {
-            a.parse::<Effect>()
-                .map_err(|e| crate::error::bad_input(format!("--effect `{a}`: {e}")))
+            let effect = a
+                .parse::<Effect>()
+                .map_err(|e| crate::error::bad_input(format!("--effect `{a}`: {e}")))?;
+            let (kind, speed, max) = match &effect {
+                Effect::Current(c) => ("current", c.speed_m_s, MAX_RECORDED_CURRENT_M_S),
+                Effect::Wind(w) => ("wind", w.speed_m_s, MAX_RECORDED_WIND_M_S),
+                _ => return Ok(effect),
+            };
+            if speed > max {
+                return Err(crate::error::bad_input(format!(
+                    "--effect `{a}`: {kind}:speed = {speed} m/s is beyond the {max} m/s a recorded {kind} may have"
+                )));
+            }
+            Ok(effect)
         })
         .collect()
 }
@@ -512,6 +526,10 @@ pub struct RecordedEnvironment {
 /// some 25 U0 of the KVLCC2 model, beyond any trial.
 pub const MAX_RECORDED_WIND_M_S: f64 = 40.0;
 
+/// The fastest current [m/s] `--recorded-current` accepts: a current of half the KVLCC2 model's speed
+/// is already beyond any tank or trial, and this is four times U0.
+pub const MAX_RECORDED_CURRENT_M_S: f64 = 5.0;
+
 /// `key=value,…` of `option` into (key, value) pairs, each key once and from `known`.
 fn key_values(
     option: &str,
@@ -665,9 +683,13 @@ impl std::str::FromStr for RecordedCurrent {
                 })
         };
         let (speed, from) = (get("speed")?, get("from")?);
-        // A current of half the KVLCC2 model's speed is already beyond any tank or trial.
-        if !(0.0..=5.0).contains(&speed) {
-            return Err(out_of_range(O, "speed", speed, "must lie in [0, 5] m/s"));
+        if !(0.0..=MAX_RECORDED_CURRENT_M_S).contains(&speed) {
+            return Err(out_of_range(
+                O,
+                "speed",
+                speed,
+                &format!("must lie in [0, {MAX_RECORDED_CURRENT_M_S}] m/s"),
+            ));
         }
         Ok(RecordedCurrent {
             speed_m_s: speed,

@@ -19,6 +19,7 @@ pub mod bootstrap;
 pub mod calibration;
 pub mod environment;
 pub mod error;
+pub mod excitation;
 pub mod fit;
 pub mod fit_gp;
 pub mod generate;
@@ -32,6 +33,7 @@ pub mod refine;
 pub mod replay;
 pub mod simulate;
 pub mod spec;
+pub mod toml_text;
 pub mod validate;
 
 pub use error::{PipelineError, bad_input, failed};

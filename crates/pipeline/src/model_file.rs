@@ -18,6 +18,7 @@ use shipid_sim::{
 };
 
 use crate::error::{PipelineError, bad_input};
+pub use crate::toml_text::toml_error;
 
 /// The model kinds a model file may declare in `kind` (an augmented file has `base` instead).
 pub const MODEL_KINDS: [&str; 3] = ["abkowitz", GP_KIND, crate::mmg::file::MMG_KIND];
@@ -249,41 +250,6 @@ fn missing_kind(path: &Path, table: &toml::Table) -> Result<(), PipelineError> {
         ),
     )
     .into())
-}
-
-/// A TOML error of a model file's reader, as [`InputError::toml`] gives it, except that an unknown
-/// table is named as one: `[foo]` was reported as "key `foo.foo`: unknown field `foo`", a doubled
-/// key for what is a table.
-pub fn toml_error(path: &Path, text: &str, err: &toml::de::Error) -> InputError {
-    let plain = InputError::toml(path, text, err);
-    let message = err.message().trim();
-    let Some(field) = message
-        .strip_prefix("unknown field `")
-        .and_then(|m| m.split('`').next())
-    else {
-        return plain;
-    };
-    let shipid_io::error::Location::Toml { line, .. } = plain.location else {
-        return plain;
-    };
-    let Some(header) = text.lines().nth(line.saturating_sub(1)).and_then(|l| {
-        let l = l.trim();
-        l.strip_prefix("[[")
-            .and_then(|x| x.split("]]").next())
-            .or_else(|| l.strip_prefix('[').and_then(|x| x.split(']').next()))
-            .map(str::trim)
-    }) else {
-        return plain;
-    };
-    // The header names the unknown field itself (`[foo]`, `[[foo]]`, `[propeller.foo]`), not a
-    // table whose key is unknown.
-    if header.rsplit('.').next() != Some(field) {
-        return plain;
-    }
-    let expected = message
-        .split_once(", expected")
-        .map_or(String::new(), |(_, rest)| format!(": expected{rest}"));
-    InputError::line(path, line, format!("unknown table `[{header}]`{expected}"))
 }
 
 /// The top-level keys only one kind of model file has, by kind: what a file "looks like".

@@ -34,7 +34,10 @@ pub struct SimRequest {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SimGrid {
     pub dt_s: f64,
+    /// Simulated time [s]: a whole number of steps, the asked duration rounded to the nearest.
     pub duration_s: f64,
+    /// The duration asked for (or the manoeuvre's standard one) [s], before that rounding.
+    pub requested_duration_s: f64,
     /// RK4 steps.
     pub steps: f64,
     /// Interval of the stored samples [s]: 0.1 s when the step divides it, else the step, times the
@@ -97,7 +100,10 @@ pub fn sim_grid(
     let thin = (duration / base / MAX_STORED_SAMPLES).ceil().max(1.0);
     Ok(SimGrid {
         dt_s: dt,
-        duration_s: duration,
+        // The integrator takes whole steps: the time it simulates, not the time asked, is what the
+        // messages and the output quote.
+        duration_s: steps * dt,
+        requested_duration_s: duration,
         steps,
         sample_interval_s: thin * base,
         decimated: thin > 1.0,
@@ -188,6 +194,20 @@ pub fn parse_flow(flag: &str, text: &str) -> Result<ConstantFlow, PipelineError>
         return Err(expected(&format!(
             "the speed {} m/s is negative (give the direction it comes from instead)",
             flow.speed_m_s
+        )));
+    }
+    // The bounds of a recorded wind or current: beyond them the run ends as a "diverged" model, and
+    // the user's typo reads as the model's failure.
+    let max = if flag == "--wind" {
+        crate::generate::MAX_RECORDED_WIND_M_S
+    } else {
+        crate::generate::MAX_RECORDED_CURRENT_M_S
+    };
+    if flow.speed_m_s > max {
+        return Err(bad_input(format!(
+            "{flag} {text}: the speed {} m/s is beyond the {max} m/s a recorded {} may have",
+            flow.speed_m_s,
+            flag.trim_start_matches("--")
         )));
     }
     Ok(flow)

@@ -299,7 +299,16 @@ pub fn study_page_with_warnings(
         .study_file
         .as_ref()
         .map(|p| p.display().to_string())
-        .or_else(|| str_of(&["study_file", "study"]))
+        .or_else(|| {
+            str_of(&["study_file", "study"]).map(|s| {
+                // Older runs stored it as typed: relative to a working directory the page cannot know.
+                if std::path::Path::new(&s).is_relative() {
+                    format!("{s} (relative to the folder `shipid run` was started in)")
+                } else {
+                    s
+                }
+            })
+        })
     {
         header.push(("study file".into(), f));
     }

@@ -540,6 +540,11 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     let ds = Dataset::load(a.dataset)?;
     warn_window_clipped(&ds, &a.recordings, a.window);
     let mut warnings = training_warnings(&ds, &a.recordings, a.validate, true);
+    // A `rate_rps` the recorded `n` overrides matters only to the mmg fit, which takes the rate.
+    for note in shipid_io::dataset::load_notes(&ds) {
+        eprintln!("warning: {note}");
+        warnings.push(note);
+    }
     for r in ds
         .recordings
         .iter()

@@ -67,6 +67,9 @@ pub struct InverseArgs<'a> {
     pub modes: Option<usize>,
     pub out: &'a Path,
     pub max_resim: usize,
+    /// Whether `--resimulate` was given (a default capped at a small test set is no request to
+    /// mention).
+    pub max_resim_given: bool,
     /// Simulations per start of the refinement (0: network only, as in the paper).
     pub refine_evals: usize,
     /// Run more than [`MAX_SAMPLES`] samples per target.
@@ -956,7 +959,24 @@ pub fn run(a: &InverseArgs) -> Result<Outcome, CliError> {
             }
             motion_json.push(mj);
         }
+        // The test set bounds the re-simulations: a larger request is capped, and the summary says
+        // so rather than let "8 re-simulated" read as the answer to "--resimulate 1000".
+        let held = &run.held;
+        let capped = (a.max_resim_given && a.max_resim > held.n).then(|| {
+            format!(
+                "--resimulate {} asks for more than the {} held-out test samples: all {} were re-simulated ({} succeeded, {} failed).",
+                a.max_resim,
+                held.n,
+                held.resimulated,
+                held.resimulated - held.resim_failed.min(held.resimulated),
+                held.resim_failed
+            )
+        });
+        if let Some(note) = &capped {
+            eprintln!("note: {}: {note}", target.name);
+        }
         let md = header_markdown(target, n_modes, db, run.build_time_s, &run.model, &run.held)
+            + &capped.map_or(String::new(), |n| format!("{n}\n\n"))
             + &format!("Modes: {}.\n\n", run.choice.reason)
             + &motions_markdown(motions, &modes, db)
             + "\n"

@@ -45,6 +45,10 @@ enum Command {
         /// board (`relative_wind_speed`, `relative_wind_angle`; docs/data-format.md).
         #[arg(long, value_name = "true|relative", default_value = "true")]
         wind_channels: shipid_io::write::WindChannels,
+        /// Write into a folder that is not empty (e.g. regenerate the shipped data set): files of the
+        /// same names are replaced, others stay.
+        #[arg(long)]
+        force: bool,
     },
     /// Import recordings of another layout through a mapping file.
     Import {
@@ -75,19 +79,19 @@ enum Command {
         #[arg(long)]
         estimator: Option<String>,
         /// sparse-gp: similarity threshold d_gen in (0, 1] of the sparsification (default 0.96).
-        #[arg(long, value_name = "D", allow_negative_numbers = true)]
+        #[arg(long, value_name = "D", allow_hyphen_values = true)]
         similarity: Option<f64>,
         /// Ridge λ (on the column-scaled design, least-squares term as a mean).
-        #[arg(long, allow_negative_numbers = true)]
+        #[arg(long, allow_hyphen_values = true)]
         lambda: Option<f64>,
         /// Lasso α (scikit-learn convention on the column-scaled design).
-        #[arg(long, allow_negative_numbers = true)]
+        #[arg(long, allow_hyphen_values = true)]
         alpha: Option<f64>,
         /// SVR C.
-        #[arg(long, allow_negative_numbers = true)]
+        #[arg(long, allow_hyphen_values = true)]
         c: Option<f64>,
         /// SVR ε (units of the prime target; default 1 % of its RMS, or tuned with --tune).
-        #[arg(long, allow_negative_numbers = true)]
+        #[arg(long, allow_hyphen_values = true)]
         epsilon: Option<f64>,
         /// Choose the hyper-parameters by blocked cross-validation: λ, α, or the SVR's C and ε (C
         /// alone when --epsilon is given).
@@ -229,7 +233,7 @@ enum Command {
         #[arg(long, value_name = "MODEL.toml")]
         model_out: Option<PathBuf>,
         /// Replay segment length ÷ (L/U0).
-        #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
+        #[arg(long, default_value_t = 10.0, allow_hyphen_values = true)]
         horizon: f64,
         /// Check mode: conceal the recorded wind and current channels, diagnose, and compare the
         /// verdict and the found wind or current with them.
@@ -250,7 +254,7 @@ enum Command {
         /// Check every recorded metric against its band at this level (e.g. 0.9) over the model's
         /// bootstrap replicates (`fit --bootstrap N`), calibrated when the file has a
         /// `[calibration]` (`fit --calibrate`), or a sparse GP's posterior draws.
-        #[arg(long, value_name = "LEVEL", allow_negative_numbers = true)]
+        #[arg(long, value_name = "LEVEL", allow_hyphen_values = true)]
         bands: Option<f64>,
     },
     /// Simulate a standard manoeuvre (or replay recordings) with a model.
@@ -264,10 +268,10 @@ enum Command {
         #[arg(long, value_name = "DATASET.toml")]
         replay: Option<PathBuf>,
         /// RK4 step [s].
-        #[arg(long, allow_negative_numbers = true)]
+        #[arg(long, allow_hyphen_values = true)]
         dt: Option<f64>,
         /// Simulated time [s].
-        #[arg(long, allow_negative_numbers = true)]
+        #[arg(long, allow_hyphen_values = true)]
         duration: Option<f64>,
         /// Run even more than 1e7 RK4 steps (the stored history is thinned to at most 1e6 samples).
         #[arg(long)]
@@ -284,7 +288,7 @@ enum Command {
         #[arg(
             long,
             value_name = "LEVEL",
-            allow_negative_numbers = true,
+            allow_hyphen_values = true,
             conflicts_with = "replay"
         )]
         bands: Option<f64>,
@@ -311,7 +315,7 @@ enum Command {
             long,
             value_name = "N_PER_S",
             conflicts_with = "replay",
-            allow_negative_numbers = true
+            allow_hyphen_values = true
         )]
         propeller_rate: Option<f64>,
     },
@@ -331,8 +335,9 @@ enum Command {
         #[arg(long, allow_negative_numbers = true)]
         modes: Option<usize>,
         /// Held-out test samples to re-simulate with their predicted weights.
-        #[arg(long, default_value_t = 200, allow_negative_numbers = true)]
-        resimulate: usize,
+        /// Default 200; at most the held-out test samples (said when more are asked for).
+        #[arg(long, allow_negative_numbers = true)]
+        resimulate: Option<usize>,
         /// Simulations per start of the Nelder–Mead refinement of the network's answer (0: off; at
         /// most 10000).
         #[arg(long, default_value_t = 150, allow_negative_numbers = true)]
@@ -363,8 +368,17 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             recorded_wind,
             recorded_current,
             wind_channels,
+            force,
         } => {
             shipid::outputs::check_folder("--out", &out, &[], &shipid::outputs::Inputs::new())?;
+            // The default --out is the shipped reference data set: a noisy or concealed-effect run
+            // from the repository root would otherwise replace it without a word.
+            let before = shipid::outputs::refuse_nonempty_folder(
+                "--out",
+                &out,
+                "a generated data set",
+                force,
+            )?;
             let effects = shipid_pipeline::generate::parse_effects(&effect)?;
             let recorded = match (&recorded_wind, &recorded_current) {
                 (None, None) => None,
@@ -416,6 +430,29 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
                 recs.len(),
                 out.join("dataset.toml").display()
             );
+            // Files of an earlier data set that this one does not list would pass for part of it.
+            let written: Vec<&str> = g
+                .dataset
+                .recordings
+                .iter()
+                .map(|r| r.file.as_str())
+                .collect();
+            let left: Vec<&String> = before
+                .iter()
+                .filter(|n| *n != "dataset.toml" && !written.contains(&n.as_str()))
+                .collect();
+            if !left.is_empty() {
+                eprintln!(
+                    "warning: --force: {} entr{} of {} left as they were, not part of the new data set: {}",
+                    left.len(),
+                    if left.len() == 1 { "y" } else { "ies" },
+                    out.display(),
+                    left.iter()
+                        .map(|n| n.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                );
+            }
             Ok(Outcome::Ok)
         }
         Command::Import {
@@ -583,9 +620,10 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
         } => {
             // With --replay, --out is refused below as not applying.
             if let (Some(out), None) = (&out, &replay) {
-                shipid::outputs::check_file(
+                shipid::outputs::check_file_named(
                     "--out",
                     out,
+                    "run.csv",
                     &shipid::outputs::Inputs::new().model(&model),
                 )?;
             }
@@ -629,14 +667,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             force,
             strict,
             allow_large,
-        } => shipid::study_cmd::run(
-            &study,
-            out.as_deref(),
-            jobs.unwrap_or_else(default_jobs),
-            force,
-            strict,
-            allow_large,
-        ),
+        } => shipid::study_cmd::run(&study, out.as_deref(), jobs, force, strict, allow_large),
         Command::Table { study, pivot, out } => {
             shipid::study_cmd::table(&study, out.as_deref(), pivot.as_deref())
         }
@@ -648,13 +679,7 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             bless,
             jobs,
             allow_large,
-        } => shipid::study_cmd::check(
-            &study,
-            &reference,
-            bless,
-            jobs.unwrap_or_else(default_jobs),
-            allow_large,
-        ),
+        } => shipid::study_cmd::check(&study, &reference, bless, jobs, allow_large),
         Command::Validate {
             model,
             dataset,
@@ -697,16 +722,21 @@ fn run(cli: Cli) -> Result<Outcome, CliError> {
             seed,
             modes,
             out: &out,
-            max_resim: resimulate,
+            max_resim: resimulate.unwrap_or(DEFAULT_RESIMULATE),
+            max_resim_given: resimulate.is_some(),
             refine_evals,
             allow_large,
         }),
     }
 }
 
+/// `inverse --resimulate` unless given.
+const DEFAULT_RESIMULATE: usize = 200;
+
 /// Most parallel cases `--jobs` accepts: each job is a thread with its own stacks and buffers, and
-/// 100 000 of them ran for 11 minutes at a load of 2400 on a 2-case study.
-const MAX_JOBS: usize = 1024;
+/// 100 000 of them ran for 11 minutes at a load of 2400 on a 2-case study; 1000 started 422 threads
+/// for 8 cases on 2 cores. A run never uses more jobs than it has cases (`study_cmd`).
+const MAX_JOBS: usize = 256;
 
 /// `--jobs`: 0 would mean no worker at all, so it is refused rather than read as one; more than
 /// [`MAX_JOBS`] is more threads than any machine has cores for.

@@ -120,11 +120,22 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
 /// `flag`'s file `out` can be written: not a folder, no file among the folders above it, the nearest
 /// existing one writable, and not one of the command's `inputs`.
 pub fn check_file(flag: &str, out: &Path, inputs: &Inputs) -> Result<(), CliError> {
+    check_file_named(flag, out, "out.toml", inputs)
+}
+
+/// [`check_file`] for an option whose file is not TOML: `example` is the file name the message
+/// suggests inside a folder given by mistake (`run.csv`, `report.json`).
+pub fn check_file_named(
+    flag: &str,
+    out: &Path,
+    example: &str,
+    inputs: &Inputs,
+) -> Result<(), CliError> {
     if out.is_dir() {
         return Err(bad_input(format!(
             "{flag} {}: is a folder; give the path of a file to write (e.g. {})",
             out.display(),
-            out.join("out.toml").display()
+            out.join(example).display()
         )));
     }
     check_folders_above(flag, out, out.parent())?;
@@ -151,6 +162,47 @@ pub fn check_folder(
         refuse_input(flag, &out.join(name), inputs)?;
     }
     Ok(())
+}
+
+/// `flag`'s folder `out` must be new or empty unless `force`: a command that writes a whole set of
+/// files there (a data set) would otherwise mix its files with what the folder held, or replace a data
+/// set that others rely on without a word. The entries it holds (sorted) when `force` lets it go on.
+pub fn refuse_nonempty_folder(
+    flag: &str,
+    out: &Path,
+    what_is_written: &str,
+    force: bool,
+) -> Result<Vec<String>, CliError> {
+    let Ok(entries) = std::fs::read_dir(out) else {
+        return Ok(Vec::new());
+    };
+    let mut names: Vec<String> = entries
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    if names.is_empty() || force {
+        return Ok(names);
+    }
+    let holds = if names.iter().any(|n| n == "dataset.toml") {
+        format!(
+            "holds a data set (dataset.toml and {} other entries)",
+            names.len() - 1
+        )
+    } else {
+        format!("holds {} entries", names.len())
+    };
+    let shown: Vec<&str> = names.iter().take(4).map(String::as_str).collect();
+    let more = if names.len() > shown.len() {
+        ", …"
+    } else {
+        ""
+    };
+    Err(bad_input(format!(
+        "{flag} {}: {holds} (`{}`{more}); {what_is_written} would replace them and leave the rest behind: give a new or empty folder, or --force to write over it",
+        out.display(),
+        shown.join("`, `")
+    )))
 }
 
 /// Two outputs of one command that are the same file would overwrite each other.

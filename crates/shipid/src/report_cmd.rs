@@ -9,7 +9,7 @@ use crate::{CliError, Outcome, bad_input, failed};
 pub fn run(dir: &Path, study: Option<&Path>) -> Result<Outcome, CliError> {
     let meta = RunMeta {
         tool_version: Some(env!("CARGO_PKG_VERSION").into()),
-        study_file: study.map(Path::to_path_buf),
+        study_file: study.map(shipid_pipeline::model_file::absolute_path),
         ..RunMeta::default()
     };
     if !dir.is_dir() {
@@ -30,6 +30,19 @@ pub fn run(dir: &Path, study: Option<&Path>) -> Result<Outcome, CliError> {
             )));
         }
         inputs = inputs.file(study, "the study file");
+        // The page is headed with this study: results of another one would be shown under its
+        // name, which `table` and `plot` refuse too.
+        if dir.join("report.json").is_file() {
+            return Err(bad_input(format!(
+                "--study {}: {} is a diagnosis folder (report.json), which no study wrote; drop --study",
+                study.display(),
+                dir.display()
+            )));
+        }
+        let s = shipid_study::load_study(study)
+            .map_err(|e| bad_input(format!("--study {}: {e}", study.display())))?;
+        shipid_study::tables::check_output_of(&s, dir)
+            .map_err(|e| bad_input(format!("--study {}: {e}", study.display())))?;
     }
     crate::outputs::check_folder("DIR", dir, &[shipid_report::REPORT_FILE], &inputs)?;
     let html = if dir.join("report.json").is_file() {

@@ -70,8 +70,14 @@ pub fn run_replay(model_spec: &str, dataset: &Path, as_json: bool) -> Result<Out
     let model = load_model(model_spec)?;
     let ds = shipid_io::Dataset::load(dataset)?;
     let windage = shipid_pipeline::validate::validation_windage(model_spec, &ds);
-    let warnings =
-        shipid_pipeline::validate::validation_warnings(model_spec, Some(model.as_ref()), &ds);
+    // The same replay as validate's: the same warnings, and errors and metrics in the data set's L
+    // and U0, so that both commands give one number under one key.
+    let mut warnings = crate::validate_cmd::ship_warnings(model_spec, model.ship(), &ds, dataset);
+    warnings.extend(shipid_pipeline::validate::validation_warnings(
+        model_spec,
+        Some(model.as_ref()),
+        &ds,
+    ));
     for w in &warnings {
         eprintln!("warning: {w}");
     }
@@ -85,13 +91,13 @@ pub fn run_replay(model_spec: &str, dataset: &Path, as_json: bool) -> Result<Out
             &r.file,
         )?;
         let sim = shipid_pipeline::validate::replay_in(model.as_ref(), &r.recording, env);
-        let errors = shipid_pipeline::validate::replay_errors(&sim, &r.recording, model.ship());
+        let errors = shipid_pipeline::validate::replay_errors(&sim, &r.recording, &ds.ship);
         let mut o = match serde_json::to_value(&sim.status) {
             Ok(Value::Object(o)) => o,
             _ => Map::new(),
         };
         if matches!(sim.status, SimStatus::Ok) {
-            for (key, value) in metrics(&sim.recording, &r.manoeuvre, model.ship()).entries() {
+            for (key, value) in metrics(&sim.recording, &r.manoeuvre, &ds.ship).entries() {
                 if let Some(v) = value {
                     o.insert(key.into(), json!(v));
                 }
@@ -105,7 +111,12 @@ pub fn run_replay(model_spec: &str, dataset: &Path, as_json: bool) -> Result<Out
         );
         recs.insert(r.file.clone(), Value::Object(o));
     }
-    let mut value = json!({ "model": model_spec, "dataset": dataset.display().to_string(), "recordings": recs });
+    let mut value = json!({
+        "model": model_spec,
+        "dataset": dataset.display().to_string(),
+        "scaled_by": { "lpp_m": ds.ship.lpp, "u0_m_s": ds.ship.u0, "ship": "the data set's" },
+        "recordings": recs,
+    });
     if !warnings.is_empty()
         && let Value::Object(o) = &mut value
     {
@@ -126,6 +137,13 @@ pub fn run_replay(model_spec: &str, dataset: &Path, as_json: bool) -> Result<Out
     } else {
         Outcome::Ok
     })
+}
+
+/// A time [s] as a person would write it: the sum of whole steps without its rounding noise
+/// (1.2000000000000002 reads 1.2).
+fn seconds(t: f64) -> String {
+    let rounded = (t * 1e9).round() / 1e9;
+    format!("{rounded}")
 }
 
 /// Flags of `shipid simulate --manoeuvre`.
@@ -286,6 +304,20 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
             grid.steps, grid.dt_s, grid.sample_interval_s, MAX_STORED_SAMPLES
         );
     }
+    let duration_note = a
+        .duration_s
+        .filter(|_| (grid.duration_s - grid.requested_duration_s).abs() > 1e-9 * grid.duration_s)
+        .map(|asked| {
+            format!(
+                "--duration {asked} s is not a whole number of --dt {} s steps: the run simulates {:.0} step(s), {} s",
+                grid.dt_s,
+                grid.duration_s / grid.dt_s,
+                seconds(grid.duration_s)
+            )
+        });
+    if let Some(n) = &duration_note {
+        eprintln!("note: {n}");
+    }
     let env = constant_environment(wind, current, &windage, model.ship(), grid.duration_s)?;
     let out = simulate_on_grid_in(model, &m, &grid, env.clone(), approach_m_s)?;
     let envelope = shipid_pipeline::range::model_envelope(a.model, model);
@@ -312,6 +344,13 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
     }
     let mut value = outcome_json(&out, &m, model);
     if let Value::Object(o) = &mut value {
+        if let Some(n) = &duration_note {
+            o.insert(
+                "simulated_s".into(),
+                json!((grid.duration_s * 1e9).round() / 1e9),
+            );
+            o.insert("duration_note".into(), json!(n));
+        }
         if let Some(w) = wind {
             o.insert(
                 "wind".into(),
@@ -403,9 +442,9 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
                     .into()
             };
             eprintln!(
-                "warning: {} undefined after {:.1} s of simulated time (left out of the output): {why}",
+                "warning: {} undefined after {} s of simulated time (left out of the output): {why}",
                 undefined.join(", "),
-                grid.duration_s
+                seconds(grid.duration_s)
             );
         }
     }
@@ -482,9 +521,24 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
     }
     // Written after the metrics are shown: a write that fails then loses no more than the file.
     if let Some(path) = a.out_csv {
-        let rate_note = a
-            .propeller_rate_hz
-            .map_or(String::new(), |n| format!(" --propeller-rate {n}"));
+        // Every option that shapes the run, the step and time as simulated, so that the file's own
+        // record reproduces it.
+        let mut options = format!(
+            " --dt {} --duration {}",
+            seconds(grid.dt_s),
+            seconds(grid.duration_s)
+        );
+        for (flag, given) in [("--wind", a.wind), ("--current", a.current)] {
+            if let Some(text) = given {
+                options.push_str(&format!(" {flag} {}", text.replace(' ', "")));
+            }
+        }
+        if let Some(n) = a.propeller_rate_hz {
+            options.push_str(&format!(" --propeller-rate {n}"));
+        }
+        if a.allow_large {
+            options.push_str(" --allow-large");
+        }
         // The model named relative to the file written, not as typed: the bytes must not depend on
         // the working directory.
         let model_name = if a.model.starts_with("mmg:") {
@@ -493,7 +547,7 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
             shipid_pipeline::model_file::stored_path(path, Path::new(a.model))
         };
         let comments = vec![format!(
-            "shipid {} simulate {model_name} --manoeuvre {}{rate_note}; midship, SI, rudder positive to starboard",
+            "shipid {} simulate {model_name} --manoeuvre {}{options}; midship, SI, rudder positive to starboard",
             env!("CARGO_PKG_VERSION"),
             a.manoeuvre
         )];

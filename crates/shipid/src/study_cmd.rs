@@ -81,8 +81,11 @@ pub fn run_and_write(
     let meta = RunMeta {
         tool_version: Some(env!("CARGO_PKG_VERSION").into()),
         name: Some(study.name.clone()),
-        study_file: Some(study.path.clone()),
-        dataset: Some(study.dataset_path.clone()),
+        // As run.json stores them: the page names files, whatever folder it is opened from.
+        study_file: Some(shipid_pipeline::model_file::absolute_path(&study.path)),
+        dataset: Some(shipid_pipeline::model_file::absolute_path(
+            &study.dataset_path,
+        )),
         warnings: warnings.clone(),
         details: vec![],
     };
@@ -198,21 +201,39 @@ fn check_out_dir(out: &Path) -> Result<(), CliError> {
     Ok(())
 }
 
+/// The parallel cases a run of `cases` cases uses: `--jobs` (default: the cores), never more than the
+/// cases, since each job is a thread and one beyond the cases has nothing to do. A `--jobs` above the
+/// cases is said, so that the summary's count is not read as a typo's.
+fn jobs_for(asked: Option<usize>, cases: usize) -> usize {
+    let cap = cases.max(1);
+    match asked {
+        Some(n) if n > cap => {
+            eprintln!("note: --jobs {n}: the study has {cases} case(s); running {cap} job(s)");
+            cap
+        }
+        Some(n) => n,
+        None => std::thread::available_parallelism()
+            .map_or(1, |n| n.get())
+            .min(cap),
+    }
+}
+
 /// `shipid run STUDY.toml`: exit 0 when every case ended with a recorded status (a diverged prediction
 /// is a result), 1 when a case could not be computed (or, with `strict`, when one diverged).
 pub fn run(
     study_path: &Path,
     out: Option<&Path>,
-    jobs: usize,
+    jobs: Option<usize>,
     force: bool,
     strict: bool,
     allow_large: bool,
 ) -> Result<Outcome, CliError> {
-    if jobs == 0 {
+    if jobs == Some(0) {
         return Err(bad_input("--jobs 0: give at least 1"));
     }
     // Sized from the grid's axes before any case is built (a 5 KB file can make millions).
     let study = shipid_study::load_study_within(study_path, allow_large)?;
+    let jobs = jobs_for(jobs, study.cases.len());
     let out = out
         .map(PathBuf::from)
         .unwrap_or_else(|| default_out(&study));
@@ -351,14 +372,15 @@ pub fn check(
     study_path: &Path,
     reference: &Path,
     bless: bool,
-    jobs: usize,
+    jobs: Option<usize>,
     allow_large: bool,
 ) -> Result<Outcome, CliError> {
-    if jobs == 0 {
+    if jobs == Some(0) {
         return Err(bad_input("--jobs 0: give at least 1"));
     }
     // Sized from the grid's axes before any case is built (a 5 KB file can make millions).
     let study = shipid_study::load_study_within(study_path, allow_large)?;
+    let jobs = jobs_for(jobs, study.cases.len());
     // Named before the run, not after minutes of it.
     shipid_study::tables::check_tolerance_columns(&study)?;
     if bless {

@@ -3,6 +3,7 @@
 use std::path::Path;
 
 use shipid_io::Dataset;
+use shipid_io::Ship;
 use shipid_pipeline::model_file::{load_model, ship_mismatch};
 
 use crate::{CliError, Outcome};
@@ -31,19 +32,8 @@ pub fn run(
     shipid_pipeline::validate::require_recordings(&ds)?;
     // Validation still runs: its errors are what the user asked for; the warnings say what they
     // cannot mean.
-    if let Some(m) = ship_mismatch(model.ship(), &ds.ship) {
-        eprintln!(
-            "warning: {model_spec} on {}: {m}: the errors below compare different ships",
-            dataset.display()
-        );
-    }
-    let differences = shipid_pipeline::model_file::ship_differences(model.ship(), &ds.ship);
-    if !differences.is_empty() {
-        eprintln!(
-            "warning: {model_spec} on {}: the ships differ ({}): the errors below compare different ships",
-            dataset.display(),
-            differences.join("; ")
-        );
+    for w in ship_warnings(model_spec, model.ship(), &ds, dataset) {
+        eprintln!("warning: {w}");
     }
     // A sparse GP carries its own identification range; a polynomial's needs its training data.
     if model.own_range().is_none() {
@@ -61,4 +51,31 @@ pub fn run(
             .map(|(level, source)| crate::print::BandCheck { level, source }),
         valley.as_ref(),
     ))
+}
+
+/// What `validate` and `simulate --replay` say when the model's ship is not the data set's: both
+/// replay the recordings and give their errors in the data set's L and U0, which then compare
+/// different ships.
+pub fn ship_warnings(
+    model_spec: &str,
+    model_ship: &Ship,
+    ds: &Dataset,
+    dataset: &Path,
+) -> Vec<String> {
+    let mut warnings = Vec::new();
+    if let Some(m) = ship_mismatch(model_ship, &ds.ship) {
+        warnings.push(format!(
+            "{model_spec} on {}: {m}: the errors below compare different ships",
+            dataset.display()
+        ));
+    }
+    let differences = shipid_pipeline::model_file::ship_differences(model_ship, &ds.ship);
+    if !differences.is_empty() {
+        warnings.push(format!(
+            "{model_spec} on {}: the ships differ ({}): the errors below compare different ships",
+            dataset.display(),
+            differences.join("; ")
+        ));
+    }
+    warnings
 }

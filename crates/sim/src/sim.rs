@@ -15,10 +15,10 @@ pub use crate::dynamics::{NoFilter, RudderFilter};
 /// displacement ship driven by its own propeller at the approach speed U0.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct DivergenceBounds {
-    /// Largest speed √(u² + v²) as a multiple of U0 [-]. Default 3: the propeller is set for U0 and the
+    /// Largest speed √(u² + v²) through the water as a multiple of U0 [-]. Default 3: the propeller is set for U0 and the
     /// hull resistance grows with U², so a ship more than three times faster has left the physics.
     pub max_speed_over_u0: f64,
-    /// Largest |v| as a multiple of U0 [-]. Default 1.5: drifting sideways faster than the approach
+    /// Largest |v| through the water as a multiple of U0 [-]. Default 1.5: drifting sideways faster than the approach
     /// speed is not a manoeuvre.
     pub max_sway_over_u0: f64,
     /// Largest |r| L / U0 [-]. Default 5: about twenty times the yaw rate of a hard-over steady turn of
@@ -253,6 +253,16 @@ fn axpy(s: &[f64; 6], h: f64, k: &[f64; 6]) -> State {
     State::from_array(std::array::from_fn(|i| s[i] + h * k[i]))
 }
 
+/// The state relative to water moving at `current` [north, east] m/s of the over-ground state `s`.
+fn through_water(s: &State, [n, e]: [f64; 2]) -> State {
+    let (sin, cos) = s.psi.sin_cos();
+    State {
+        u: s.u - (n * cos + e * sin),
+        v: s.v - (-n * sin + e * cos),
+        ..*s
+    }
+}
+
 fn check_bounds(s: &State, b: &DivergenceBounds, u0: f64, lpp: f64) -> Option<String> {
     if !s.is_finite() {
         return Some(format!("non-finite state {s:?}"));
@@ -380,7 +390,14 @@ pub fn simulate_filtered(
             y[i] + dt / 6.0 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i])
         }));
         delta = recorded[2];
-        if let Some(reason) = check_bounds(&state, &options.bounds, ship.u0, ship.lpp) {
+        // The limits are of the hydrodynamics, which see the velocities through the water: a
+        // current only carries the ship along (a 2.4 m/s current is not a model going 3 U0).
+        let t_end = (k + 1) as f64 * dt;
+        let judged = match model.current_velocity_earth(t_end) {
+            Some(current) => through_water(&state, current),
+            None => state,
+        };
+        if let Some(reason) = check_bounds(&judged, &options.bounds, ship.u0, ship.lpp) {
             status = diverged((k + 1) as f64 * dt, reason);
             break;
         }

@@ -6,6 +6,7 @@ use std::time::SystemTime;
 
 use serde::Serialize;
 use shipid_io::write::write_atomic;
+use shipid_pipeline::model_file::absolute_path;
 
 use crate::error::StudyError;
 use crate::runner::{CaseResult, OutcomeCounts};
@@ -46,8 +47,10 @@ impl RunRecord {
         RunRecord {
             tool_version: tool_version.into(),
             study: study.name.clone(),
-            study_file: study.path.display().to_string(),
-            dataset: study.dataset_path.display().to_string(),
+            // Absolute: a path relative to the working directory of `shipid run` names nothing
+            // once `report` or a reader starts elsewhere.
+            study_file: absolute_path(&study.path).display().to_string(),
+            dataset: absolute_path(&study.dataset_path).display().to_string(),
             started_utc: utc(started),
             finished_utc: utc(finished),
             wall_time_s: finished

@@ -766,8 +766,9 @@ pub fn run_study(
     // faer would otherwise spread each small factorisation over all threads while rayon already runs
     // one case per thread.
     faer::set_global_parallelism(faer::Par::Seq);
+    // A thread beyond the cases would have nothing to do but cost its stack.
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(jobs.max(1))
+        .num_threads(jobs.clamp(1, study.cases.len().max(1)))
         .build()
         .map_err(std::io::Error::other)?;
     let meter = Progress::new(study.cases.len(), progress);

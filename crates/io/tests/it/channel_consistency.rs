@@ -295,3 +295,65 @@ fn a_heading_that_lags_the_yaw_rate_by_a_second_is_named() {
         Some("column `psi` lags `r` by 1.00 s"),
     );
 }
+
+/// The consistent recording's propeller turning at a constant 11.85 1/s, then `change`d.
+fn with_rate(change: impl Fn(&mut Vec<f64>)) -> impl Fn(&mut Recording) {
+    move |r: &mut Recording| {
+        let mut n = vec![11.85; r.len()];
+        change(&mut n);
+        r.n = Some(n);
+    }
+}
+
+/// Regression: one corrupt sample in a constant `n` passed the spike test (the channel's spread is
+/// 0) and the mmg fit ran on it with exit 0 (residual ×1e8, rate_rps 13.93 for 11.85).
+#[test]
+fn a_corrupt_sample_in_a_constant_propeller_rate_is_named_with_its_time() {
+    check(
+        with_rate(|n| n[840] = 9999.0),
+        &ZIGZAG,
+        Some(
+            "column `n`: the sample at t = 84 s is 9999.000 1/s, against the channel's level (median) of 11.850 1/s",
+        ),
+    );
+}
+
+/// Regression: 5 s of `n = 0` inside a constant rate fitted with exit 0 (w_p0 and c2_pos on their
+/// bounds, the turn 6 % off).
+#[test]
+fn a_dropout_of_the_propeller_rate_to_zero_is_named_with_its_times() {
+    check(
+        with_rate(|n| n[840..890].fill(0.0)),
+        &ZIGZAG,
+        Some("column `n`: the 50 samples from t = 84 to 88.9 s are 0.00e0 1/s"),
+    );
+}
+
+#[test]
+fn real_changes_of_the_propeller_rate_pass() {
+    // Half the rate from the middle on, a stop at the end, a rate with noise, a slow ramp.
+    let changes: [fn(&mut Vec<f64>); 4] = [
+        |n| {
+            let half = n.len() / 2;
+            n[half..].fill(5.9)
+        },
+        |n| {
+            let end = n.len() - 30;
+            n[end..].fill(0.0)
+        },
+        |n| {
+            n.iter_mut()
+                .enumerate()
+                .for_each(|(i, x)| *x += 0.05 * (i as f64 * 0.7).sin())
+        },
+        |n| {
+            let len = n.len() as f64;
+            n.iter_mut()
+                .enumerate()
+                .for_each(|(i, x)| *x *= 1.0 - 0.5 * i as f64 / len)
+        },
+    ];
+    for change in changes {
+        check(with_rate(change), &ZIGZAG, None);
+    }
+}

@@ -7,6 +7,7 @@ mod channel_consistency;
 mod conventions;
 mod input_checks;
 mod prime_and_derivatives;
+mod propeller_loading;
 mod propeller_rudder;
 mod readers_never_panic;
 mod relative_wind;

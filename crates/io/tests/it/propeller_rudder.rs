@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use shipid_io::dataset::parse_dataset;
-use shipid_io::{Dataset, PropellerData, RudderData};
+use shipid_io::{Dataset, DatasetRecording, Manoeuvre, PropellerData, Recording, RudderData};
 
 const SHIP: &str = r#"name = "tables"
 
@@ -266,4 +266,168 @@ fn recorded_wind_and_current_read_in_si_and_round_trip() {
         }
     }
     assert_eq!(rec.slice(2..5).wind.unwrap().speed_m_s.len(), 3);
+}
+
+/// The message `parse_open_water` gives for an open-water table's text.
+fn check_open_water(text: &str, expected: &str) {
+    match shipid_io::open_water::parse_open_water(Path::new("ow.csv"), "ow.csv", text) {
+        Ok((k, _)) => panic!("accepted (k_t {k:?}):\n{text}"),
+        Err(e) => assert_eq!(e.to_string(), expected, "table:\n{text}"),
+    }
+}
+
+/// The table `J,Kt` of the default curve at J = 0 … 0.8, its columns passed through `f`.
+fn table(f: impl Fn(f64, f64) -> (f64, f64)) -> String {
+    let mut text = String::from("J,Kt\n");
+    for i in 0..=16 {
+        let j = 0.05 * i as f64;
+        let (j, k) = f(j, 0.2931 - 0.2753 * j - 0.1385 * j * j);
+        text.push_str(&format!("{j:.3},{k:.5}\n"));
+    }
+    text
+}
+
+/// Regression: J in percent, K_T rising with J, K_T × 100 and two K_T columns were all read with
+/// exit 0 (the first K_T column silently), and the mmg fit put up to 11 parameters on bounds.
+#[test]
+fn an_absurd_open_water_table_is_refused_with_the_likely_slip() {
+    check_open_water(
+        &table(|j, k| (100.0 * j, k)),
+        "ow.csv: the table's J runs from 0 to 80; a propeller's advance ratio stays below 3 (J in percent?)",
+    );
+    check_open_water(
+        &table(|j, _| (j, 0.1 + 0.2 * j)),
+        "ow.csv: K_T rises from 0.1 at J = 0 to 0.26 at J = 0.8: a propeller's thrust coefficient falls as the advance ratio grows (K_T and J swapped, or another column?)",
+    );
+    check_open_water(
+        &table(|j, k| (j, 100.0 * k)),
+        "ow.csv: the quadratic through the open-water points: K_T at J = 0 is 29.31, outside the 0.05 … 1 of a propeller's open-water curve (K_T × 100 (in percent)?)",
+    );
+    check_open_water(
+        "J,Kt,KT\n0,0.29,0.58\n0.4,0.16,0.32\n0.8,-0.02,-0.03\n",
+        "ow.csv:1: two `K_T` columns, `Kt` (column 2) and `KT` (column 3): which one holds K_T is ambiguous; keep one, or rename the other (e.g. `KT_alt`)",
+    );
+}
+
+#[test]
+fn the_open_water_tables_of_real_propellers_are_read() {
+    // The default curve, and the HSVA table (K_T 0.323 at J = 0 to 0.006 at J = 0.9).
+    let hsva = "J,Kt,10Kq,Eta\n0,0.323,0.37,0\n0.3,0.245,0.30,0.38\n0.6,0.137,0.21,0.63\n0.9,0.006,0.06,0.15\n";
+    for text in [table(|j, k| (j, k)), hsva.to_string()] {
+        shipid_io::open_water::parse_open_water(Path::new("ow.csv"), "ow.csv", &text)
+            .unwrap_or_else(|e| panic!("{e}"));
+    }
+}
+
+/// Regression: `k_t = [29.31, -27.53, -13.85]` (×100) and a rising curve were accepted; the model ran
+/// straight at 2.7 U0.
+#[test]
+fn absurd_k_t_coefficients_are_refused_naming_the_key() {
+    let cases = [
+        (
+            "[29.31, -27.53, -13.85]",
+            "ds.toml: key `propeller.k_t`: K_T at J = 0 is 29.31, outside the 0.05 … 1 of a propeller's open-water curve (K_T × 100 (in percent)?)",
+        ),
+        (
+            "[0.001, -0.001, 0.0]",
+            "ds.toml: key `propeller.k_t`: K_T at J = 0 is 0.001, outside the 0.05 … 1 of a propeller's open-water curve (K_T ÷ 10 or ÷ 100, or another coefficient (K_Q?) in its place?)",
+        ),
+        (
+            "[0.1, 0.2, 0.0]",
+            "ds.toml: key `propeller.k_t`: K_T rises with J (dK_T/dJ = 0.200 at J = 0, over J = 0 … 3): a propeller's thrust coefficient falls as the advance ratio grows (K_T and J swapped, or another column?)",
+        ),
+    ];
+    for (k_t, expected) in cases {
+        check_message(
+            &PROPELLER.replace("[0.2931, -0.2753, -0.1385]", k_t),
+            expected,
+        );
+    }
+}
+
+/// Regression: a rudder or propeller forward of midship (a sign slip: the turn came out twice as
+/// large), a rudder ahead of the propeller, and a rudder span below the propeller diameter
+/// (η = D/H_R 4.3: a 0.89 L turn) were accepted.
+#[test]
+fn a_misplaced_or_undersized_rudder_or_propeller_is_refused_naming_the_key() {
+    let cases = [
+        (
+            format!("{PROPELLER}\n{}", RUDDER.replace("-3.5", "3.5")),
+            "ds.toml: key `rudder.x_m`: 3.5 m is at or forward of midship, where the MMG model has no rudder: positions are forward of midship, aft is negative (a sign slip? write -3.5)",
+        ),
+        (
+            format!("{}\n{RUDDER}", PROPELLER.replace("-3.36", "3.36")),
+            "ds.toml: key `propeller.x_m`: 3.36 m is at or forward of midship, where the MMG model has no propeller: positions are forward of midship, aft is negative (a sign slip? write -3.36)",
+        ),
+        (
+            format!("{PROPELLER}\n{}", RUDDER.replace("-3.5", "-3.0")),
+            "ds.toml: key `rudder.x_m`: -3 m puts the rudder forward of the propeller (propeller.x_m = -3.36 m): the MMG rudder sits behind the propeller, in its slipstream (aft is more negative; the two positions swapped?)",
+        ),
+        (
+            format!("{PROPELLER}\n{}", RUDDER.replace("0.345", "0.1")),
+            "ds.toml: key `rudder.span_m`: 0.1 m is smaller than the propeller's diameter propeller.diameter_m = 0.204 m: the share of the rudder in the slipstream, η = D/H_R = 2.04, would exceed 1 (a rudder's span is about 1.2 … 2 × the diameter); rudder.span_m or propeller.diameter_m in another unit?",
+        ),
+        (
+            format!("{}\n{RUDDER}", PROPELLER.replace("0.204", "2.04")),
+            "ds.toml: key `propeller.diameter_m`: 2.04 m is 4.43 × the draft ship.draft = 0.46 m (a propeller's diameter is about 0.5 … 0.8 × the draft; at most 2 × is accepted): a wrong unit?",
+        ),
+    ];
+    for (tables, expected) in cases {
+        check_message(&tables, expected);
+    }
+    // The model files' check (`hardware_fault`) has the span and diameter but not the positions.
+    let ship = parse_dataset(Path::new("ds.toml"), SHIP).unwrap().ship;
+    let fault = shipid_io::dataset::hardware_fault(&ship, Some(0.216), Some((0.0539, 0.05)));
+    assert_eq!(fault.map(|f| f.0), Some("rudder.span_m"));
+}
+
+/// Regression: a `[propeller] rate_rps` beside recordings that all have `n` was ignored without a
+/// word (5 1/s beside a recorded 11.85 1/s).
+#[test]
+fn a_rate_rps_no_recording_uses_is_noted_with_the_recorded_rate() {
+    let check_notes = |rate_rps: Option<f64>, n: Option<f64>, expected: &[&str]| {
+        let recording = Recording {
+            t: vec![0.0, 0.1, 0.2],
+            n: n.map(|n| vec![n; 3]),
+            ..Default::default()
+        };
+        let ds = Dataset {
+            path: "ds.toml".into(),
+            name: "notes".into(),
+            ship: parse_dataset(Path::new("ds.toml"), SHIP).unwrap().ship,
+            added_mass: None,
+            propeller: Some(PropellerData {
+                diameter_m: 0.216,
+                x_m: -3.36,
+                k_t: shipid_io::DEFAULT_K_T,
+                open_water: None,
+                k_t_default: None,
+                rate_rps,
+            }),
+            rudder: None,
+            windage: None,
+            recordings: vec![DatasetRecording {
+                file: "a.csv".into(),
+                manoeuvre: Manoeuvre::Free,
+                recording,
+            }],
+        };
+        assert_eq!(shipid_io::dataset::load_notes(&ds), expected);
+    };
+    check_notes(
+        Some(5.0),
+        Some(11.85),
+        &[
+            "ds.toml: key `propeller.rate_rps` = 5 1/s is not used: every recording has an `n` column (median 11.85 1/s), a different rate: check which one is the ship's",
+        ],
+    );
+    check_notes(
+        Some(11.85),
+        Some(11.85),
+        &[
+            "ds.toml: key `propeller.rate_rps` = 11.85 1/s is not used: every recording has an `n` column (median 11.85 1/s)",
+        ],
+    );
+    check_notes(Some(5.0), None, &[]);
+    check_notes(None, Some(11.85), &[]);
 }

@@ -415,11 +415,17 @@ pub fn hardware_fault(
     propeller: &PropellerEntry,
     rudder: &RudderEntry,
 ) -> Option<(&'static str, String)> {
-    shipid_io::dataset::hardware_fault(
+    if let Some(fault) = shipid_io::dataset::hardware_fault_placed(
         ship,
-        Some(propeller.diameter_m),
-        Some((rudder.area_m2, rudder.span_m)),
-    )
+        Some((propeller.diameter_m, propeller.x_m)),
+        Some((rudder.area_m2, rudder.span_m, rudder.x_m)),
+    ) {
+        return Some(fault);
+    }
+    // The curve a data set may not carry either (K_T × 100, rising with J): over the J range where
+    // it gives thrust, as a data set's `k_t` is checked.
+    let (j_lo, j_hi) = shipid_io::open_water::thrusting_range(&propeller.k_t);
+    shipid_io::open_water::k_t_problem(&propeller.k_t, j_lo, j_hi).map(|why| ("propeller.k_t", why))
 }
 
 impl MmgModelFile {
@@ -772,7 +778,7 @@ impl MmgModelFile {
         }
         let e = &self.estimator;
         // Written by `fit` (whose estimators these are), rather than `inverse` or by hand.
-        let fitted = super::MmgEstimator::parse(&e.name).is_ok();
+        let fitted = super::estimator::MmgEstimator::parse(&e.name).is_ok();
         if !(e.prior_weight.is_finite() && e.prior_weight >= 0.0) {
             return Some((
                 "estimator.prior_weight".into(),
@@ -1037,7 +1043,7 @@ pub fn load_mmg_model_if_kind(path: &Path, text: &str) -> Result<Option<MmgModel
 /// too ([`MmgModelFile::check_optional_tables`]): every command reads them through here.
 pub fn load_mmg_model(path: &Path, text: &str) -> Result<MmgModel, PipelineError> {
     let file: MmgModelFile =
-        toml::from_str(text).map_err(|e| crate::model_file::toml_error(path, text, &e))?;
+        toml::from_str(text).map_err(|e| crate::toml_text::toml_error(path, text, &e))?;
     let model = file.to_model(path)?;
     file.check_optional_tables(path)?;
     Ok(model)

@@ -18,6 +18,7 @@
 //!
 //! Module imports: `geometry` ← `priors` ← `identify` ← this file → `file`, `refine` ← `valley`.
 
+pub mod estimator;
 pub mod file;
 pub mod geometry;
 pub mod identify;
@@ -26,6 +27,7 @@ pub mod refine;
 pub mod thrust;
 pub mod valley;
 
+pub use estimator::MmgEstimator;
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -50,35 +52,6 @@ use crate::refine::RefineOptions;
 use crate::replay::{replay_segment_in, segments};
 use crate::validate::interp;
 use shipid_sim::environment::KnownEnvironment;
-
-/// How the hull derivatives are solved inside: bounded least squares on the prior-augmented design
-/// (the physical sign bounds of [`priors`] hold), or the same without bounds (a ridge toward the
-/// prior).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum MmgEstimator {
-    BoundedLsq,
-    Ridge,
-}
-
-impl MmgEstimator {
-    pub fn name(self) -> &'static str {
-        match self {
-            MmgEstimator::BoundedLsq => "bounded-lsq",
-            MmgEstimator::Ridge => "ridge",
-        }
-    }
-
-    /// `bounded-lsq` or `ridge`.
-    pub fn parse(name: &str) -> Result<MmgEstimator, PipelineError> {
-        match name {
-            "bounded-lsq" => Ok(MmgEstimator::BoundedLsq),
-            "ridge" => Ok(MmgEstimator::Ridge),
-            other => Err(bad_input(format!(
-                "estimator `{other}` does not apply to --set mmg: expected bounded-lsq or ridge"
-            ))),
-        }
-    }
-}
 
 /// The weight λ of the prior against the data.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -273,9 +246,9 @@ pub fn training_samples(ds: &Dataset, opts: &MmgFitOptions) -> Result<TrainingDa
     // thrust deduction and wake with zero standard errors from one force balance, and its model
     // carried no identification range to warn with.
     let delta: Vec<f64> = samples.iter().map(|s| s.delta_rad).collect();
-    let spread_deg = crate::fit::rudder_spread_deg(&delta);
-    if spread_deg < crate::fit::MIN_RUDDER_SPREAD_DEG {
-        return Err(crate::fit::rudder_unexcited_error(
+    let spread_deg = crate::excitation::rudder_spread_deg(&delta);
+    if spread_deg < crate::excitation::MIN_RUDDER_SPREAD_DEG {
+        return Err(crate::excitation::rudder_unexcited_error(
             spread_deg,
             &windows,
             "the rudder and hull parameters need",
@@ -379,7 +352,12 @@ pub fn fit_mmg_with_priors(
         _ => {}
     }
     let added = ds.added_mass.unwrap_or_default();
-    let rate = samples.iter().map(|s| s.n_hz).sum::<f64>() / samples.len() as f64;
+    // The median: a mean takes in whatever dropout or spike the recording checks let through.
+    let rate = {
+        let mut n: Vec<f64> = samples.iter().map(|s| s.n_hz).collect();
+        n.sort_by(f64::total_cmp);
+        n[n.len() / 2]
+    };
     let problem = Problem::new(
         ds.ship,
         added,

@@ -33,7 +33,7 @@ fn committed_data_equal_a_fresh_generation() {
                 .fold(0.0, f64::max);
             assert!(
                 worst < 1e-7,
-                "{} differs from a fresh generation by {worst}: run `shipid generate`",
+                "{} differs from a fresh generation by {worst}: run `shipid generate --force`",
                 stored.file
             );
         }

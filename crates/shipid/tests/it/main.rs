@@ -2,6 +2,7 @@
 //! module per concern (one link of the workspace's heavy dependencies instead of one per file).
 
 mod cli;
+mod cli_probe;
 mod common;
 mod diagnose;
 mod embedded_data;

@@ -395,3 +395,27 @@ fn check_same_metrics(
         }
     }
 }
+
+/// Regression (CLI probe B1): the divergence check judged the speed over ground, so a current of twice
+/// U0 (`simulate --current 2.4,180`) ended a calm-water turn as "speed 3.579 m/s above 3 U0", blaming
+/// the model for being carried along.
+#[test]
+fn a_current_faster_than_the_ship_only_carries_it_and_is_no_divergence() {
+    let m = kvlcc2();
+    let current = Current {
+        speed_m_s: 2.4,
+        from_deg: 180.0,
+    };
+    let calm = run(&m, &[], TC35, 300.0);
+    let drift = run(&m, &[Effect::Current(current)], TC35, 300.0);
+    assert_eq!(
+        drift.status,
+        shipid_sim::SimStatus::Ok,
+        "{:?}",
+        drift.status
+    );
+    assert_eq!(calm.recording.len(), drift.recording.len());
+    for (a, b) in calm.recording.psi.iter().zip(&drift.recording.psi) {
+        assert!((a - b).abs() < 1e-8);
+    }
+}
