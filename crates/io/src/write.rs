@@ -10,8 +10,17 @@ use crate::dataset::DatasetFile;
 use crate::types::Recording;
 pub use crate::units::fmt_sig;
 
-/// Write `contents` to `path` so that readers see either the old file or the whole new one.
+/// Write `contents` to `path` so that readers see either the old file or the whole new one. A path
+/// that is a device, pipe or socket (`--out /dev/null`, `/dev/stdout`, a named pipe) is written
+/// into as it is: renaming a file over it replaced the machine's `/dev/null` with a regular file.
 pub fn write_atomic(path: &Path, contents: &[u8]) -> std::io::Result<()> {
+    if let Ok(meta) = std::fs::metadata(path)
+        && !meta.is_file()
+        && !meta.is_dir()
+    {
+        let mut f = std::fs::OpenOptions::new().write(true).open(path)?;
+        return f.write_all(contents);
+    }
     if let Some(dir) = path.parent()
         && !dir.as_os_str().is_empty()
     {

@@ -11,3 +11,4 @@ mod propeller_loading;
 mod propeller_rudder;
 mod readers_never_panic;
 mod relative_wind;
+mod special_outputs;
