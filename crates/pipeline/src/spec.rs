@@ -4,8 +4,14 @@ use shipid_io::{Manoeuvre, Side};
 
 /// `zigzag:20/20:port`, `zigzag:10/10:starboard`, `turning:35:starboard` (side also `ps`/`sb`).
 pub fn parse_manoeuvre(text: &str) -> Result<Manoeuvre, String> {
-    let parts: Vec<&str> = text.split(':').collect();
-    let side = |s: &str| match s.to_ascii_lowercase().as_str() {
+    // Every field trimmed and the words taken in any case, the kind as the side: `ZIGZAG:20/20: port`
+    // was refused for its kind and its space while `zigzag: 20 / 20:PORT` was read.
+    let lowered: Vec<String> = text
+        .split(':')
+        .map(|p| p.trim().to_ascii_lowercase())
+        .collect();
+    let parts: Vec<&str> = lowered.iter().map(String::as_str).collect();
+    let side = |s: &str| match s {
         "port" | "ps" | "p" => Ok(Side::Port),
         "starboard" | "sb" | "s" => Ok(Side::Starboard),
         other => Err(format!(
@@ -73,6 +79,25 @@ mod tests {
             expected.map_err(String::from),
             "{text}"
         );
+    }
+
+    #[test]
+    fn manoeuvre_fields_are_trimmed_and_read_in_any_case_alike() {
+        let zz = Ok(Manoeuvre::ZigZag {
+            rudder_deg: 20.0,
+            check_deg: 20.0,
+            side: Side::Port,
+        });
+        for text in [
+            "zigzag:20/20:port",
+            "ZIGZAG:20/20:port",
+            "zigzag:20/20:PORT",
+            "zigzag:20/20: port",
+            "zigzag:20/20:port ",
+            " zigzag : 20 / 20 : Port",
+        ] {
+            check(text, zz.clone());
+        }
     }
 
     #[test]

@@ -255,6 +255,14 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
         Some((driven, _)) => driven,
         None => loaded.as_ref(),
     };
+    // t_a and t_check are divided by L/U0 with the ship's U0 (docs/conventions.md), not by the
+    // approach speed: at 0.08 U0 a zig-zag's t_a read 20.7 "L/U0" without saying which U0.
+    if (approach_m_s / u0 - 1.0).abs() > 0.05 {
+        eprintln!(
+            "note: times (t_a, t_check) are in L/U0 with U0 = {u0:.4} m/s, the ship's, not the approach speed {approach_m_s:.4} m/s: multiply by {:.4} for L/U_approach",
+            approach_m_s / u0
+        );
+    }
     let mut warnings = Vec::new();
     let windage = simulation_windage(a.model, model.ship());
     if wind.is_some() {
