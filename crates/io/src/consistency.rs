@@ -52,6 +52,7 @@ pub fn check_channels(
     check_heading_lag(file, rec)?;
     let windows = windows(rec, WINDOW_L_OVER_U0 * lpp_m / u0_m_s);
     if windows.len() >= 4 {
+        check_time_base(file, rec, &windows)?;
         check_heading(file, rec, &windows)?;
         // A track is tested when the ship moves at a quarter of U0 on average at least: at rest, the
         // position noise is all there is.
@@ -165,6 +166,71 @@ fn number_short(x: f64) -> String {
     } else {
         format!("{x:.2e}")
     }
+}
+
+/// The time column against both rates: when the heading and the track change by one common factor
+/// more or less than the yaw rate and the velocities integrate to, the clock is what is off (t in
+/// ms under a bare `t` was blamed on `psi`, seconds declared `t[min]` on radians read as degrees).
+fn check_time_base(
+    file: &Path,
+    rec: &Recording,
+    windows: &[(usize, usize)],
+) -> Result<(), InputError> {
+    let dpsi: Vec<f64> = windows
+        .iter()
+        .map(|&(a, b)| rec.psi[b] - rec.psi[a])
+        .collect();
+    let int_r: Vec<f64> = windows
+        .iter()
+        .map(|&(a, b)| integral(&rec.t, |i| rec.r[i], a, b))
+        .collect();
+    let earth = |i: usize| {
+        let (s, c) = rec.psi[i].sin_cos();
+        (rec.u[i] * c - rec.v[i] * s, rec.u[i] * s + rec.v[i] * c)
+    };
+    let (mut track, mut int_v) = (Vec::new(), Vec::new());
+    for &(a, b) in windows {
+        track.extend([rec.x0[b] - rec.x0[a], rec.y0[b] - rec.y0[a]]);
+        int_v.extend([
+            integral(&rec.t, |i| earth(i).0, a, b),
+            integral(&rec.t, |i| earth(i).1, a, b),
+        ]);
+    }
+    if rms(&dpsi).max(rms(&int_r)) < HEADING_SIGNIFICANT_RAD {
+        return Ok(());
+    }
+    let (Some(k_psi), Some(k_track)) = (
+        clear_wrong_factor(factor(&dpsi, &int_r)),
+        clear_wrong_factor(factor(&track, &int_v)),
+    ) else {
+        return Ok(());
+    };
+    if !(k_psi > 0.0 && k_track > 0.0 && (k_psi / k_track - 1.0).abs() < 0.1) {
+        return Ok(());
+    }
+    let k = (k_psi * k_track).sqrt();
+    let near = |target: f64| (k / target - 1.0).abs() < 0.1;
+    let hint = if near(1e-3) {
+        "t in milliseconds under a bare `t`? write `t[ms]`".to_string()
+    } else if near(1e3) {
+        "seconds declared as `t[ms]`? check `t`'s unit".to_string()
+    } else if near(1.0 / 60.0) {
+        "seconds declared as `t[min]`? check `t`'s unit".to_string()
+    } else if near(60.0) {
+        "t in minutes under a bare `t`? write `t[min]`".to_string()
+    } else {
+        format!(
+            "the recorded times span {} times what the rates imply: check `t`'s unit and sampling",
+            number_short(1.0 / k)
+        )
+    };
+    Err(InputError::file(
+        file,
+        format!(
+            "column `t` is off: the heading and the track both change {} times as much as the yaw rate and the velocities integrate to over the recorded time ({hint})",
+            number_short(k)
+        ),
+    ))
 }
 
 /// The heading's increments against the yaw rate's integral.
