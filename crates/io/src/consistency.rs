@@ -168,6 +168,19 @@ fn number_short(x: f64) -> String {
     }
 }
 
+/// Per window: the heading's change and the yaw rate's integral.
+fn heading_increments(rec: &Recording, windows: &[(usize, usize)]) -> (Vec<f64>, Vec<f64>) {
+    windows
+        .iter()
+        .map(|&(a, b)| {
+            (
+                rec.psi[b] - rec.psi[a],
+                integral(&rec.t, |i| rec.r[i], a, b),
+            )
+        })
+        .unzip()
+}
+
 /// The time column against both rates: when the heading and the track change by one common factor
 /// more or less than the yaw rate and the velocities integrate to, the clock is what is off (t in
 /// ms under a bare `t` was blamed on `psi`, seconds declared `t[min]` on radians read as degrees).
@@ -176,14 +189,7 @@ fn check_time_base(
     rec: &Recording,
     windows: &[(usize, usize)],
 ) -> Result<(), InputError> {
-    let dpsi: Vec<f64> = windows
-        .iter()
-        .map(|&(a, b)| rec.psi[b] - rec.psi[a])
-        .collect();
-    let int_r: Vec<f64> = windows
-        .iter()
-        .map(|&(a, b)| integral(&rec.t, |i| rec.r[i], a, b))
-        .collect();
+    let (dpsi, int_r) = heading_increments(rec, windows);
     let earth = |i: usize| {
         let (s, c) = rec.psi[i].sin_cos();
         (rec.u[i] * c - rec.v[i] * s, rec.u[i] * s + rec.v[i] * c)
@@ -239,14 +245,7 @@ fn check_heading(
     rec: &Recording,
     windows: &[(usize, usize)],
 ) -> Result<(), InputError> {
-    let dpsi: Vec<f64> = windows
-        .iter()
-        .map(|&(a, b)| rec.psi[b] - rec.psi[a])
-        .collect();
-    let int_r: Vec<f64> = windows
-        .iter()
-        .map(|&(a, b)| integral(&rec.t, |i| rec.r[i], a, b))
-        .collect();
+    let (dpsi, int_r) = heading_increments(rec, windows);
     let (moves_psi, moves_r) = (rms(&dpsi), rms(&int_r));
     if moves_psi.max(moves_r) < HEADING_SIGNIFICANT_RAD {
         return Ok(());

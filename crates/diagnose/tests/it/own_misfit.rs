@@ -10,6 +10,17 @@ use shipid_pipeline::generate::generate_manoeuvres;
 use shipid_sim::MmgModel;
 use shipid_sim::effects::{Asymmetry, Effect};
 
+/// The diagnosis input of `model` with its own level `level` [÷ L] (None: a model naming no
+/// training data).
+fn input_of(model: &MmgModel, level: Option<f64>) -> DiagnoseInput<'_> {
+    DiagnoseInput {
+        base: model,
+        base_effects: &[],
+        model_level_over_l: level,
+        identification_range: None,
+    }
+}
+
 fn runs(seed: u64) -> shipid_io::Dataset {
     let m: Vec<Manoeuvre> = [Side::Port, Side::Starboard]
         .into_iter()
@@ -44,12 +55,7 @@ fn an_effect_in_the_training_data_as_much_is_the_models_own_misfit_not_a_verdict
     // The base: the reference without the offset, "identified" on runs that have it.
     let model = MmgModel::kvlcc2();
     let opts = DiagnoseOptions::default();
-    let input = |level| DiagnoseInput {
-        base: &model,
-        base_effects: &[],
-        model_level_over_l: level,
-        identification_range: None,
-    };
+    let input = |level| input_of(&model, level);
     let level = model_level(&input(None), &runs(1), &opts);
     let report = diagnose(&input(Some(level)), &runs(2), &opts).unwrap();
     assert_eq!(report.verdict, Verdict::None, "{}", report.explanation);
@@ -93,12 +99,7 @@ fn runs_in_current(seed: u64, speed_m_s: f64) -> shipid_io::Dataset {
 fn none_from_a_model_that_misfits_its_own_training_data_says_that_misfit_bounds_it() {
     let model = MmgModel::kvlcc2();
     let opts = DiagnoseOptions::default();
-    let input = |level| DiagnoseInput {
-        base: &model,
-        base_effects: &[],
-        model_level_over_l: level,
-        identification_range: None,
-    };
+    let input = |level| input_of(&model, level);
     let calm = runs_in_current(3, 0.0);
     let misfit = diagnose(&input(Some(0.3)), &calm, &opts).unwrap();
     assert_eq!(misfit.verdict, Verdict::None, "{}", misfit.explanation);
