@@ -74,13 +74,25 @@ pub fn track_figure(
         .x_desc("east y0 / L")
         .y_desc("north x0 / L")
         .draw()?;
+    // The recording under the replays, as a wide light band with a thin line on it: the replays
+    // after the effect lie on it and are what the figure is for, while the band stays visible
+    // around them (a plain black line under them disappeared wherever one lay on it).
+    let underlay = RGBColor(150, 150, 150).mix(0.45).stroke_width(7);
+    let recorded: Vec<(f64, f64)> = rec
+        .x0
+        .iter()
+        .zip(&rec.y0)
+        .map(|(n, e)| (e / l, n / l))
+        .collect();
+    chart.draw_series(LineSeries::new(recorded.clone(), underlay))?;
     chart
-        .draw_series(LineSeries::new(
-            rec.x0.iter().zip(&rec.y0).map(|(n, e)| (e / l, n / l)),
-            BLACK.stroke_width(2),
-        ))?
+        .draw_series(LineSeries::new(recorded, BLACK.stroke_width(1)))?
         .label("recorded")
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
+        .legend(move |(x, y)| {
+            EmptyElement::at((x, y))
+                + PathElement::new(vec![(0, 0), (20, 0)], underlay)
+                + PathElement::new(vec![(0, 0), (20, 0)], BLACK.stroke_width(1))
+        });
     let red = RGBColor(214, 39, 40);
     let blue = RGBColor(31, 119, 180);
     let sides = [
@@ -89,7 +101,7 @@ pub fn track_figure(
     ];
     for (tracks, colour, label) in sides {
         for (i, s) in tracks.iter().enumerate() {
-            let series = chart.draw_series(LineSeries::new(pts(s), colour.stroke_width(1)))?;
+            let series = chart.draw_series(LineSeries::new(pts(s), colour.stroke_width(2)))?;
             if i == 0 {
                 series
                     .label(label)
@@ -97,10 +109,11 @@ pub fn track_figure(
             }
         }
     }
+    // Opaque: half transparent, the tracks ran through its text.
     chart
         .configure_series_labels()
         .border_style(BLACK)
-        .background_style(WHITE.mix(0.6))
+        .background_style(WHITE)
         .draw()?;
 
     // Distance between each replay and the recorded position at the same time, ÷ L.

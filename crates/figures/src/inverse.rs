@@ -73,7 +73,7 @@ pub fn write_modes(out: &Path, modes: &VariationModes) -> Result<()> {
     chart
         .configure_series_labels()
         .position(SeriesLabelPosition::MiddleRight)
-        .background_style(WHITE.mix(0.6))
+        .background_style(WHITE)
         .border_style(BLACK)
         .draw()?;
     root.present()?;
@@ -159,7 +159,7 @@ pub fn motions_figure(path: &PathBuf, target: &TargetShip, figures: &[MotionFigu
         }
         c.configure_series_labels()
             .position(SeriesLabelPosition::LowerLeft)
-            .background_style(WHITE.mix(0.6))
+            .background_style(WHITE)
             .border_style(BLACK)
             .label_font(("sans-serif", 11))
             .draw()?;

@@ -546,32 +546,27 @@ fn allowed((lo, hi): (f64, f64)) -> (f64, f64) {
 }
 
 /// Draw a prediction's line (and its × when it diverged) on a chart.
+/// A prediction's line (and its × when it diverged) on a chart; `dashed` when it coincides with one
+/// drawn before it, so that both stay visible.
 fn draw_prediction<'a, DB: DrawingBackend + 'a>(
     chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
     p: &Prediction,
     pts: Vec<(f64, f64)>,
-    with_legend: bool,
+    dashed: bool,
 ) -> Result<()>
 where
     DB::ErrorType: 'static,
 {
     let c = p.colour;
     let last = pts.last().copied();
-    let series = chart
-        .draw_series(LineSeries::new(pts, c.stroke_width(2)))
-        .map_err(|e| fig_err!("{e}"))?;
-    if with_legend {
-        if p.diverged_at_s.is_some() {
-            series.label(legend_label(p)).legend(move |(x, y)| {
-                EmptyElement::at((x, y))
-                    + PathElement::new(vec![(0, 0), (20, 0)], c.stroke_width(2))
-                    + Cross::new((10, 0), 5, c.stroke_width(2))
-            });
-        } else {
-            series.label(legend_label(p)).legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
-            });
-        }
+    if dashed {
+        chart
+            .draw_series(DashedLineSeries::new(pts, 9, 7, c.stroke_width(2)))
+            .map_err(|e| fig_err!("{e}"))?;
+    } else {
+        chart
+            .draw_series(LineSeries::new(pts, c.stroke_width(2)))
+            .map_err(|e| fig_err!("{e}"))?;
     }
     if p.diverged_at_s.is_some()
         && let Some(at) = last
@@ -583,6 +578,156 @@ where
     Ok(())
 }
 
+/// For each prediction, the earlier one it coincides with on `plotted` (points as drawn, one list
+/// per prediction): every point within `tol` (x, y) of the other's. Two estimators that give the
+/// same model otherwise draw one line over the other and the legend lists a line nobody can see.
+fn coincident(plotted: &[Vec<(f64, f64)>], tol: (f64, f64)) -> Vec<Option<usize>> {
+    (0..plotted.len())
+        .map(|i| {
+            (0..i).find(|&j| {
+                let (a, b) = (&plotted[i], &plotted[j]);
+                !a.is_empty()
+                    && a.len() == b.len()
+                    && a.iter()
+                        .zip(b)
+                        .all(|(p, q)| (p.0 - q.0).abs() <= tol.0 && (p.1 - q.1).abs() <= tol.1)
+            })
+        })
+        .collect()
+}
+
+/// The recorded series drawn last, on top of the predictions it is the reference for: a wide light
+/// underlay keeps it visible where predictions lie on it, a thin black line on top keeps the
+/// predictions visible beside it.
+fn draw_recorded<'a, DB: DrawingBackend + 'a>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    pts: Vec<(f64, f64)>,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    chart
+        .draw_series(LineSeries::new(
+            pts.clone(),
+            RGBColor(150, 150, 150).mix(0.45).stroke_width(7),
+        ))
+        .map_err(|e| fig_err!("{e}"))?;
+    chart
+        .draw_series(LineSeries::new(pts, BLACK.stroke_width(2)))
+        .map_err(|e| fig_err!("{e}"))?;
+    Ok(())
+}
+
+/// One line of a legend drawn outside the plots.
+struct LegendEntry {
+    label: String,
+    colour: RGBColor,
+    /// Recorded: black on a grey underlay.
+    recorded: bool,
+    dashed: bool,
+    diverged: bool,
+}
+
+/// The legend entries of a time-series figure: the recording, then each prediction (a coinciding
+/// one says which it equals).
+fn series_entries(file: &str, sims: &[Prediction], same: &[Option<usize>]) -> Vec<LegendEntry> {
+    std::iter::once(LegendEntry {
+        label: format!("recorded {file}"),
+        colour: BLACK,
+        recorded: true,
+        dashed: false,
+        diverged: false,
+    })
+    .chain(sims.iter().zip(same).map(|(p, s)| LegendEntry {
+        label: match s {
+            Some(j) => format!("{} (= {}, dashed)", legend_label(p), sims[*j].label),
+            None => legend_label(p),
+        },
+        colour: p.colour,
+        recorded: false,
+        dashed: s.is_some(),
+        diverged: p.diverged_at_s.is_some(),
+    }))
+    .collect()
+}
+
+/// Legend font size and row height, and the width of a column for the longest label.
+const LEGEND_FONT: u32 = 14;
+const LEGEND_ROW: u32 = 21;
+fn legend_column_width(entries: &[LegendEntry]) -> u32 {
+    // About half an em per character of a sans-serif label; 44 px of sample line and gap.
+    let chars = entries
+        .iter()
+        .map(|e| e.label.chars().count())
+        .max()
+        .unwrap_or(0) as u32;
+    44 + chars * LEGEND_FONT / 2
+}
+
+/// (columns, height) of a legend of `entries` across `width` px, below the plots.
+fn legend_layout(entries: &[LegendEntry], width: u32) -> (u32, u32) {
+    let cols = ((width.saturating_sub(40)) / legend_column_width(entries).max(1)).clamp(1, 3);
+    let rows = (entries.len() as u32).div_ceil(cols);
+    (cols, 14 + rows * LEGEND_ROW)
+}
+
+/// A legend in an area of its own (outside every plot, so it covers no data), `cols` columns.
+fn draw_entries<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    entries: &[LegendEntry],
+    cols: u32,
+    x0: i32,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let (w, _) = area.dim_in_pixel();
+    let col_w = ((w as i32 - x0 - 10) / cols.max(1) as i32).max(1);
+    let rows = (entries.len() as u32).div_ceil(cols.max(1)) as i32;
+    for (k, e) in entries.iter().enumerate() {
+        let (c, r) = (k as i32 / rows.max(1), k as i32 % rows.max(1));
+        let (x, y) = (
+            x0 + c * col_w,
+            10 + r * LEGEND_ROW as i32 + LEGEND_ROW as i32 / 2,
+        );
+        let style = e.colour.stroke_width(2);
+        if e.recorded {
+            area.draw(&PathElement::new(
+                vec![(x, y), (x + 30, y)],
+                RGBColor(150, 150, 150).mix(0.45).stroke_width(7),
+            ))
+            .map_err(|e| fig_err!("{e}"))?;
+        }
+        if e.dashed {
+            for s in [0, 12, 24] {
+                area.draw(&PathElement::new(vec![(x + s, y), (x + s + 7, y)], style))
+                    .map_err(|e| fig_err!("{e}"))?;
+            }
+        } else {
+            area.draw(&PathElement::new(vec![(x, y), (x + 30, y)], style))
+                .map_err(|e| fig_err!("{e}"))?;
+        }
+        if e.diverged {
+            area.draw(&Cross::new((x + 15, y), 5, e.colour.stroke_width(2)))
+                .map_err(|e| fig_err!("{e}"))?;
+        }
+        area.draw(&Text::new(
+            e.label.clone(),
+            (x + 38, y),
+            TextStyle::from((FONT, LEGEND_FONT).into_font()).pos(
+                plotters::style::text_anchor::Pos::new(
+                    plotters::style::text_anchor::HPos::Left,
+                    plotters::style::text_anchor::VPos::Center,
+                ),
+            ),
+        ))
+        .map_err(|e| fig_err!("{e}"))?;
+    }
+    Ok(())
+}
+
+/// A legend inside a plot (where there is no room outside it): opaque, so that no curve runs through
+/// its text.
 fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
     chart: &mut ChartContext<'a, DB, CT>,
     position: SeriesLabelPosition,
@@ -590,7 +735,7 @@ fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
     chart
         .configure_series_labels()
         .position(position)
-        .background_style(WHITE.mix(0.6))
+        .background_style(WHITE)
         .border_style(BLACK)
         .label_font((FONT, 13))
         .draw()
@@ -638,9 +783,14 @@ fn trajectories(
         n0 -= grow;
         n1 += grow;
     }
-    let root = SVGBackend::new(path, (w, h)).into_drawing_area();
+    // Coinciding within half a pixel of the plot area.
+    let same = coincident(&clipped, ((e1 - e0) / 1640.0, (n1 - n0) / 1280.0));
+    let entries = series_entries(&r.file, sims, &same);
+    let (cols, legend_h) = legend_layout(&entries, w);
+    let root = SVGBackend::new(path, (w, h + legend_h)).into_drawing_area();
     root.fill(&WHITE)?;
-    let mut chart = ChartBuilder::on(&root)
+    let (plot, legend) = root.split_vertically(h);
+    let mut chart = ChartBuilder::on(&plot)
         .caption(
             format!("Track of {}: recorded vs closed-loop predictions", r.file),
             (FONT, 20),
@@ -662,24 +812,18 @@ fn trajectories(
         e_range,
         n_range,
     );
-    chart
-        .draw_series(LineSeries::new(rec_pts, BLACK.stroke_width(3)))?
-        .label(format!("recorded {}", r.file))
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(3)));
-    for (p, pts) in sims.iter().zip(clipped) {
+    for ((p, pts), s) in sims.iter().zip(clipped).zip(&same) {
         let pts = inside(pts.into_iter(), e_range, n_range);
-        draw_prediction(&mut chart, p, pts, true)?;
+        draw_prediction(&mut chart, p, pts, s.is_some())?;
     }
-    draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
+    draw_recorded(&mut chart, rec_pts)?;
+    draw_entries(&legend, &entries, cols, 75)?;
     root.present()?;
     Ok(())
 }
 
 fn heading(path: &Path, r: &DatasetRecording, sims: &[Prediction]) -> Result<()> {
     let rec = &r.recording;
-    let root = SVGBackend::new(path, (1000, 900)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let (top, bottom) = root.split_vertically(470);
     let t_range = range_of(
         rec.t
             .iter()
@@ -687,6 +831,41 @@ fn heading(path: &Path, r: &DatasetRecording, sims: &[Prediction]) -> Result<()>
             .chain(sims.iter().flat_map(|p| p.t.iter().copied())),
         0.0,
     );
+    // Which predictions coincide is decided on the heading (a heading that coincides is steered by
+    // a rudder that does) and holds for both panels, as their one legend says.
+    let psi_deg = |v: &[f64]| -> Vec<f64> { v.iter().map(|x| x.to_degrees()).collect() };
+    let rec_psi = psi_deg(&rec.psi);
+    let psi_allowed = allowed(range_of(rec_psi.iter().copied(), 0.0));
+    let psi_pts: Vec<Vec<(f64, f64)>> = sims
+        .iter()
+        .map(|p| {
+            inside(
+                p.t.iter().copied().zip(psi_deg(&p.psi)),
+                (f64::NEG_INFINITY, f64::INFINITY),
+                psi_allowed,
+            )
+        })
+        .collect();
+    let psi_range = range_of(
+        rec_psi
+            .iter()
+            .copied()
+            .chain(psi_pts.iter().flatten().map(|p| p.1)),
+        0.05,
+    );
+    let same = coincident(
+        &psi_pts,
+        (
+            (t_range.1 - t_range.0) / 1700.0,
+            (psi_range.1 - psi_range.0) / 700.0,
+        ),
+    );
+    let entries = series_entries(&r.file, sims, &same);
+    let (cols, legend_h) = legend_layout(&entries, 1000);
+    let root = SVGBackend::new(path, (1000, 900 + legend_h)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let (plots, legend) = root.split_vertically(900);
+    let (top, bottom) = plots.split_vertically(470);
     for (first, area) in [(true, &top), (false, &bottom)] {
         let desc = if first {
             "heading ψ [deg]"
@@ -738,25 +917,15 @@ fn heading(path: &Path, r: &DatasetRecording, sims: &[Prediction]) -> Result<()>
             .y_desc(desc)
             .axis_desc_style((FONT, 15))
             .draw()?;
-        chart
-            .draw_series(LineSeries::new(
-                rec.t.iter().copied().zip(rec_y.iter().copied()),
-                BLACK.stroke_width(3),
-            ))?
-            .label(format!("recorded {}", r.file))
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(3)));
-        for (p, pts) in sims.iter().zip(pred) {
-            draw_prediction(&mut chart, p, pts, true)?;
+        for ((p, pts), s) in sims.iter().zip(pred).zip(&same) {
+            draw_prediction(&mut chart, p, pts, s.is_some())?;
         }
-        draw_legend(
+        draw_recorded(
             &mut chart,
-            if first {
-                SeriesLabelPosition::UpperLeft
-            } else {
-                SeriesLabelPosition::LowerRight
-            },
+            rec.t.iter().copied().zip(rec_y.iter().copied()).collect(),
         )?;
     }
+    draw_entries(&legend, &entries, cols, 80)?;
     root.present()?;
     Ok(())
 }
@@ -940,6 +1109,11 @@ fn bars(path: &Path, set: &str, rows: &[LongRow], kind: BarKind) -> Result<()> {
         BarKind::Vif => (lo.min(1.0) / 2.0, hi.max(10.0) * 3.0),
         BarKind::Coefficients => (lo / 2.0, hi * 5.0),
     };
+    // Headroom above the tallest bar for the legend (one row per case, the VIF line and the ±
+    // mark), so that it covers no bar: that share of the log axis's ~640 px is added on top.
+    let legend_rows = cases.len() + 2;
+    let share = ((20.0 * legend_rows as f64 + 30.0) / 640.0).min(0.6);
+    let hi = lo * (hi / lo).powf(1.0 / (1.0 - share));
     let n = terms.len() as f64;
     let width = (300 + 28 * terms.len()).clamp(900, 3000) as u32;
     let root = SVGBackend::new(path, (width, 800)).into_drawing_area();
@@ -1223,7 +1397,42 @@ fn forces(path: &Path, study: &Study, c: &CaseData, test: &str) -> Result<()> {
     let (samples, _) = training_samples(ds, &[test.to_string()], WindowSpec::Whole)
         .map_err(|e| fig_err!("{e}"))?;
     let inertia = PrimeInertia::new(&ds.ship, &model.added_mass, &model.set);
-    let root = SVGBackend::new(path, (1100, 1300)).into_drawing_area();
+    // Each panel's legend to its right, outside the plot: drawn over it (even half transparent),
+    // the curves ran through the term names. Columns as many as the panel's height needs.
+    let (panel_h, plot_w) = (420u32, 1100u32);
+    let per_dof: Vec<Vec<LegendEntry>> = Dof::ALL
+        .iter()
+        .map(|dof| {
+            let names = design(&model.set, *dof, &samples, &inertia).names;
+            std::iter::once(LegendEntry {
+                label: format!("target y_{dof}"),
+                colour: BLACK,
+                recorded: false,
+                dashed: false,
+                diverged: false,
+            })
+            .chain(names.iter().enumerate().map(|(j, n)| LegendEntry {
+                label: n.clone(),
+                colour: colour(j),
+                recorded: false,
+                dashed: j >= PALETTE.len(),
+                diverged: false,
+            }))
+            .collect()
+        })
+        .collect();
+    let rows_fit = ((panel_h - 20) / LEGEND_ROW).max(1);
+    let legend_cols: Vec<u32> = per_dof
+        .iter()
+        .map(|e| (e.len() as u32).div_ceil(rows_fit))
+        .collect();
+    let legend_w = per_dof
+        .iter()
+        .zip(&legend_cols)
+        .map(|(e, c)| legend_column_width(e) * c + 20)
+        .max()
+        .unwrap_or(0);
+    let root = SVGBackend::new(path, (plot_w + legend_w, 40 + 3 * panel_h)).into_drawing_area();
     root.fill(&WHITE)?;
     let (title, body) = root.split_vertically(40);
     title.draw(&Text::new(
@@ -1237,7 +1446,9 @@ fn forces(path: &Path, study: &Study, c: &CaseData, test: &str) -> Result<()> {
     ))?;
     let panels = body.split_evenly((3, 1));
     let t_range = range_of(samples.t.iter().copied(), 0.0);
-    for (dof, area) in Dof::ALL.iter().zip(panels.iter()) {
+    for (k, (dof, panel)) in Dof::ALL.iter().zip(panels.iter()).enumerate() {
+        let (area, legend) = panel.split_horizontally(plot_w);
+        let area = &area;
         let d = design(&model.set, *dof, &samples, &inertia);
         let beta = &model.coefficients[dof.index()];
         if beta.len() != d.names.len() {
@@ -1264,33 +1475,25 @@ fn forces(path: &Path, study: &Study, c: &CaseData, test: &str) -> Result<()> {
             .y_desc(format!("{dof}' contribution [-]"))
             .axis_desc_style((FONT, 14))
             .draw()?;
-        chart
-            .draw_series(LineSeries::new(
-                samples.t.iter().copied().zip(d.y.iter().copied()),
-                BLACK.stroke_width(3),
-            ))?
-            .label(format!("target y_{dof}"))
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(3)));
-        for (j, name) in d.names.iter().enumerate() {
-            let col = colour(j);
-            let style = if j >= PALETTE.len() {
-                col.stroke_width(1)
+        chart.draw_series(LineSeries::new(
+            samples.t.iter().copied().zip(d.y.iter().copied()),
+            BLACK.stroke_width(3),
+        ))?;
+        // Terms past the palette's ten colours repeat a colour, dashed to stay apart.
+        for j in 0..d.names.len() {
+            let style = colour(j).stroke_width(2);
+            let pts = samples
+                .t
+                .iter()
+                .enumerate()
+                .map(|(i, t)| (*t, contrib[(i, j)]));
+            if j >= PALETTE.len() {
+                chart.draw_series(DashedLineSeries::new(pts, 9, 7, style))?;
             } else {
-                col.stroke_width(2)
-            };
-            chart
-                .draw_series(LineSeries::new(
-                    samples
-                        .t
-                        .iter()
-                        .enumerate()
-                        .map(|(i, t)| (*t, contrib[(i, j)])),
-                    style,
-                ))?
-                .label(name.clone())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
+                chart.draw_series(LineSeries::new(pts, style))?;
+            }
         }
-        draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+        draw_entries(&legend, &per_dof[k], legend_cols[k], 10)?;
     }
     root.present()?;
     Ok(())

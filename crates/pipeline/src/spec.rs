@@ -96,7 +96,7 @@ mod tests {
             "zigzag:20/20:port ",
             " zigzag : 20 / 20 : Port",
         ] {
-            check(text, zz.clone());
+            check(text, zz);
         }
     }
 

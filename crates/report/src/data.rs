@@ -206,6 +206,31 @@ pub fn caption(path: &Path) -> String {
     }
 }
 
+/// An inline `<svg>` with an accessible name: `aria-labelledby` its figcaption and a `<title>` as its
+/// first child (a screen reader otherwise announces an unnamed image; the title is also the tooltip).
+fn named_svg(svg: &str, title: &str, caption_id: &str) -> String {
+    // The root tag ends at the first '>' (attribute values are escaped, so hold none).
+    let Some(end) = svg.find('>') else {
+        return svg.to_string();
+    };
+    let (open, rest) = svg.split_at(end);
+    let self_closing = open.ends_with('/');
+    let open = open.trim_end_matches('/');
+    let title = format!("<title>{}</title>", esc(title));
+    if self_closing {
+        format!(
+            "{open} aria-labelledby=\"{}\">{title}</svg>",
+            esc(caption_id)
+        )
+    } else {
+        format!(
+            "{open} aria-labelledby=\"{}\">{title}{}",
+            esc(caption_id),
+            &rest[1..]
+        )
+    }
+}
+
 /// The figures of a folder as `<figure>` elements in a grid; a file that is not a usable SVG becomes
 /// a note. `id_prefix` keeps the figures' ids apart from other sections'.
 pub fn figures_html(
@@ -260,11 +285,14 @@ pub fn figures_html(
                     group = Some(rank);
                 }
                 let id = id_of("figure-", &name);
+                let cap_id = format!("{id}-caption");
+                let svg = named_svg(&svg, &caption(f), &cap_id);
                 let _ = write!(
                     body,
-                    "<figure id=\"{}\" data-file=\"{}\">{svg}<figcaption>{} <code>{}</code></figcaption></figure>",
+                    "<figure id=\"{}\" data-file=\"{}\">{svg}<figcaption id=\"{}\">{} <code>{}</code></figcaption></figure>",
                     esc(&id),
                     esc(&name),
+                    esc(&cap_id),
                     esc(&caption(f)),
                     esc(&name)
                 );

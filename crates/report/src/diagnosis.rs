@@ -246,11 +246,12 @@ pub fn diagnosis_page(files: &DiagnosisFiles, meta: &RunMeta) -> Result<String, 
     match r.get("candidates").and_then(Value::as_array) {
         Some(cands) if !cands.is_empty() => {
             b.push_str(
-                "<div class=\"tablewrap\"><table class=\"candidates\"><thead><tr>\
-                 <th>effect</th><th title=\"accepted\">accepted</th>\
-                 <th title=\"score\">score</th><th title=\"explains\">explains [%]</th>\
-                 <th title=\"held_out_position_rmse_over_l\">held-out position RMSE ÷ L</th>\
-                 <th title=\"n_parameters\">parameters</th><th>fitted values</th></tr></thead><tbody>",
+                "<div class=\"tablewrap\"><table class=\"candidates\"><caption class=\"vh\">Candidate \
+                 effects, each fitted to the data set</caption><thead><tr>\
+                 <th scope=\"col\">effect</th><th scope=\"col\" title=\"accepted\">accepted</th>\
+                 <th scope=\"col\" title=\"score\">score</th><th scope=\"col\" title=\"explains\">explains [%]</th>\
+                 <th scope=\"col\" title=\"held_out_position_rmse_over_l\">held-out position RMSE ÷ L</th>\
+                 <th scope=\"col\" title=\"n_parameters\">parameters</th><th scope=\"col\">fitted values</th></tr></thead><tbody>",
             );
             for c in cands {
                 let accepted = c.get("accepted").and_then(Value::as_bool);
@@ -305,14 +306,15 @@ pub fn diagnosis_page(files: &DiagnosisFiles, meta: &RunMeta) -> Result<String, 
                 .iter()
                 .any(|x| x.get("outside_identification_range").is_some());
             b.push_str(
-                "<div class=\"tablewrap fit\"><table class=\"summary narrow\"><thead><tr><th>recording</th>\
-                 <th title=\"before_position_rmse_over_l\">position RMSE ÷ L before</th>\
-                 <th title=\"after_position_rmse_over_l\">position RMSE ÷ L after</th>\
-                 <th>change [%]</th>",
+                "<div class=\"tablewrap fit\"><table class=\"summary narrow\"><caption class=\"vh\">\
+                 Per recording, held out: position RMSE before and after the effect</caption><thead><tr><th scope=\"col\">recording</th>\
+                 <th scope=\"col\" title=\"before_position_rmse_over_l\">position RMSE ÷ L before</th>\
+                 <th scope=\"col\" title=\"after_position_rmse_over_l\">position RMSE ÷ L after</th>\
+                 <th scope=\"col\">change [%]</th>",
             );
             if has_out {
                 b.push_str(
-                    "<th title=\"outside_identification_range\">outside identification range [%]</th>",
+                    "<th scope=\"col\" title=\"outside_identification_range\">outside identification range [%]</th>",
                 );
             }
             b.push_str("</tr></thead><tbody>");
@@ -475,17 +477,17 @@ fn environment_section(b: &mut String, r: &Map<String, Value>) {
     let mut rows: Vec<(String, String)> = Vec::new();
     if let Some(w) = windage {
         let assumed = w.get("source").and_then(Value::as_str) == Some("assumed");
-        rows.push((
-            if assumed {
-                "windage (assumed: the data set gives no [windage])".into()
-            } else {
-                "windage (the data set's [windage])".into()
-            },
-            w.get("description")
-                .and_then(Value::as_str)
-                .unwrap_or_default()
-                .to_string(),
-        ));
+        let description = w
+            .get("description")
+            .and_then(Value::as_str)
+            .unwrap_or_default();
+        // Whether it is assumed goes with the value: in the label it outgrew a phone's width.
+        let value = if assumed && !description.contains("assumed") {
+            format!("assumed (the data set gives no [windage]): {description}")
+        } else {
+            description.to_string()
+        };
+        rows.push(("windage".into(), value));
     }
     for (key, word) in [("wind", "recorded wind"), ("current", "recorded current")] {
         for x in recorded
@@ -644,19 +646,21 @@ fn rows_table(b: &mut String, v: Option<&Value>, title: &str, cols: &[(&str, &st
     let _ = if folded {
         write!(
             b,
-            "<details><summary>{} ({} rows)</summary><div class=\"tablewrap fit\"><table class=\"narrow\"><thead><tr>",
+            "<details><summary>{} ({} rows)</summary><div class=\"tablewrap fit\"><table class=\"narrow\"><caption class=\"vh\">{}</caption><thead><tr>",
             esc(title),
-            rows.len()
+            rows.len(),
+            esc(title)
         )
     } else {
         write!(
             b,
-            "<h3>{}</h3><div class=\"tablewrap fit\"><table class=\"narrow\"><thead><tr>",
+            "<h3>{}</h3><div class=\"tablewrap fit\"><table class=\"narrow\"><caption class=\"vh\">{}</caption><thead><tr>",
+            esc(title),
             esc(title)
         )
     };
     for (k, h, _) in cols {
-        let _ = write!(b, "<th title=\"{}\">{}</th>", esc(k), esc(h));
+        let _ = write!(b, "<th scope=\"col\" title=\"{}\">{}</th>", esc(k), esc(h));
     }
     b.push_str("</tr></thead><tbody>");
     for r in rows {

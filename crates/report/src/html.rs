@@ -152,7 +152,11 @@ pub fn label(name: &str) -> String {
 
 /// A `<th>` for a column name: readable label, the name itself in the tooltip.
 pub fn th(name: &str) -> String {
-    format!("<th title=\"{}\">{}</th>", esc(name), esc(&label(name)))
+    format!(
+        "<th scope=\"col\" title=\"{}\">{}</th>",
+        esc(name),
+        esc(&label(name))
+    )
 }
 
 /// A status word as a coloured badge.
@@ -297,12 +301,15 @@ h3 { font-size:16px; margin:18px 0 8px; }
 p.sub { margin:0 0 10px; color:var(--muted); }
 a { color:var(--accent); }
 nav.toc { display:flex; flex-wrap:wrap; gap:6px 16px; margin:6px 0 0; font-size:14px; }
-dl.facts { display:grid; grid-template-columns:max-content 1fr; gap:3px 16px; margin:10px 0 0; }
-dl.facts dt { color:var(--muted); }
-dl.facts dd { margin:0; overflow-wrap:anywhere; }
-dl.kv { display:grid; grid-template-columns:max-content 1fr; gap:2px 14px; margin:0; }
-dl.kv dt { color:var(--muted); }
-dl.kv dd { margin:0; overflow-wrap:anywhere; }
+dl.facts { display:grid; grid-template-columns:fit-content(40%) minmax(0,1fr); gap:3px 16px;
+  margin:10px 0 0; }
+dl.facts dt { color:var(--muted); overflow-wrap:anywhere; }
+dl.facts dd { margin:0; overflow-wrap:anywhere; min-width:0; }
+dl.kv { display:grid; grid-template-columns:fit-content(40%) minmax(0,1fr); gap:2px 14px; margin:0; }
+dl.kv dt { color:var(--muted); overflow-wrap:anywhere; }
+dl.kv dd { margin:0; overflow-wrap:anywhere; min-width:0; }
+.vh { position:absolute; width:1px; height:1px; overflow:hidden; clip:rect(0 0 0 0);
+  white-space:nowrap; }
 ol.jlist { margin:0; padding-left:20px; }
 .muted { color:var(--muted); }
 .warnings { background:var(--warn-bg); border:1px solid #e7c46b; border-left:6px solid #d99a00;
@@ -339,6 +346,8 @@ td.n { text-align:right; font-variant-numeric:tabular-nums; white-space:nowrap; 
 td.id { font-family:ui-monospace,"DejaVu Sans Mono",monospace; font-size:12.5px; white-space:nowrap; }
 table.summary td.id, table.summary th.id { position:sticky; left:0; z-index:1; background:#fff;
   border-right:1px solid var(--line); }
+table.summary td.id a { display:block; max-width:40vw; overflow:hidden; text-overflow:ellipsis; }
+table.summary td.id .tail { display:none; }
 table.summary th.id { z-index:2; background:var(--head); }
 table.summary tbody tr:nth-child(even) td.id { background:var(--zebra); }
 table.summary tbody tr:hover td { background:#e6f0fa; }
@@ -366,10 +375,21 @@ figure { margin:0; border:1px solid var(--line); border-radius:6px; padding:10px
 figure svg { display:block; max-width:100%; height:auto; margin:0 auto; }
 figcaption { font-size:14px; margin-top:6px; text-align:center; }
 figcaption code { color:var(--muted); font-size:12px; }
+figcaption code, summary code { overflow-wrap:anywhere; }
 .verdict { border:1px solid var(--line); border-left:6px solid var(--accent); border-radius:6px;
   padding:10px 18px; margin:16px 0; background:#f5f9fd; }
 .verdict .word { font-size:28px; font-weight:700; }
 .verdict p { margin:6px 0; }
+/* A phone: a label beside its value would leave the value a one-character column, and a sticky
+   case column as wide as the screen would hide every other column. */
+@media (max-width:600px) {
+  main { padding:16px 12px 40px; }
+  dl.kv, dl.facts { grid-template-columns:minmax(0,1fr); gap:0; }
+  dl.kv dd, dl.facts dd { margin:0 0 6px; }
+  table.summary td.id, table.summary th.id { position:static; }
+  table.summary td.id .full { display:none; }
+  table.summary td.id .tail { display:inline; }
+}
 footer { margin-top:40px; color:var(--muted); font-size:13px; border-top:1px solid var(--line);
   padding-top:8px; }
 "#;

@@ -411,7 +411,11 @@ pub fn study_page_with_warnings(
     if with_diverged > 0 {
         count_box(
             &mut b,
-            "cases with a diverged prediction",
+            if with_diverged == 1 {
+                "case with a diverged prediction"
+            } else {
+                "cases with a diverged prediction"
+            },
             with_diverged,
             "bad",
         );
@@ -466,18 +470,20 @@ pub fn study_page_with_warnings(
         .filter(|&j| Some(j) != status_col)
         .collect();
     b.push_str(
-        "<div class=\"tablewrap\"><table class=\"summary\"><thead><tr><th class=\"id\" title=\"case\">case</th>",
+        "<div class=\"tablewrap\"><table class=\"summary\"><caption class=\"vh\">Summary: one row per case, \
+         with its fit status, its tests' statuses and the medians over its tests</caption><thead><tr>\
+         <th scope=\"col\" class=\"id\" title=\"case\">case</th>",
     );
     if status_col.is_some() {
-        b.push_str("<th title=\"case_status\">status</th>");
+        b.push_str("<th scope=\"col\" title=\"case_status\">status</th>");
     }
     if test_status_col.is_some() {
-        b.push_str("<th>tests</th>");
+        b.push_str("<th scope=\"col\">tests</th>");
     }
     for &j in &medians {
         let _ = write!(
             b,
-            "<th title=\"median over the case's tests of {}\">median {}</th>",
+            "<th scope=\"col\" title=\"median over the case's tests of {}\">median {}</th>",
             esc(&summary.headers[j]),
             esc(&label(&summary.headers[j]))
         );
@@ -486,6 +492,7 @@ pub fn study_page_with_warnings(
         b.push_str(&th(&summary.headers[j]));
     }
     b.push_str("</tr></thead><tbody>");
+    let shared = shared_prefix(&cases.iter().map(|c| c.id.as_str()).collect::<Vec<_>>());
     for c in &cases {
         let mut worst = "good";
         if let Some(j) = status_col {
@@ -506,11 +513,12 @@ pub fn study_page_with_warnings(
         }
         let _ = write!(
             b,
-            "<tr id=\"{}\" data-case-id=\"{}\" class=\"{worst}\"><td class=\"id\"><a href=\"#{}\">{}</a></td>",
+            "<tr id=\"{}\" data-case-id=\"{}\" class=\"{worst}\"><td class=\"id\"><a href=\"#{}\" title=\"{}\">{}</a></td>",
             esc(&id_of("case-", &c.id)),
             esc(&c.id),
             esc(&id_of("details-", &c.id)),
-            esc(&c.id)
+            esc(&c.id),
+            id_cell_text(&c.id, shared)
         );
         if let Some(j) = status_col {
             let v = if c.rows.is_empty() {
@@ -518,7 +526,7 @@ pub fn study_page_with_warnings(
             } else {
                 first_value(c, j)
             };
-            let _ = write!(b, "<td>{}</td>", badge(&v));
+            let _ = write!(b, "<td class=\"nw\">{}</td>", fit_badge(&v, &tcount));
         }
         if test_status_col.is_some() {
             let parts: Vec<String> = tcount
@@ -646,6 +654,63 @@ pub fn study_page_with_warnings(
     Ok((page(&format!("{name} — shipid study report"), &b), printed))
 }
 
+/// A case's status badge: its fit's word, and when some of its tests diverged, how many, in the
+/// colour of a failure. A green "ok" on a case whose predictions mostly diverged read as a good case.
+fn fit_badge<K: AsRef<str>>(status: &str, tests: &BTreeMap<K, usize>) -> String {
+    let diverged: usize = tests
+        .iter()
+        .filter(|(k, _)| k.as_ref() == "diverged")
+        .map(|(_, n)| n)
+        .sum();
+    if diverged == 0 {
+        return badge(status);
+    }
+    let all: usize = tests.values().sum();
+    format!(
+        "<span class=\"badge {}\" title=\"{}\">{}</span>",
+        worse(status_class(status), "bad"),
+        esc(&format!(
+            "the fit is {status}; {diverged} of its {all} tests' predictions diverged"
+        )),
+        esc(&format!("fit {status} · {diverged} of {all} diverged"))
+    )
+}
+
+/// Length of the prefix every case id shares, up to and with its last `_` (0 for one case): the
+/// ids of a study differ in their tails, and a narrow window shows them without it.
+fn shared_prefix(ids: &[&str]) -> usize {
+    let Some((first, rest)) = ids.split_first() else {
+        return 0;
+    };
+    if rest.is_empty() {
+        return 0;
+    }
+    let mut n = first.len();
+    for id in rest {
+        n = n.min(
+            first
+                .bytes()
+                .zip(id.bytes())
+                .take_while(|(a, b)| a == b)
+                .count(),
+        );
+    }
+    first[..n].rfind('_').map_or(0, |i| i + 1)
+}
+
+/// The summary's case cell: the full id, and for a narrow window the id without the prefix all
+/// cases share (the stylesheet shows one of the two; the link's title holds the full id).
+fn id_cell_text(id: &str, shared: usize) -> String {
+    match id.get(shared..).filter(|_| shared > 0) {
+        Some(tail) => format!(
+            "<span class=\"full\">{}</span><span class=\"tail\">…{}</span>",
+            esc(id),
+            esc(tail)
+        ),
+        None => esc(id),
+    }
+}
+
 fn count_box(b: &mut String, what: &str, n: usize, class: &str) {
     let _ = write!(
         b,
@@ -761,10 +826,10 @@ fn metric_table(b: &mut String, csv: &Csv, rows: &[usize], metric_cols: &[usize]
     }
     b.push_str(
         "<h3>Manoeuvre metrics</h3><div class=\"tablewrap fit\"><table class=\"metrics narrow\"><thead><tr>\
-         <th>test</th><th>metric</th><th>recorded</th><th>predicted</th><th>rel. error</th>",
+         <th scope=\"col\">test</th><th scope=\"col\">metric</th><th scope=\"col\">recorded</th><th scope=\"col\">predicted</th><th scope=\"col\">rel. error</th>",
     );
     if banded {
-        b.push_str("<th>band</th><th>recorded inside</th>");
+        b.push_str("<th scope=\"col\">band</th><th scope=\"col\">recorded inside</th>");
     }
     b.push_str("</tr></thead><tbody>");
     b.push_str(&body);
@@ -827,9 +892,15 @@ fn case_details(
         .unwrap_or_default();
     let mut tcount: BTreeMap<&str, usize> = BTreeMap::new();
     if let (Some(t), Some(j)) = (summary.col("test"), summary.col("status")) {
+        let replay = summary.col("replay_status");
         for &i in &c.rows {
             if !summary.rows[i][t].is_empty() {
-                *tcount.entry(summary.rows[i][j].as_str()).or_default() += 1;
+                // As the summary row counts it: a diverged replay is a diverged prediction.
+                let st = match replay {
+                    Some(r) if summary.rows[i][r] == "diverged" => "diverged",
+                    _ => summary.rows[i][j].as_str(),
+                };
+                *tcount.entry(st).or_default() += 1;
             }
         }
     }
@@ -843,7 +914,11 @@ fn case_details(
         esc(&id_of("details-", &c.id)),
         esc(&c.id),
         esc(&c.id),
-        badge(&status),
+        if status.is_empty() {
+            badge(&status)
+        } else {
+            fit_badge(&status, &tcount)
+        },
         if tests.is_empty() {
             String::new()
         } else {

@@ -102,3 +102,118 @@ fn a_case_without_its_model_or_with_a_corrupt_result_is_named_in_the_warnings() 
     assert!(report.warnings[0].contains(a.as_str()) && report.warnings[0].contains("model.toml"));
     assert!(report.warnings[1].contains(b.as_str()) && report.warnings[1].contains("result.json"));
 }
+
+/// A reduced32 study with lsq and bounded-lsq (the same model here: no bound is active), trained
+/// on ZZ35 4 OS and tested on ZZ20, run into `<dir>/out` and its figures drawn.
+fn run_two_estimators() -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let dataset = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/kvlcc2-mmg/dataset.toml");
+    let path = dir.path().join("study.toml");
+    std::fs::write(
+        &path,
+        format!(
+            "name = \"figs\"\ndataset = {:?}\nsets = [\"reduced32\"]\n[training]\n\
+             recordings = [[\"zz35_35_ps.csv\"]]\novershoots = [4]\n[[estimator]]\nname = \"lsq\"\n\
+             [[estimator]]\nname = \"bounded-lsq\"\n[test]\nrecordings = [\"zz20_20_ps.csv\"]\n",
+            dataset.display().to_string()
+        ),
+    )
+    .unwrap();
+    let study = load_study(&path).unwrap();
+    let out = dir.path().join("out");
+    let results = run_study(&study, &out, 1, false, false).unwrap();
+    write_tables(&study, &results, &out).unwrap();
+    let report = write_figures(&study, &out);
+    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+    (dir, out)
+}
+
+/// The `<polyline>`s of an SVG as (stroke, number of points), in drawing order.
+fn polylines(svg: &str) -> Vec<(String, usize)> {
+    svg.split("<polyline ")
+        .skip(1)
+        .map(|p| {
+            let attr = |k: &str| {
+                p.split(&format!("{k}=\""))
+                    .nth(1)
+                    .map(|s| s[..s.find('"').unwrap()].to_string())
+                    .unwrap_or_default()
+            };
+            (attr("stroke"), attr("points").split_whitespace().count())
+        })
+        .collect()
+}
+
+/// Regression (visual review §3): the recorded track was the first series in the SVG and every
+/// prediction was painted over it, so in the gp study's figures the reference had disappeared.
+#[test]
+fn the_recorded_series_is_the_last_polyline_of_each_time_series_figure() {
+    let (_dir, out) = run_two_estimators();
+    for name in ["trajectories_zz20_20_ps.svg", "heading_zz20_20_ps.svg"] {
+        let svg = std::fs::read_to_string(out.join("figures").join(name)).unwrap();
+        // Data series have many points; the mesh, ticks and legend samples have two.
+        let series: Vec<(String, usize)> = polylines(&svg)
+            .into_iter()
+            .filter(|(_, n)| *n > 20)
+            .collect();
+        assert!(series.len() >= 3, "{name}: {series:?}");
+        // In the heading figure each of the two panels ends with its recorded series.
+        let last = series.last().unwrap();
+        assert_eq!(
+            last.0, "#000000",
+            "{name}: the last series is not the recorded one"
+        );
+        if name.starts_with("heading") {
+            let blacks = series.iter().filter(|(s, _)| s == "#000000").count();
+            assert_eq!(blacks, 2, "{name}: one recorded line per panel");
+            let first_black = series.iter().position(|(s, _)| s == "#000000").unwrap();
+            // Before the first panel's recorded line, only its predictions and its underlay.
+            assert!(first_black >= 2, "{name}: {series:?}");
+        }
+    }
+}
+
+/// Regression (visual review §3): two estimators that gave the same model drew one line exactly over
+/// the other, and the legend listed a line nobody could see; the second is dashed and says so.
+#[test]
+fn a_prediction_that_coincides_with_another_is_dashed_and_named_in_the_legend() {
+    let (_dir, out) = run_two_estimators();
+    let svg = std::fs::read_to_string(out.join("figures/trajectories_zz20_20_ps.svg")).unwrap();
+    assert!(
+        svg.contains("reduced32 bounded-lsq 4 OS (= reduced32 lsq 4 OS, dashed)"),
+        "no coincidence noted in the legend"
+    );
+    // Dashes: the second case's colour (tab10 orange) as many short polylines, not one long one.
+    let orange: Vec<usize> = polylines(&svg)
+        .into_iter()
+        .filter(|(s, _)| s.eq_ignore_ascii_case("#FF7F0E"))
+        .map(|(_, n)| n)
+        .collect();
+    assert!(orange.len() > 20, "{} orange polylines", orange.len());
+}
+
+/// Regression (visual review §4): the legends sat inside the plots over the data (the heading
+/// figure's two legends over its first peak and its rudder signal); there is one, below the plots.
+#[test]
+fn the_legend_of_a_time_series_figure_is_below_its_plots() {
+    let (_dir, out) = run_two_estimators();
+    let svg = std::fs::read_to_string(out.join("figures/heading_zz20_20_ps.svg")).unwrap();
+    // One entry per series, once: the recording and the two cases (plotters writes a text on a
+    // line of its own).
+    let text = |t: &str| format!(">\n{t}\n</text>");
+    assert_eq!(svg.matches(&text("recorded zz20_20_ps.csv")).count(), 1);
+    assert_eq!(svg.matches(&text("reduced32 lsq 4 OS")).count(), 1);
+    // Below the 900-px plots.
+    let at = svg.find(&text("recorded zz20_20_ps.csv")).unwrap();
+    let tag = &svg[svg[..at].rfind("<text").unwrap()..at];
+    let y: f64 = tag
+        .split("y=\"")
+        .nth(1)
+        .unwrap()
+        .split('"')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(y > 900.0, "legend text at y = {y}");
+}

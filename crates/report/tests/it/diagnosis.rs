@@ -68,3 +68,49 @@ fn figures_written_beside_the_report_are_found() {
     let html = diagnosis_page(&files, &meta()).unwrap();
     assert_eq!(html.matches("<figure ").count(), 1);
 }
+
+/// Regression (visual review §1): on a 420-px window the key/value grid left its value column a
+/// few pixels wide (values one character per line), and the windage label alone was wider than the
+/// window, pushing its value off-screen below a ~3400 px blank gap.
+#[test]
+fn key_value_pairs_stack_on_a_narrow_window_and_a_label_never_takes_the_row() {
+    let files = DiagnosisFiles::in_dir(&fixture("diagnosis-hsva"));
+    let html = diagnosis_page(&files, &meta()).unwrap();
+    for list in ["dl.kv", "dl.facts"] {
+        assert!(
+            html.contains(&format!(
+                "{list} {{ display:grid; grid-template-columns:fit-content(40%) minmax(0,1fr);"
+            )),
+            "{list}: a label column of at most 40 %"
+        );
+    }
+    let narrow = html
+        .find("@media (max-width:600px)")
+        .expect("a narrow-window rule");
+    let rule = &html[narrow..narrow + html[narrow..].find("\n}").unwrap()];
+    assert!(
+        rule.contains("dl.kv, dl.facts { grid-template-columns:minmax(0,1fr);"),
+        "{rule}"
+    );
+}
+
+/// Regression (visual review §1): the windage row's label "windage (assumed: the data set gives no
+/// [windage])" outgrew a phone's width; the value says it is assumed.
+#[test]
+fn the_windage_label_is_short_and_the_value_says_it_is_assumed() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut r: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(fixture("diagnosis-hsva").join("report.json")).unwrap(),
+    )
+    .unwrap();
+    r["windage"] = serde_json::json!({"source": "assumed", "description": "frontal 0.258 m²"});
+    std::fs::write(dir.path().join("report.json"), r.to_string()).unwrap();
+    let html = diagnosis_page(&DiagnosisFiles::in_dir(dir.path()), &meta()).unwrap();
+    assert!(
+        html.contains(
+            "<dt>windage</dt><dd>assumed (the data set gives no [windage]): frontal 0.258 m²</dd>"
+        ),
+        "{html}"
+    );
+    assert!(!html.contains("windage (assumed"));
+}

@@ -61,7 +61,7 @@ fn status_counts_and_summary_numbers() {
     for (n, what) in [
         (3, "cases"),
         (2, "cases ok"),
-        (1, "cases with a diverged prediction"),
+        (1, "case with a diverged prediction"),
         (18, "tests"),
         (5, "tests diverged"),
         (13, "tests ok"),
@@ -249,14 +249,14 @@ fn a_study_with_bands_shows_each_metrics_band_and_whether_the_record_is_inside()
     .unwrap();
     let html = study_page(dir.path(), &RunMeta::default()).unwrap();
     assert!(
-        html.contains("<th>band</th><th>recorded inside</th>"),
+        html.contains("<th scope=\"col\">band</th><th scope=\"col\">recorded inside</th>"),
         "{html}"
     );
     assert!(html.contains("[2.5000, 11.2500]</td><td>no</td>"));
     // The band columns are shown in the metric table, not again among the test's other columns.
     assert!(!html.contains(">overshoot_1_lo<"));
     // A study without bands keeps its metric table as it was.
-    assert!(!page().contains("<th>band</th>"));
+    assert!(!page().contains(">band</th>"));
 }
 
 #[test]
@@ -322,7 +322,7 @@ fn a_diverged_replay_counts_and_badges_as_a_diverged_test() {
     let html = study_page(dir.path(), &RunMeta::default()).unwrap();
     for (n, what) in [
         (1, "cases ok"),
-        (1, "cases with a diverged prediction"),
+        (1, "case with a diverged prediction"),
         (4, "tests"),
         (1, "tests diverged"),
         (3, "tests ok"),
@@ -369,4 +369,90 @@ fn a_case_rewritten_after_the_summary_is_named_in_the_warnings() {
     assert!(!box_.contains("case b:"), "{box_}");
     // The shipped fixture's cases agree with its summary.
     assert!(!page().contains("is of another run than summary.csv"));
+}
+
+/// Regression (visual review §6): the 1-overshoot case, whose fit is ok but 5 of whose 6 tests
+/// diverged, showed a green "ok" in the summary and in its details.
+#[test]
+fn a_case_with_diverged_tests_does_not_show_a_green_ok() {
+    let html = page();
+    let id = "reduced32_lsq_fast_zz35_35_ps_os1-01228642";
+    let row = html
+        .find(&format!("<tr id=\"case-{id}\""))
+        .expect("os1's row");
+    let row = &html[row..row + html[row..].find("</tr>").unwrap()];
+    assert!(
+        row.contains("<span class=\"badge bad\"")
+            && row.contains(">fit ok · 5 of 6 diverged</span>"),
+        "{row}"
+    );
+    let d = html.find(&format!("<details id=\"details-{id}\"")).unwrap();
+    let summary = &html[d..d + html[d..].find("</summary>").unwrap()];
+    assert!(
+        summary.contains(">fit ok · 5 of 6 diverged</span>"),
+        "{summary}"
+    );
+    // A case whose every test is ok keeps its plain badge.
+    let ok = "reduced32_lsq_fast_zz35_35_ps_os2-122d3577";
+    let row = html.find(&format!("<tr id=\"case-{ok}\"")).unwrap();
+    let row = &html[row..row + html[row..].find("</tr>").unwrap()];
+    assert!(
+        row.contains("<span class=\"badge good\">ok</span>"),
+        "{row}"
+    );
+}
+
+/// Regression (visual review §2): on a phone the sticky case column, in nowrap monospace, was as
+/// wide as the screen and hid every other column of the summary.
+#[test]
+fn the_summary_case_column_is_capped_and_not_sticky_on_a_narrow_window() {
+    let html = page();
+    let narrow = html
+        .find("@media (max-width:600px)")
+        .expect("a narrow-window rule");
+    let rule = &html[narrow..narrow + html[narrow..].find("\n}").unwrap()];
+    assert!(
+        rule.contains("table.summary td.id, table.summary th.id { position:static; }"),
+        "{rule}"
+    );
+    assert!(html.contains("table.summary td.id a { display:block; max-width:40vw;"));
+    // The full id in the link's title; without the prefix all cases share on a narrow window.
+    let id = "reduced32_lsq_fast_zz35_35_ps_os2-122d3577";
+    assert!(html.contains(&format!(
+        "<a href=\"#details-{id}\" title=\"{id}\"><span class=\"full\">{id}</span><span class=\"tail\">…os2-122d3577</span></a>"
+    )));
+}
+
+/// Regression (visual review §13): inline figures were unnamed images to a screen reader, and the
+/// tables had neither a caption nor header scopes.
+#[test]
+fn each_svg_has_a_title_and_tables_have_captions_and_scopes() {
+    let html = page();
+    let n_svg = html.matches("<svg ").count();
+    assert!(n_svg > 0);
+    for (i, svg) in html.split("<svg ").skip(1).enumerate() {
+        let open = &svg[..svg.find('>').unwrap()];
+        assert!(open.contains("role=\"img\""), "svg {i}");
+        let cap = open
+            .split("aria-labelledby=\"")
+            .nth(1)
+            .map(|s| &s[..s.find('"').unwrap()])
+            .unwrap_or_else(|| panic!("svg {i} has no aria-labelledby"));
+        assert!(
+            html.contains(&format!("<figcaption id=\"{cap}\">")),
+            "svg {i}"
+        );
+        assert!(
+            svg[open.len() + 1..].starts_with("<title>"),
+            "svg {i}: no <title> first"
+        );
+    }
+    assert!(html.contains("<title>Variance inflation factor per term — reduced32</title>"));
+    assert!(html.contains("<table class=\"summary\"><caption class=\"vh\">"));
+    assert_eq!(
+        html.matches("<th>").count(),
+        0,
+        "a header cell without a scope"
+    );
+    assert!(html.matches("<th scope=\"col\"").count() > 10);
 }
