@@ -139,6 +139,14 @@ fn clear_wrong_factor((k, residual): (Option<f64>, f64)) -> Option<f64> {
     k.filter(|k| residual < CLEAR_FIT && !(FACTOR_BAND.0..=FACTOR_BAND.1).contains(k))
 }
 
+/// The middle value of `values` (the upper of the two middle ones for an even count), `None` for
+/// none: the level the load checks judge a channel against.
+pub fn upper_median(values: &[f64]) -> Option<f64> {
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    sorted.get(sorted.len() / 2).copied()
+}
+
 fn rms(x: &[f64]) -> f64 {
     (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
 }
@@ -563,9 +571,9 @@ fn check_rate_dropouts(file: &Path, rec: &Recording) -> Result<(), InputError> {
     if len < 50 || n.len() != rec.t.len() {
         return Ok(());
     }
-    let mut sorted = n.to_vec();
-    sorted.sort_by(f64::total_cmp);
-    let level = sorted[len / 2];
+    let Some(level) = upper_median(n) else {
+        return Ok(());
+    };
     if !(level.is_finite() && level != 0.0) {
         return Ok(());
     }
@@ -699,7 +707,7 @@ const ADVANCE_RATIO_MAX: f64 = 2.0;
 /// where the propeller turns ahead and the ship moves at a quarter of U0 at least must be a working
 /// propeller's. `None` when no such sample exists.
 fn median_advance_ratio(rec: &Recording, n: &[f64], diameter_m: f64, u0_m_s: f64) -> Option<f64> {
-    let mut j: Vec<f64> = rec
+    let j: Vec<f64> = rec
         .u
         .iter()
         .zip(n)
@@ -707,11 +715,7 @@ fn median_advance_ratio(rec: &Recording, n: &[f64], diameter_m: f64, u0_m_s: f64
         .map(|(u, n)| u / (n * diameter_m))
         .filter(|j| j.is_finite())
         .collect();
-    if j.is_empty() {
-        return None;
-    }
-    j.sort_by(f64::total_cmp);
-    Some(j[j.len() / 2])
+    upper_median(&j)
 }
 
 /// What an advance ratio outside a working propeller's range most likely means.
@@ -829,14 +833,12 @@ pub fn check_propeller_loading(
     } else {
         "propeller.rate_rps"
     };
-    let mut j: Vec<f64> = working
+    let j: Vec<f64> = working
         .iter()
         .map(|&(i, n)| rec.u[i] / (n * d))
         .filter(|j| j.is_finite())
         .collect();
-    if !j.is_empty() {
-        j.sort_by(f64::total_cmp);
-        let j_median = j[j.len() / 2];
+    if let Some(j_median) = upper_median(&j) {
         let j_p = LEAST_INFLOW_SHARE * j_median;
         if propeller.k_t_at(j_p) <= 0.0 {
             return Err(InputError::file(
@@ -855,7 +857,7 @@ pub fn check_propeller_loading(
     let Some(thrust) = &rec.thrust else {
         return Ok(());
     };
-    let mut k_t: Vec<f64> = working
+    let k_t: Vec<f64> = working
         .iter()
         .filter_map(|&(i, n)| thrust.get(i).map(|t| t / (rho * n * n * d.powi(4))))
         .filter(|k| k.is_finite())
@@ -879,8 +881,7 @@ pub fn check_propeller_loading(
             ),
         ));
     }
-    k_t.sort_by(f64::total_cmp);
-    let median = k_t[count / 2];
+    let median = upper_median(&k_t).unwrap_or(f64::NAN);
     let share = median / k0;
     let beyond = |above: bool| {
         k_t.iter()

@@ -253,7 +253,7 @@ impl Dataset {
             Origin::Midship | Origin::Point => a,
             Origin::Cg => added_mass_cg_to_midship(a, file.ship.xg),
         });
-        let ds = Dataset {
+        Ok(Dataset {
             path: path.to_path_buf(),
             name: file.name,
             ship: file.ship,
@@ -262,10 +262,7 @@ impl Dataset {
             rudder: file.rudder,
             windage: file.windage,
             recordings,
-        };
-        // What loading notices but does not refuse ([`load_notes`]) is for the command that uses it
-        // to say: the library prints nothing.
-        Ok(ds)
+        })
     }
 
     /// The recording with this file name.
@@ -283,7 +280,7 @@ pub fn load_notes(ds: &Dataset) -> Vec<String> {
         && !ds.recordings.is_empty()
         && ds.recordings.iter().all(|r| r.recording.n.is_some())
     {
-        let mut recorded: Vec<f64> = ds
+        let recorded: Vec<f64> = ds
             .recordings
             .iter()
             .filter_map(|r| r.recording.n.as_ref())
@@ -291,11 +288,7 @@ pub fn load_notes(ds: &Dataset) -> Vec<String> {
             .copied()
             .filter(|n| n.is_finite())
             .collect();
-        recorded.sort_by(f64::total_cmp);
-        let median = recorded
-            .get(recorded.len() / 2)
-            .copied()
-            .unwrap_or(f64::NAN);
+        let median = crate::consistency::upper_median(&recorded).unwrap_or(f64::NAN);
         let differs = if (rate / median - 1.0).abs() > 0.02 {
             ", a different rate: check which one is the ship's"
         } else {
@@ -895,8 +888,7 @@ fn check_propeller(path: &Path, p: &PropellerTable, lpp: f64) -> Result<(), Inpu
                 ));
             }
             let k = [k[0], k[1], k[2]];
-            let (lo, hi) = crate::open_water::thrusting_range(&k);
-            if let Some(problem) = crate::open_water::k_t_problem(&k, lo, hi) {
+            if let Some(problem) = crate::open_water::k_t_coefficients_problem(&k) {
                 return Err(InputError::key(path, "propeller.k_t", problem));
             }
             Ok(())

@@ -214,6 +214,13 @@ fn four_digits(x: f64) -> String {
     s.parse::<f64>().map_or(s, crate::error::number)
 }
 
+/// [`k_t_problem`] of coefficients given without a table (a data set's `propeller.k_t`, a model
+/// file's), over the range they thrust ([`thrusting_range`]).
+pub fn k_t_coefficients_problem(k: &[f64; 3]) -> Option<String> {
+    let (lo, hi) = thrusting_range(k);
+    k_t_problem(k, lo, hi)
+}
+
 /// The J range over which coefficients given without a table thrust: from 0 to where K_T first
 /// vanishes, at most [`MAX_TABLE_J`].
 pub fn thrusting_range(k: &[f64; 3]) -> (f64, f64) {

@@ -422,10 +422,9 @@ pub fn hardware_fault(
     ) {
         return Some(fault);
     }
-    // The curve a data set may not carry either (K_T × 100, rising with J): over the J range where
-    // it gives thrust, as a data set's `k_t` is checked.
-    let (j_lo, j_hi) = shipid_io::open_water::thrusting_range(&propeller.k_t);
-    shipid_io::open_water::k_t_problem(&propeller.k_t, j_lo, j_hi).map(|why| ("propeller.k_t", why))
+    // The curve a data set may not carry either (K_T × 100, rising with J).
+    shipid_io::open_water::k_t_coefficients_problem(&propeller.k_t)
+        .map(|why| ("propeller.k_t", why))
 }
 
 impl MmgModelFile {

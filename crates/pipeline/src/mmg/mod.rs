@@ -353,11 +353,8 @@ pub fn fit_mmg_with_priors(
     }
     let added = ds.added_mass.unwrap_or_default();
     // The median: a mean takes in whatever dropout or spike the recording checks let through.
-    let rate = {
-        let mut n: Vec<f64> = samples.iter().map(|s| s.n_hz).collect();
-        n.sort_by(f64::total_cmp);
-        n[n.len() / 2]
-    };
+    let n_hz: Vec<f64> = samples.iter().map(|s| s.n_hz).collect();
+    let rate = shipid_io::consistency::upper_median(&n_hz).unwrap_or(f64::NAN);
     let problem = Problem::new(
         ds.ship,
         added,
