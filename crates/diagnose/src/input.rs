@@ -38,7 +38,9 @@ impl DiagnoseOptions {
     /// is shorter than the horizon, a segment would be a whole recording while the noise floor and the
     /// model's own level were those of full-length segments (a 6-s recording judged against the drift
     /// of 59-s segments hides a strong current), so the horizon is shortened to the longest recording
-    /// and a note says so. `Err` when even that is below [`MIN_HORIZON_L_OVER_U0`].
+    /// and a note says so. A single recording is judged on its two time halves, so the horizon is
+    /// also shortened to the longer half ([`halves_horizon`]). `Err` when even the longest recording
+    /// is below [`MIN_HORIZON_L_OVER_U0`].
     pub fn fitted_to(
         self,
         ds: &shipid_io::Dataset,
@@ -52,7 +54,7 @@ impl DiagnoseOptions {
             .fold(0.0, f64::max);
         let longest = longest_s / l_over_u0_s;
         if !(longest.is_finite() && longest > 0.0) || self.horizon_l_over_u0 <= longest {
-            return Ok((self, None));
+            return Ok(self.fitted_to_halves(ds, None));
         }
         if longest < MIN_HORIZON_L_OVER_U0 {
             return Err(crate::DiagnoseError::TooShort {
@@ -66,14 +68,61 @@ impl DiagnoseOptions {
             self.horizon_l_over_u0,
             self.horizon_l_over_u0 * l_over_u0_s,
         );
-        Ok((
-            DiagnoseOptions {
-                horizon_l_over_u0: longest,
-                ..self
-            },
-            Some(note),
-        ))
+        Ok(DiagnoseOptions {
+            horizon_l_over_u0: longest,
+            ..self
+        }
+        .fitted_to_halves(ds, Some(note)))
     }
+
+    /// These options with the horizon shortened to a single recording's longer time half when it
+    /// outlasts that half, and the note that says so (else `note`, the earlier one).
+    fn fitted_to_halves(
+        self,
+        ds: &shipid_io::Dataset,
+        note: Option<String>,
+    ) -> (DiagnoseOptions, Option<String>) {
+        match halves_horizon(ds, self.horizon_l_over_u0) {
+            Some((half, why)) => (
+                DiagnoseOptions {
+                    horizon_l_over_u0: half,
+                    ..self
+                },
+                Some(why),
+            ),
+            None => (self, note),
+        }
+    }
+}
+
+/// Shortest recording [samples] cut into time halves: each half keeps the samples a replay segment
+/// and the differentiator need twice over.
+pub(crate) const MIN_SAMPLES_FOR_HALVES: usize = 4 * shipid_io::table::MIN_SAMPLES;
+
+/// A single recording is judged on its two time halves, so no segment outlasts the longer half: a
+/// horizon beyond it would be reported as segments that never ran. The horizon shortened to that
+/// half (÷ L/U0) and the note that says so, or `None` when the horizon fits.
+fn halves_horizon(ds: &shipid_io::Dataset, horizon_l_over_u0: f64) -> Option<(f64, String)> {
+    let [one] = ds.recordings.as_slice() else {
+        return None;
+    };
+    let (t, n) = (&one.recording.t, one.recording.len());
+    if n < MIN_SAMPLES_FOR_HALVES {
+        return None;
+    }
+    let l_over_u0_s = ds.ship.lpp / ds.ship.u0;
+    let half_s = (t[n / 2 - 1] - t[0]).max(t[n - 1] - t[n / 2]);
+    let half = half_s / l_over_u0_s;
+    (half.is_finite() && horizon_l_over_u0 > half).then(|| {
+        (
+            half,
+            format!(
+                "{}: the one recording is judged on its two time halves, each shorter than the replay horizon {horizon_l_over_u0:.1} L/U0 ({:.0} s): the horizon is shortened to {half:.2} L/U0 ({half_s:.1} s), the longest segment a half holds",
+                one.file,
+                horizon_l_over_u0 * l_over_u0_s,
+            ),
+        )
+    })
 }
 
 /// Shortest replay horizon ÷ (L/U0) a diagnosis works with (the command's smallest `--horizon`).

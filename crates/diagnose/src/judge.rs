@@ -424,9 +424,7 @@ impl<'a> Judge<'a> {
     }
 }
 
-/// Shortest recording [samples] cut into time halves: each half keeps the samples a replay segment
-/// and the differentiator need twice over.
-pub(crate) const MIN_SAMPLES_FOR_HALVES: usize = 4 * shipid_io::table::MIN_SAMPLES;
+pub(crate) use crate::input::MIN_SAMPLES_FOR_HALVES;
 
 /// `ds` with every recording cut into its first and second half in time, interleaved (recording i's
 /// halves are units 2i and 2i + 1, so the judge's alternating folds are the first halves and the

@@ -72,36 +72,6 @@ fn refused(dataset: &Path, e: DiagnoseError) -> CliError {
     bad_input(format!("{}: {e}", dataset.display()))
 }
 
-/// Fewest samples of a single recording that the diagnosis cuts into two halves of its time
-/// (`shipid_diagnose`'s judge: four times the fewest a recording may have).
-const MIN_SAMPLES_FOR_HALVES: usize = 4 * shipid_io::table::MIN_SAMPLES;
-
-/// A single recording is judged on its two time halves, so no segment outlasts the longer half: a
-/// horizon beyond it would be reported as segments that never ran. The horizon shortened to that
-/// half (÷ L/U0) and the note that says so, or `None` when the horizon fits.
-fn halves_horizon(ds: &Dataset, horizon_l_over_u0: f64) -> Option<(f64, String)> {
-    let [one] = ds.recordings.as_slice() else {
-        return None;
-    };
-    let (t, n) = (&one.recording.t, one.recording.len());
-    if n < MIN_SAMPLES_FOR_HALVES {
-        return None;
-    }
-    let l_over_u0_s = ds.ship.lpp / ds.ship.u0;
-    let half_s = (t[n / 2 - 1] - t[0]).max(t[n - 1] - t[n / 2]);
-    let half = half_s / l_over_u0_s;
-    (half.is_finite() && horizon_l_over_u0 > half).then(|| {
-        (
-            half,
-            format!(
-                "{}: the one recording is judged on its two time halves, each shorter than the replay horizon {horizon_l_over_u0:.1} L/U0 ({:.0} s): the horizon is shortened to {half:.2} L/U0 ({half_s:.1} s), the longest segment a half holds",
-                one.file,
-                horizon_l_over_u0 * l_over_u0_s,
-            ),
-        )
-    })
-}
-
 /// Arguments of `shipid diagnose`.
 pub struct DiagnoseArgs<'a> {
     pub model_spec: &'a str,
@@ -201,16 +171,6 @@ pub fn run(args: &DiagnoseArgs) -> Result<Outcome, CliError> {
     }
     .fitted_to(&ds)
     .map_err(|e| refused(dataset, e))?;
-    let (opts, horizon_note) = match halves_horizon(&ds, opts.horizon_l_over_u0) {
-        Some((half, note)) => (
-            DiagnoseOptions {
-                horizon_l_over_u0: half,
-                ..opts
-            },
-            Some(note),
-        ),
-        None => (opts, horizon_note),
-    };
     let mut input = DiagnoseInput {
         base: base.as_ref(),
         base_effects: &base_effects,
