@@ -833,28 +833,34 @@ fn heading(path: &Path, r: &DatasetRecording, sims: &[Prediction]) -> Result<()>
     );
     // Which predictions coincide is decided on the heading (a heading that coincides is steered by
     // a rudder that does) and holds for both panels, as their one legend says.
-    let psi_deg = |v: &[f64]| -> Vec<f64> { v.iter().map(|x| x.to_degrees()).collect() };
-    let rec_psi = psi_deg(&rec.psi);
-    let psi_allowed = allowed(range_of(rec_psi.iter().copied(), 0.0));
-    let psi_pts: Vec<Vec<(f64, f64)>> = sims
-        .iter()
-        .map(|p| {
-            inside(
-                p.t.iter().copied().zip(psi_deg(&p.psi)),
-                (f64::NEG_INFINITY, f64::INFINITY),
-                psi_allowed,
-            )
-        })
-        .collect();
-    let psi_range = range_of(
-        rec_psi
+    let degrees = |v: &[f64]| -> Vec<f64> { v.iter().map(|x| x.to_degrees()).collect() };
+    // One panel's recorded series, the predictions within its allowed range and its y range [deg].
+    let panel = |channel: fn(&Recording) -> &[f64], predicted: fn(&Prediction) -> &[f64]| {
+        let rec_y = degrees(channel(rec));
+        let y_allowed = allowed(range_of(rec_y.iter().copied(), 0.0));
+        let pred: Vec<Vec<(f64, f64)>> = sims
             .iter()
-            .copied()
-            .chain(psi_pts.iter().flatten().map(|p| p.1)),
-        0.05,
-    );
+            .map(|p| {
+                inside(
+                    p.t.iter().copied().zip(degrees(predicted(p))),
+                    (f64::NEG_INFINITY, f64::INFINITY),
+                    y_allowed,
+                )
+            })
+            .collect();
+        let y_range = range_of(
+            rec_y
+                .iter()
+                .copied()
+                .chain(pred.iter().flatten().map(|p| p.1)),
+            0.05,
+        );
+        (rec_y, pred, y_range)
+    };
+    let heading_panel = panel(|r| &r.psi, |p| &p.psi);
+    let (_, psi_pts, psi_range) = &heading_panel;
     let same = coincident(
-        &psi_pts,
+        psi_pts,
         (
             (t_range.1 - t_range.0) / 1700.0,
             (psi_range.1 - psi_range.0) / 700.0,
@@ -872,33 +878,12 @@ fn heading(path: &Path, r: &DatasetRecording, sims: &[Prediction]) -> Result<()>
         } else {
             "rudder δ [deg]"
         };
-        let get = |rec: &Recording| -> Vec<f64> {
-            let v = if first { &rec.psi } else { &rec.delta };
-            v.iter().map(|x| x.to_degrees()).collect()
+        // The heading panel's series were computed once, for the coincidence test above.
+        let (rec_y, pred, y_range) = if first {
+            heading_panel.clone()
+        } else {
+            panel(|r| &r.delta, |p| &p.delta)
         };
-        let get_p = |p: &Prediction| -> Vec<f64> {
-            let v = if first { &p.psi } else { &p.delta };
-            v.iter().map(|x| x.to_degrees()).collect()
-        };
-        let rec_y = get(rec);
-        let y_allowed = allowed(range_of(rec_y.iter().copied(), 0.0));
-        let pred: Vec<Vec<(f64, f64)>> = sims
-            .iter()
-            .map(|p| {
-                inside(
-                    p.t.iter().copied().zip(get_p(p)),
-                    (f64::NEG_INFINITY, f64::INFINITY),
-                    y_allowed,
-                )
-            })
-            .collect();
-        let y_range = range_of(
-            rec_y
-                .iter()
-                .copied()
-                .chain(pred.iter().flatten().map(|p| p.1)),
-            0.05,
-        );
         let mut b = ChartBuilder::on(area);
         b.margin(15).x_label_area_size(45).y_label_area_size(65);
         if first {
