@@ -630,6 +630,9 @@ fn check_rate_dropouts(file: &Path, rec: &Recording) -> Result<(), InputError> {
 /// would be measured from a heading that arrives late (a 1 s gyro latency moved t_a by 10 %).
 const HEADING_LAG_S: f64 = 0.4;
 
+/// Shifts each way that [`check_heading_lag`] tries at most (a high-rate recording is thinned to them).
+const MAX_LAG_SHIFTS: usize = 200;
+
 /// The lag of the heading's rate behind the yaw rate, by the best correlation over shifts of up to
 /// 2 s; refused when the channels clearly agree better shifted.
 fn check_heading_lag(file: &Path, rec: &Recording) -> Result<(), InputError> {
@@ -641,11 +644,24 @@ fn check_heading_lag(file: &Path, rec: &Recording) -> Result<(), InputError> {
     let max_shift = ((2.0 / dt).round() as usize).clamp(1, n / 10);
     // Rates over ±0.5 s: a compass's noise differentiated sample by sample would hide any lag.
     let h = ((0.5 / dt).round() as usize).clamp(1, n / 20);
-    let rate: Vec<f64> = (h..n - h)
-        .map(|i| (rec.psi[i + h] - rec.psi[i - h]) / (rec.t[i + h] - rec.t[i - h]))
+    // Both series are smooth over ±0.5 s, so a high-rate recording is compared on every stride-th
+    // sample: at most MAX_LAG_SHIFTS shifts each way (20 Hz keeps every sample; 10 kHz every 100th,
+    // 0.01 s apart, far finer than the lag refused), and not n × 40 000 products.
+    let stride = max_shift.div_ceil(MAX_LAG_SHIFTS).max(1);
+    let max_shift = max_shift / stride;
+    let mut r_prefix = Vec::with_capacity(n + 1);
+    r_prefix.push(0.0);
+    for (i, &x) in rec.r.iter().enumerate() {
+        r_prefix.push(r_prefix[i] + x);
+    }
+    let centres: Vec<usize> = (h..n - h).step_by(stride).collect();
+    let rate: Vec<f64> = centres
+        .iter()
+        .map(|&i| (rec.psi[i + h] - rec.psi[i - h]) / (rec.t[i + h] - rec.t[i - h]))
         .collect();
-    let r: Vec<f64> = (h..n - h)
-        .map(|i| rec.r[i - h..=i + h].iter().sum::<f64>() / (2 * h + 1) as f64)
+    let r: Vec<f64> = centres
+        .iter()
+        .map(|&i| (r_prefix[i + h + 1] - r_prefix[i - h]) / (2 * h + 1) as f64)
         .collect();
     // Correlation of the heading's rate at i + k with the yaw rate at i (k > 0: the heading lags).
     let correlation = |k: isize| -> f64 {
@@ -669,12 +685,12 @@ fn check_heading_lag(file: &Path, rec: &Recording) -> Result<(), InputError> {
         .map(|k| (k, correlation(k)))
         .max_by(|a, b| a.1.total_cmp(&b.1))
         .unwrap_or((0, at_zero));
-    let lag_s = best_k as f64 * dt;
+    let lag_s = best_k as f64 * stride as f64 * dt;
     // Smooth manoeuvres correlate highly at any small shift; what tells a lag is the unexplained
     // share 1 − ρ² falling to a quarter or less when shifted.
     let unexplained = |rho: f64| 1.0 - rho * rho;
     if lag_s.abs() >= HEADING_LAG_S
-        && best_k.unsigned_abs() >= 2
+        && best_k.unsigned_abs() * stride >= 2
         && best > 0.9
         && unexplained(best) < 0.25 * unexplained(at_zero)
     {

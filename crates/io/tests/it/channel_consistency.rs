@@ -15,8 +15,12 @@ const DEG: f64 = 180.0 / std::f64::consts::PI;
 /// heading and track integrated from them, accelerations their derivatives, and a little noise on
 /// the measured positions and heading.
 fn consistent() -> Recording {
-    let dt = 0.1;
-    let n = 1500;
+    consistent_at(0.1)
+}
+
+/// [`consistent`] sampled every `dt` [s] over the same 150 s.
+fn consistent_at(dt: f64) -> Recording {
+    let n = (150.0 / dt).round() as usize;
     let w = 0.08; // rad/s
     let t: Vec<f64> = (0..n).map(|i| i as f64 * dt).collect();
     let r: Vec<f64> = t.iter().map(|t| 0.05 * (w * t).sin()).collect();
@@ -87,7 +91,15 @@ const ZIGZAG: Manoeuvre = Manoeuvre::ZigZag {
 /// `change` applied to the consistent recording, checked against the declared `manoeuvre`: `None`
 /// expects it accepted, `Some(words)` refused with a message holding `words`.
 fn check(change: impl Fn(&mut Recording), manoeuvre: &Manoeuvre, expected: Option<&str>) {
-    let mut rec = consistent();
+    check_recording(consistent(), change, manoeuvre, expected);
+}
+
+fn check_recording(
+    mut rec: Recording,
+    change: impl Fn(&mut Recording),
+    manoeuvre: &Manoeuvre,
+    expected: Option<&str>,
+) {
     change(&mut rec);
     let got = check_channels(Path::new("rec.csv"), &rec, manoeuvre, LPP_M, U0_M_S);
     match (got, expected) {
@@ -293,6 +305,36 @@ fn a_heading_that_lags_the_yaw_rate_by_a_second_is_named() {
         },
         &ZIGZAG,
         Some("column `psi` lags `r` by 1.00 s"),
+    );
+}
+
+/// Heading lagging `r` by `lag_s` in a recording sampled every `dt_s`.
+fn heading_late_by(lag_s: f64, dt_s: f64) -> impl Fn(&mut Recording) {
+    move |r: &mut Recording| {
+        let lag = (lag_s / dt_s).round() as usize;
+        r.psi = (0..r.psi.len())
+            .map(|i| r.psi[i.saturating_sub(lag)])
+            .collect();
+    }
+}
+
+/// Regression: at high rates the lag test compared n × 4/dt products (a 10 kHz recording of
+/// 1M samples spent 40 s there); it now thins the series to 200 shifts each way and must still name
+/// the lag to the hundredth of a second, and pass a recording without one.
+#[test]
+fn a_heading_lag_is_named_in_a_high_rate_recording() {
+    let dt = 0.001;
+    check_recording(
+        consistent_at(dt),
+        heading_late_by(1.0, dt),
+        &ZIGZAG,
+        Some("column `psi` lags `r` by 1.00 s"),
+    );
+    check_recording(
+        consistent_at(dt),
+        heading_late_by(0.0, dt),
+        &ZIGZAG,
+        None,
     );
 }
 
