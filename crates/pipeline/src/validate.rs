@@ -883,20 +883,44 @@ fn rates_text(rates: &[f64]) -> String {
 pub fn rates_between_runs_note<'a>(
     recordings: impl IntoIterator<Item = &'a DatasetRecording>,
 ) -> Option<String> {
+    runs_at_different_rates(recordings).map(|runs| {
+        format!(
+            "the recordings ran at different propeller rates ({runs} 1/s): a model without a propeller-rate input (polynomial sets, sparse GP) fits their forces as if at one rate; an mmg model takes each sample's rate"
+        )
+    })
+}
+
+/// For an mmg fit at its own rate `own_rate_hz` (the median of its training samples) on `recordings`:
+/// a note when they ran at different constant rates. Each sample is fitted at its own rate, but a
+/// standard manoeuvre runs at the model's one rate, which then is none of the recordings' in
+/// particular.
+pub fn training_rates_note<'a>(
+    own_rate_hz: f64,
+    recordings: impl IntoIterator<Item = &'a DatasetRecording>,
+) -> Option<String> {
+    runs_at_different_rates(recordings).map(|runs| {
+        format!(
+            "the training recordings ran at different propeller rates ({runs} 1/s): each sample is fitted at its recorded rate, but `simulate --manoeuvre` and the bands of a standard manoeuvre run at the model's own rate, the median of all its samples, {own_rate_hz:.3} 1/s (`simulate --propeller-rate N` for another)"
+        )
+    })
+}
+
+/// "file median, …" of `recordings` when their median rates are more than
+/// [`PROPELLER_RATE_DIFFERENCE_NOTE`] apart (recordings without `n` are not judged).
+fn runs_at_different_rates<'a>(
+    recordings: impl IntoIterator<Item = &'a DatasetRecording>,
+) -> Option<String> {
     let medians: Vec<(String, f64)> = recordings
         .into_iter()
         .filter_map(|r| Some((r.file.clone(), rate_percentiles(r)?.1)))
         .collect();
     let distinct = distinct_rates(medians.iter().map(|m| m.1).collect());
     (distinct.len() > 1).then(|| {
-        let runs = medians
+        medians
             .iter()
             .map(|(f, n)| format!("{f} {n:.3}"))
             .collect::<Vec<_>>()
-            .join(", ");
-        format!(
-            "the recordings ran at different propeller rates ({runs} 1/s): a model without a propeller-rate input (polynomial sets, sparse GP) fits their forces as if at one rate; an mmg model takes each sample's rate"
-        )
+            .join(", ")
     })
 }
 

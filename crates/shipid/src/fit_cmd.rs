@@ -594,6 +594,16 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
         bar.finish_and_clear();
     }
     let (fit, mut file) = fitted?;
+    let trained_on = ds
+        .recordings
+        .iter()
+        .filter(|r| a.recordings.is_empty() || a.recordings.contains(&r.file));
+    if let Some(note) =
+        shipid_pipeline::validate::training_rates_note(fit.propeller_rate_hz, trained_on)
+    {
+        eprintln!("note: {note}");
+        warnings.push(note);
+    }
     if let Some((n, seed)) = a.bootstrap {
         let family = MmgFamily {
             opts: opts.clone(),

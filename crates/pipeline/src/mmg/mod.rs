@@ -133,7 +133,7 @@ pub struct MmgFit {
     /// Each fold's fit was refined before it was scored ([`MmgFitOptions::refine_folds`]).
     pub cv_folds_refined: bool,
     pub windows: Vec<TrainingWindow>,
-    /// Propeller rate of the model: the mean recorded rate of the training samples [1/s].
+    /// Propeller rate of the model: the (upper) median recorded rate of the training samples [1/s].
     pub propeller_rate_hz: f64,
     pub samples: usize,
     /// Usable samples before the even thinning (`samples` when none was needed).

@@ -6,7 +6,9 @@ use shipid_io::{DatasetRecording, Manoeuvre, Recording, Side};
 use shipid_pipeline::generate::T_EXECUTE_S;
 use shipid_pipeline::replay::{replay_segment_in, segments};
 use shipid_pipeline::simulate::straight_run_speed;
-use shipid_pipeline::validate::{rates_between_runs_note, recorded_rate_notes, validate_recording};
+use shipid_pipeline::validate::{
+    rates_between_runs_note, recorded_rate_notes, training_rates_note, validate_recording,
+};
 use shipid_sim::{
     Dynamics, MmgModel, RecordedRate, SimOptions, State, Turning, WithPropellerRate, simulate,
 };
@@ -258,5 +260,19 @@ fn a_fit_without_a_rate_input_on_runs_at_different_rates_says_so() {
     check(
         &[11.852, 6.0],
         Some("different propeller rates (run0.csv 11.852, run1.csv 6.000 1/s)"),
+    );
+}
+
+/// Regression: an mmg fit of recordings at 10 and 11 1/s simulated its standard manoeuvres at the
+/// samples' median rate without a word; within 1 % the rates count as one.
+#[test]
+fn an_mmg_fit_says_when_its_training_runs_differ_in_rate() {
+    let note = training_rates_note(10.5, &runs_at(&[(10.0, 10.0), (11.0, 11.0)])).unwrap();
+    for words in ["run0.csv 10.000, run1.csv 11.000 1/s", "own rate", "10.500 1/s"] {
+        assert!(note.contains(words), "{note} lacks {words}");
+    }
+    assert_eq!(
+        training_rates_note(10.0, &runs_at(&[(10.0, 10.0), (10.05, 10.05)])),
+        None
     );
 }
