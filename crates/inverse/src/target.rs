@@ -362,6 +362,26 @@ impl TargetShip {
                     readable(&self.propeller_diameter_m)
                 ),
             )),
+            Err(shipid_sim::MmgError::OutsideDomain {
+                name,
+                value,
+                domain,
+            }) => {
+                // t_p and f_alpha are the target's own; the others come from the database's ships.
+                let key = match name {
+                    "t_p" => "t_p",
+                    "f_alpha" => "f_alpha",
+                    _ => "lpp_m",
+                };
+                Err(bad(
+                    key,
+                    value,
+                    format!(
+                        "gives the MMG parameter {name} = {}, outside its physical domain ({domain}), so no ship of this target can be simulated",
+                        readable(&value)
+                    ),
+                ))
+            }
             Err(shipid_sim::MmgError::InvalidParameter { name, value }) => {
                 let key = match name {
                     "m_y" | "m_x" | "j_z" => "added_mass",

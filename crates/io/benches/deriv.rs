@@ -31,7 +31,9 @@ fn differentiator(c: &mut Criterion) {
     for (name, t) in [("even", &even), ("jittered", &jittered)] {
         let y = signal(t);
         let d = Differentiator::for_window(t, WINDOW_S);
-        group.bench_function(name, |b| b.iter(|| black_box(d.derivative(t, black_box(&y)))));
+        group.bench_function(name, |b| {
+            b.iter(|| black_box(d.derivative(t, black_box(&y))))
+        });
     }
     group.finish();
 }

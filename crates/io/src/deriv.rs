@@ -184,7 +184,10 @@ impl SlidingMoments {
 }
 
 /// Gaussian elimination with partial pivoting; `None` for a singular system.
-fn solve4(mut a: [[f64; DEGREE + 1]; DEGREE + 1], mut b: [f64; DEGREE + 1]) -> Option<[f64; DEGREE + 1]> {
+fn solve4(
+    mut a: [[f64; DEGREE + 1]; DEGREE + 1],
+    mut b: [f64; DEGREE + 1],
+) -> Option<[f64; DEGREE + 1]> {
     let k = DEGREE + 1;
     for col in 0..k {
         let pivot = (col..k).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
@@ -280,7 +283,6 @@ impl LocalCubic {
         (c[1] + tau * (2.0 * c[2] + tau * 3.0 * c[3])) / self.scale
     }
 }
-
 
 #[cfg(test)]
 mod tests {

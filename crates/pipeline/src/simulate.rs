@@ -68,15 +68,18 @@ pub fn sim_grid(
         .unwrap_or_else(|| DT_S.min(DEFAULT_MAX_STEP_OVER_L_OVER_U0 * ship.lpp / ship.u0));
     if !(dt.is_finite() && dt > 0.0) {
         return Err(bad_input(format!(
-            "--dt must be a positive number of seconds, got {dt}"
+            "--dt must be a positive number of seconds, got {}",
+            shipid_io::error::number(dt)
         )));
     }
     let max_dt = MAX_STEP_OVER_L_OVER_U0 * ship.lpp / ship.u0;
     // Only a step the user chose: the default suits every model-scale ship.
     if request.dt_s.is_some() && dt > max_dt {
         return Err(bad_input(format!(
-            "--dt {dt} s is more than {MAX_STEP_OVER_L_OVER_U0} L/U0 = {max_dt:.3} s for this ship (L = {} m, U0 = {} m/s): RK4 would step over its yaw response",
-            ship.lpp, ship.u0
+            "--dt {} s is more than {MAX_STEP_OVER_L_OVER_U0} L/U0 = {max_dt:.3} s for this ship (L = {} m, U0 = {} m/s): RK4 would step over its yaw response",
+            shipid_io::error::number(dt),
+            ship.lpp,
+            ship.u0
         )));
     }
     let duration = request
@@ -84,18 +87,23 @@ pub fn sim_grid(
         .unwrap_or_else(|| standard_duration_s(m, &ship));
     if !(duration.is_finite() && duration > 0.0) {
         return Err(bad_input(format!(
-            "--duration must be a positive number of seconds, got {duration}"
+            "--duration must be a positive number of seconds, got {}",
+            shipid_io::error::number(duration)
         )));
     }
     if dt >= duration {
         return Err(bad_input(format!(
-            "--dt {dt} s is not shorter than the simulated time {duration} s: the run would have no step to measure"
+            "--dt {} s is not shorter than the simulated time {} s: the run would have no step to measure",
+            shipid_io::error::number(dt),
+            shipid_io::error::number(duration)
         )));
     }
     let steps = (duration / dt).round();
     if steps > MAX_STEPS_UNLESS_ALLOWED && !request.allow_large {
         return Err(bad_input(format!(
-            "--duration {duration} s at --dt {dt} s is {steps:.3e} RK4 steps (more than {MAX_STEPS_UNLESS_ALLOWED:.0e}; a standard manoeuvre takes about {:.0}): give --allow-large to run it anyway (its stored history is then thinned to at most {MAX_STORED_SAMPLES:.0e} samples)",
+            "--duration {} s at --dt {} s is {steps:.3e} RK4 steps (more than {MAX_STEPS_UNLESS_ALLOWED:.0e}; a standard manoeuvre takes about {:.0}): give --allow-large to run it anyway (its stored history is then thinned to at most {MAX_STORED_SAMPLES:.0e} samples)",
+            shipid_io::error::number(duration),
+            shipid_io::error::number(dt),
             (standard_duration_s(m, &ship) / DT_S).round()
         )));
     }

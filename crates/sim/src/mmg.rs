@@ -296,9 +296,74 @@ impl MmgParameters {
                 value: self.w_p0,
             });
         }
+        for &(name, domain, inside) in PHYSICAL_DOMAINS {
+            let value = self
+                .named()
+                .iter()
+                .find(|(n, _)| *n == name)
+                .map_or(f64::NAN, |p| p.1);
+            if !inside(value) {
+                return Err(MmgError::OutsideDomain {
+                    name,
+                    value,
+                    domain,
+                });
+            }
+        }
         Ok(())
     }
 }
+
+/// Where each resistance, propeller, rudder and interaction parameter means what the MMG equations
+/// use it for, whatever the ship: outside, a force changes sign (1 − t_P ≤ 0 thrusts astern, ε ≤ 0
+/// reverses the rudder's inflow, f_α ≤ 0 its lift), and a hand-edited model file with ε = −0.5
+/// simulated a ship turning against its rudder. Wider than any fit's bounds (docs/mmg.md) and than
+/// the inverse method's ships; the hull derivatives have no such domain beyond finiteness.
+type Domain = (&'static str, &'static str, fn(f64) -> bool);
+const PHYSICAL_DOMAINS: &[Domain] = &[
+    ("r0", "R′₀ ≥ 0: a resistance", |v| v >= 0.0),
+    ("t_p", "0 ≤ t_P < 1: a thrust deduction", |v| {
+        (0.0..1.0).contains(&v)
+    }),
+    (
+        "c1",
+        "C₁ ≥ 0: the wake's decay with the propeller's drift",
+        |v| v >= 0.0,
+    ),
+    ("c2_pos", "C₂ ≥ 0: keeps 1 − w_P positive", |v| {
+        v >= 0.0
+    }),
+    ("c2_neg", "C₂ ≥ 0: keeps 1 − w_P positive", |v| {
+        v >= 0.0
+    }),
+    (
+        "t_r",
+        "t_R < 1: the rudder's drag deduction keeps 1 − t_R > 0",
+        |v| v < 1.0,
+    ),
+    (
+        "a_h",
+        "a_H > −1: the hull's share of the rudder force keeps 1 + a_H > 0",
+        |v| v > -1.0,
+    ),
+    (
+        "epsilon",
+        "ε > 0: the ratio of the rudder's to the propeller's wake",
+        |v| v > 0.0,
+    ),
+    (
+        "kappa",
+        "κ ≥ 0: the slipstream's share of the rudder inflow",
+        |v| v >= 0.0,
+    ),
+    ("gamma_r_neg", "γ_R ≥ 0: flow straightening", |v| {
+        v >= 0.0
+    }),
+    ("gamma_r_pos", "γ_R ≥ 0: flow straightening", |v| {
+        v >= 0.0
+    }),
+    ("f_alpha", "f_α > 0: the rudder's lift slope", |v| v > 0.0),
+];
 
 /// The KVLCC2 model of the SIMMAN/MMG benchmark at scale 1:45.714 (particulars as in
 /// `docs/conventions.md`, "The reference model"):
@@ -343,6 +408,13 @@ pub enum MmgError {
     /// A parameter or ship particular is non-finite or outside its physical range.
     #[error("invalid MMG parameter {name} = {value}")]
     InvalidParameter { name: &'static str, value: f64 },
+    /// A parameter lies outside the range where it means what the equations use it for.
+    #[error("MMG parameter {name} = {value} is outside its physical domain ({domain})")]
+    OutsideDomain {
+        name: &'static str,
+        value: f64,
+        domain: &'static str,
+    },
     /// The propeller cannot balance the resistance at U0 for any rate in the searched range.
     #[error(
         "no self-propulsion point at U0 = {u0_m_s} m/s for propeller rates up to {max_rate_hz} 1/s"

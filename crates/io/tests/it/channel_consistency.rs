@@ -330,12 +330,7 @@ fn a_heading_lag_is_named_in_a_high_rate_recording() {
         &ZIGZAG,
         Some("column `psi` lags `r` by 1.00 s"),
     );
-    check_recording(
-        consistent_at(dt),
-        heading_late_by(0.0, dt),
-        &ZIGZAG,
-        None,
-    );
+    check_recording(consistent_at(dt), heading_late_by(0.0, dt), &ZIGZAG, None);
 }
 
 /// The consistent recording's propeller turning at a constant 11.85 1/s, then `change`d.

@@ -659,6 +659,29 @@ impl MmgModelFile {
                     format!("must be a finite number, not {}", number(p.value)),
                 ));
             }
+            for (field, bound) in [("lower", p.lower), ("upper", p.upper)] {
+                if bound.is_nan() {
+                    return Err(at(
+                        format!("parameter[{i}].{field}"),
+                        format!(
+                            "{}: must be a bound ({} for none), not NaN",
+                            p.name,
+                            if field == "lower" { "-inf" } else { "inf" }
+                        ),
+                    ));
+                }
+            }
+            if p.lower > p.upper {
+                return Err(at(
+                    format!("parameter[{i}].lower"),
+                    format!(
+                        "{}: the lower bound {} is above the upper bound {}: reversed?",
+                        p.name,
+                        number(p.lower),
+                        number(p.upper)
+                    ),
+                ));
+            }
             if p.value < p.lower || p.value > p.upper {
                 return Err(at(
                     format!("parameter[{i}].value"),
@@ -744,8 +767,21 @@ impl MmgModelFile {
                 .map_or(f64::NAN, |p| p.value)
         };
         let params = assemble(&self.ship, &self.added_mass, &geometry, &get);
-        MmgModel::at_rate(self.ship, params, self.propeller.rate_rps)
-            .map_err(|e| bad_input(format!("{}: {e}", path.display())))
+        MmgModel::at_rate(self.ship, params, self.propeller.rate_rps).map_err(|e| {
+            let index = match &e {
+                shipid_sim::MmgError::OutsideDomain { name, .. } => {
+                    self.parameters.iter().position(|p| p.name == *name)
+                }
+                _ => None,
+            };
+            match index {
+                Some(i) => bad_input(format!(
+                    "{}: key `parameter[{i}].value`: {e}; no model file may carry it",
+                    path.display()
+                )),
+                None => bad_input(format!("{}: {e}", path.display())),
+            }
+        })
     }
 }
 

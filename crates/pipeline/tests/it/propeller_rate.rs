@@ -268,7 +268,11 @@ fn a_fit_without_a_rate_input_on_runs_at_different_rates_says_so() {
 #[test]
 fn an_mmg_fit_says_when_its_training_runs_differ_in_rate() {
     let note = training_rates_note(10.5, &runs_at(&[(10.0, 10.0), (11.0, 11.0)])).unwrap();
-    for words in ["run0.csv 10.000, run1.csv 11.000 1/s", "own rate", "10.500 1/s"] {
+    for words in [
+        "run0.csv 10.000, run1.csv 11.000 1/s",
+        "own rate",
+        "10.500 1/s",
+    ] {
         assert!(note.contains(words), "{note} lacks {words}");
     }
     assert_eq!(

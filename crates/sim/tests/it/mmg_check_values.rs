@@ -141,3 +141,46 @@ fn default_step_is_converged() {
         assert!((coarse.t_a.unwrap() - fine.t_a.unwrap()).abs() < 1e-3);
     }
 }
+
+/// The KVLCC2 parameters with `change` applied, built at its self-propulsion rate: `Ok` or the name
+/// of the parameter refused for lying outside its physical domain.
+fn check_domain(change: impl Fn(&mut shipid_sim::MmgParameters), expected: Result<(), &str>) {
+    let mut p = shipid_sim::MmgParameters::kvlcc2();
+    change(&mut p);
+    let got = shipid_sim::MmgModel::at_rate(shipid_sim::kvlcc2_ship(), p, 10.0);
+    match (got, expected) {
+        (Ok(_), Ok(())) => {}
+        (Err(shipid_sim::MmgError::OutsideDomain { name, .. }), Err(want)) => {
+            assert_eq!(name, want)
+        }
+        (got, want) => panic!("{:?} instead of {want:?}", got.map(|_| ())),
+    }
+}
+
+/// Regression: a model file with ε = −0.5 simulated a ship turning against its rudder.
+#[test]
+fn propeller_and_rudder_parameters_outside_their_physical_domain_are_refused() {
+    check_domain(|p| p.epsilon = -0.5, Err("epsilon"));
+    check_domain(|p| p.epsilon = 0.0, Err("epsilon"));
+    check_domain(|p| p.t_p = 1.0, Err("t_p"));
+    check_domain(|p| p.t_p = -0.1, Err("t_p"));
+    check_domain(|p| p.t_r = 1.2, Err("t_r"));
+    check_domain(|p| p.a_h = -1.0, Err("a_h"));
+    check_domain(|p| p.kappa = -0.1, Err("kappa"));
+    check_domain(|p| p.gamma_r_neg = -0.1, Err("gamma_r_neg"));
+    check_domain(|p| p.gamma_r_pos = -0.1, Err("gamma_r_pos"));
+    check_domain(|p| p.f_alpha = 0.0, Err("f_alpha"));
+    check_domain(|p| p.c1 = -1.0, Err("c1"));
+    check_domain(|p| p.c2_neg = -0.5, Err("c2_neg"));
+    check_domain(|p| p.r0 = -0.01, Err("r0"));
+    // The edges of every fit's bounds (docs/mmg.md) lie inside.
+    check_domain(
+        |p| {
+            (p.t_p, p.t_r, p.a_h, p.epsilon, p.kappa) = (0.5, 0.8, 0.0, 0.5, 0.0);
+            (p.gamma_r_neg, p.gamma_r_pos, p.f_alpha, p.c1, p.c2_pos) = (0.05, 1.5, 1.0, 0.0, 0.5);
+        },
+        Ok(()),
+    );
+    // Hull derivatives keep no domain beyond finiteness (the inverse method's ships take both signs).
+    check_domain(|p| p.y_vrr = 0.065, Ok(()));
+}
