@@ -10,9 +10,6 @@
 //! rate: h = round(T_w / (2 Δt_median)), at least 3. For KVLCC2 at model scale (L/U0 = 5.94 s) the window
 //! is 1.78 s: 19 samples at 10 Hz, 37 at 20 Hz.
 
-use faer::Mat;
-use faer::prelude::*;
-
 use crate::types::{Accelerations, Recording, Ship};
 
 /// Window duration as a fraction of L/U0. Zig-zag periods are 5–8 L/U0; over 0.3 L/U0 a cubic follows
@@ -83,7 +80,10 @@ impl Differentiator {
             if !moved {
                 sliding = Some(SlidingMoments::new(t, y, lo, m));
             }
-            out[i] = sliding.as_ref().map_or(f64::NAN, |s| s.slope_at(t[i]));
+            out[i] = sliding
+                .as_ref()
+                .and_then(SlidingMoments::cubic)
+                .map_or(f64::NAN, |c| c.slope_at(t[i]));
         }
         out
     }
@@ -165,9 +165,10 @@ impl SlidingMoments {
         true
     }
 
-    fn slope_at(&self, t: f64) -> f64 {
+    /// The window's least-squares cubic; `None` for a window without duration or a singular system.
+    fn cubic(&self) -> Option<LocalCubic> {
         if self.scale.is_nan() || self.scale <= 0.0 {
-            return f64::NAN;
+            return None;
         }
         let mut gram = [[0.0; DEGREE + 1]; DEGREE + 1];
         for (a, row) in gram.iter_mut().enumerate() {
@@ -175,11 +176,11 @@ impl SlidingMoments {
                 *g = self.tau_powers[a + b];
             }
         }
-        let Some(c) = solve4(gram, self.y_moments) else {
-            return f64::NAN;
-        };
-        let tau = (t - self.anchor) / self.scale;
-        (c[1] + tau * (2.0 * c[2] + tau * 3.0 * c[3])) / self.scale
+        Some(LocalCubic {
+            centre: self.anchor,
+            scale: self.scale,
+            coefficients: solve4(gram, self.y_moments)?,
+        })
     }
 }
 
@@ -213,14 +214,6 @@ fn solve4(
     Some(x)
 }
 
-fn powers(tau: f64) -> [f64; DEGREE + 1] {
-    let mut pow = [1.0; DEGREE + 1];
-    for p in 1..=DEGREE {
-        pow[p] = pow[p - 1] * tau;
-    }
-    pow
-}
-
 /// Recorded accelerations when the recording has them, otherwise the smoothing differentiator's
 /// estimate with the ship's default window. Returns whether they were estimated.
 pub fn accelerations_or_estimate(rec: &Recording, ship: &Ship) -> (Accelerations, bool) {
@@ -242,8 +235,9 @@ fn median_step(t: &[f64]) -> Option<f64> {
     Some(steps[steps.len() / 2])
 }
 
-/// The least-squares cubic through (t, y) in τ = (t − centre)/scale, centred and scaled to [−1, 1] so
-/// the normal equations stay well conditioned at any sampling rate.
+/// A least-squares cubic in τ = (t − centre)/scale, the window centred and scaled to [−1, 1] so the
+/// normal equations stay well conditioned at any sampling rate: a window's fit from its power sums
+/// ([`SlidingMoments::cubic`]).
 struct LocalCubic {
     centre: f64,
     scale: f64,
@@ -252,29 +246,7 @@ struct LocalCubic {
 
 impl LocalCubic {
     fn fit(t: &[f64], y: &[f64]) -> Option<LocalCubic> {
-        let centre = 0.5 * (t[0] + t[t.len() - 1]);
-        let scale = (t[t.len() - 1] - t[0]) / 2.0;
-        if scale.is_nan() || scale <= 0.0 {
-            return None;
-        }
-        let k = DEGREE + 1;
-        let mut gram = Mat::<f64>::zeros(k, k);
-        let mut rhs = Mat::<f64>::zeros(k, 1);
-        for (&tj, &yj) in t.iter().zip(y) {
-            let pow = powers((tj - centre) / scale);
-            for a in 0..k {
-                rhs[(a, 0)] += pow[a] * yj;
-                for b in 0..k {
-                    gram[(a, b)] += pow[a] * pow[b];
-                }
-            }
-        }
-        let c = gram.partial_piv_lu().solve(&rhs);
-        Some(LocalCubic {
-            centre,
-            scale,
-            coefficients: [c[(0, 0)], c[(1, 0)], c[(2, 0)], c[(3, 0)]],
-        })
+        SlidingMoments::new(t, y, 0, t.len().min(y.len())).cubic()
     }
 
     fn slope_at(&self, t: f64) -> f64 {

@@ -545,11 +545,12 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
         eprintln!("warning: {note}");
         warnings.push(note);
     }
-    for r in ds
+    let training: Vec<&shipid_io::DatasetRecording> = ds
         .recordings
         .iter()
         .filter(|r| a.recordings.is_empty() || a.recordings.contains(&r.file))
-    {
+        .collect();
+    for r in &training {
         let astern = r
             .recording
             .n
@@ -594,13 +595,10 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
         bar.finish_and_clear();
     }
     let (fit, mut file) = fitted?;
-    let trained_on = ds
-        .recordings
-        .iter()
-        .filter(|r| a.recordings.is_empty() || a.recordings.contains(&r.file));
-    if let Some(note) =
-        shipid_pipeline::validate::training_rates_note(fit.propeller_rate_hz, trained_on)
-    {
+    if let Some(note) = shipid_pipeline::validate::training_rates_note(
+        fit.propeller_rate_hz,
+        training.iter().copied(),
+    ) {
         eprintln!("note: {note}");
         warnings.push(note);
     }

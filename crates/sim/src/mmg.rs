@@ -296,9 +296,9 @@ impl MmgParameters {
                 value: self.w_p0,
             });
         }
+        let named = self.named();
         for &(name, domain, inside) in PHYSICAL_DOMAINS {
-            let value = self
-                .named()
+            let value = named
                 .iter()
                 .find(|(n, _)| *n == name)
                 .map_or(f64::NAN, |p| p.1);
