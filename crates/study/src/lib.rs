@@ -3,7 +3,7 @@
 //! ids), runs the cases in parallel with resume, and builds the result tables. No printing: progress
 //! goes through an optional bar the caller asks for.
 //!
-//! Module map: `study` (the file, its checks, the case grid) ← `runner` (per-case fit, validation,
+//! Module map: `study` (the file, its checks, the case grid; `raw_values` its values of more than one shape) ← `runner` (per-case fit, validation,
 //! stored results, typed statuses and outcomes) ← `tables` (summary, coefficients, diagnostics) and
 //! `record` (`study.toml`, `run.json`); `lock` (one run per output folder), `output` (no link inside
 //! the output folder followed out of it), `progress` (a bar or plain lines); `error`.
@@ -12,6 +12,7 @@ pub mod error;
 pub mod lock;
 pub mod output;
 pub mod progress;
+pub mod raw_values;
 pub mod record;
 pub mod runner;
 pub mod study;

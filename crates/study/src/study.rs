@@ -11,7 +11,7 @@
 //! sets = ["reduced32"]
 //! [training]
 //! recordings = [["zz35_35_ps.csv"], ["zz35_35_ps.csv", "tc35_ps.csv"]]  # combinations
-//! overshoots = { from = 1, to = 8 }             # or a list [1, 4], or omit for whole records
+//! overshoots = { from = 1, to = 8 }             # or a list [1, 4], one count 4, or omit: whole records
 //! [[estimator]]
 //! name = "ridge"
 //! lambda = [1e-6, 1e-4]                         # one case per value; or tune = true
@@ -47,28 +47,7 @@ pub use shipid_pipeline::fit::GP;
 pub const NO_SET: &str = "none";
 const NO_SOLVER: &str = "none";
 
-#[derive(Debug, Clone, Deserialize)]
-#[serde(untagged)]
-pub enum OneOrMany {
-    One(f64),
-    Many(Vec<f64>),
-}
-
-impl OneOrMany {
-    fn values(&self) -> Vec<f64> {
-        match self {
-            OneOrMany::One(x) => vec![*x],
-            OneOrMany::Many(v) => v.clone(),
-        }
-    }
-}
-
-#[derive(Debug, Clone, Deserialize)]
-#[serde(untagged)]
-pub enum OvershootSpec {
-    List(Vec<u32>),
-    Range { from: u32, to: u32 },
-}
+pub use crate::raw_values::{OneOrMany, OvershootSpec, TestRecordings};
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -110,14 +89,6 @@ pub struct RawEstimator {
     /// --inflow-from-thrust`); a study whose sets are all `mmg` only.
     #[serde(default)]
     pub inflow_from_thrust: bool,
-}
-
-#[derive(Debug, Clone, Deserialize)]
-#[serde(untagged)]
-pub enum TestRecordings {
-    /// "all"
-    Word(String),
-    List(Vec<String>),
 }
 
 #[derive(Debug, Clone, Deserialize)]
