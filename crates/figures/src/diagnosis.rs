@@ -71,6 +71,7 @@ pub fn track_figure(
         .build_cartesian_2d(x0..x1, y0..y1)?;
     chart
         .configure_mesh()
+        .label_style(("sans-serif", crate::TICK_LABEL_PX))
         .x_desc("east y0 / L")
         .y_desc("north x0 / L")
         .draw()?;
@@ -154,6 +155,7 @@ pub fn track_figure(
         .build_cartesian_2d(0.0..t_end, 0.0..1.05 * top_error)?;
     err_chart
         .configure_mesh()
+        .label_style(("sans-serif", crate::TICK_LABEL_PX))
         .x_desc("t [s]")
         .y_desc("|Δ position| / L")
         .draw()?;
@@ -212,6 +214,7 @@ pub fn residual_figure(
             .build_cartesian_2d(t0..t1, -lim..lim)?;
         chart
             .configure_mesh()
+            .label_style(("sans-serif", crate::TICK_LABEL_PX))
             .x_desc("t [s]")
             .y_desc(dofs[d])
             .draw()?;

@@ -39,6 +39,7 @@ pub fn write_modes(out: &Path, modes: &VariationModes) -> Result<()> {
         .build_cartesian_2d(0.5..n as f64 + 0.5, 0.0..100.0)?;
     chart
         .configure_mesh()
+        .label_style(("sans-serif", crate::TICK_LABEL_PX))
         .x_desc("mode")
         .y_desc("contribution [%]")
         .x_label_formatter(&|x| format!("{x:.0}"))
@@ -113,6 +114,7 @@ pub fn motions_figure(path: &PathBuf, target: &TargetShip, figures: &[MotionFigu
             .y_label_area_size(45)
             .build_cartesian_2d(-5.5..5.5, -1.0..6.0)?;
         c.configure_mesh()
+            .label_style(("sans-serif", crate::TICK_LABEL_PX))
             .x_desc("y0 / L")
             .y_desc("x0 / L")
             .draw()?;
@@ -181,6 +183,7 @@ pub fn motions_figure(path: &PathBuf, target: &TargetShip, figures: &[MotionFigu
                 .y_label_area_size(45)
                 .build_cartesian_2d(0.0..t_max, -55.0..55.0)?;
             c.configure_mesh()
+                .label_style(("sans-serif", crate::TICK_LABEL_PX))
                 .x_desc("t U0 / L")
                 .y_desc("ψ (coloured), δ (grey) [deg]")
                 .draw()?;

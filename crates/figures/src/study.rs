@@ -801,6 +801,7 @@ fn trajectories(
         .build_cartesian_2d(e0..e1, n0..n1)?;
     chart
         .configure_mesh()
+        .label_style(("sans-serif", crate::TICK_LABEL_PX))
         .x_desc("y0 / L (east) [-]")
         .y_desc("x0 / L (north) [-]")
         .axis_desc_style((FONT, 15))
@@ -898,6 +899,7 @@ fn heading(path: &Path, r: &DatasetRecording, sims: &[Prediction]) -> Result<()>
         let mut chart = b.build_cartesian_2d(t_range.0..t_range.1, y_range.0..y_range.1)?;
         chart
             .configure_mesh()
+            .label_style(("sans-serif", crate::TICK_LABEL_PX))
             .x_desc("time t [s]")
             .y_desc(desc)
             .axis_desc_style((FONT, 15))
@@ -1036,6 +1038,7 @@ fn convergence(path: &Path, rows: &[LongRow]) -> Result<bool> {
             .build_cartesian_2d(o_lo - 0.2..o_hi + 0.2, y.0.min(0.0)..y.1.max(1.2))?;
         chart
             .configure_mesh()
+            .label_style(("sans-serif", crate::TICK_LABEL_PX))
             .x_desc("overshoots in the training window [-]")
             .y_desc("β / β(most overshoots) [-]")
             .axis_desc_style((FONT, 14))
@@ -1119,6 +1122,7 @@ fn bars(path: &Path, set: &str, rows: &[LongRow], kind: BarKind) -> Result<()> {
         .build_cartesian_2d(0.0..n, (lo..hi).log_scale())?;
     chart
         .configure_mesh()
+        .label_style(("sans-serif", crate::TICK_LABEL_PX))
         .disable_x_mesh()
         .disable_x_axis()
         .y_desc(match kind {
@@ -1319,6 +1323,7 @@ fn metric_bands(path: &Path, study: &Study, summary: &Table, test: &str) -> Resu
             .build_cartesian_2d(-0.5..(n as f64 - 0.5), y_lo..y_hi)?;
         chart
             .configure_mesh()
+            .label_style(("sans-serif", crate::TICK_LABEL_PX))
             .disable_x_mesh()
             .x_labels(n.max(1))
             .x_label_formatter(&|x| format!("case {}", x.round() as i64 + 1))
@@ -1456,6 +1461,7 @@ fn forces(path: &Path, study: &Study, c: &CaseData, test: &str) -> Result<()> {
             .build_cartesian_2d(t_range.0..t_range.1, y_range.0..y_range.1)?;
         chart
             .configure_mesh()
+            .label_style(("sans-serif", crate::TICK_LABEL_PX))
             .x_desc("time t [s]")
             .y_desc(format!("{dof}' contribution [-]"))
             .axis_desc_style((FONT, 14))

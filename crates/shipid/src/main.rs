@@ -770,11 +770,12 @@ fn parse_window(text: &str) -> Result<shipid_pipeline::fit::WindowSpec, CliError
     if !(start_s.is_finite() && end_s.is_finite() && end_s > start_s) {
         return Err(bad());
     }
-    // Beyond this no recording runs; such a number would also print as hundreds of digits.
-    const MAX_WINDOW_S: f64 = 1e7;
-    if start_s.abs() > MAX_WINDOW_S || end_s.abs() > MAX_WINDOW_S {
+    // The largest time a recording may hold (its `t` is refused beyond it); such a number would also
+    // print as hundreds of digits.
+    let max_time_s = shipid_io::units::Quantity::T.bound_si();
+    if start_s.abs() > max_time_s || end_s.abs() > max_time_s {
         return Err(shipid::bad_input(format!(
-            "--window `{text}`: times beyond ±{MAX_WINDOW_S:e} s (116 days) are no recording's"
+            "--window `{text}`: times beyond ±{max_time_s:e} s, the largest a recording's `t` may hold, are no recording's"
         )));
     }
     Ok(shipid_pipeline::fit::WindowSpec::Time { start_s, end_s })
