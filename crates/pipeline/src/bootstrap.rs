@@ -24,9 +24,9 @@ use shipid_uncertainty::{BlockLength, SplitMix64, block_length, replicate_rows, 
 
 use crate::error::{PipelineError, bad_input};
 use crate::mmg::file::{MmgBootstrapRecord, ReplicateKind};
-use crate::mmg::identify::{EqSample, Problem};
+use crate::mmg::identify::EqSample;
 use crate::mmg::priors::{NONLINEAR_NAMES, ParamSpec, Role};
-use crate::mmg::{MmgEstimator, MmgFit, MmgFitOptions, training_samples};
+use crate::mmg::{MmgFit, MmgFitOptions, refit_problem};
 
 /// The bootstrap in words, as the model file states it.
 pub const METHOD: &str = "moving-block bootstrap of the training rows (blocks within each recording), \
@@ -374,31 +374,8 @@ pub fn bootstrap_mmg(
     seed: u64,
 ) -> Result<MmgBootstrap, PipelineError> {
     check_replicates(replicates)?;
-    let added = ds
-        .added_mass
-        .ok_or_else(|| bad_input(format!("{}: no [added_mass] table", ds.path.display())))?;
-    let mut opts = opts.clone();
-    if opts.propeller_rate_hz.is_none() {
-        opts.propeller_rate_hz = ds.propeller.as_ref().and_then(|p| p.rate_rps);
-    }
-    let samples = training_samples(ds, &opts)?.samples;
-    let specs: Vec<ParamSpec> = fit.estimate.params.iter().map(|p| p.spec.clone()).collect();
+    let (problem, start) = refit_problem(ds, fit, opts)?;
     let centre: Vec<f64> = fit.estimate.params.iter().map(|p| p.value).collect();
-    let value_of = |name: &str| {
-        specs
-            .iter()
-            .position(|s| s.name == name)
-            .map_or(f64::NAN, |k| centre[k])
-    };
-    let start: Vec<f64> = NONLINEAR_NAMES.iter().map(|n| value_of(n)).collect();
-    let problem = Problem::new(
-        ds.ship,
-        added,
-        fit.geometry,
-        samples,
-        specs,
-        fit.estimator == MmgEstimator::BoundedLsq,
-    )?;
     let all: Vec<usize> = (0..problem.samples.len()).collect();
     let (phi_hat, beta_hat, _) = problem.solve(&start, &all, fit.lambda)?;
     let theta_hat = mmg_theta(&problem.specs, &phi_hat, &beta_hat);

@@ -474,6 +474,7 @@ fn model_file(
                 standard_error: if found { se(k) } else { 0.0 },
                 data_share: if found { 1.0 } else { 0.0 },
                 determined_by_data: found,
+                jackknife_standard_error: None,
             }
         })
         .collect();
@@ -552,6 +553,7 @@ fn model_file(
             cv_folds_refined: false,
             refinement: None,
             thrust_inflow: None,
+            jackknife: None,
         },
         training: Vec::new(),
         parameters,

@@ -671,6 +671,7 @@ fn run_gp_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
 /// part of J ((residual RMS ÷ force RMS)²), `hyper_parameter` the prior weight λ; its identification
 /// range is the ellipsoid of its training states ([`shipid_pipeline::range::state_range_of`]).
 fn run_mmg_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
+    use shipid_pipeline::mmg::file::Identifiability;
     use shipid_pipeline::mmg::{MmgFitOptions, fit_mmg_model_file, write_mmg_model_file};
     let fitted = MmgFitOptions::from_spec(&case.estimator, &case.training, case.window)
         .and_then(|o| fit_mmg_model_file(&study.dataset, &o, case.estimator.refine));
@@ -689,16 +690,20 @@ fn run_mmg_case(study: &Study, case: &Case) -> (CaseResult, Option<String>) {
             .as_ref()
             .map(|g| outside_fraction(g, rec, &scale, 0..rec.len()))
     });
-    let prior_held: Vec<&str> = file
+    // On a bound, prior-held, moved by correlated parameters, or disputed by the recordings.
+    let undetermined: Vec<&str> = file
         .parameters
         .iter()
-        .filter(|p| !p.determined_by_data)
+        .filter(|p| p.identifiability() != Identifiability::DeterminedByData)
         .map(|p| p.name.as_str())
         .collect();
     let result = CaseResult {
         case_id: case.id.clone(),
         status: CaseStatus::Ok,
-        message: Some(format!("mmg: prior-held {}", prior_held.join(", "))),
+        message: Some(format!(
+            "mmg: not determined by the data: {}",
+            undetermined.join(", ")
+        )),
         fit_time_s: Some(fit.fit_time_s),
         samples: fit.samples,
         dofs: ["X", "Y", "N"]

@@ -79,7 +79,27 @@ pub struct MmgEstimatorEntry {
     /// The propeller inflow the training windows' recorded thrust measures.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub thrust_inflow: Option<ThrustInflowEntry>,
+    /// The delete-one-recording jackknife of the equation-error estimate (three or more training
+    /// recordings); each parameter's `jackknife_standard_error` comes from it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub jackknife: Option<JackknifeEntry>,
 }
+
+/// `[estimator.jackknife]`: the refits with one training recording left out in turn.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JackknifeEntry {
+    pub method: String,
+    /// The recording left out of each refit.
+    pub left_out: Vec<String>,
+    /// Refits that failed, with the reason; the standard errors are over the others.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub failed: Vec<String>,
+}
+
+/// A jackknife standard error this many times the information matrix's is reported: the samples'
+/// errors are then far from independent, and the information matrix's error is not the one to read.
+pub const JACKKNIFE_REPORT_RATIO: f64 = 2.0;
 
 /// `[estimator.thrust_inflow]`: the propeller's wake parameters as the recorded thrust measures them
 /// (the open-water curve inverted at K_T = T/(ρn²D⁴), 1 − w_P of the MMG wake model fitted to it).
@@ -112,7 +132,13 @@ pub struct ParamEntry {
     pub standard_error: f64,
     /// Share of the posterior precision that comes from the data, in [0, 1].
     pub data_share: f64,
+    /// The information matrix's verdict (`data_share` above `estimator.determined_share`, off its
+    /// bounds); [`ParamEntry::identifiability`] also weighs `jackknife_standard_error`.
     pub determined_by_data: bool,
+    /// Spread of the refits with each training recording left out (`[estimator.jackknife]`): the
+    /// standard error when the recordings' misfits are not independent samples.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub jackknife_standard_error: Option<f64>,
 }
 
 impl ParamEntry {
@@ -147,8 +173,12 @@ pub enum Identifiability {
     /// share; its standard error describes the problem without the bound.
     OnBound,
     /// More than [`DETERMINED_SHARE`](super::identify::DETERMINED_SHARE) of its precision from the
-    /// data.
+    /// data, by the information matrix and by the leave-one-recording-out jackknife when there is one.
     DeterminedByData,
+    /// Determined by the information matrix, but the refits without one recording spread it so far
+    /// that the data hold it no tighter than its prior does (jackknife share ≤
+    /// [`DETERMINED_SHARE`](super::identify::DETERMINED_SHARE)): the recordings disagree about it.
+    RecordingsDisagree,
     /// Little precision of its own from the data, yet more than [`PRIOR_HELD_SD`] prior sd from its
     /// prior: moved by the parameters it is correlated with.
     MovedByCorrelated,
@@ -162,10 +192,23 @@ impl ParamEntry {
         (self.value - self.prior).abs() / self.prior_sd.abs()
     }
 
+    /// The share of the prior's variance the recordings' disagreement leaves out,
+    /// 1 − (jackknife standard error / prior sd)², in [0, 1]; `None` without a jackknife.
+    pub fn jackknife_share(&self) -> Option<f64> {
+        let se = self.jackknife_standard_error?;
+        Some((1.0 - (se / self.prior_sd).powi(2)).clamp(0.0, 1.0))
+    }
+
     /// Which of [`Identifiability`]'s labels the fit's numbers support.
     pub fn identifiability(&self) -> Identifiability {
         if self.bound_reached().is_some() {
             Identifiability::OnBound
+        } else if self.determined_by_data
+            && self
+                .jackknife_share()
+                .is_some_and(|s| s <= super::identify::DETERMINED_SHARE)
+        {
+            Identifiability::RecordingsDisagree
         } else if self.determined_by_data {
             Identifiability::DeterminedByData
         } else if self.prior_distance_sd() > PRIOR_HELD_SD {
@@ -559,6 +602,58 @@ impl MmgModelFile {
                 .collect::<Vec<_>>()
                 .join(", ")
         ));
+        if let Some(j) = &e.jackknife {
+            let wide: Vec<String> = self
+                .parameters
+                .iter()
+                .filter(|p| p.identifiability() != Identifiability::OnBound)
+                .filter_map(|p| {
+                    let jse = p.jackknife_standard_error?;
+                    (jse > JACKKNIFE_REPORT_RATIO * p.standard_error).then(|| {
+                        format!(
+                            "{} ± {} (information ± {})",
+                            p.name,
+                            short(jse),
+                            short(p.standard_error)
+                        )
+                    })
+                })
+                .collect();
+            let refits = j.left_out.len() - j.failed.len();
+            lines.push(if wide.is_empty() {
+                format!(
+                    "  leave-one-recording-out ({refits} refits): no parameter spreads more than {JACKKNIFE_REPORT_RATIO} times its standard error"
+                )
+            } else {
+                format!(
+                    "  leave-one-recording-out ({refits} refits{}): the recordings disagree more than the information matrix allows about ({}) {} — read these standard errors, not the information matrix's, which counts every sample as independent",
+                    if j.failed.is_empty() {
+                        String::new()
+                    } else {
+                        format!(", {} failed: {}", j.failed.len(), j.failed.join("; "))
+                    },
+                    wide.len(),
+                    wide.join(", ")
+                )
+            });
+            let disputed = of(Identifiability::RecordingsDisagree);
+            if !disputed.is_empty() {
+                lines.push(format!(
+                    "  not determined: the recordings disagree ({}): {} — without one recording each moves about as far as its prior allows",
+                    disputed.len(),
+                    disputed
+                        .iter()
+                        .map(|p| format!(
+                            "{} (jackknife ± {}, prior sd {})",
+                            p.name,
+                            short(p.jackknife_standard_error.unwrap_or(f64::NAN)),
+                            short(p.prior_sd)
+                        ))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ));
+            }
+        }
         let moved = of(Identifiability::MovedByCorrelated);
         if !moved.is_empty() {
             lines.push(format!(

@@ -22,6 +22,7 @@ pub mod estimator;
 pub mod file;
 pub mod geometry;
 pub mod identify;
+pub mod jackknife;
 pub mod priors;
 pub mod refine;
 pub mod thrust;
@@ -37,8 +38,8 @@ use shipid_model::TrainingWindow;
 use shipid_sim::{Dynamics, MmgModel, State};
 
 pub use file::{
-    CvEntry, MMG_KIND, MmgEstimatorEntry, MmgModelFile, MmgValleyRecord, ParamEntry,
-    PropellerEntry, RudderEntry, ThrustInflowEntry, ValleyStartEntry, load_mmg_model,
+    CvEntry, JackknifeEntry, MMG_KIND, MmgEstimatorEntry, MmgModelFile, MmgValleyRecord,
+    ParamEntry, PropellerEntry, RudderEntry, ThrustInflowEntry, ValleyStartEntry, load_mmg_model,
     load_mmg_model_if_kind, write_mmg_model_file,
 };
 pub use geometry::MmgGeometry;
@@ -709,6 +710,45 @@ impl MmgFitOptions {
     }
 }
 
+/// The equation-error problem `fit` was made on (the training samples of `opts` in `ds`, its priors,
+/// bounds and estimator) and its propeller and rudder parameters φ, where every refit of it starts
+/// (the bootstrap's replicates, the jackknife's refits).
+pub(crate) fn refit_problem(
+    ds: &Dataset,
+    fit: &MmgFit,
+    opts: &MmgFitOptions,
+) -> Result<(Problem, Vec<f64>), PipelineError> {
+    let added = ds
+        .added_mass
+        .ok_or_else(|| bad_input(format!("{}: no [added_mass] table", ds.path.display())))?;
+    let mut opts = opts.clone();
+    if opts.propeller_rate_hz.is_none() {
+        opts.propeller_rate_hz = ds.propeller.as_ref().and_then(|p| p.rate_rps);
+    }
+    let samples = training_samples(ds, &opts)?.samples;
+    let specs: Vec<ParamSpec> = fit.estimate.params.iter().map(|p| p.spec.clone()).collect();
+    let value_of = |name: &str| {
+        fit.estimate
+            .params
+            .iter()
+            .find(|p| p.spec.name == name)
+            .map_or(f64::NAN, |p| p.value)
+    };
+    let start: Vec<f64> = priors::NONLINEAR_NAMES
+        .iter()
+        .map(|n| value_of(n))
+        .collect();
+    let problem = Problem::new(
+        ds.ship,
+        added,
+        fit.geometry,
+        samples,
+        specs,
+        fit.estimator == MmgEstimator::BoundedLsq,
+    )?;
+    Ok((problem, start))
+}
+
 /// `shipid fit --set mmg`: the fit of `ds` (propeller and rudder from its tables), refined when asked,
 /// and its model file (the caller anchors its training paths to where it writes it,
 /// `model_file::anchor_training`, which imports this module's loader).
@@ -729,8 +769,14 @@ pub fn fit_mmg_model_file(
         opts.refine_folds = Some(refine.clone());
     }
     let fit = fit_mmg_dataset(ds, &opts)?;
+    // Of the equation-error estimate, as its standard errors are: a refinement moves the values,
+    // not what the recordings say about them.
+    let jackknife = jackknife::recording_jackknife(ds, &fit, &opts)?;
     if !refine_after {
-        let file = model_file(&fit, added);
+        let mut file = model_file(&fit, added);
+        if let Some(j) = &jackknife {
+            add_jackknife(&mut file, j);
+        }
         return Ok((fit, file));
     }
     let started = Instant::now();
@@ -752,9 +798,28 @@ pub fn fit_mmg_model_file(
     };
     refined.fit_time_s += started.elapsed().as_secs_f64();
     let mut file = model_file(&refined, added);
+    if let Some(j) = &jackknife {
+        add_jackknife(&mut file, j);
+    }
     file.estimator.refinement = Some(how);
     file.valley = starts.as_deref().map(valley_record);
     Ok((refined, file))
+}
+
+/// Each parameter's jackknife standard error and `[estimator.jackknife]` into `file`.
+fn add_jackknife(file: &mut MmgModelFile, j: &jackknife::RecordingJackknife) {
+    for (p, se) in file.parameters.iter_mut().zip(&j.standard_errors) {
+        p.jackknife_standard_error = Some(*se);
+    }
+    file.estimator.jackknife = Some(JackknifeEntry {
+        method:
+            "delete-one-recording jackknife: the equation-error fit repeated with each training \
+                 recording left out (same priors, prior weight and start), standard error \
+                 √((g − 1)/g Σ (θ₋ᵢ − θ̄)²) over the g refits"
+                .into(),
+        left_out: j.left_out.clone(),
+        failed: j.failed.clone(),
+    });
 }
 
 /// The `[valley]` of a model file from its starts.
@@ -856,6 +921,7 @@ pub fn model_file(fit: &MmgFit, added: AddedMass) -> MmgModelFile {
                     standard_errors: named(&t.standard_errors),
                 }
             }),
+            jackknife: None,
         },
         training: fit.windows.clone(),
         parameters: fit
@@ -873,6 +939,7 @@ pub fn model_file(fit: &MmgFit, added: AddedMass) -> MmgModelFile {
                 standard_error: p.standard_error,
                 data_share: p.data_share,
                 determined_by_data: p.determined_by_data,
+                jackknife_standard_error: None,
             })
             .collect(),
         bootstrap: None,

@@ -10,6 +10,7 @@ mod family_calibration;
 mod generate_environment;
 mod mmg;
 mod mmg_identifiability;
+mod mmg_jackknife;
 mod mmg_model_file;
 mod out_of_kind;
 mod propeller_rate;

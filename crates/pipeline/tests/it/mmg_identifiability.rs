@@ -15,6 +15,7 @@ fn entry(value: f64, bounds: (f64, f64), prior: (f64, f64), share: f64) -> Param
         standard_error: 0.025,
         data_share: share,
         determined_by_data: share > 0.5,
+        jackknife_standard_error: None,
     }
 }
 
@@ -43,6 +44,45 @@ fn mmg_prior_held_label_of_a_parameter_far_from_its_prior() {
         OnBound,
     );
     check_label(entry(0.4, (0.0, 1.0), (0.5, 0.2), 0.9), DeterminedByData);
+}
+
+/// The jackknife over training recordings overrides the information matrix's "determined" when the
+/// refits without one recording spread a parameter as far as its prior allows.
+#[test]
+fn mmg_recordings_that_disagree_undo_determined_by_data() {
+    use Identifiability::*;
+    let with = |e: ParamEntry, jse: f64| ParamEntry {
+        jackknife_standard_error: Some(jse),
+        ..e
+    };
+    // X′_vv of the HSVA fit: share 0.99, jackknife ± 0.081 against a prior sd of 0.1.
+    check_label(
+        with(
+            entry(
+                -0.13,
+                (f64::NEG_INFINITY, f64::INFINITY),
+                (-0.013, 0.1),
+                0.99,
+            ),
+            0.081,
+        ),
+        RecordingsDisagree,
+    );
+    // X′_vr: jackknife ± 0.066 against a prior sd of 0.2 leaves the data most of the precision.
+    check_label(
+        with(
+            entry(0.028, (f64::NEG_INFINITY, f64::INFINITY), (0.0, 0.2), 1.0),
+            0.066,
+        ),
+        DeterminedByData,
+    );
+    // Not determined by the information matrix in the first place: the jackknife changes nothing.
+    check_label(
+        with(entry(0.9, (0.2, 2.0), (0.6, 0.2), 0.44), 0.5),
+        PriorHeld,
+    );
+    // On a bound, whatever the refits do.
+    check_label(with(entry(0.0, (0.0, 1.0), (0.5, 0.2), 0.9), 0.5), OnBound);
 }
 
 fn check_shape(values: &[f64], fit: f64, expected: Option<&str>) {
