@@ -15,10 +15,16 @@ use crate::PipelineError;
 /// Fewer training recordings leave too little to compare: each refit would lose half the data.
 pub const JACKKNIFE_MIN_RECORDINGS: usize = 3;
 
+/// At most this many refits: more training recordings are dealt round-robin into this many groups,
+/// each refit leaving one group out (the grouped jackknife), so that a data set of hundreds of short
+/// recordings costs 20 refits, not hundreds.
+pub const JACKKNIFE_MAX_GROUPS: usize = 20;
+
 /// The refits of a fit with each training recording left out in turn.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RecordingJackknife {
-    /// The training window left out of each refit, by its recording's file name.
+    /// The training windows left out of each refit, by their recordings' file names (one each up to
+    /// [`JACKKNIFE_MAX_GROUPS`] recordings, `a.csv + b.csv + …` beyond).
     pub left_out: Vec<String>,
     /// Those whose refit failed (named with the reason); the standard errors are over the others.
     pub failed: Vec<String>,
@@ -41,13 +47,14 @@ pub fn recording_jackknife(
     let (problem, start) = refit_problem(ds, fit, opts)?;
     let all: Vec<usize> = (0..problem.samples.len()).collect();
     let (phi_hat, _, _) = problem.solve(&start, &all, fit.lambda)?;
-    let refits: Vec<Result<Vec<f64>, String>> = (0..fit.windows.len())
+    let groups = group_count(fit.windows.len());
+    let refits: Vec<Result<Vec<f64>, String>> = (0..groups)
         .into_par_iter()
         .map(|g| {
             let kept: Vec<usize> = all
                 .iter()
                 .copied()
-                .filter(|&i| problem.samples[i].group != g)
+                .filter(|&i| problem.samples[i].group % groups != g)
                 .collect();
             let (phi, beta, _) = problem
                 .solve(&phi_hat, &kept, fit.lambda)
@@ -59,7 +66,17 @@ pub fn recording_jackknife(
             }
         })
         .collect();
-    let left_out: Vec<String> = fit.windows.iter().map(|w| w.recording.clone()).collect();
+    let left_out: Vec<String> = (0..groups)
+        .map(|g| {
+            fit.windows
+                .iter()
+                .skip(g)
+                .step_by(groups)
+                .map(|w| w.recording.as_str())
+                .collect::<Vec<_>>()
+                .join(" + ")
+        })
+        .collect();
     let failed: Vec<String> = refits
         .iter()
         .zip(&left_out)
@@ -73,6 +90,12 @@ pub fn recording_jackknife(
             standard_errors,
         }),
     )
+}
+
+/// How many refits a jackknife over `windows` training windows makes; window k is in group
+/// k mod that count.
+pub fn group_count(windows: usize) -> usize {
+    windows.min(JACKKNIFE_MAX_GROUPS)
 }
 
 /// √((g − 1)/g Σ (θᵢ − θ̄)²) per component over the g leave-one-out estimates; `None` for fewer than
@@ -97,6 +120,14 @@ pub fn jackknife_standard_errors(thetas: &[&Vec<f64>]) -> Option<Vec<f64>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn many_recordings_are_grouped_into_at_most_twenty_refits() {
+        assert_eq!(group_count(3), 3);
+        assert_eq!(group_count(13), 13);
+        assert_eq!(group_count(20), 20);
+        assert_eq!(group_count(500), JACKKNIFE_MAX_GROUPS);
+    }
 
     #[test]
     fn the_jackknife_of_a_mean_is_its_standard_error() {
