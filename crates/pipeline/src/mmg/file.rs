@@ -941,6 +941,17 @@ impl MmgModelFile {
                     ),
                 ));
             }
+            if let Some(se) = p.jackknife_standard_error
+                && !(se.is_finite() && se >= 0.0)
+            {
+                return Some((
+                    key("jackknife_standard_error"),
+                    format!(
+                        "{name}: must be a finite standard error ≥ 0, not {}",
+                        number(se)
+                    ),
+                ));
+            }
             // A fit's priors all have a width (a held inflow's at least 1e-9); a file that was not
             // fitted with priors (`inverse`, a published model) writes 0 for "no prior" and +∞ for
             // a prior of no weight.
