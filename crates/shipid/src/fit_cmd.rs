@@ -666,6 +666,11 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
             "set": "mmg",
             "estimator": file.estimator,
             "parameters": file.parameters,
+            "identifiability": file
+                .parameters
+                .iter()
+                .map(|p| (p.name.clone(), p.identifiability().label()))
+                .collect::<std::collections::BTreeMap<_, _>>(),
             "valley": file.valley,
             "on_bound": file
                 .parameters

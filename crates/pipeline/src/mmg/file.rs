@@ -186,6 +186,19 @@ pub enum Identifiability {
     PriorHeld,
 }
 
+impl Identifiability {
+    /// The label in `fit --json` (`identifiability` by parameter name).
+    pub fn label(self) -> &'static str {
+        match self {
+            Identifiability::OnBound => "on-bound",
+            Identifiability::DeterminedByData => "determined-by-data",
+            Identifiability::RecordingsDisagree => "recordings-disagree",
+            Identifiability::MovedByCorrelated => "moved-by-correlated",
+            Identifiability::PriorHeld => "prior-held",
+        }
+    }
+}
+
 impl ParamEntry {
     /// |value − prior| in prior standard deviations (∞ for a prior of no width).
     pub fn prior_distance_sd(&self) -> f64 {

@@ -85,6 +85,12 @@ fn a_turn_simulated_from_a_zigzag_fit_is_flagged_as_an_extrapolation() {
     let report: serde_json::Value = serde_json::from_slice(&fitted.stdout).unwrap();
     // The fit of the reference's own zig-zag leaves every parameter inside its bounds.
     assert_eq!(report["on_bound"], serde_json::json!([]), "{report}");
+    // Each parameter's label as the text output lists it (y_vvr is prior-held on this run).
+    assert_eq!(
+        report["identifiability"]["y_v"], "determined-by-data",
+        "{report}"
+    );
+    assert_eq!(report["identifiability"]["y_vvr"], "prior-held", "{report}");
     let extent = &report["training_extent"];
     assert!(
         extent["max_drift_deg"].as_f64().unwrap() > 17.0
