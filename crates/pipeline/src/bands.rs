@@ -508,12 +508,24 @@ pub fn valley_run(
                 .map(|out| metrics(&out.recording, m, ship)),
         })
         .collect();
+    let ranges = metric_ranges(
+        point,
+        std::iter::once(point).chain(members.iter().filter_map(|m| m.metrics.as_ref())),
+    );
+    ValleyRun { members, ranges }
+}
+
+/// (metric key, lo, hi) over `runs`, for the metrics `point` defines.
+fn metric_ranges<'a>(
+    point: &shipid_sim::Metrics,
+    runs: impl Iterator<Item = &'a shipid_sim::Metrics>,
+) -> Vec<(&'static str, f64, f64)> {
     let mut ranges: Vec<(&'static str, f64, f64)> = point
         .entries()
         .iter()
-        .filter_map(|(key, v)| v.map(|v| (*key, v, v)))
+        .filter_map(|(key, v)| v.map(|_| (*key, f64::INFINITY, f64::NEG_INFINITY)))
         .collect();
-    for k in members.iter().filter_map(|m| m.metrics.as_ref()) {
+    for k in runs {
         for (key, v) in k.entries() {
             if let (Some(v), Some(r)) = (v, ranges.iter_mut().find(|r| r.0 == key)) {
                 r.1 = r.1.min(v);
@@ -521,7 +533,100 @@ pub fn valley_run(
             }
         }
     }
-    ValleyRun { members, ranges }
+    ranges.retain(|r| r.1 <= r.2);
+    ranges
+}
+
+/// The refits of an mmg model file's `[estimator.jackknife]` (each without one training recording,
+/// `fit --set mmg` on three or more), which a prediction runs beside the point model: where their
+/// predictions differ, the training set decides the prediction.
+pub struct Jackknife {
+    /// (what the refit left out, its model).
+    pub members: Vec<(String, shipid_sim::MmgModel)>,
+}
+
+impl Jackknife {
+    /// What the jackknife's ranges mean, in words.
+    pub fn what(&self) -> &'static str {
+        "the fit repeated without each training recording in turn: a wide range says that which \
+         recordings trained the model decides this prediction (the standard error is the jackknife's, \
+         √((g − 1)/g Σ (m₋ᵢ − m̄)²))"
+    }
+}
+
+/// The jackknife refits of the model file `spec`: `None` for a built-in model, a file of another
+/// kind or an mmg file without stored refits. A damaged table names its key.
+pub fn jackknife_of(spec: &str) -> Result<Option<Jackknife>, PipelineError> {
+    let path = std::path::Path::new(spec);
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let (text, kind) = crate::environment::model_file_family_text(path)?;
+    if kind.as_deref() != Some(MMG_KIND) {
+        return Ok(None);
+    }
+    let file: MmgModelFile =
+        toml::from_str(&text).map_err(|e| InputError::toml(path, &text, &e))?;
+    file.to_model(path)?;
+    let members = file.jackknife_models(path)?;
+    Ok((!members.is_empty()).then_some(Jackknife { members }))
+}
+
+/// The jackknife through one manoeuvre: each refit's metrics (`None`: its run diverged), each
+/// metric's range over the refits and its jackknife standard error (only metrics the point run
+/// defines, and standard errors over at least three refits that define them).
+#[derive(Debug, Clone)]
+pub struct JackknifeRun {
+    pub members: Vec<(String, Option<shipid_sim::Metrics>)>,
+    pub ranges: Vec<(&'static str, f64, f64)>,
+    pub standard_errors: Vec<(&'static str, f64)>,
+}
+
+impl JackknifeRun {
+    /// Refits whose run diverged.
+    pub fn diverged(&self) -> usize {
+        self.members.iter().filter(|m| m.1.is_none()).count()
+    }
+}
+
+/// Run every refit of `jackknife` through `m` as `run` runs a model (as the point prediction whose
+/// metrics are `point` was run).
+pub fn jackknife_run(
+    jackknife: &Jackknife,
+    point: &shipid_sim::Metrics,
+    m: &Manoeuvre,
+    ship: &Ship,
+    run: impl Fn(&dyn Dynamics) -> Option<shipid_sim::SimOutput> + Sync,
+) -> JackknifeRun {
+    let members: Vec<(String, Option<shipid_sim::Metrics>)> = jackknife
+        .members
+        .par_iter()
+        .map(|(name, model)| {
+            let metrics = run(model)
+                .filter(|out| matches!(out.status, SimStatus::Ok))
+                .map(|out| metrics(&out.recording, m, ship));
+            (name.clone(), metrics)
+        })
+        .collect();
+    let runs: Vec<&shipid_sim::Metrics> = members.iter().filter_map(|m| m.1.as_ref()).collect();
+    let ranges = metric_ranges(point, runs.iter().copied());
+    let standard_errors = ranges
+        .iter()
+        .filter_map(|(key, _, _)| {
+            let values: Vec<Vec<f64>> = runs
+                .iter()
+                .filter_map(|k| k.entries().iter().find(|e| e.0 == *key)?.1)
+                .map(|v| vec![v])
+                .collect();
+            let refs: Vec<&Vec<f64>> = values.iter().collect();
+            crate::mmg::jackknife::jackknife_standard_errors(&refs).map(|se| (*key, se[0]))
+        })
+        .collect();
+    JackknifeRun {
+        members,
+        ranges,
+        standard_errors,
+    }
 }
 
 /// Posterior functions drawn per sparse-GP band, and the seed of their draws: the posterior is in the

@@ -291,6 +291,7 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
         .map(|level| ModelBands::of(a.model, level))
         .transpose()?;
     let valley = shipid_pipeline::bands::valley_of(a.model)?;
+    let jackknife = shipid_pipeline::bands::jackknife_of(a.model)?;
     // A slower approach (another propeller rate) takes longer to the same heading changes: the
     // default duration scales with L over the approach speed, not over U0.
     let duration_s = a.duration_s.or_else(|| {
@@ -392,19 +393,23 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
             o.insert("warnings".into(), json!(warnings));
         }
     }
+    // Each valley member and jackknife refit runs as the point model does: the same grid and
+    // environment, at the asked propeller rate from its own straight-run speed there.
+    let run_member = |member: &dyn Dynamics| match a.propeller_rate_hz {
+        Some(n) => at_propeller_rate(member, a.model, n)
+            .ok()
+            .and_then(|(d, u)| simulate_on_grid_in(&d, &m, &grid, env.clone(), u).ok()),
+        None => simulate_on_grid_in(member, &m, &grid, env.clone(), approach_m_s).ok(),
+    };
     if let (Some(v), SimStatus::Ok) = (&valley, &out.status) {
         let point = metrics(&out.recording, &m, model.ship());
-        // Each member runs as the point model does: the same grid and environment, at the asked
-        // propeller rate from its own straight-run speed there.
-        let run = shipid_pipeline::bands::valley_run(v, &point, &m, model.ship(), |member| match a
-            .propeller_rate_hz
-        {
-            Some(n) => at_propeller_rate(member, a.model, n)
-                .ok()
-                .and_then(|(d, u)| simulate_on_grid_in(&d, &m, &grid, env.clone(), u).ok()),
-            None => simulate_on_grid_in(member, &m, &grid, env.clone(), approach_m_s).ok(),
-        });
+        let run = shipid_pipeline::bands::valley_run(v, &point, &m, model.ship(), run_member);
         add_valley(&mut value, v, &run);
+    }
+    if let (Some(j), SimStatus::Ok) = (&jackknife, &out.status) {
+        let point = metrics(&out.recording, &m, model.ship());
+        let run = shipid_pipeline::bands::jackknife_run(j, &point, &m, model.ship(), run_member);
+        add_jackknife(&mut value, j, &run);
     }
     if let (Some(level), Some(replicates)) = (a.bands, &replicates) {
         let bands = replicates.bands(
@@ -465,8 +470,10 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
         for (k, v) in o {
             if k == "bands"
                 || k == "valley"
+                || k == "jackknife"
                 || k.ends_with("_band")
                 || k.ends_with("_valley")
+                || k.ends_with("_jackknife")
                 || k == "identification_range"
             {
                 continue;
@@ -483,12 +490,19 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
                     })
             };
             let (band, valley) = (range("band"), range("valley"));
+            let se = o
+                .get("jackknife")
+                .and_then(|j| j["standard_errors"][k].as_f64());
+            let jackknife = match se {
+                Some(se) => format!("{} ± {se:.4}", range("jackknife")),
+                None => range("jackknife"),
+            };
             // A metric with its unit and the digits its band has; other entries as they are.
             let shown = match (shipid_sim::metrics::metric_unit(k), v.as_f64()) {
                 (Some(unit), Some(x)) => format!("{x:.4} {unit}"),
                 _ => v.to_string(),
             };
-            println!("{k:>18}: {shown}{band}{valley}");
+            println!("{k:>18}: {shown}{band}{valley}{jackknife}");
         }
         if let Some(r) = &reach {
             println!(
@@ -505,6 +519,18 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
                 v.members.len(),
                 v.starts,
                 100.0 * v.cost_tolerance,
+                about["diverged"]
+                    .as_u64()
+                    .filter(|d| *d > 0)
+                    .map_or(String::new(), |d| format!(" ({d} of their runs diverged)")),
+                about["what"].as_str().unwrap_or_default()
+            );
+        }
+        if let Some(about) = o.get("jackknife") {
+            println!(
+                "{:>18}: {} refits{}: {}",
+                "jackknife",
+                about["refits"],
                 about["diverged"]
                     .as_u64()
                     .filter(|d| *d > 0)
@@ -641,6 +667,58 @@ fn add_bands(value: &mut Value, run: &RunBands, source: &ModelBands, with_track:
             bands.diverged,
             bands.replicates,
             source.noun()
+        );
+    }
+}
+
+/// The jackknife into the output: `<metric>_jackknife: [lo, hi]`, the range of the metric over the
+/// refits whose runs define it, and a `jackknife` object (each refit's metrics, diverged runs, each
+/// metric's jackknife standard error, what it means).
+fn add_jackknife(
+    value: &mut Value,
+    jackknife: &shipid_pipeline::bands::Jackknife,
+    run: &shipid_pipeline::bands::JackknifeRun,
+) {
+    let Value::Object(o) = value else { return };
+    for (key, lo, hi) in &run.ranges {
+        o.insert(format!("{key}_jackknife"), json!([lo, hi]));
+    }
+    let members: Vec<Value> = run
+        .members
+        .iter()
+        .map(|(left_out, metrics)| {
+            let mut member = match metrics.as_ref().map(serde_json::to_value) {
+                Some(Ok(Value::Object(k))) => k,
+                _ => Map::new(),
+            };
+            member.insert("left_out".into(), json!(left_out));
+            member.insert(
+                "status".into(),
+                json!(if metrics.is_some() { "ok" } else { "diverged" }),
+            );
+            Value::Object(member)
+        })
+        .collect();
+    let standard_errors: Map<String, Value> = run
+        .standard_errors
+        .iter()
+        .map(|(key, se)| (key.to_string(), json!(se)))
+        .collect();
+    o.insert(
+        "jackknife".into(),
+        json!({
+            "refits": jackknife.members.len(),
+            "diverged": run.diverged(),
+            "standard_errors": standard_errors,
+            "members": members,
+            "what": jackknife.what(),
+        }),
+    );
+    if run.diverged() > 0 {
+        eprintln!(
+            "warning: {} of the jackknife's {} refits diverged in this manoeuvre (its ranges are over the others)",
+            run.diverged(),
+            jackknife.members.len()
         );
     }
 }

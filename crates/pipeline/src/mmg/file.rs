@@ -90,11 +90,15 @@ pub struct MmgEstimatorEntry {
 #[serde(deny_unknown_fields)]
 pub struct JackknifeEntry {
     pub method: String,
-    /// The recording left out of each refit.
+    /// The recording(s) each refit that succeeded left out.
     pub left_out: Vec<String>,
     /// Refits that failed, with the reason; the standard errors are over the others.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub failed: Vec<String>,
+    /// Each parameter's value in every refit, in the order of `left_out`: `simulate` runs them
+    /// beside the model.
+    #[serde(default)]
+    pub values: BTreeMap<String, Vec<f64>>,
 }
 
 /// A jackknife standard error this many times the information matrix's is reported: the samples'
@@ -632,7 +636,7 @@ impl MmgModelFile {
                     })
                 })
                 .collect();
-            let refits = j.left_out.len() - j.failed.len();
+            let refits = j.left_out.len();
             lines.push(if wide.is_empty() {
                 format!(
                     "  leave-one-recording-out ({refits} refits): no parameter spreads more than {JACKKNIFE_REPORT_RATIO} times its standard error"
@@ -1121,7 +1125,74 @@ impl MmgModelFile {
         Ok(models)
     }
 
-    /// `[bootstrap]`, `[calibration]` and `[valley]` checked as `--bands` and `simulate` use them,
+    /// The refits of `[estimator.jackknife]` as models, each named by what it left out (none without
+    /// one, or without stored values); every parameter needs a finite value within its bounds per
+    /// refit. A fault names the file and the key.
+    pub fn jackknife_models(&self, path: &Path) -> Result<Vec<(String, MmgModel)>, PipelineError> {
+        let Some(j) = &self.estimator.jackknife else {
+            return Ok(Vec::new());
+        };
+        if j.values.is_empty() {
+            return Ok(Vec::new());
+        }
+        let at =
+            |key: String, msg: String| bad_input(format!("{}: key `{key}`: {msg}", path.display()));
+        if let Some(extra) = j
+            .values
+            .keys()
+            .find(|k| !self.parameters.iter().any(|p| &p.name == *k))
+        {
+            return Err(at(
+                format!("estimator.jackknife.values.{extra}"),
+                "is not a parameter of the model".into(),
+            ));
+        }
+        let mut columns = Vec::with_capacity(self.parameters.len());
+        for p in &self.parameters {
+            let key = format!("estimator.jackknife.values.{}", p.name);
+            let values = j.values.get(&p.name).ok_or_else(|| {
+                at(
+                    key.clone(),
+                    "missing: every refit gives every parameter".into(),
+                )
+            })?;
+            if values.len() != j.left_out.len() {
+                return Err(at(
+                    key,
+                    format!(
+                        "has {} values for the {} refits of `left_out`",
+                        values.len(),
+                        j.left_out.len()
+                    ),
+                ));
+            }
+            if let Some(v) = values
+                .iter()
+                .find(|v| !(v.is_finite() && (p.lower..=p.upper).contains(*v)))
+            {
+                return Err(at(
+                    key,
+                    format!(
+                        "{v} is not a finite number within the bounds [{}, {}]",
+                        p.lower, p.upper
+                    ),
+                ));
+            }
+            columns.push(values);
+        }
+        j.left_out
+            .iter()
+            .enumerate()
+            .map(|(k, name)| {
+                let values: Vec<f64> = columns.iter().map(|c| c[k]).collect();
+                let key = format!("estimator.jackknife.values[{k}]");
+                Ok((name.clone(), self.model_with(&values, path, &key)?))
+            })
+            .collect()
+    }
+
+    /// `[bootstrap]`, `[calibration]`, `[valley]` and the jackknife's refits checked as `--bands` and
+    /// `simulate` use them,
     /// whichever command reads the file: a NaN replicate read without `--bands` went unsaid while
     /// the same file's bands were refused. A fault names the file and the key.
     pub fn check_optional_tables(&self, path: &Path) -> Result<(), PipelineError> {
@@ -1141,6 +1212,7 @@ impl MmgModelFile {
             }
         }
         self.valley_models(path)?;
+        self.jackknife_models(path)?;
         Ok(())
     }
 

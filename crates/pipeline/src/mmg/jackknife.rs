@@ -30,6 +30,8 @@ pub struct RecordingJackknife {
     pub failed: Vec<String>,
     /// Per parameter (the fit's order), √((g − 1)/g Σ (θ₋ᵢ − θ̄)²) over the g refits.
     pub standard_errors: Vec<f64>,
+    /// Each refit that succeeded: what it left out and its parameters (the fit's order).
+    pub refits: Vec<(String, Vec<f64>)>,
 }
 
 /// The delete-one-recording jackknife of `fit` on its training samples (`opts`, as the fit was made),
@@ -83,11 +85,17 @@ pub fn recording_jackknife(
         .filter_map(|(r, name)| r.as_ref().err().map(|why| format!("{name}: {why}")))
         .collect();
     let thetas: Vec<&Vec<f64>> = refits.iter().filter_map(|r| r.as_ref().ok()).collect();
+    let kept: Vec<(String, Vec<f64>)> = refits
+        .iter()
+        .zip(&left_out)
+        .filter_map(|(r, name)| r.as_ref().ok().map(|t| (name.clone(), t.clone())))
+        .collect();
     Ok(
         jackknife_standard_errors(&thetas).map(|standard_errors| RecordingJackknife {
             left_out,
             failed,
             standard_errors,
+            refits: kept,
         }),
     )
 }

@@ -817,8 +817,17 @@ fn add_jackknife(file: &mut MmgModelFile, j: &jackknife::RecordingJackknife) {
                  recording left out (same priors, prior weight and start), standard error \
                  √((g − 1)/g Σ (θ₋ᵢ − θ̄)²) over the g refits"
                 .into(),
-        left_out: j.left_out.clone(),
+        left_out: j.refits.iter().map(|(name, _)| name.clone()).collect(),
         failed: j.failed.clone(),
+        values: file
+            .parameters
+            .iter()
+            .enumerate()
+            .map(|(k, p)| {
+                let values = j.refits.iter().map(|(_, theta)| theta[k]).collect();
+                (p.name.clone(), values)
+            })
+            .collect(),
     });
 }
 

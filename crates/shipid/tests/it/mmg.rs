@@ -201,6 +201,62 @@ fn mmg_from_the_hsva_zigzags_predicts_the_35_degree_turn_of_docs_mmg() {
         let d = simulated(model, &format!("turning:35:{side}"), "tactical_diameter");
         assert!((3.4..3.9).contains(&d), "{side}: tactical diameter {d} L");
     }
+    // docs/mmg.md, Identifiability: the 13 refits without one zig-zag spread the steady turn by
+    // about ±10 % (the 35°/5° run decides it), the advance by about 1 %.
+    let out = shipid_ok(&[
+        "simulate",
+        model,
+        "--manoeuvre",
+        "turning:35:port",
+        "--json",
+    ]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["jackknife"]["refits"], 13, "{v}");
+    let se = |metric: &str| v["jackknife"]["standard_errors"][metric].as_f64().unwrap();
+    let relative = |metric: &str| se(metric) / v[metric].as_f64().unwrap();
+    assert!(relative("steady_diameter") > 0.05, "{v}");
+    assert!(relative("advance") < 0.03, "{v}");
+}
+
+/// A fit on three or more recordings carries its jackknife refits, and `simulate` runs them beside
+/// the model: on the default data's four zig-zags (one model, no noise) they agree.
+#[test]
+fn simulate_runs_the_jackknife_refits_of_an_mmg_fit_beside_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("mmg.toml");
+    let model = model.to_str().unwrap();
+    shipid_ok(&[
+        "fit",
+        "data/kvlcc2-mmg/dataset.toml",
+        "--set",
+        "mmg",
+        "--recordings",
+        "zz10_10_ps.csv,zz20_20_ps.csv,zz35_35_ps.csv,zz35_35_sb.csv",
+        "--out",
+        model,
+    ]);
+    let out = shipid_ok(&[
+        "simulate",
+        model,
+        "--manoeuvre",
+        "turning:35:starboard",
+        "--json",
+    ]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["jackknife"]["refits"], 4, "{v}");
+    assert_eq!(v["jackknife"]["diverged"], 0, "{v}");
+    let point = v["tactical_diameter"].as_f64().unwrap();
+    let range = &v["tactical_diameter_jackknife"];
+    let (lo, hi) = (range[0].as_f64().unwrap(), range[1].as_f64().unwrap());
+    assert!(lo <= hi && hi - lo < 0.01 * point, "{point} [{lo}, {hi}]");
+    assert!((lo - point).abs() < 0.01 * point, "{point} [{lo}, {hi}]");
+    let text = shipid_ok(&["simulate", model, "--manoeuvre", "turning:35:starboard"]);
+    let text = String::from_utf8_lossy(&text.stdout);
+    assert!(text.contains("jackknife: 4 refits"), "{text}");
+    assert!(
+        text.contains("tactical_diameter:") && text.contains("jackknife ["),
+        "{text}"
+    );
 }
 
 #[test]
