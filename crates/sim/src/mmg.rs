@@ -290,12 +290,6 @@ impl MmgParameters {
                 return Err(MmgError::InvalidParameter { name, value });
             }
         }
-        if self.w_p0 >= 1.0 {
-            return Err(MmgError::InvalidParameter {
-                name: "w_p0",
-                value: self.w_p0,
-            });
-        }
         let named = self.named();
         for &(name, domain, inside) in PHYSICAL_DOMAINS {
             let value = named
@@ -322,6 +316,11 @@ impl MmgParameters {
 type Domain = (&'static str, &'static str, fn(f64) -> bool);
 const PHYSICAL_DOMAINS: &[Domain] = &[
     ("r0", "R′₀ ≥ 0: a resistance", |v| v >= 0.0),
+    (
+        "w_p0",
+        "w_P0 < 1: keeps the propeller's inflow 1 − w_P0 positive",
+        |v| v < 1.0,
+    ),
     ("t_p", "0 ≤ t_P < 1: a thrust deduction", |v| {
         (0.0..1.0).contains(&v)
     }),

@@ -173,6 +173,7 @@ fn propeller_and_rudder_parameters_outside_their_physical_domain_are_refused() {
     check_domain(|p| p.c1 = -1.0, Err("c1"));
     check_domain(|p| p.c2_neg = -0.5, Err("c2_neg"));
     check_domain(|p| p.r0 = -0.01, Err("r0"));
+    check_domain(|p| p.w_p0 = 1.0, Err("w_p0"));
     // The edges of every fit's bounds (docs/mmg.md) lie inside.
     check_domain(
         |p| {
