@@ -629,6 +629,87 @@ pub fn jackknife_run(
     }
 }
 
+/// Models a prediction runs beside the point model: the valley of a refined fit (`--tune
+/// --refine`), or the refits of its jackknife (three or more training recordings).
+#[derive(Clone, Copy)]
+pub enum Beside<'a> {
+    Valley(&'a Valley),
+    Jackknife(&'a Jackknife),
+}
+
+impl Beside<'_> {
+    /// Each metric's range over the members through `m` (each run as `run` runs a model, as the
+    /// point prediction whose metrics are `point` was), and how many of their runs diverged.
+    pub fn ranges(
+        &self,
+        point: &shipid_sim::Metrics,
+        m: &Manoeuvre,
+        ship: &Ship,
+        run: impl Fn(&dyn Dynamics) -> Option<shipid_sim::SimOutput> + Sync,
+    ) -> (Vec<(&'static str, f64, f64)>, usize) {
+        match self {
+            Beside::Valley(v) => {
+                let r = valley_run(v, point, m, ship, run);
+                let diverged = r.diverged();
+                (r.ranges, diverged)
+            }
+            Beside::Jackknife(j) => {
+                let r = jackknife_run(j, point, m, ship, run);
+                let diverged = r.diverged();
+                (r.ranges, diverged)
+            }
+        }
+    }
+}
+
+/// A recorded metric against a range over models beside the point model: (recording, metric,
+/// recorded, predicted, (lo, hi), inside).
+pub type RangeRow = (String, &'static str, f64, f64, (f64, f64), bool);
+
+/// Each recorded metric of every recording whose closed-loop re-simulation `validated` holds, against
+/// its range over `beside` (each member re-simulated as the validation re-simulated the model, whose
+/// metrics are taken from there), and the members' runs that diverged.
+pub fn recorded_in_ranges(
+    validated: &[crate::validate::ValidatedRecording],
+    model_spec: &str,
+    ds: &shipid_io::Dataset,
+    beside: Beside,
+) -> (Vec<RangeRow>, usize) {
+    let windage = crate::validate::validation_windage(model_spec, ds);
+    let mut rows = Vec::new();
+    let mut diverged = 0;
+    for v in validated {
+        let (Some(r), Some(comparison)) = (ds.recording(&v.file), &v.validation.manoeuvre) else {
+            continue;
+        };
+        let Some(point) = &comparison.predicted else {
+            continue;
+        };
+        let env = crate::validate::validation_environment(&windage, ds, r);
+        let (ranges, gone) = beside.ranges(point, &r.manoeuvre, &ds.ship, |m| {
+            closed_loop_in(m, r, &ds.ship, env.clone())
+        });
+        diverged += gone;
+        for ((key, value), (_, predicted)) in
+            comparison.recorded.entries().iter().zip(point.entries())
+        {
+            let range = ranges.iter().find(|x| x.0 == *key).map(|x| (x.1, x.2));
+            let (Some(value), Some(predicted), Some((lo, hi))) = (*value, predicted, range) else {
+                continue;
+            };
+            rows.push((
+                r.file.clone(),
+                *key,
+                value,
+                predicted,
+                (lo, hi),
+                lo <= value && value <= hi,
+            ));
+        }
+    }
+    (rows, diverged)
+}
+
 /// Posterior functions drawn per sparse-GP band, and the seed of their draws: the posterior is in the
 /// model file, so its bands need no replicates stored; a fixed seed makes them reproducible.
 pub const GP_DRAWS: usize = 200;

@@ -36,14 +36,22 @@ pub fn training_range_warnings(model_spec: &str, what: &str) -> Vec<String> {
 /// Validates `model` on every recording of `ds` and prints the table (or the JSON with `as_json`);
 /// `SomeFailed` when a simulation diverged.
 pub fn validation(model: &dyn Dynamics, model_spec: &str, ds: &Dataset, as_json: bool) -> Outcome {
-    validation_with_bands(model, model_spec, ds, as_json, None, None)
+    validation_with_bands(model, model_spec, ds, as_json, None, None, None)
 }
 
 /// The JSON report `shipid validate MODEL DATASET --json` prints, returned instead of printed (for a
 /// command that puts it beside its own report), with the validation's outcome.
 pub fn validation_value(model: &dyn Dynamics, model_spec: &str, ds: &Dataset) -> (Value, Outcome) {
     let mut value = Value::Null;
-    let outcome = validation_into(model, model_spec, ds, Emit::Into(&mut value), None, None);
+    let outcome = validation_into(
+        model,
+        model_spec,
+        ds,
+        Emit::Into(&mut value),
+        None,
+        None,
+        None,
+    );
     (value, outcome)
 }
 
@@ -53,56 +61,6 @@ enum Emit<'a> {
     Text,
     Json,
     Into(&'a mut Value),
-}
-
-/// Each recorded metric against the valley's range: `(recording, metric, recorded, predicted, (lo,
-/// hi), inside)`.
-type ValleyRow = (String, &'static str, f64, f64, (f64, f64), bool);
-
-/// The valley rows of every recording whose closed-loop re-simulation `validated` holds (each member
-/// re-simulated as validate re-simulated the model, whose metrics are taken from there), and the
-/// members' runs that diverged.
-fn valley_rows(
-    validated: &[shipid_pipeline::validate::ValidatedRecording],
-    model_spec: &str,
-    ds: &Dataset,
-    valley: &shipid_pipeline::bands::Valley,
-) -> (Vec<ValleyRow>, usize) {
-    let windage = shipid_pipeline::validate::validation_windage(model_spec, ds);
-    let mut rows = Vec::new();
-    let mut diverged = 0;
-    for v in validated {
-        let (Some(r), Some(comparison)) = (ds.recording(&v.file), &v.validation.manoeuvre) else {
-            continue;
-        };
-        let Some(point) = &comparison.predicted else {
-            continue;
-        };
-        let env = shipid_pipeline::validate::validation_environment(&windage, ds, r);
-        let members =
-            shipid_pipeline::bands::valley_run(valley, point, &r.manoeuvre, &ds.ship, |m| {
-                shipid_pipeline::validate::closed_loop_in(m, r, &ds.ship, env.clone())
-            });
-        diverged += members.diverged();
-        for ((key, value), (_, predicted)) in
-            comparison.recorded.entries().iter().zip(point.entries())
-        {
-            let (Some(value), Some(predicted), Some((lo, hi))) =
-                (*value, predicted, members.range(key))
-            else {
-                continue;
-            };
-            rows.push((
-                r.file.clone(),
-                *key,
-                value,
-                predicted,
-                (lo, hi),
-                lo <= value && value <= hi,
-            ));
-        }
-    }
-    (rows, diverged)
 }
 
 /// The bands `validate --bands LEVEL` checks the recorded metrics against: calibrated when the
@@ -256,9 +214,10 @@ pub fn validation_with_bands(
     as_json: bool,
     bands: Option<BandCheck>,
     valley: Option<&shipid_pipeline::bands::Valley>,
+    jackknife: Option<&shipid_pipeline::bands::Jackknife>,
 ) -> Outcome {
     let emit = if as_json { Emit::Json } else { Emit::Text };
-    validation_into(model, model_spec, ds, emit, bands, valley)
+    validation_into(model, model_spec, ds, emit, bands, valley, jackknife)
 }
 
 fn validation_into(
@@ -268,6 +227,7 @@ fn validation_into(
     emit: Emit<'_>,
     bands: Option<BandCheck>,
     valley: Option<&shipid_pipeline::bands::Valley>,
+    jackknife: Option<&shipid_pipeline::bands::Jackknife>,
 ) -> Outcome {
     let as_json = !matches!(emit, Emit::Text);
     let (rows, source) = validate_dataset(model, model_spec, ds);
@@ -425,9 +385,43 @@ fn validation_into(
         }
         o.insert("bands".into(), about);
     }
-    let valley_check = valley
-        .filter(|v| !v.members.is_empty())
-        .map(|v| (v, valley_rows(&rows, model_spec, ds, v)));
+    let valley_check = valley.filter(|v| !v.members.is_empty()).map(|v| {
+        let beside = shipid_pipeline::bands::Beside::Valley(v);
+        (
+            v,
+            shipid_pipeline::bands::recorded_in_ranges(&rows, model_spec, ds, beside),
+        )
+    });
+    let jackknife_check = jackknife.map(|j| {
+        let beside = shipid_pipeline::bands::Beside::Jackknife(j);
+        (
+            j,
+            shipid_pipeline::bands::recorded_in_ranges(&rows, model_spec, ds, beside),
+        )
+    });
+    if let (Some((j, (rows, diverged))), Value::Object(o)) = (&jackknife_check, &mut value) {
+        let mut per: Map<String, Value> = Map::new();
+        for (file, metric, recorded, predicted, (lo, hi), inside) in rows {
+            if let Value::Object(m) = per
+                .entry(file.clone())
+                .or_insert_with(|| Value::Object(Map::new()))
+            {
+                m.insert(
+                    (*metric).into(),
+                    json!({ "recorded": recorded, "predicted": predicted, "jackknife": [lo, hi], "inside": inside }),
+                );
+            }
+        }
+        o.insert(
+            "jackknife".into(),
+            json!({
+                "refits": j.members.len(),
+                "diverged_runs": diverged,
+                "what": j.what(),
+                "recordings": per,
+            }),
+        );
+    }
     if let (Some((v, (rows, diverged))), Value::Object(o)) = (&valley_check, &mut value) {
         let mut per: Map<String, Value> = Map::new();
         for (file, metric, recorded, predicted, (lo, hi), inside) in rows {
@@ -626,6 +620,31 @@ fn validation_into(
         let inside = rows.iter().filter(|r| r.5).count();
         println!(
             "inside: {inside} of {} recorded metrics lie in the valley's range",
+            rows.len()
+        );
+    }
+    if !as_json && let Some((j, (rows, diverged))) = &jackknife_check {
+        println!(
+            "\njackknife: {} refits, each without one training recording ({} of their runs diverged): {}",
+            j.members.len(),
+            diverged,
+            j.what()
+        );
+        println!(
+            "{:<16} {:<18} {:>5} {:>10} {:>10} {:>22} {:>7}",
+            "recording", "metric", "unit", "recorded", "predicted", "jackknife", "inside"
+        );
+        for (file, metric, recorded, predicted, (lo, hi), inside) in rows {
+            let unit = shipid_sim::metrics::metric_unit(metric).unwrap_or("");
+            println!(
+                "{file:<16} {metric:<18} {unit:>5} {recorded:>10.4} {predicted:>10.4} {:>22} {:>7}",
+                format!("[{lo:.4}, {hi:.4}]"),
+                if *inside { "yes" } else { "no" }
+            );
+        }
+        let inside = rows.iter().filter(|r| r.5).count();
+        println!(
+            "inside: {inside} of {} recorded metrics lie in the jackknife's range (not a band of the truth: how far the training set moves the prediction)",
             rows.len()
         );
     }

@@ -28,6 +28,7 @@ pub fn run(
         .map(|level| shipid_pipeline::calibration::ModelBands::of(model_spec, level))
         .transpose()?;
     let valley = shipid_pipeline::bands::valley_of(model_spec)?;
+    let jackknife = shipid_pipeline::bands::jackknife_of(model_spec)?;
     let ds = Dataset::load(dataset)?;
     shipid_pipeline::validate::require_recordings(&ds)?;
     // Validation still runs: its errors are what the user asked for; the warnings say what they
@@ -50,6 +51,7 @@ pub fn run(
             .zip(replicates.as_ref())
             .map(|(level, source)| crate::print::BandCheck { level, source }),
         valley.as_ref(),
+        jackknife.as_ref(),
     ))
 }
 

@@ -257,6 +257,20 @@ fn simulate_runs_the_jackknife_refits_of_an_mmg_fit_beside_it() {
         text.contains("tactical_diameter:") && text.contains("jackknife ["),
         "{text}"
     );
+    // validate checks each recorded metric against the refits' range.
+    let out = shipid_ok(&["validate", model, "data/kvlcc2-mmg/dataset.toml", "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["jackknife"]["refits"], 4, "{v}");
+    let turn = &v["jackknife"]["recordings"]["tc35_sb.csv"]["tactical_diameter"];
+    let recorded = turn["recorded"].as_f64().unwrap();
+    let (lo, hi) = (
+        turn["jackknife"][0].as_f64().unwrap(),
+        turn["jackknife"][1].as_f64().unwrap(),
+    );
+    assert!(
+        lo <= hi && (recorded - 0.5 * (lo + hi)).abs() < 0.01 * recorded,
+        "{turn}"
+    );
 }
 
 #[test]
