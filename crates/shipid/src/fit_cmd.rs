@@ -696,7 +696,18 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
     if a.validate {
         let spec = a.out.to_string_lossy();
         let model = load_model(&spec)?;
-        return Ok(crate::print::validation(model.as_ref(), &spec, &ds, a.json));
+        // As `validate` of the written file: its valley and jackknife ranges beside the table.
+        let valley = shipid_pipeline::bands::valley_of(&spec)?;
+        let jackknife = shipid_pipeline::bands::jackknife_of(&spec)?;
+        return Ok(crate::print::validation_with_bands(
+            model.as_ref(),
+            &spec,
+            &ds,
+            a.json,
+            None,
+            valley.as_ref(),
+            jackknife.as_ref(),
+        ));
     }
     Ok(Outcome::Ok)
 }
