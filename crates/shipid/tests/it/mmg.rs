@@ -271,6 +271,21 @@ fn simulate_runs_the_jackknife_refits_of_an_mmg_fit_beside_it() {
         lo <= hi && (recorded - 0.5 * (lo + hi)).abs() < 0.01 * recorded,
         "{turn}"
     );
+    // fit --validate shows the same table as validate of the written file.
+    let again = dir.path().join("again.toml");
+    let out = shipid_ok(&[
+        "fit",
+        "data/kvlcc2-mmg/dataset.toml",
+        "--set",
+        "mmg",
+        "--recordings",
+        "zz10_10_ps.csv,zz20_20_ps.csv,zz35_35_ps.csv,zz35_35_sb.csv",
+        "--out",
+        again.to_str().unwrap(),
+        "--validate",
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("lie in the jackknife's range"), "{text}");
 }
 
 #[test]
