@@ -432,28 +432,43 @@ impl Valley {
     }
 }
 
-/// The `[valley]` of the model file `spec`: `None` for a built-in model, a file of another kind or an
-/// mmg file without one (fitted without `--tune --refine`). A damaged `[valley]` names its key.
-pub fn valley_of(spec: &str) -> Result<Option<Valley>, PipelineError> {
+/// The models a prediction runs beside an mmg model file's own: its valley and its jackknife refits.
+#[derive(Default)]
+pub struct BesideModels {
+    /// `[valley]` (`fit --tune --refine`).
+    pub valley: Option<Valley>,
+    /// `[estimator.jackknife]` with its refits' values (three or more training recordings).
+    pub jackknife: Option<Jackknife>,
+}
+
+/// The [`BesideModels`] of the model file `spec`, read once: none for a built-in model, a file of
+/// another kind or an mmg file without them. A damaged table names its key.
+pub fn beside_of(spec: &str) -> Result<BesideModels, PipelineError> {
     let path = std::path::Path::new(spec);
     if !path.is_file() {
-        return Ok(None);
+        return Ok(BesideModels::default());
     }
     let (text, kind) = crate::environment::model_file_family_text(path)?;
     if kind.as_deref() != Some(MMG_KIND) {
-        return Ok(None);
+        return Ok(BesideModels::default());
     }
     let file: MmgModelFile =
         toml::from_str(&text).map_err(|e| InputError::toml(path, &text, &e))?;
-    let Some(record) = &file.valley else {
-        return Ok(None);
-    };
+    if file.valley.is_none() && file.estimator.jackknife.is_none() {
+        return Ok(BesideModels::default());
+    }
     file.to_model(path)?;
-    Ok(Some(Valley {
-        cost_tolerance: record.cost_tolerance,
-        starts: record.starts.len(),
-        members: file.valley_models(path)?,
-    }))
+    let valley = match &file.valley {
+        Some(record) => Some(Valley {
+            cost_tolerance: record.cost_tolerance,
+            starts: record.starts.len(),
+            members: file.valley_models(path)?,
+        }),
+        None => None,
+    };
+    let members = file.jackknife_models(path)?;
+    let jackknife = (!members.is_empty()).then_some(Jackknife { members });
+    Ok(BesideModels { valley, jackknife })
 }
 
 /// One member of a valley through one manoeuvre: its start, cost ratio and metrics (`None`: its run
@@ -554,24 +569,6 @@ impl Jackknife {
     }
 }
 
-/// The jackknife refits of the model file `spec`: `None` for a built-in model, a file of another
-/// kind or an mmg file without stored refits. A damaged table names its key.
-pub fn jackknife_of(spec: &str) -> Result<Option<Jackknife>, PipelineError> {
-    let path = std::path::Path::new(spec);
-    if !path.is_file() {
-        return Ok(None);
-    }
-    let (text, kind) = crate::environment::model_file_family_text(path)?;
-    if kind.as_deref() != Some(MMG_KIND) {
-        return Ok(None);
-    }
-    let file: MmgModelFile =
-        toml::from_str(&text).map_err(|e| InputError::toml(path, &text, &e))?;
-    file.to_model(path)?;
-    let members = file.jackknife_models(path)?;
-    Ok((!members.is_empty()).then_some(Jackknife { members }))
-}
-
 /// The jackknife through one manoeuvre: each refit's metrics (`None`: its run diverged), each
 /// metric's range over the refits and its jackknife standard error (only metrics the point run
 /// defines, and standard errors over at least three refits that define them).
@@ -613,12 +610,11 @@ pub fn jackknife_run(
     let standard_errors = ranges
         .iter()
         .filter_map(|(key, _, _)| {
-            let values: Vec<Vec<f64>> = runs
+            let values: Vec<f64> = runs
                 .iter()
                 .filter_map(|k| k.entries().iter().find(|e| e.0 == *key)?.1)
-                .map(|v| vec![v])
                 .collect();
-            let refs: Vec<&Vec<f64>> = values.iter().collect();
+            let refs: Vec<&[f64]> = values.iter().map(std::slice::from_ref).collect();
             crate::mmg::jackknife::jackknife_standard_errors(&refs).map(|se| (*key, se[0]))
         })
         .collect();

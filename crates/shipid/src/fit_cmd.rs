@@ -697,8 +697,8 @@ fn run_mmg(a: FitArgs<'_>) -> Result<Outcome, CliError> {
         let spec = a.out.to_string_lossy();
         let model = load_model(&spec)?;
         // As `validate` of the written file: its valley and jackknife ranges beside the table.
-        let valley = shipid_pipeline::bands::valley_of(&spec)?;
-        let jackknife = shipid_pipeline::bands::jackknife_of(&spec)?;
+        let shipid_pipeline::bands::BesideModels { valley, jackknife } =
+            shipid_pipeline::bands::beside_of(&spec)?;
         return Ok(crate::print::validation_with_bands(
             model.as_ref(),
             &spec,

@@ -63,6 +63,48 @@ enum Emit<'a> {
     Into(&'a mut Value),
 }
 
+/// Recorded metrics against a range over models beside the point model, by recording and metric:
+/// `{recorded, predicted, <range>: [lo, hi], inside}`.
+fn range_rows_by_recording(
+    rows: &[shipid_pipeline::bands::RangeRow],
+    range: &str,
+) -> Map<String, Value> {
+    let mut per: Map<String, Value> = Map::new();
+    for (file, metric, recorded, predicted, (lo, hi), inside) in rows {
+        if let Value::Object(m) = per
+            .entry(file.clone())
+            .or_insert_with(|| Value::Object(Map::new()))
+        {
+            m.insert(
+                (*metric).into(),
+                json!({ "recorded": recorded, "predicted": predicted, range: [lo, hi], "inside": inside }),
+            );
+        }
+    }
+    per
+}
+
+/// The table of [`range_rows_by_recording`], with the count inside and what it means.
+fn print_range_rows(rows: &[shipid_pipeline::bands::RangeRow], range: &str, inside_means: &str) {
+    println!(
+        "{:<16} {:<18} {:>5} {:>10} {:>10} {:>22} {:>7}",
+        "recording", "metric", "unit", "recorded", "predicted", range, "inside"
+    );
+    for (file, metric, recorded, predicted, (lo, hi), inside) in rows {
+        let unit = shipid_sim::metrics::metric_unit(metric).unwrap_or("");
+        println!(
+            "{file:<16} {metric:<18} {unit:>5} {recorded:>10.4} {predicted:>10.4} {:>22} {:>7}",
+            format!("[{lo:.4}, {hi:.4}]"),
+            if *inside { "yes" } else { "no" }
+        );
+    }
+    let inside = rows.iter().filter(|r| r.5).count();
+    println!(
+        "inside: {inside} of {} recorded metrics {inside_means}",
+        rows.len()
+    );
+}
+
 /// The bands `validate --bands LEVEL` checks the recorded metrics against: calibrated when the
 /// model file has a `[calibration]`, else its replicates' percentiles.
 pub struct BandCheck<'a> {
@@ -400,18 +442,7 @@ fn validation_into(
         )
     });
     if let (Some((j, (rows, diverged))), Value::Object(o)) = (&jackknife_check, &mut value) {
-        let mut per: Map<String, Value> = Map::new();
-        for (file, metric, recorded, predicted, (lo, hi), inside) in rows {
-            if let Value::Object(m) = per
-                .entry(file.clone())
-                .or_insert_with(|| Value::Object(Map::new()))
-            {
-                m.insert(
-                    (*metric).into(),
-                    json!({ "recorded": recorded, "predicted": predicted, "jackknife": [lo, hi], "inside": inside }),
-                );
-            }
-        }
+        let per = range_rows_by_recording(rows, "jackknife");
         o.insert(
             "jackknife".into(),
             json!({
@@ -423,18 +454,7 @@ fn validation_into(
         );
     }
     if let (Some((v, (rows, diverged))), Value::Object(o)) = (&valley_check, &mut value) {
-        let mut per: Map<String, Value> = Map::new();
-        for (file, metric, recorded, predicted, (lo, hi), inside) in rows {
-            if let Value::Object(m) = per
-                .entry(file.clone())
-                .or_insert_with(|| Value::Object(Map::new()))
-            {
-                m.insert(
-                    (*metric).into(),
-                    json!({ "recorded": recorded, "predicted": predicted, "valley": [lo, hi], "inside": inside }),
-                );
-            }
-        }
+        let per = range_rows_by_recording(rows, "valley");
         o.insert(
             "valley".into(),
             json!({
@@ -605,23 +625,7 @@ fn validation_into(
             diverged,
             v.what()
         );
-        println!(
-            "{:<16} {:<18} {:>5} {:>10} {:>10} {:>22} {:>7}",
-            "recording", "metric", "unit", "recorded", "predicted", "valley", "inside"
-        );
-        for (file, metric, recorded, predicted, (lo, hi), inside) in rows {
-            let unit = shipid_sim::metrics::metric_unit(metric).unwrap_or("");
-            println!(
-                "{file:<16} {metric:<18} {unit:>5} {recorded:>10.4} {predicted:>10.4} {:>22} {:>7}",
-                format!("[{lo:.4}, {hi:.4}]"),
-                if *inside { "yes" } else { "no" }
-            );
-        }
-        let inside = rows.iter().filter(|r| r.5).count();
-        println!(
-            "inside: {inside} of {} recorded metrics lie in the valley's range",
-            rows.len()
-        );
+        print_range_rows(rows, "valley", "lie in the valley's range");
     }
     if !as_json && let Some((j, (rows, diverged))) = &jackknife_check {
         println!(
@@ -630,22 +634,10 @@ fn validation_into(
             diverged,
             j.what()
         );
-        println!(
-            "{:<16} {:<18} {:>5} {:>10} {:>10} {:>22} {:>7}",
-            "recording", "metric", "unit", "recorded", "predicted", "jackknife", "inside"
-        );
-        for (file, metric, recorded, predicted, (lo, hi), inside) in rows {
-            let unit = shipid_sim::metrics::metric_unit(metric).unwrap_or("");
-            println!(
-                "{file:<16} {metric:<18} {unit:>5} {recorded:>10.4} {predicted:>10.4} {:>22} {:>7}",
-                format!("[{lo:.4}, {hi:.4}]"),
-                if *inside { "yes" } else { "no" }
-            );
-        }
-        let inside = rows.iter().filter(|r| r.5).count();
-        println!(
-            "inside: {inside} of {} recorded metrics lie in the jackknife's range (not a band of the truth: how far the training set moves the prediction)",
-            rows.len()
+        print_range_rows(
+            rows,
+            "jackknife",
+            "lie in the jackknife's range (not a band of the truth: how far the training set moves the prediction)",
         );
     }
     if any_failed || no_band_at_all.is_some() {

@@ -290,8 +290,8 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
         .bands
         .map(|level| ModelBands::of(a.model, level))
         .transpose()?;
-    let valley = shipid_pipeline::bands::valley_of(a.model)?;
-    let jackknife = shipid_pipeline::bands::jackknife_of(a.model)?;
+    let shipid_pipeline::bands::BesideModels { valley, jackknife } =
+        shipid_pipeline::bands::beside_of(a.model)?;
     // A slower approach (another propeller rate) takes longer to the same heading changes: the
     // default duration scales with L over the approach speed, not over U0.
     let duration_s = a.duration_s.or_else(|| {
@@ -671,6 +671,24 @@ fn add_bands(value: &mut Value, run: &RunBands, source: &ModelBands, with_track:
     }
 }
 
+/// One model run beside the point model, as `--json` lists it: its metrics (none when its run
+/// diverged), what names it, and its `status`.
+fn member_json<const N: usize>(
+    metrics: Option<&shipid_sim::Metrics>,
+    names: [(&str, Value); N],
+) -> Value {
+    let mut member = match metrics.map(serde_json::to_value) {
+        Some(Ok(Value::Object(k))) => k,
+        _ => Map::new(),
+    };
+    for (key, value) in names {
+        member.insert(key.into(), value);
+    }
+    let status = if metrics.is_some() { "ok" } else { "diverged" };
+    member.insert("status".into(), json!(status));
+    Value::Object(member)
+}
+
 /// The jackknife into the output: `<metric>_jackknife: [lo, hi]`, the range of the metric over the
 /// refits whose runs define it, and a `jackknife` object (each refit's metrics, diverged runs, each
 /// metric's jackknife standard error, what it means).
@@ -686,18 +704,7 @@ fn add_jackknife(
     let members: Vec<Value> = run
         .members
         .iter()
-        .map(|(left_out, metrics)| {
-            let mut member = match metrics.as_ref().map(serde_json::to_value) {
-                Some(Ok(Value::Object(k))) => k,
-                _ => Map::new(),
-            };
-            member.insert("left_out".into(), json!(left_out));
-            member.insert(
-                "status".into(),
-                json!(if metrics.is_some() { "ok" } else { "diverged" }),
-            );
-            Value::Object(member)
-        })
+        .map(|(left_out, metrics)| member_json(metrics.as_ref(), [("left_out", json!(left_out))]))
         .collect();
     let standard_errors: Map<String, Value> = run
         .standard_errors
@@ -741,21 +748,13 @@ fn add_valley(
         .members
         .iter()
         .map(|m| {
-            let mut member = match m.metrics.as_ref().map(serde_json::to_value) {
-                Some(Ok(Value::Object(k))) => k,
-                _ => Map::new(),
-            };
-            member.insert("prior_weight".into(), json!(m.prior_weight));
-            member.insert("cost_ratio".into(), json!(m.cost_ratio));
-            member.insert(
-                "status".into(),
-                json!(if m.metrics.is_some() {
-                    "ok"
-                } else {
-                    "diverged"
-                }),
-            );
-            Value::Object(member)
+            member_json(
+                m.metrics.as_ref(),
+                [
+                    ("prior_weight", json!(m.prior_weight)),
+                    ("cost_ratio", json!(m.cost_ratio)),
+                ],
+            )
         })
         .collect();
     o.insert(

@@ -27,8 +27,8 @@ pub fn run(
     let replicates = bands
         .map(|level| shipid_pipeline::calibration::ModelBands::of(model_spec, level))
         .transpose()?;
-    let valley = shipid_pipeline::bands::valley_of(model_spec)?;
-    let jackknife = shipid_pipeline::bands::jackknife_of(model_spec)?;
+    let shipid_pipeline::bands::BesideModels { valley, jackknife } =
+        shipid_pipeline::bands::beside_of(model_spec)?;
     let ds = Dataset::load(dataset)?;
     shipid_pipeline::validate::require_recordings(&ds)?;
     // Validation still runs: its errors are what the user asked for; the warnings say what they

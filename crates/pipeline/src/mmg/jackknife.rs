@@ -23,21 +23,21 @@ pub const JACKKNIFE_MAX_GROUPS: usize = 20;
 /// The refits of a fit with each training recording left out in turn.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RecordingJackknife {
-    /// The training windows left out of each refit, by their recordings' file names (one each up to
-    /// [`JACKKNIFE_MAX_GROUPS`] recordings, `a.csv + b.csv + …` beyond).
-    pub left_out: Vec<String>,
-    /// Those whose refit failed (named with the reason); the standard errors are over the others.
+    /// Refits that failed, each named by what it left out, with the reason; the standard errors are
+    /// over the others.
     pub failed: Vec<String>,
     /// Per parameter (the fit's order), √((g − 1)/g Σ (θ₋ᵢ − θ̄)²) over the g refits.
     pub standard_errors: Vec<f64>,
-    /// Each refit that succeeded: what it left out and its parameters (the fit's order).
+    /// Each refit that succeeded: the training windows it left out, by their recordings' file names
+    /// (one each up to [`JACKKNIFE_MAX_GROUPS`] recordings, `a.csv + b.csv + …` beyond), and its
+    /// parameters (the fit's order).
     pub refits: Vec<(String, Vec<f64>)>,
 }
 
 /// The delete-one-recording jackknife of `fit` on its training samples (`opts`, as the fit was made),
 /// with its priors and prior weight; `None` with fewer than [`JACKKNIFE_MIN_RECORDINGS`] training
-/// windows or fewer than that many refits that succeed. Each refit starts from the fit's equation-error
-/// estimate, as the bootstrap's replicates do.
+/// windows or fewer than that many refits that succeed. `fit` is the equation-error estimate (before
+/// any refinement, as its standard errors are): each refit starts from it.
 pub fn recording_jackknife(
     ds: &Dataset,
     fit: &MmgFit,
@@ -46,9 +46,8 @@ pub fn recording_jackknife(
     if fit.windows.len() < JACKKNIFE_MIN_RECORDINGS {
         return Ok(None);
     }
-    let (problem, start) = refit_problem(ds, fit, opts)?;
+    let (problem, phi_hat) = refit_problem(ds, fit, opts)?;
     let all: Vec<usize> = (0..problem.samples.len()).collect();
-    let (phi_hat, _, _) = problem.solve(&start, &all, fit.lambda)?;
     let groups = group_count(fit.windows.len());
     let refits: Vec<Result<Vec<f64>, String>> = (0..groups)
         .into_par_iter()
@@ -79,25 +78,22 @@ pub fn recording_jackknife(
                 .join(" + ")
         })
         .collect();
-    let failed: Vec<String> = refits
-        .iter()
-        .zip(&left_out)
-        .filter_map(|(r, name)| r.as_ref().err().map(|why| format!("{name}: {why}")))
-        .collect();
-    let thetas: Vec<&Vec<f64>> = refits.iter().filter_map(|r| r.as_ref().ok()).collect();
-    let kept: Vec<(String, Vec<f64>)> = refits
-        .iter()
-        .zip(&left_out)
-        .filter_map(|(r, name)| r.as_ref().ok().map(|t| (name.clone(), t.clone())))
-        .collect();
-    Ok(
-        jackknife_standard_errors(&thetas).map(|standard_errors| RecordingJackknife {
-            left_out,
-            failed,
-            standard_errors,
-            refits: kept,
-        }),
-    )
+    let (mut kept, mut failed) = (Vec::new(), Vec::new());
+    for (refit, name) in refits.into_iter().zip(left_out) {
+        match refit {
+            Ok(theta) => kept.push((name, theta)),
+            Err(why) => failed.push(format!("{name}: {why}")),
+        }
+    }
+    let thetas: Vec<&[f64]> = kept.iter().map(|(_, theta)| theta.as_slice()).collect();
+    let Some(standard_errors) = jackknife_standard_errors(&thetas) else {
+        return Ok(None);
+    };
+    Ok(Some(RecordingJackknife {
+        failed,
+        standard_errors,
+        refits: kept,
+    }))
 }
 
 /// How many refits a jackknife over `windows` training windows makes; window k is in group
@@ -108,7 +104,7 @@ pub fn group_count(windows: usize) -> usize {
 
 /// √((g − 1)/g Σ (θᵢ − θ̄)²) per component over the g leave-one-out estimates; `None` for fewer than
 /// [`JACKKNIFE_MIN_RECORDINGS`].
-pub fn jackknife_standard_errors(thetas: &[&Vec<f64>]) -> Option<Vec<f64>> {
+pub fn jackknife_standard_errors(thetas: &[&[f64]]) -> Option<Vec<f64>> {
     let g = thetas.len();
     if g < JACKKNIFE_MIN_RECORDINGS {
         return None;
@@ -143,7 +139,7 @@ mod tests {
         let x = [1.0, 2.0, 3.0, 4.0];
         let sum: f64 = x.iter().sum();
         let loo: Vec<Vec<f64>> = x.iter().map(|v| vec![(sum - v) / 3.0]).collect();
-        let refs: Vec<&Vec<f64>> = loo.iter().collect();
+        let refs: Vec<&[f64]> = loo.iter().map(Vec::as_slice).collect();
         let se = jackknife_standard_errors(&refs).unwrap()[0];
         let sd = (x.iter().map(|v| (v - 2.5f64).powi(2)).sum::<f64>() / 3.0).sqrt();
         assert!((se - sd / 2.0).abs() < 1e-12, "{se} vs {}", sd / 2.0);
