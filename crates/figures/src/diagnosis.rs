@@ -47,8 +47,9 @@ pub fn track_figure(
     let (mut x0, mut x1) = range(&xs);
     let (mut y0, mut y1) = range(&ys);
     // Equal scales on both axes (a track is a shape): widen the narrower range about its centre to the
-    // plotting area's aspect (about 835 × 715 px inside the labels).
-    let aspect = 835.0 / 715.0;
+    // plotting area's aspect (900 × 800 px less the margins, the label areas and the caption).
+    let aspect = (900.0 - 30.0 - f64::from(crate::Y_LABEL_AREA_PX))
+        / (800.0 - 30.0 - f64::from(crate::X_LABEL_AREA_PX) - 25.0);
     let (w, h) = (x1 - x0, y1 - y0);
     if w / h < aspect {
         let c = 0.5 * (x0 + x1);
@@ -66,8 +67,8 @@ pub fn track_figure(
             ("sans-serif", 20),
         )
         .margin(15)
-        .x_label_area_size(40)
-        .y_label_area_size(50)
+        .x_label_area_size(crate::X_LABEL_AREA_PX)
+        .y_label_area_size(crate::Y_LABEL_AREA_PX)
         .build_cartesian_2d(x0..x1, y0..y1)?;
     chart
         .configure_mesh()
@@ -150,8 +151,8 @@ pub fn track_figure(
             ("sans-serif", 16),
         )
         .margin(15)
-        .x_label_area_size(40)
-        .y_label_area_size(50)
+        .x_label_area_size(crate::X_LABEL_AREA_PX)
+        .y_label_area_size(crate::Y_LABEL_AREA_PX)
         .build_cartesian_2d(0.0..t_end, 0.0..1.05 * top_error)?;
     err_chart
         .configure_mesh()
@@ -200,17 +201,19 @@ pub fn residual_figure(
         let mut chart = ChartBuilder::on(panel)
             .caption(
                 if d == 0 {
-                    format!(
-                        "{name}: equation-error residual ÷ noise scale (shaded: located mismatch)"
-                    )
+                    let shaded = match windows.is_empty() {
+                        true => "no mismatch located in this recording",
+                        false => "shaded: located mismatch",
+                    };
+                    format!("{name}: equation-error residual ÷ noise scale ({shaded})")
                 } else {
                     String::new()
                 },
                 ("sans-serif", 18),
             )
             .margin(10)
-            .x_label_area_size(30)
-            .y_label_area_size(50)
+            .x_label_area_size(crate::X_LABEL_AREA_PX)
+            .y_label_area_size(crate::Y_LABEL_AREA_PX)
             .build_cartesian_2d(t0..t1, -lim..lim)?;
         chart
             .configure_mesh()

@@ -34,8 +34,8 @@ pub fn write_modes(out: &Path, modes: &VariationModes) -> Result<()> {
             ("sans-serif", 18),
         )
         .margin(15)
-        .x_label_area_size(45)
-        .y_label_area_size(60)
+        .x_label_area_size(crate::X_LABEL_AREA_PX)
+        .y_label_area_size(crate::Y_LABEL_AREA_PX)
         .build_cartesian_2d(0.5..n as f64 + 0.5, 0.0..100.0)?;
     chart
         .configure_mesh()
@@ -110,8 +110,8 @@ pub fn motions_figure(path: &PathBuf, target: &TargetShip, figures: &[MotionFigu
                 ("sans-serif", 16),
             )
             .margin(10)
-            .x_label_area_size(35)
-            .y_label_area_size(45)
+            .x_label_area_size(crate::X_LABEL_AREA_PX)
+            .y_label_area_size(crate::Y_LABEL_AREA_PX)
             .build_cartesian_2d(-5.5..5.5, -1.0..6.0)?;
         c.configure_mesh()
             .label_style(("sans-serif", crate::TICK_LABEL_PX))
@@ -179,8 +179,8 @@ pub fn motions_figure(path: &PathBuf, target: &TargetShip, figures: &[MotionFigu
                     ("sans-serif", 16),
                 )
                 .margin(10)
-                .x_label_area_size(35)
-                .y_label_area_size(45)
+                .x_label_area_size(crate::X_LABEL_AREA_PX)
+                .y_label_area_size(crate::Y_LABEL_AREA_PX)
                 .build_cartesian_2d(0.0..t_max, -55.0..55.0)?;
             c.configure_mesh()
                 .label_style(("sans-serif", crate::TICK_LABEL_PX))

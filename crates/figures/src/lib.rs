@@ -13,5 +13,13 @@ pub mod study;
 /// report around it; 15 draws them as large as the axis titles.
 pub(crate) const TICK_LABEL_PX: u32 = 15;
 
+/// Height of the area under an x axis: its tick labels and its title below them. 30 and 35 let the
+/// title overlap the digits once the ticks grew to 15 units (the diagnosis's residual panels).
+pub(crate) const X_LABEL_AREA_PX: u32 = 45;
+
+/// Width of the area left of a y axis: tick labels of up to five characters (`-0.25`) and the rotated
+/// title beside them. Wider areas stay where the labels are longer (names of coefficients).
+pub(crate) const Y_LABEL_AREA_PX: u32 = 60;
+
 pub use error::FigureError;
 pub use study::{FigureReport, write_figures};

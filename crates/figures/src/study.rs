@@ -796,8 +796,8 @@ fn trajectories(
             (FONT, 20),
         )
         .margin(15)
-        .x_label_area_size(45)
-        .y_label_area_size(60)
+        .x_label_area_size(crate::X_LABEL_AREA_PX)
+        .y_label_area_size(crate::Y_LABEL_AREA_PX)
         .build_cartesian_2d(e0..e1, n0..n1)?;
     chart
         .configure_mesh()
@@ -886,7 +886,9 @@ fn heading(path: &Path, r: &DatasetRecording, sims: &[Prediction]) -> Result<()>
             panel(|r| &r.delta, |p| &p.delta)
         };
         let mut b = ChartBuilder::on(area);
-        b.margin(15).x_label_area_size(45).y_label_area_size(65);
+        b.margin(15)
+            .x_label_area_size(crate::X_LABEL_AREA_PX)
+            .y_label_area_size(65);
         if first {
             b.caption(
                 format!(
@@ -1033,8 +1035,8 @@ fn convergence(path: &Path, rows: &[LongRow]) -> Result<bool> {
         let mut chart = ChartBuilder::on(area)
             .caption(format!("{dof}"), (FONT, 18))
             .margin(12)
-            .x_label_area_size(45)
-            .y_label_area_size(55)
+            .x_label_area_size(crate::X_LABEL_AREA_PX)
+            .y_label_area_size(crate::Y_LABEL_AREA_PX)
             .build_cartesian_2d(o_lo - 0.2..o_hi + 0.2, y.0.min(0.0)..y.1.max(1.2))?;
         chart
             .configure_mesh()
@@ -1318,7 +1320,7 @@ fn metric_bands(path: &Path, study: &Study, summary: &Table, test: &str) -> Resu
         let (y_lo, y_hi) = range_of(values, 0.1);
         let mut chart = ChartBuilder::on(area)
             .margin(10)
-            .x_label_area_size(30)
+            .x_label_area_size(crate::X_LABEL_AREA_PX)
             .y_label_area_size(70)
             .build_cartesian_2d(-0.5..(n as f64 - 0.5), y_lo..y_hi)?;
         chart
@@ -1456,7 +1458,7 @@ fn forces(path: &Path, study: &Study, c: &CaseData, test: &str) -> Result<()> {
         );
         let mut chart = ChartBuilder::on(area)
             .margin(12)
-            .x_label_area_size(40)
+            .x_label_area_size(crate::X_LABEL_AREA_PX)
             .y_label_area_size(80)
             .build_cartesian_2d(t_range.0..t_range.1, y_range.0..y_range.1)?;
         chart
