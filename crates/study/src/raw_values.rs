@@ -40,8 +40,15 @@ pub enum TestRecordings {
     List(Vec<String>),
 }
 
-/// A TOML number, integer or float.
+/// A TOML number, integer or float; `-0.0` is read as `0.0`, since it labels cases and ids as
+/// `-0` while fitting exactly as `0`, so two of them would pass the grid's repeat check as two
+/// values and give one case twice.
 struct Number(f64);
+
+/// `x` with a negative zero made positive (every other value unchanged).
+pub fn unsigned_zero(x: f64) -> f64 {
+    if x == 0.0 { 0.0 } else { x }
+}
 
 impl<'de> Deserialize<'de> for Number {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
@@ -52,7 +59,7 @@ impl<'de> Deserialize<'de> for Number {
                 f.write_str("a number")
             }
             fn visit_f64<E: de::Error>(self, x: f64) -> Result<Number, E> {
-                Ok(Number(x))
+                Ok(Number(unsigned_zero(x)))
             }
             fn visit_i64<E: de::Error>(self, x: i64) -> Result<Number, E> {
                 Ok(Number(x as f64))
@@ -74,7 +81,7 @@ impl<'de> Deserialize<'de> for OneOrMany {
                 f.write_str("a number or a list of numbers (e.g. 1e-3 or [1e-4, 1e-3])")
             }
             fn visit_f64<E: de::Error>(self, x: f64) -> Result<OneOrMany, E> {
-                Ok(OneOrMany::One(x))
+                Ok(OneOrMany::One(unsigned_zero(x)))
             }
             fn visit_i64<E: de::Error>(self, x: i64) -> Result<OneOrMany, E> {
                 Ok(OneOrMany::One(x as f64))
@@ -88,6 +95,46 @@ impl<'de> Deserialize<'de> for OneOrMany {
                     values.push(x);
                 }
                 Ok(OneOrMany::Many(values))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// A training time window `[start, end]` in seconds. Exactly two numbers: a third one (`[0, 120,
+/// 5]`, perhaps meant as a step or a third window's start) was dropped without a word.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TimeWindow(pub [f64; 2]);
+
+impl<'de> Deserialize<'de> for TimeWindow {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = TimeWindow;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a time window [start, end] in seconds (two numbers, e.g. [0, 120])")
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<TimeWindow, A::Error> {
+                let mut ends = Vec::with_capacity(2);
+                while ends.len() < 2 {
+                    match seq.next_element::<Number>()? {
+                        Some(Number(x)) => ends.push(x),
+                        None => break,
+                    }
+                }
+                let mut extra = 0;
+                while seq.next_element::<de::IgnoredAny>()?.is_some() {
+                    extra += 1;
+                }
+                let given = ends.len() + extra;
+                if given != 2 {
+                    let s = if given == 1 { "" } else { "s" };
+                    return Err(de::Error::custom(format!(
+                        "a time window is [start, end] in seconds (two numbers, e.g. [0, 120]), \
+                         not {given} value{s}"
+                    )));
+                }
+                Ok(TimeWindow([ends[0], ends[1]]))
             }
         }
         d.deserialize_any(V)
@@ -268,6 +315,29 @@ mod tests {
         check("[1e-4, 1]", Ok(Many(vec![1e-4, 1.0])));
         check::<OneOrMany>("\"x\"", Err("expected a number or a list of numbers"));
         check::<OneOrMany>("[1, \"a\"]", Err("expected a number"));
+    }
+
+    #[test]
+    fn time_window_with_extra_elements_is_refused_not_cut_to_two() {
+        check("[0, 120]", Ok(TimeWindow([0.0, 120.0])));
+        check::<TimeWindow>("[0, 120, 5]", Err("not 3 values"));
+        check::<TimeWindow>("[0, 120, 5, 6, 7]", Err("not 5 values"));
+        check::<TimeWindow>("[0, 120, \"x\"]", Err("not 3 values"));
+        check::<TimeWindow>("[120]", Err("not 1 value"));
+        check::<TimeWindow>("[]", Err("not 0 values"));
+        check::<TimeWindow>("[0, \"x\"]", Err("expected a number"));
+        check::<TimeWindow>("120", Err("expected a time window [start, end]"));
+    }
+
+    #[test]
+    fn negative_zero_is_read_as_zero_so_repeats_are_seen() {
+        let bits = |v: OneOrMany| v.values().iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let got = toml::from_str::<Doc<OneOrMany>>("value = [0.0, -0.0]").unwrap();
+        assert_eq!(bits(got.value), vec![0u64, 0]);
+        let got = toml::from_str::<Doc<OneOrMany>>("value = -0.0").unwrap();
+        assert_eq!(bits(got.value), vec![0u64]);
+        let got = toml::from_str::<Doc<TimeWindow>>("value = [-0.0, 120]").unwrap();
+        assert_eq!(got.value.0[0].to_bits(), 0);
     }
 
     #[test]

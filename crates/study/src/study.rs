@@ -47,7 +47,7 @@ pub use shipid_pipeline::fit::GP;
 pub const NO_SET: &str = "none";
 const NO_SOLVER: &str = "none";
 
-pub use crate::raw_values::{OneOrMany, OvershootSpec, TestRecordings};
+pub use crate::raw_values::{OneOrMany, OvershootSpec, TestRecordings, TimeWindow};
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -58,7 +58,7 @@ pub struct RawTraining {
     pub overshoots: Option<OvershootSpec>,
     /// Time windows [start, end] in seconds, instead of overshoots.
     #[serde(default)]
-    pub windows: Option<Vec<[f64; 2]>>,
+    pub windows: Option<Vec<TimeWindow>>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -98,13 +98,73 @@ pub struct RawTest {
 }
 
 /// Tolerance of one summary column in `shipid check`: |fresh − reference| ≤ abs + rel·|reference|.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
+/// Written as a table only (`{ abs = 1e-6, rel = 1e-4 }`): serde's derive also took a list read by
+/// position (`[1e-6, 1e-4, 99]`, extras dropped, `[]` the default), a form no document names.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Tolerance {
-    #[serde(default)]
     pub abs: f64,
-    #[serde(default)]
     pub rel: f64,
+}
+
+impl<'de> Deserialize<'de> for Tolerance {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::{self, MapAccess, Visitor};
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = Tolerance;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a tolerance table such as { abs = 1e-6, rel = 1e-4 } (either may be left out: 0)")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Tolerance, A::Error> {
+                let (mut abs, mut rel) = (None, None);
+                while let Some(key) = map.next_key::<String>()? {
+                    let slot = match key.as_str() {
+                        "abs" => &mut abs,
+                        "rel" => &mut rel,
+                        _ => {
+                            // Not serde's "unknown field `…`" form, which would be read as the
+                            // key's name (`check.x`), not the tolerance it is in.
+                            return Err(de::Error::custom(format!(
+                                "{key:?} is not a key of a tolerance: it has `abs` and `rel` only"
+                            )));
+                        }
+                    };
+                    *slot = Some(map.next_value::<TolerancePart>()?.0);
+                }
+                Ok(Tolerance {
+                    abs: abs.unwrap_or(0.0),
+                    rel: rel.unwrap_or(0.0),
+                })
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// One bound of a [`Tolerance`]: a number, integer or float.
+struct TolerancePart(f64);
+
+impl<'de> Deserialize<'de> for TolerancePart {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::{self, Visitor};
+        struct V;
+        impl Visitor<'_> for V {
+            type Value = TolerancePart;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number (e.g. 1e-6)")
+            }
+            fn visit_f64<E: de::Error>(self, x: f64) -> Result<TolerancePart, E> {
+                Ok(TolerancePart(x))
+            }
+            fn visit_i64<E: de::Error>(self, x: i64) -> Result<TolerancePart, E> {
+                Ok(TolerancePart(x as f64))
+            }
+            fn visit_u64<E: de::Error>(self, x: u64) -> Result<TolerancePart, E> {
+                Ok(TolerancePart(x as f64))
+            }
+        }
+        d.deserialize_any(V)
+    }
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -622,8 +682,22 @@ fn check_tolerances(path: &Path, check: &BTreeMap<String, Tolerance>) -> Result<
     Ok(())
 }
 
+/// Most characters of a study's name: it names the default results folder, and a file name holds
+/// at most 255 bytes (with room left for the check's scratch folder, which adds some 40).
+pub const MAX_NAME_CHARS: usize = 100;
+
 /// The name becomes the default results directory (`results/NAME`): one plain word.
 fn check_name(path: &Path, name: &str) -> Result<(), InputError> {
+    if name.chars().count() > MAX_NAME_CHARS {
+        return Err(InputError::key(
+            path,
+            "name",
+            format!(
+                "{} characters: a study's name names its results folder, give at most {MAX_NAME_CHARS}",
+                name.chars().count()
+            ),
+        ));
+    }
     if !name.is_empty()
         && name
             .chars()
@@ -841,6 +915,19 @@ fn check_training(
             ));
         }
         for (j, f) in combo.iter().enumerate() {
+            // The tables write a combination as its names joined by `+`: `["a+b.csv"]` and
+            // `["a", "b.csv"]` would read alike.
+            if f.contains('+') {
+                return Err(InputError::key(
+                    path,
+                    format!("training.recordings[{i}][{j}]"),
+                    format!(
+                        "`{f}` holds a `+`, which the tables put between the recordings of a combination \
+                         (a recording named `a+b.csv` would read as `a` and `b.csv` trained together): \
+                         rename the file"
+                    ),
+                ));
+            }
             known.check(path, format!("training.recordings[{i}][{j}]"), f)?;
         }
     }
@@ -874,7 +961,12 @@ fn training_windows(
         return Err(InputError::key(
             path,
             grid,
-            format!("value {} repeats value {} (counting from 1)", i + 1, j + 1),
+            format!(
+                "value {} repeats value {} (counting from 1): {} twice",
+                i + 1,
+                j + 1,
+                windows[i].label()
+            ),
         ));
     }
     Ok(windows)
@@ -916,7 +1008,10 @@ fn overshoot_windows(
     Ok(list.into_iter().map(WindowSpec::Overshoots).collect())
 }
 
-fn time_windows(path: &Path, windows: &[[f64; 2]]) -> Result<Vec<WindowSpec>, InputError> {
+fn time_windows(path: &Path, windows: &[TimeWindow]) -> Result<Vec<WindowSpec>, InputError> {
+    // As `shipid fit --window`: the largest time a recording's `t` may hold. A window beyond it
+    // is no recording's, and its times would print as hundreds of digits in ids and tables.
+    let max_time_s = shipid_io::units::Quantity::T.bound_si();
     if windows.is_empty() {
         return Err(InputError::key(
             path,
@@ -927,14 +1022,18 @@ fn time_windows(path: &Path, windows: &[[f64; 2]]) -> Result<Vec<WindowSpec>, In
     windows
         .iter()
         .enumerate()
-        .map(|(k, [a, b])| {
+        .map(|(k, TimeWindow([a, b]))| {
             // Recordings start at 0 s: a negative start would be labelled with a time no sample has.
             let why = if !(a.is_finite() && b.is_finite()) {
-                Some("give finite seconds")
+                Some("give finite seconds".to_string())
             } else if *a < 0.0 {
-                Some("it starts before 0 s, where recordings start")
+                Some("it starts before 0 s, where recordings start".to_string())
+            } else if a.abs() > max_time_s || b.abs() > max_time_s {
+                Some(format!(
+                    "times beyond {max_time_s:e} s, the largest a recording's `t` may hold, are no recording's"
+                ))
             } else if b <= a {
-                Some("it does not end after it starts")
+                Some("it does not end after it starts".to_string())
             } else {
                 None
             };
@@ -947,7 +1046,9 @@ fn time_windows(path: &Path, windows: &[[f64; 2]]) -> Result<Vec<WindowSpec>, In
                     path,
                     "training.windows",
                     format!(
-                        "[{a}, {b}] is not a time window: {why} (window {}, counting from 1)",
+                        "[{}, {}] is not a time window: {why} (window {}, counting from 1)",
+                        shipid_io::error::number(*a),
+                        shipid_io::error::number(*b),
                         k + 1
                     ),
                 )),
@@ -1070,7 +1171,11 @@ fn gp_estimators(
                 ..EstimatorSpec::named(GP)
             };
             spec.validate().map_err(|err| {
-                InputError::key(path, entry_key(i, "similarity"), err.to_string())
+                InputError::key(
+                    path,
+                    entry_key(i, "similarity"),
+                    flags_as_keys(&err.to_string()),
+                )
             })?;
             Ok(CheckedEstimator {
                 spec,
@@ -1140,10 +1245,10 @@ fn polynomial_estimators(
         .into_iter()
         .map(|spec| {
             spec.validate().map_err(|err| {
-                let msg = err.to_string();
+                let msg = flags_as_keys(&err.to_string());
                 // Name the key that holds the bad value (a λ of NaN is `lambda`'s fault, not `name`'s).
                 let key = match e.name.as_str() {
-                    "ridge" | "lasso" | "svr" if msg.contains("--epsilon") => "epsilon",
+                    "ridge" | "lasso" | "svr" if msg.contains("epsilon") => "epsilon",
                     "ridge" | "lasso" | "svr" => grid_key(&e.name),
                     _ => "name",
                 };
@@ -1156,6 +1261,41 @@ fn polynomial_estimators(
             })
         })
         .collect()
+}
+
+/// The pipeline's checks of an estimator speak of `shipid fit`'s flags (`--lambda must be …`); in a
+/// study the same settings are keys of an `[[estimator]]` entry, which the message names instead.
+fn flags_as_keys(message: &str) -> String {
+    let mut out = message
+        .replace("--tune", "tune = true")
+        .replace("--estimator lsq", "name = \"lsq\"")
+        .replace("--estimator sparse-gp", "name = \"sparse-gp\"");
+    for flag in ["similarity", "epsilon", "lambda", "alpha", "c"] {
+        let dashed = format!("--{flag}");
+        let mut rest = out.as_str();
+        let mut done = String::new();
+        while let Some(at) = rest.find(&dashed) {
+            done.push_str(&rest[..at]);
+            let after = &rest[at + dashed.len()..];
+            // `--c 1e9 is beyond` is `c = 1e9 is beyond`; `--c must be` is `c must be`.
+            let value_follows = after
+                .strip_prefix(' ')
+                .and_then(|a| a.chars().next())
+                .is_some_and(|ch| ch.is_ascii_digit() || "-+.".contains(ch));
+            if after.starts_with(|ch: char| ch.is_ascii_alphanumeric() || ch == '-') {
+                done.push_str(&dashed); // another flag with this prefix
+            } else if value_follows {
+                done.push_str(flag);
+                done.push_str(" =");
+            } else {
+                done.push_str(flag);
+            }
+            rest = after;
+        }
+        done.push_str(rest);
+        out = done;
+    }
+    out
 }
 
 /// A value beyond what the estimators take ([`shipid_estimators::MAX_HYPER_PARAMETER`]) would
@@ -1277,10 +1417,17 @@ fn check_estimator_repeats(
     };
     let (i, earlier) = (origin[a], origin[b]);
     Err(if i == earlier {
+        let spec = &estimators[a].spec;
+        let value = [spec.lambda, spec.alpha, spec.c, spec.similarity]
+            .into_iter()
+            .flatten()
+            .next()
+            .map(|v| format!(" ({})", shipid_io::error::number(v)))
+            .unwrap_or_default();
         InputError::key(
             path,
-            entry_key(i, grid_key(&estimators[a].spec.name)),
-            "a value appears twice in the grid",
+            entry_key(i, grid_key(&spec.name)),
+            format!("a value appears twice in the grid{value}"),
         )
     } else {
         InputError::key(
@@ -1454,3 +1601,35 @@ fn case(set: &str, est: &EstimatorSpec, solver: &str, combo: &[String], w: Windo
 
 /// Most bytes of a case id before its hash (`-` and 8 hex digits follow).
 pub const MAX_READABLE_ID: usize = 100;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Regression: a study's `lambda = -1` said "--lambda must be a non-negative number", a flag
+    /// the study file has not.
+    #[test]
+    fn estimator_messages_name_study_keys_not_cli_flags() {
+        for (flag_words, key_words) in [
+            (
+                "--lambda must be a non-negative number, not -1",
+                "lambda must be a non-negative number, not -1",
+            ),
+            (
+                "--c 1e12 is beyond 1e10: for no regularisation use --estimator lsq, or --tune",
+                "c = 1e12 is beyond 1e10: for no regularisation use name = \"lsq\", or tune = true",
+            ),
+            (
+                "give --alpha or --tune, not both (--tune chooses alpha by cross-validation)",
+                "give alpha or tune = true, not both (tune = true chooses alpha by cross-validation)",
+            ),
+            (
+                "--similarity applies to --estimator sparse-gp only",
+                "similarity applies to name = \"sparse-gp\" only",
+            ),
+            ("--c must be > 0, got 0", "c must be > 0, got 0"),
+        ] {
+            assert_eq!(flags_as_keys(flag_words), key_words);
+        }
+    }
+}

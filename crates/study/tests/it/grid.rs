@@ -194,11 +194,116 @@ fn a_window_outside_the_recording_is_refused_or_warned_with_the_span_fitted() {
             "{windows}: {err}"
         );
     }
-    let study = windows_study("[[0.0, 100.0], [10.0, 1e9]]").unwrap();
+    let study = windows_study("[[0.0, 100.0], [10.0, 1e7]]").unwrap();
     assert_eq!(study.warnings.len(), 1, "{:?}", study.warnings);
     let w = &study.warnings[0];
     assert!(
         w.contains("training.windows[1]") && w.contains("zz35_35_ps.csv") && w.contains("10–480 s"),
         "{w}"
+    );
+}
+
+/// Regression: `[[0, 120, 5]]` (and `[[0, 120, "x"]]`) ran as `[0, 120]`, the extras dropped.
+#[test]
+fn a_time_window_with_extra_elements_is_refused_naming_the_key() {
+    for (windows, given) in [
+        ("[[0, 120, 5]]", "not 3 values"),
+        ("[[0, 120, 5, 6, 7]]", "not 5 values"),
+        ("[[0, 120, \"x\"]]", "not 3 values"),
+        ("[[120]]", "not 1 value"),
+    ] {
+        let err = windows_study(windows).err().unwrap_or_default();
+        assert!(
+            err.contains("key `training.windows`: a time window is [start, end] in seconds")
+                && err.contains(given),
+            "{windows}: {err}"
+        );
+    }
+}
+
+/// Regression: `windows = [[0, 1e300]]` ran, and its 301 digits landed in ids, tables and the
+/// report; `shipid fit --window` refuses times beyond a recording's largest `t`.
+#[test]
+fn a_window_beyond_the_largest_recorded_time_is_refused_as_fit_window_refuses_it() {
+    for windows in ["[[0, 1e300]]", "[[0, 100000001]]"] {
+        let err = windows_study(windows).err().unwrap_or_default();
+        assert!(
+            err.contains("key `training.windows`")
+                && err.contains("times beyond 1e8 s")
+                && err.len() < 300,
+            "{windows}: {err}"
+        );
+    }
+    assert!(windows_study("[[0, 1e8]]").is_ok());
+}
+
+/// Regression: `-0.0` passed the repeat checks as a value of its own: `lambda = [0.0, -0.0]` gave
+/// two cases of one fit (`l0e0`, `l-0e0`), a window `[-0.0, 120]` one labelled `-0-120 s`.
+#[test]
+fn negative_zero_is_zero_so_it_repeats_zero() {
+    let err = windows_study("[[0, 120], [-0.0, 120]]")
+        .err()
+        .unwrap_or_default();
+    assert!(
+        err.contains("key `training.windows`: value 2 repeats value 1"),
+        "{err}"
+    );
+    let ids = load(
+        |_| {},
+        &body(r#"["reduced32"]"#, r#"[["zz35_35_ps.csv"]]"#, "")
+            .replace("name = \"lsq\"", "name = \"ridge\"\nlambda = [0.0, -0.0]"),
+    );
+    let err = ids.err().unwrap_or_default();
+    assert!(
+        err.contains("key `estimator[0].lambda`: a value appears twice in the grid (0)"),
+        "{err}"
+    );
+    let ids = load(
+        |_| {},
+        &body(r#"["reduced32"]"#, r#"[["zz35_35_ps.csv"]]"#, "")
+            .replace("name = \"lsq\"", "name = \"ridge\"\nlambda = -0.0"),
+    )
+    .unwrap();
+    assert!(ids[0].contains("-l0e0_"), "{ids:?}");
+    let study = windows_study("[[-0.0, 120]]").unwrap();
+    assert!(
+        study.cases[0].id.contains("_t0-120-"),
+        "{}",
+        study.cases[0].id
+    );
+}
+
+/// Regression: a 300-character name passed the checks and the run failed with exit 1 and the
+/// OS's "File name too long" twice, when it made its results folder.
+#[test]
+fn a_study_name_too_long_for_a_folder_is_refused_naming_the_key() {
+    let long = body(r#"["reduced32"]"#, r#"[["zz35_35_ps.csv"]]"#, "")
+        .replace("name = \"g\"", &format!("name = \"{}\"", "a".repeat(300)));
+    let err = load(|_| {}, &long).unwrap_err();
+    assert!(
+        err.contains("key `name`: 300 characters") && err.contains("at most 100"),
+        "{err}"
+    );
+    let at_most = body(r#"["reduced32"]"#, r#"[["zz35_35_ps.csv"]]"#, "")
+        .replace("name = \"g\"", &format!("name = \"{}\"", "a".repeat(100)));
+    assert!(load(|_| {}, &at_most).is_ok());
+}
+
+/// Regression: the summary's `training` column joins a combination's names with `+`, so
+/// `["a+b.csv"]` and `["a", "b.csv"]` both read `a+b.csv`.
+#[test]
+fn a_training_recording_whose_name_holds_a_plus_is_refused() {
+    let err = load(
+        |_| {},
+        &body(
+            r#"["reduced32"]"#,
+            r#"[["zz35_35_ps.csv"], ["a+b.csv"]]"#,
+            "",
+        ),
+    )
+    .unwrap_err();
+    assert!(
+        err.contains("key `training.recordings[1][0]`: `a+b.csv` holds a `+`"),
+        "{err}"
     );
 }

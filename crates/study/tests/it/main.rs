@@ -415,6 +415,10 @@ fn check_tolerances_are_finite_bounded_and_name_numeric_columns() {
         Some("key `check.mrae.rel`: NaN is not a number (it would fail every comparison)"),
     );
     check_tolerance(
+        "mrae = { abs = 1e-6, tol = 1.0 }",
+        Some("key `check.mrae`: \"tol\" is not a key of a tolerance: it has `abs` and `rel` only"),
+    );
+    check_tolerance(
         "fit_time_s = { abs = 0.0 }",
         Some(
             "key `check.fit_time_s`: the fit's wall time varies between runs and is never compared: remove this tolerance",
@@ -438,6 +442,29 @@ fn check_tolerances_are_finite_bounded_and_name_numeric_columns() {
         );
         assert!(!msg.contains("fit_time_s"), "{msg}");
     }
+}
+
+/// Regression: a tolerance written as a list was read by position with extras dropped (`[0.5]`
+/// was abs 0.5, `[1e-6, 1e-4, 99]` dropped 99, `[]` the default), a form no document names.
+#[test]
+fn a_tolerance_written_as_a_list_is_refused_naming_the_key() {
+    for list in ["[0.5]", "[1e-6, 1e-4, 99]", "[]"] {
+        let (_dir, path) = study_file(&format!("{ONE_CASE}[check]\nmrae = {list}\n"));
+        let err = load_study(&path)
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(
+            err.contains("key `check.mrae`: invalid type: sequence, expected a tolerance table such as { abs = 1e-6, rel = 1e-4 }"),
+            "{list}: {err}"
+        );
+    }
+    let (_dir, path) = study_file(&format!("{ONE_CASE}[check]\nmrae = {{ rel = 1 }}\n"));
+    let check = load_study(&path).unwrap().check;
+    assert_eq!(
+        check["mrae"],
+        shipid_study::study::Tolerance { abs: 0.0, rel: 1.0 }
+    );
 }
 
 /// Regression: two recordings of 121 characters trained together made a case id over 255 bytes,
