@@ -377,6 +377,7 @@ fn check_track(
             }
         }
     }
+    check_heading_offset(file, rec, &measured, &as_given, residual)?;
     match k {
         Some(k) if residual < CLEAR_FIT && !(FACTOR_BAND.0..=FACTOR_BAND.1).contains(&k) => {
             let cause = match k {
@@ -408,6 +409,78 @@ fn check_track(
         )),
         _ => Ok(()),
     }
+}
+
+/// A heading this far off the track's direction is named (a compass's mounting, magnetic against
+/// true north); below it, a GNSS track and a gyro agree within what trials record.
+const HEADING_OFFSET_NAMED_RAD: f64 = 1.0_f64 * std::f64::consts::PI / 180.0;
+
+/// The heading must turn through this much for a rotation of the whole track to be told from a
+/// current: a current across a straight run or a zig-zag looks like a turned track, but the
+/// rotation it mimics changes sign once the ship has turned a quarter circle.
+const HEADING_SPAN_FOR_OFFSET_RAD: f64 = std::f64::consts::FRAC_PI_2;
+
+/// A constant offset of the recorded heading: the velocities turned by `psi` then carry the ship
+/// along a track turned by that angle from the recorded one. The scale test above reads the
+/// rotation θ as a factor cos θ (inside its band up to 37°) and a residual sin² θ (under its
+/// threshold up to 33°), so a 10° or 30° offset passed and every model was blamed for it.
+fn check_heading_offset(
+    file: &Path,
+    rec: &Recording,
+    measured: &[f64],
+    as_given: &[f64],
+    residual: f64,
+) -> Result<(), InputError> {
+    let (lo, hi) = rec
+        .psi
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        });
+    if residual <= NOISE_SHARE || hi - lo < HEADING_SPAN_FOR_OFFSET_RAD || hi.is_nan() || lo.is_nan() {
+        return Ok(());
+    }
+    // measured ≈ c · predicted with c complex (x north, y east: a turn to starboard is +θ).
+    let (mut re, mut im, mut pp, mut mm) = (0.0, 0.0, 0.0, 0.0);
+    for (m, p) in measured.chunks_exact(2).zip(as_given.chunks_exact(2)) {
+        re += m[0] * p[0] + m[1] * p[1];
+        im += m[1] * p[0] - m[0] * p[1];
+        pp += p[0] * p[0] + p[1] * p[1];
+        mm += m[0] * m[0] + m[1] * m[1];
+    }
+    if pp <= 0.0 || mm <= 0.0 {
+        return Ok(());
+    }
+    let theta = im.atan2(re);
+    let (cr, ci) = (re / pp, im / pp);
+    let rotated: f64 = measured
+        .chunks_exact(2)
+        .zip(as_given.chunks_exact(2))
+        .map(|(m, p)| {
+            (m[0] - (cr * p[0] - ci * p[1])).powi(2) + (m[1] - (ci * p[0] + cr * p[1])).powi(2)
+        })
+        .sum::<f64>()
+        / mm;
+    let k = (cr * cr + ci * ci).sqrt();
+    if theta.abs() >= HEADING_OFFSET_NAMED_RAD
+        && rotated < ALTERNATIVE_WINS * residual
+        && rotated < TRACK_AGREES
+        && (FACTOR_BAND.0..=FACTOR_BAND.1).contains(&k)
+    {
+        // The track runs θ to starboard of where the heading points: the heading reads θ too little.
+        return Err(InputError::file(
+            file,
+            format!(
+                "the track (`x0`, `y0`) runs {:.1}° to {} of the direction the velocities (`u`, `v`) turned by the heading `psi` give, throughout the run ({:.1} % of its movement unexplained as given, {:.2} % with the heading turned by that angle): the heading is offset from the track's north (a compass's mounting, magnetic against true north?); correct `psi` by {:+.1}° or give the track in the heading's frame (docs/conventions.md)",
+                theta.abs().to_degrees(),
+                if theta > 0.0 { "starboard" } else { "port" },
+                100.0 * residual,
+                100.0 * rotated,
+                theta.to_degrees()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Recorded accelerations against the changes of the velocities they belong to.

@@ -160,6 +160,8 @@ impl Dataset {
         let mut recordings = Vec::new();
         let mut opened: Vec<(usize, FileIdentity)> = Vec::new();
         let mut copies: Vec<(usize, u64)> = Vec::new();
+        // The data set's index of each recording read (`keep` may skip some).
+        let mut entries: Vec<usize> = Vec::new();
         for (i, entry) in file.recordings.iter().enumerate() {
             if !keep(&entry.file) {
                 continue;
@@ -241,12 +243,14 @@ impl Dataset {
                     file.ship.u0,
                 )?;
             }
+            entries.push(i);
             recordings.push(DatasetRecording {
                 file: entry.file.clone(),
                 manoeuvre,
                 recording,
             });
         }
+        refuse_near_copies(path, &recordings, &entries)?;
         // Added masses of a data set at another point of the hull (a GNSS antenna) are given about
         // midship: nobody computes them about an antenna.
         let added_mass = file.added_mass.map(|a| match file.origin {
@@ -752,6 +756,41 @@ pub fn check_added_mass(path: &Path, a: &AddedMass, s: &Ship) -> Result<(), Inpu
 /// A hash of every sample of the channels that define a motion: equal for a copy of a file, also
 /// when the copy's clock or track starts elsewhere (time and positions are taken from their first
 /// sample, to a micro-unit, so the subtraction's rounding does not tell copies apart).
+/// A recording that holds a part of another's samples (cut, thinned, rewritten, its track turned):
+/// refused as the byte-for-byte copy is, naming the span of the other it holds.
+fn refuse_near_copies(
+    path: &Path,
+    recordings: &[DatasetRecording],
+    entries: &[usize],
+) -> Result<(), InputError> {
+    let indexes: Vec<crate::copies::CopyIndex> = recordings
+        .iter()
+        .map(|r| crate::copies::CopyIndex::new(&r.recording))
+        .collect();
+    for later in 1..recordings.len() {
+        for earlier in 0..later {
+            let (a, b) = (&recordings[earlier], &recordings[later]);
+            let found = crate::copies::copied_span(&a.recording, &indexes[earlier], &b.recording)
+                .map(|span| (a, b, entries[earlier], span))
+                .or_else(|| {
+                    crate::copies::copied_span(&b.recording, &indexes[later], &a.recording)
+                        .map(|span| (b, a, entries[later], span))
+                });
+            if let Some((whole, part, whole_entry, (t0, t1))) = found {
+                return Err(InputError::key(
+                    path,
+                    format!("recording[{}].file", entries[later]),
+                    format!(
+                        "`{}` holds the samples of recording[{whole_entry}].file `{}` from t = {t0:.2} s to {t1:.2} s of its clock (a cut, thinned or rewritten copy, or one with its track turned): list each recording once",
+                        part.file, whole.file
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 fn samples_fingerprint(rec: &Recording) -> u64 {
     use std::hash::{Hash, Hasher};
     let mut h = std::collections::hash_map::DefaultHasher::new();
@@ -1023,9 +1062,38 @@ fn propeller_data(
 }
 
 fn manoeuvre_of(path: &Path, i: usize, e: &RecordingEntry) -> Result<Manoeuvre, InputError> {
+    // A key the kind has no use for was silently ignored (a `turning` entry with a `check`): it
+    // says the entry means another manoeuvre than the one it is read as.
+    let unused: &[(&str, bool)] = match e.kind {
+        Kind::Zigzag => &[],
+        Kind::Turning => &[("check", e.check.is_some())],
+        Kind::Free => &[
+            ("rudder", e.rudder.is_some()),
+            ("check", e.check.is_some()),
+            ("side", e.side.is_some()),
+        ],
+    };
+    if let Some((key, _)) = unused.iter().find(|(_, given)| *given) {
+        return Err(InputError::key(
+            path,
+            format!("recording[{i}].{key}"),
+            format!(
+                "does not apply to kind = \"{}\" (a zigzag has rudder, check and side; a turning circle rudder and side; a free manoeuvre none)",
+                kind_word(e.kind)
+            ),
+        ));
+    }
+    // The standard manoeuvres' controllers take a rudder up to 90° and a check angle up to 180°; a
+    // larger value failed later as a "diverged" simulation instead of as the input it is.
     let need = |key: &str, v: Option<f64>| -> Result<f64, InputError> {
+        let limit_deg = if key == "check" { 180.0 } else { 90.0 };
         match v {
-            Some(x) if x.is_finite() && x > 0.0 => Ok(x),
+            Some(x) if x.is_finite() && x > 0.0 && x <= limit_deg => Ok(x),
+            Some(x) if x.is_finite() && x > limit_deg => Err(InputError::key(
+                path,
+                format!("recording[{i}].{key}"),
+                format!("{x}° is above the {limit_deg}° a {key} angle can be (in degrees?)"),
+            )),
             Some(x) => Err(InputError::key(
                 path,
                 format!("recording[{i}].{key}"),

@@ -17,6 +17,7 @@
 //! - [`error`]: [`InputError`], which always names the file and the line/column or key.
 
 pub mod consistency;
+mod copies;
 pub mod dataset;
 pub mod deriv;
 pub mod error;

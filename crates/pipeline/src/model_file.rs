@@ -338,7 +338,18 @@ pub fn newer_version_note(spec: &str) -> Option<String> {
 /// A path as stored in a file at `file`: relative to the file's folder, or absolute when there is no
 /// relative path (another drive).
 pub fn stored_path(file: &Path, target: &Path) -> String {
-    let target = absolute_path(target);
+    // The target's own name stays as given: a data set read through a symbolic link reads its
+    // recordings beside the link, and a path to the link's target named training data the fit
+    // never saw (its folders' links are resolved, so `sub/../a` and a linked folder still compare).
+    let target = match (target.parent(), target.file_name()) {
+        (Some(dir), Some(name)) => absolute_path(if dir.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            dir
+        })
+        .join(name),
+        _ => absolute_path(target),
+    };
     let dir = absolute_path(file)
         .parent()
         .map(Path::to_path_buf)
@@ -764,6 +775,29 @@ mod tests {
         // Spelled with `..` and `.`, the same file.
         let odd = dir.path().join("results/./run/../../data/set/dataset.toml");
         assert_eq!(absolute_path(&odd), absolute_path(&data));
+    }
+
+    /// Regression: a fit through a linked `dataset.toml` stored the link's target, whose folder
+    /// holds other recordings than the ones the fit read beside the link.
+    #[cfg(unix)]
+    #[test]
+    fn a_linked_data_set_is_stored_as_the_link() {
+        let dir = Scratch::new("linked");
+        let base = dir.path().join("base/dataset.toml");
+        let link = dir.path().join("x/dataset.toml");
+        std::fs::create_dir_all(base.parent().unwrap()).unwrap();
+        std::fs::create_dir_all(link.parent().unwrap()).unwrap();
+        std::fs::write(&base, "x").unwrap();
+        std::os::unix::fs::symlink(&base, &link).unwrap();
+        let model = dir.path().join("m.toml");
+        assert_eq!(stored_path(&model, &link), "x/dataset.toml");
+        // A linked folder is still resolved: the stored path is the file system's.
+        let linked_dir = dir.path().join("y");
+        std::os::unix::fs::symlink(dir.path().join("base"), &linked_dir).unwrap();
+        assert_eq!(
+            stored_path(&model, &linked_dir.join("dataset.toml")),
+            "base/dataset.toml"
+        );
     }
 
     #[test]

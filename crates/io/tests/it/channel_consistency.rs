@@ -394,3 +394,70 @@ fn real_changes_of_the_propeller_rate_pass() {
         check(with_rate(change), &ZIGZAG, None);
     }
 }
+
+/// A ship turning through 1.5 full circles at 1.2 m/s (yaw rate 0.04 … 0.06 rad/s), its track
+/// integrated from its velocities and heading, plus a constant current `current_m_s` (north, east)
+/// carrying the track.
+fn turning(current_m_s: (f64, f64)) -> Recording {
+    let (n, dt) = (2400, 0.1);
+    let t: Vec<f64> = (0..n).map(|i| i as f64 * dt).collect();
+    let r: Vec<f64> = t.iter().map(|t| 0.05 + 0.01 * (0.05 * t).sin()).collect();
+    let v: Vec<f64> = r.iter().map(|r| -2.0 * r).collect();
+    let u = vec![U0_M_S; n];
+    let (mut psi, mut x0, mut y0) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let earth = |k: usize, p: f64| {
+        let (s, c) = p.sin_cos();
+        (
+            u[k] * c - v[k] * s + current_m_s.0,
+            u[k] * s + v[k] * c + current_m_s.1,
+        )
+    };
+    for i in 1..n {
+        psi[i] = psi[i - 1] + 0.5 * (r[i] + r[i - 1]) * dt;
+        let (a, b) = (earth(i - 1, psi[i - 1]), earth(i, psi[i]));
+        x0[i] = x0[i - 1] + 0.5 * (a.0 + b.0) * dt;
+        y0[i] = y0[i - 1] + 0.5 * (a.1 + b.1) * dt;
+    }
+    Recording {
+        delta: vec![35.0_f64.to_radians(); n],
+        t,
+        x0,
+        y0,
+        psi,
+        u,
+        v,
+        r,
+        ..Default::default()
+    }
+}
+
+const TURNING: Manoeuvre = Manoeuvre::Turning {
+    rudder_deg: 35.0,
+    side: Side::Starboard,
+};
+
+/// Regression: a heading 10° (up to 33°) off the track passed the scale test (a factor cos θ, a
+/// residual sin² θ) and every model was blamed for the turned track.
+#[test]
+fn a_heading_offset_is_named_where_the_ship_turns() {
+    let offset =
+        |deg: f64| move |rec: &mut Recording| rec.psi.iter_mut().for_each(|p| *p += deg / DEG);
+    check_recording(turning((0.0, 0.0)), |_| {}, &TURNING, None);
+    check_recording(
+        turning((0.0, 0.0)),
+        offset(10.0),
+        &TURNING,
+        Some(
+            "runs 10.0° to port of the direction the velocities (`u`, `v`) turned by the heading `psi` give",
+        ),
+    );
+    check_recording(
+        turning((0.0, 0.0)),
+        offset(-3.0),
+        &TURNING,
+        Some("correct `psi` by +3.0°"),
+    );
+    // A current carries the track off the velocities too, but not as a rotation once the ship has
+    // turned: no offset is named.
+    check_recording(turning((0.15, -0.1)), |_| {}, &TURNING, None);
+}

@@ -728,3 +728,108 @@ fn large_times_and_positions_are_written_exactly() {
     assert_eq!(back.t, rec.t);
     assert_eq!(back.x0, rec.x0);
 }
+
+/// Regression: a recording cut from another, every second sample of it, its samples rounded to
+/// 8 digits or its track turned by a heading offset was read as a recording of its own, and the
+/// fit counted the run twice without a word.
+#[test]
+fn a_cut_thinned_rewritten_or_turned_copy_of_a_recording_is_refused() {
+    let dir = TempDir::new("near-copies");
+    // 200 samples of a zig-zag-like yaw (the copy test needs a recording that yaws), heading and
+    // track integrated from the velocities so that the channels agree.
+    let rows: Vec<[f64; 8]> = {
+        let (mut psi, mut x0, mut y0) = (0.0_f64, 0.0_f64, 0.0_f64);
+        (0..200)
+            .map(|i| {
+                let t = i as f64 * 0.1;
+                let r = 0.02 * (0.3 * t).sin();
+                let (u, v) = (1.0, -0.5 * r);
+                if i > 0 {
+                    psi += r * 0.1;
+                    let (s, c) = psi.sin_cos();
+                    x0 += (u * c - v * s) * 0.1;
+                    y0 += (u * s + v * c) * 0.1;
+                }
+                [t, x0, y0, psi, u, v, r, 0.1 * (0.3 * t).sin()]
+            })
+            .collect()
+    };
+    let row = |i: usize| rows[i];
+    let write =
+        |name: &str, rows: &mut dyn Iterator<Item = [f64; 8]>, fmt: &dyn Fn(f64) -> String| {
+            let mut text = format!("{HEADER}\n");
+            for r in rows {
+                text.push_str(&r.map(fmt).join(","));
+                text.push('\n');
+            }
+            std::fs::write(dir.0.join(name), text).unwrap();
+        };
+    let full = |x: f64| format!("{x:e}");
+    write("a.csv", &mut (0..200).map(row), &full);
+    write("cut.csv", &mut (50..150).map(row), &full);
+    write("thinned.csv", &mut (0..200).step_by(2).map(row), &full);
+    write("rounded.csv", &mut (0..200).map(row), &|x| {
+        format!("{x:.7e}")
+    });
+    write(
+        "turned.csv",
+        &mut (0..200).map(|i| {
+            let mut r = row(i);
+            r[3] += 0.5; // heading turned by 0.5 rad, track kept: only u, v, r, δ compare
+            r
+        }),
+        &full,
+    );
+    let entry = |f: &str| format!("[[recording]]\nfile = \"{f}\"\nkind = \"free\"\n");
+    for (second, span) in [
+        ("cut.csv", "from t = 5.00 s to 14.90 s"),
+        ("thinned.csv", "from t = 0.00 s to 19.80 s"),
+        ("rounded.csv", "from t = 0.00 s to 19.90 s"),
+        ("turned.csv", "from t = 0.00 s to 19.90 s"),
+    ] {
+        let ds = dir.0.join(format!("ds-{second}.toml"));
+        std::fs::write(&ds, format!("{SHIP}{}{}", entry("a.csv"), entry(second))).unwrap();
+        let e = Dataset::load(&ds).unwrap_err().to_string();
+        assert!(
+            e.contains(&format!(
+                "key `recording[1].file`: `{second}` holds the samples of recording[0].file `a.csv` {span}"
+            )),
+            "{e}"
+        );
+    }
+}
+
+/// Regression: a `turning` entry with a `check`, a `free` one with a rudder, were read with the key
+/// ignored; a rudder of 179° passed loading and failed later as a "diverged" simulation.
+#[test]
+fn keys_a_manoeuvre_has_no_use_for_and_angles_beyond_the_controller_are_refused() {
+    let dir = TempDir::new("entry-keys");
+    std::fs::write(dir.0.join("a.csv"), recording_text(HEADER, |_, _| {})).unwrap();
+    for (entry, expected) in [
+        (
+            "kind = \"turning\"\nrudder = 35.0\nside = \"port\"\ncheck = 5.0\n",
+            "key `recording[0].check`: does not apply to kind = \"turning\"",
+        ),
+        (
+            "kind = \"free\"\nrudder = 10.0\n",
+            "key `recording[0].rudder`: does not apply to kind = \"free\"",
+        ),
+        (
+            "kind = \"zigzag\"\nrudder = 179.0\ncheck = 5.0\nside = \"port\"\n",
+            "key `recording[0].rudder`: 179° is above the 90° a rudder angle can be",
+        ),
+        (
+            "kind = \"zigzag\"\nrudder = 20.0\ncheck = 200.0\nside = \"port\"\n",
+            "key `recording[0].check`: 200° is above the 180° a check angle can be",
+        ),
+    ] {
+        let ds = dir.0.join("ds.toml");
+        std::fs::write(
+            &ds,
+            format!("{SHIP}[[recording]]\nfile = \"a.csv\"\n{entry}"),
+        )
+        .unwrap();
+        let e = Dataset::load(&ds).unwrap_err().to_string();
+        assert!(e.contains(expected), "{e}");
+    }
+}
