@@ -775,7 +775,7 @@ pub fn fit_mmg_model_file(
     if !refine_after {
         let mut file = model_file(&fit, added);
         if let Some(j) = &jackknife {
-            add_jackknife(&mut file, j);
+            add_jackknife(&mut file, j, None);
         }
         return Ok((fit, file));
     }
@@ -799,24 +799,54 @@ pub fn fit_mmg_model_file(
     refined.fit_time_s += started.elapsed().as_secs_f64();
     let mut file = model_file(&refined, added);
     if let Some(j) = &jackknife {
-        add_jackknife(&mut file, j);
+        // The refits are equation-error fits: as they were, their predictions spread about the
+        // unrefined fit, not this model (on the default data the refined turn lay outside the
+        // whole range). Each is carried by this model's own refinement step.
+        let step: Vec<f64> = refined
+            .estimate
+            .params
+            .iter()
+            .zip(&fit.estimate.params)
+            .map(|(r, e)| r.value - e.value)
+            .collect();
+        add_jackknife(&mut file, j, Some(&step));
     }
     file.estimator.refinement = Some(how);
     file.valley = starts.as_deref().map(valley_record);
     Ok((refined, file))
 }
 
-/// Each parameter's jackknife standard error and `[estimator.jackknife]` into `file`.
-fn add_jackknife(file: &mut MmgModelFile, j: &jackknife::RecordingJackknife) {
+/// Each parameter's jackknife standard error and `[estimator.jackknife]` into `file`; with
+/// `refinement_step` (the refined minus the equation-error values, per parameter) each refit is
+/// moved by it, kept within the bounds.
+fn add_jackknife(
+    file: &mut MmgModelFile,
+    j: &jackknife::RecordingJackknife,
+    refinement_step: Option<&[f64]>,
+) {
     for (p, se) in file.parameters.iter_mut().zip(&j.standard_errors) {
         p.jackknife_standard_error = Some(*se);
     }
+    let base = "delete-one-recording jackknife: the equation-error fit repeated with each training \
+                recording left out (same priors, prior weight and start), standard error \
+                √((g − 1)/g Σ (θ₋ᵢ − θ̄)²) over the g refits";
+    let method = match refinement_step {
+        None => base.to_string(),
+        Some(_) => format!(
+            "{base}; each refit then moved by this model's refinement step (its refined minus its \
+             equation-error values, within the bounds), so that they spread about the refined model \
+             (the refits themselves are not refined: a first-order transfer)"
+        ),
+    };
+    let carried = |k: usize, v: f64| match refinement_step {
+        Some(step) => {
+            let p = &file.parameters[k];
+            (v + step[k]).clamp(p.lower, p.upper)
+        }
+        None => v,
+    };
     file.estimator.jackknife = Some(JackknifeEntry {
-        method:
-            "delete-one-recording jackknife: the equation-error fit repeated with each training \
-                 recording left out (same priors, prior weight and start), standard error \
-                 √((g − 1)/g Σ (θ₋ᵢ − θ̄)²) over the g refits"
-                .into(),
+        method,
         left_out: j.refits.iter().map(|(name, _)| name.clone()).collect(),
         failed: j.failed.clone(),
         values: file
@@ -824,7 +854,11 @@ fn add_jackknife(file: &mut MmgModelFile, j: &jackknife::RecordingJackknife) {
             .iter()
             .enumerate()
             .map(|(k, p)| {
-                let values = j.refits.iter().map(|(_, theta)| theta[k]).collect();
+                let values = j
+                    .refits
+                    .iter()
+                    .map(|(_, theta)| carried(k, theta[k]))
+                    .collect();
                 (p.name.clone(), values)
             })
             .collect(),

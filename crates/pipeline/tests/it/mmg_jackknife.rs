@@ -96,3 +96,37 @@ fn a_recording_that_disagrees_widens_the_jackknife_and_is_reported() {
         "{text}"
     );
 }
+
+/// Regression: the refits of a `--refine`d fit were stored as equation-error fits, so their
+/// predictions spread about the unrefined fit; on the default data the refined model's own
+/// tactical diameter (3.1047 L) lay outside their whole range ([3.2142, 3.2552] L). Each refit is
+/// now carried by the model's refinement step: its offset from the model is its offset from the
+/// equation-error fit.
+#[test]
+fn a_refined_fit_s_jackknife_refits_spread_about_the_refined_model() {
+    let ds = default_data();
+    let opts = MmgFitOptions {
+        recordings: ZIGZAGS[..3].iter().map(|s| s.to_string()).collect(),
+        ..MmgFitOptions::default()
+    };
+    let plain = fit_mmg_model_file(&ds, &opts, false).unwrap().1;
+    let refined = fit_mmg_model_file(&ds, &opts, true).unwrap().1;
+    let (pj, rj) = (
+        plain.estimator.jackknife.as_ref().unwrap(),
+        refined.estimator.jackknife.as_ref().unwrap(),
+    );
+    assert!(rj.method.contains("refinement step"), "{}", rj.method);
+    let mut moved = 0;
+    for (p, r) in plain.parameters.iter().zip(&refined.parameters) {
+        let (pv, rv) = (&pj.values[&p.name], &rj.values[&r.name]);
+        if r.value != p.value {
+            moved += 1;
+        }
+        for (a, b) in pv.iter().zip(rv) {
+            let expected = (a - p.value + r.value).clamp(r.lower, r.upper);
+            let scale = 1e-9 * (1.0 + a.abs() + r.value.abs());
+            assert!((b - expected).abs() <= scale, "{}: {b} vs {expected}", r.name);
+        }
+    }
+    assert!(moved > 0, "the refinement moved no parameter: nothing tested");
+}
