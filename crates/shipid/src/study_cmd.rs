@@ -33,6 +33,8 @@ pub fn run_and_write(
             .dataset(&study.dataset_path),
     )?;
     refuse_foreign_folder(out)?;
+    // Whatever --force says: a reference is the check's, and a run's tables would replace it.
+    shipid_study::reference::refuse_run_over_reference(out)?;
     shipid_study::output::refuse_links(out)?;
     if !force {
         refuse_other_study(study, out)?;
@@ -386,6 +388,8 @@ pub fn check(
     if bless {
         check_out_dir(reference)
             .map_err(|_| bad_input(format!("--reference {}: not a folder", reference.display())))?;
+        // Before the run, not after minutes of it.
+        shipid_study::reference::refuse_bless_over(&study, reference)?;
     } else {
         for (stem, _) in COMPARED {
             let path = reference.join(format!("{stem}.csv"));
@@ -435,6 +439,8 @@ pub fn check(
                 std::fs::copy(fresh_dir.join(&name), &to).map_err(named(&to))?;
             }
         }
+        // Last: tables without it are still taken as this study's by their case ids.
+        shipid_study::reference::write_reference_record(&study, reference)?;
         eprintln!(
             "blessed {} as the reference of {} ({} cases)",
             reference.display(),

@@ -5,7 +5,8 @@
 //!
 //! Module map: `study` (the file, its checks, the case grid; `raw_values` its values of more than one shape) ← `runner` (per-case fit, validation,
 //! stored results, typed statuses and outcomes) ← `tables` (summary, coefficients, diagnostics) and
-//! `record` (`study.toml`, `run.json`); `lock` (one run per output folder), `output` (no link inside
+//! `record` (`study.toml`, `run.json`), `reference` (whose tables a folder holds, before `check
+//! --bless` or a run writes over them); `lock` (one run per output folder), `output` (no link inside
 //! the output folder followed out of it), `progress` (a bar or plain lines); `error`.
 
 pub mod error;
@@ -14,6 +15,7 @@ pub mod output;
 pub mod progress;
 pub mod raw_values;
 pub mod record;
+pub mod reference;
 pub mod runner;
 pub mod study;
 pub mod tables;

@@ -57,7 +57,7 @@ fn bad_study_files_name_the_file_and_key() {
     );
     check_bad(
         "gp_similarity_out_of_range.toml",
-        ": key `estimator[0].similarity`: --similarity must be in (0, 1], not 1.5",
+        ": key `estimator[0].similarity`: similarity must be in (0, 1], not 1.5",
     );
     check_bad(
         "similarity_on_lsq.toml",
