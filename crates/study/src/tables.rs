@@ -72,9 +72,9 @@ pub fn summary_pivot(summary: &Table, pivot: Option<&str>) -> Result<String, Tab
     let percent = p.value.ends_with("mrae") || p.value.ends_with("rel_error");
     let mut md = summary.pivot_markdown(&p, "case", |x| {
         if percent {
-            format!("{:.1} %", 100.0 * x)
+            percent_cell(x)
         } else {
-            format!("{x:.4}")
+            significant(x)
         }
     })?;
     // A case without test rows has a row of empty cells: say why, so they do not read as missing
@@ -333,6 +333,48 @@ fn strsim_close(a: &str, b: &str) -> bool {
     }
 }
 
+/// A table cell of `x` to four significant digits: four fixed decimals showed λ = 1e-8 and 1e-6
+/// both as 0.0000 and a fit time of 9.7e-5 s as 0.0001. Scientific below 1e-3 and from 1e6 on,
+/// where fixed decimals would need many zeros.
+pub fn significant(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 {
+        "0".into()
+    } else if !x.is_finite() {
+        format!("{x}")
+    } else if !(1e-3..1e6).contains(&a) {
+        format!("{x:.3e}")
+    } else {
+        // Rounding to four digits may carry into a fifth (9999.5 → 10000): then one decimal fewer.
+        let magnitude = a.log10().floor() as i32;
+        let decimals = (3 - magnitude).max(0) as usize;
+        let text = format!("{x:.decimals$}");
+        let digits = text.chars().filter(char::is_ascii_digit).count();
+        let leading_zeros = text
+            .trim_start_matches('-')
+            .chars()
+            .take_while(|&c| c == '0' || c == '.')
+            .filter(|&c| c == '0')
+            .count();
+        if digits - leading_zeros > 4 && decimals > 0 {
+            format!("{x:.prec$}", prec = decimals - 1)
+        } else {
+            text
+        }
+    }
+}
+
+/// A relative error or MRAE as a percentage to one decimal; one that small rounds to 0.0 %, so a
+/// non-zero value under 0.05 % is given to four significant digits instead.
+fn percent_cell(x: f64) -> String {
+    let p = 100.0 * x;
+    if p != 0.0 && p.abs() < 0.05 {
+        format!("{} %", significant(p))
+    } else {
+        format!("{p:.1} %")
+    }
+}
+
 /// The cells of a `<metric>_band` value, when the summary has that metric's band columns and no
 /// column of that name: `[lo, hi] inside`, `[lo, hi] outside`, `[lo, hi]` without a recorded value,
 /// or empty without a band.
@@ -354,7 +396,7 @@ fn band_cells(summary: &Table, value: &str) -> Option<Vec<String>> {
                         "no" => " outside",
                         _ => "",
                     };
-                    format!("[{l:.4}, {h:.4}]{side}")
+                    format!("[{}, {}]{side}", significant(l), significant(h))
                 }
                 _ => String::new(),
             })
@@ -603,4 +645,38 @@ fn long_table(
     t.push_text("quantity", long.iter().map(|r| r.2.clone()).collect());
     t.push_num("value", long.iter().map(|r| r.3).collect());
     t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Regression: `shipid table` printed every value with four fixed decimals, so λ = 1e-8 and
+    /// 1e-6 both read 0.0000 and a fit time of 9.7e-5 s read 0.0001.
+    #[test]
+    fn small_values_keep_four_significant_digits_in_a_table() {
+        for (x, cell) in [
+            (1e-8, "1.000e-8"),
+            (1e-6, "1.000e-6"),
+            (9.7e-5, "9.700e-5"),
+            (-2.5e-4, "-2.500e-4"),
+            (0.0, "0"),
+            (0.001, "0.001000"),
+            (0.12345, "0.1235"),
+            (2.5, "2.500"),
+            (11.25, "11.25"),
+            (-11.25, "-11.25"),
+            (123.456, "123.5"),
+            (9999.6, "10000"),
+            (99.996, "100.0"),
+            (123456.0, "123456"),
+            (1e6, "1.000e6"),
+            (f64::NAN, "NaN"),
+        ] {
+            assert_eq!(significant(x), cell, "{x}");
+        }
+        assert_eq!(percent_cell(0.109), "10.9 %");
+        assert_eq!(percent_cell(1e-8), "1.000e-6 %");
+        assert_eq!(percent_cell(0.0), "0.0 %");
+    }
 }

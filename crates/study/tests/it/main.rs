@@ -300,10 +300,7 @@ fn a_study_with_bands_has_lo_hi_inside_columns_and_one_without_has_none() {
     assert_eq!(text("advance_inside"), ["", ""]);
 
     let md = summary_pivot(&t, Some("window,test,overshoot_1_band")).unwrap();
-    assert!(
-        md.contains("| whole | [2.5000, 11.2500] outside |  |"),
-        "{md}"
-    );
+    assert!(md.contains("| whole | [2.500, 11.25] outside |  |"), "{md}");
     let md = summary_pivot(&t, Some("window,test,overshoot_2_inside")).unwrap();
     assert!(md.contains("| whole | yes |  |"), "{md}");
 
