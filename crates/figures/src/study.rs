@@ -306,9 +306,9 @@ fn hash_suffix(name: &str) -> String {
     format!("-{:08x}", shipid_pipeline::generate::fnv1a(name) as u32)
 }
 
-/// The file-name prefixes of the figures [`write_figures`] draws: an SVG of the figures folder with
-/// one of them that a run did not draw is a leftover of an earlier run (another study, or bands since
-/// turned off), removed so the folder and the report show the current run only.
+/// The file-name prefixes of the figures [`write_figures`] draws. A figure an earlier run recorded
+/// ([`FIGURE_RECORD`]) that this run does not draw (another study's, or bands since turned off) is
+/// removed, so the folder and the report show the current run only.
 pub const FIGURE_PREFIXES: [&str; 7] = [
     "trajectories_",
     "heading_",
@@ -319,17 +319,35 @@ pub const FIGURE_PREFIXES: [&str; 7] = [
     "forces_",
 ];
 
-/// Removes the figures of `dir` that shipid draws (by [`FIGURE_PREFIXES`]) and `keep` does not
-/// hold; other files are the user's and stay.
-fn remove_stale(dir: &Path, keep: &[PathBuf], report: &mut FigureReport) {
-    let Ok(entries) = std::fs::read_dir(dir) else {
-        return;
+/// The list of the figures a run drew, kept in the figures folder: the next run removes those of
+/// them it does not draw, and nothing else. A name alone (`trajectories_my_hand_drawn.svg`, of
+/// the user's) says nothing of who wrote the file: removing by prefix deleted such files.
+pub const FIGURE_RECORD: &str = ".shipid-figures";
+
+/// The figures an earlier run recorded in `dir` ([`FIGURE_RECORD`]): plain file names of shipid's
+/// figures only, so an edited record cannot name a file elsewhere or one of another kind.
+fn recorded_figures(dir: &Path) -> Vec<String> {
+    let Ok(text) = std::fs::read_to_string(dir.join(FIGURE_RECORD)) else {
+        return Vec::new(); // no earlier run, or one before the record existed: remove nothing
     };
-    for e in entries.flatten() {
-        let path = e.path();
-        let name = e.file_name().to_string_lossy().into_owned();
-        let ours = name.ends_with(".svg") && FIGURE_PREFIXES.iter().any(|p| name.starts_with(p));
-        if !ours || keep.contains(&path) || !path.is_file() {
+    text.lines()
+        .map(str::trim)
+        .filter(|name| {
+            name.ends_with(".svg")
+                && FIGURE_PREFIXES.iter().any(|p| name.starts_with(p))
+                && !name.contains(['/', '\\'])
+                && !name.starts_with('.')
+        })
+        .map(str::to_string)
+        .collect()
+}
+
+/// Removes the figures an earlier run recorded in `dir` that `keep` does not hold, then records
+/// `keep` for the next run; other files are the user's and stay.
+fn remove_stale(dir: &Path, keep: &[PathBuf], report: &mut FigureReport) {
+    for name in recorded_figures(dir) {
+        let path = dir.join(&name);
+        if keep.contains(&path) || !path.is_file() {
             continue;
         }
         match std::fs::remove_file(&path) {
@@ -339,6 +357,18 @@ fn remove_stale(dir: &Path, keep: &[PathBuf], report: &mut FigureReport) {
                 path.display()
             )),
         }
+    }
+    let names: Vec<String> = keep
+        .iter()
+        .filter_map(|p| Some(p.file_name()?.to_string_lossy().into_owned()))
+        .collect();
+    let record = dir.join(FIGURE_RECORD);
+    let text = format!("{}\n", names.join("\n"));
+    if let Err(e) = shipid_io::write::write_atomic(&record, text.as_bytes()) {
+        report.warnings.push(format!(
+            "{}: cannot record the figures drawn (the next run will not remove those it no longer draws): {e}",
+            record.display()
+        ));
     }
 }
 

@@ -62,33 +62,64 @@ fn figures_of_an_earlier_run_are_removed_and_the_users_files_kept() {
     let (_dir, study, out) = run(&["reduced32"], &[]);
     let figures = out.join("figures");
     std::fs::create_dir_all(&figures).unwrap();
-    // Left by a run with bands and by another study; beside them the user's own files.
-    for stale in [
+    // Drawn by a run with bands and by another study, as that run recorded them; beside them the
+    // user's own files, some named like shipid's figures.
+    let stale = [
         "bands_zz20_20_ps.svg",
         "coefficients_full74.svg",
         "forces_old_case_tc35_ps.svg",
-    ] {
-        std::fs::write(figures.join(stale), "<svg/>").unwrap();
+    ];
+    for name in stale {
+        std::fs::write(figures.join(name), "<svg/>").unwrap();
     }
-    for own in ["my_sketch.svg", "notes.txt"] {
-        std::fs::write(figures.join(own), "mine").unwrap();
+    std::fs::write(
+        figures.join(shipid_figures::study::FIGURE_RECORD),
+        format!("{}\n../../victim.svg\nnotes.txt\n", stale.join("\n")),
+    )
+    .unwrap();
+    let own = [
+        "my_sketch.svg",
+        "notes.txt",
+        "trajectories_my_hand_drawn.svg",
+        "bands_notes.svg",
+    ];
+    for name in own {
+        std::fs::write(figures.join(name), "mine").unwrap();
     }
+    std::fs::write(out.join("victim.svg"), "mine").unwrap();
     let report = write_figures(&study, &out);
     assert!(report.warnings.is_empty(), "{:?}", report.warnings);
     assert_eq!(report.removed.len(), 3, "{:?}", report.removed);
     let left = names(&figures);
-    for stale in [
-        "bands_zz20_20_ps.svg",
-        "coefficients_full74.svg",
-        "forces_old_case_tc35_ps.svg",
-    ] {
-        assert!(!left.contains(&stale.to_string()), "{left:?}");
+    for name in stale {
+        assert!(!left.contains(&name.to_string()), "{left:?}");
     }
-    assert!(left.contains(&"my_sketch.svg".into()) && left.contains(&"notes.txt".into()));
+    for name in own {
+        assert!(left.contains(&name.to_string()), "{name}: {left:?}");
+    }
+    assert!(out.join("victim.svg").is_file());
     assert!(
         left.contains(&"coefficients_reduced32.svg".into()),
         "{left:?}"
     );
+}
+
+/// Regression: a resume run deleted the user's `figures/trajectories_my_hand_drawn.svg` and
+/// `figures/bands_notes.svg`, whose names begin as shipid's figures do, though no run drew them.
+#[test]
+fn the_users_svg_files_named_like_figures_survive_every_run() {
+    let (_dir, study, out) = run(&["reduced32"], &[]);
+    let first = write_figures(&study, &out);
+    assert!(first.warnings.is_empty(), "{:?}", first.warnings);
+    let figures = out.join("figures");
+    for name in ["trajectories_my_hand_drawn.svg", "bands_notes.svg"] {
+        std::fs::write(figures.join(name), "mine").unwrap();
+    }
+    let again = write_figures(&study, &out);
+    assert!(again.removed.is_empty(), "{:?}", again.removed);
+    for name in ["trajectories_my_hand_drawn.svg", "bands_notes.svg"] {
+        assert_eq!(std::fs::read_to_string(figures.join(name)).unwrap(), "mine");
+    }
 }
 
 #[test]
