@@ -45,7 +45,8 @@ pub fn study_page_with_warnings(
     let run_obj = run.as_ref().and_then(Value::as_object);
     let mut notes: Vec<String> = Vec::new();
 
-    // Cases in the order of summary.csv, then any case folder without a row.
+    // Cases in the order of summary.csv. A case folder without a row is a leftover (an earlier run
+    // into the folder with other grid values): shown as a case, it was counted among the run's.
     let mut cases: Vec<Case> = Vec::new();
     let mut index: BTreeMap<String, usize> = BTreeMap::new();
     for (i, r) in summary.rows.iter().enumerate() {
@@ -68,11 +69,13 @@ pub fn study_page_with_warnings(
             .filter(|id| !index.contains_key(id))
             .collect();
         extra.sort();
-        for id in extra {
+        if let Some(first) = extra.first() {
             notes.push(format!(
-                "case {id} has a folder under cases/ but no row in summary.csv"
+                "{} folder(s) under cases/ have no row in summary.csv and are not cases of this run \
+                 (left from an earlier run into this folder?), not shown: {first}{}",
+                extra.len(),
+                if extra.len() > 1 { ", …" } else { "" }
             ));
-            cases.push(Case { id, rows: vec![] });
         }
     }
 

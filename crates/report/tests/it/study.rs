@@ -456,3 +456,34 @@ fn each_svg_has_a_title_and_tables_have_captions_and_scopes() {
     );
     assert!(html.matches("<th scope=\"col\"").count() > 10);
 }
+
+/// Regression: an earlier run of the same study with other grid values left its case folders in
+/// the --out, and the page counted them as the run's ("3 cases · 2 cases no row" where run.json
+/// says 1 case). They are named in the warnings and not shown as cases.
+#[test]
+fn leftover_case_folders_of_an_earlier_run_are_not_counted_as_cases() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(
+        dir.path().join("summary.csv"),
+        "case,set,case_status,test,status\na,s,ok,zz35.csv,ok\n",
+    )
+    .unwrap();
+    for id in ["a", "old1", "old2"] {
+        fs::create_dir_all(dir.path().join("cases").join(id)).unwrap();
+    }
+    let html = study_page(dir.path(), &RunMeta::default()).unwrap();
+    assert!(
+        html.contains("<span class=\"v\">1</span>cases</div>"),
+        "one case"
+    );
+    assert!(!html.contains("no row</div>"), "no 'cases no row' tile");
+    assert!(!html.contains("data-case-id=\"old1\""));
+    let w = html.find("id=\"warnings\"").expect("warnings box");
+    assert!(
+        html[w..].contains(
+            "2 folder(s) under cases/ have no row in summary.csv and are not cases of this run"
+        ) && html[w..].contains("old1, …"),
+        "{}",
+        &html[w..]
+    );
+}
