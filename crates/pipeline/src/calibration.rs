@@ -1257,6 +1257,14 @@ pub struct RunBands {
 }
 
 impl ModelBands {
+    /// Simulations the bands add to a run: one per replicate.
+    pub fn runs(&self) -> usize {
+        match self {
+            ModelBands::Calibrated(c) => c.replicates.len(),
+            ModelBands::Raw { replicates, .. } => replicates.len(),
+        }
+    }
+
     /// The bands of the model file `spec` at `level` (see [`stored_calibration`] and
     /// `bands::replicate_models` for what is refused).
     pub fn of(spec: &str, level: f64) -> Result<ModelBands, PipelineError> {

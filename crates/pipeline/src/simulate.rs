@@ -14,6 +14,10 @@ use crate::generate::{DT_S, SAMPLE_INTERVAL_S, execute_time_s, standard_duration
 /// RK4 steps a simulation may take unless the user insists (`--allow-large`): about ten seconds of
 /// work, some 4000 times a standard manoeuvre of the KVLCC2 model at the default step.
 pub const MAX_STEPS_UNLESS_ALLOWED: f64 = 1e7;
+/// RK4 steps of one command over all its runs (the model, its band replicates, valley starts and
+/// jackknife refits) unless the user insists: a minute or so of an mmg model, a few minutes of a
+/// sparse GP — 2500 standard manoeuvres, so that a thousand replicates of one pass.
+pub const MAX_TOTAL_STEPS_UNLESS_ALLOWED: f64 = 5e7;
 /// Samples kept of a run's history at most: 96 bytes each (twelve channels), so under 100 MB. A longer
 /// run stores every k-th step (the history is decimated, the integration is not).
 pub const MAX_STORED_SAMPLES: f64 = 1e6;

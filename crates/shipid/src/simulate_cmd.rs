@@ -65,11 +65,13 @@ pub fn outcome_json(out: &SimOutput, m: &Manoeuvre, model: &dyn Dynamics) -> Val
 }
 
 /// `--replay DATASET.toml`: every recording's rudder replayed from its initial state, in its recorded
-/// wind and current.
+/// wind and current, and each standard manoeuvre re-simulated with its own rudder law — as
+/// `validate` does. The IMO metrics of the open-loop replay were given before 2026-12-02: with the
+/// rudder no longer answering the heading they measure nothing (an overshoot of 110° where the
+/// re-simulation predicts 2.8°).
 pub fn run_replay(model_spec: &str, dataset: &Path, as_json: bool) -> Result<Outcome, CliError> {
     let model = load_model(model_spec)?;
     let ds = shipid_io::Dataset::load(dataset)?;
-    let windage = shipid_pipeline::validate::validation_windage(model_spec, &ds);
     // The same replay as validate's: the same warnings, and errors and metrics in the data set's L
     // and U0, so that both commands give one number under one key.
     let mut warnings = crate::validate_cmd::ship_warnings(model_spec, model.ship(), &ds, dataset);
@@ -78,39 +80,21 @@ pub fn run_replay(model_spec: &str, dataset: &Path, as_json: bool) -> Result<Out
         Some(model.as_ref()),
         &ds,
     ));
+    if model.own_range().is_none() {
+        warnings.extend(crate::print::training_range_warnings(
+            model_spec,
+            "`outside_identification_range`",
+        ));
+    }
     for w in &warnings {
         eprintln!("warning: {w}");
     }
-    let mut recs = Map::new();
-    let mut any_failed = false;
-    for r in &ds.recordings {
-        let env = shipid_pipeline::environment::environment_with(
-            &r.recording,
-            &windage,
-            &ds.ship,
-            &r.file,
-        )?;
-        let sim = shipid_pipeline::validate::replay_in(model.as_ref(), &r.recording, env);
-        let errors = shipid_pipeline::validate::replay_errors(&sim, &r.recording, &ds.ship);
-        let mut o = match serde_json::to_value(&sim.status) {
-            Ok(Value::Object(o)) => o,
-            _ => Map::new(),
-        };
-        if matches!(sim.status, SimStatus::Ok) {
-            for (key, value) in metrics(&sim.recording, &r.manoeuvre, &ds.ship).entries() {
-                if let Some(v) = value {
-                    o.insert(key.into(), json!(v));
-                }
-            }
-        } else {
-            any_failed = true;
-        }
-        o.insert(
-            "errors".into(),
-            serde_json::to_value(&errors).unwrap_or_default(),
-        );
-        recs.insert(r.file.clone(), Value::Object(o));
-    }
+    let (rows, _) = shipid_pipeline::validate::validate_dataset(model.as_ref(), model_spec, &ds);
+    let any_failed = rows.iter().any(|r| r.validation.diverged());
+    let recs: Map<String, Value> = rows
+        .iter()
+        .map(|r| (r.file.clone(), serde_json::to_value(r).unwrap_or_default()))
+        .collect();
     let mut value = json!({
         "model": model_spec,
         "dataset": dataset.display().to_string(),
@@ -128,15 +112,66 @@ pub fn run_replay(model_spec: &str, dataset: &Path, as_json: bool) -> Result<Out
             serde_json::to_string_pretty(&value).unwrap_or_default()
         );
     } else {
-        for (file, v) in &recs {
-            println!("{file}: {v}");
+        println!(
+            "replay of {} on {} (lengths ÷ the data set's L = {} m)",
+            model_spec,
+            dataset.display(),
+            ds.ship.lpp
+        );
+        for r in &rows {
+            println!("{}", replay_line(r));
         }
+        println!(
+            "replay: the recorded rudder from the recorded initial state, RMS errors (position ÷ L); closed loop: the manoeuvre re-simulated with its rudder law, its IMO metrics (angles [deg], times ÷ L/U0, lengths ÷ L); outside: share of the recording's states outside the model's identification range"
+        );
     }
     Ok(if any_failed {
         Outcome::SomeFailed
     } else {
         Outcome::Ok
     })
+}
+
+/// One recording of `simulate --replay` as text.
+fn replay_line(r: &shipid_pipeline::validate::ValidatedRecording) -> String {
+    let e = &r.validation.replay;
+    let replay = match &e.status {
+        SimStatus::Ok => format!(
+            "replay pos/L {:.4}, ψ {:.2}°, u {:.4} m/s, v {:.4} m/s, r {:.4}°/s",
+            e.position_rmse_over_l, e.heading_rmse_deg, e.u_rmse_m_s, e.v_rmse_m_s, e.r_rmse_deg_s
+        ),
+        other => format!(
+            "replay {}",
+            serde_json::to_string(other).unwrap_or_default()
+        ),
+    };
+    let closed = match &r.validation.manoeuvre {
+        None => String::new(),
+        Some(m) => match &m.predicted {
+            Some(p) => {
+                let values: Vec<String> = p
+                    .entries()
+                    .iter()
+                    .filter_map(|(k, v)| v.map(|v| format!("{k} {v:.4}")))
+                    .collect();
+                let left = m
+                    .left_manoeuvre
+                    .as_ref()
+                    .map(|why| format!(" (left the manoeuvre: {why})"))
+                    .unwrap_or_default();
+                format!("; closed loop {}{left}", values.join(", "))
+            }
+            None => format!(
+                "; closed loop {}",
+                serde_json::to_string(&m.status).unwrap_or_default()
+            ),
+        },
+    };
+    let outside = r
+        .outside_identification_range
+        .map(|o| format!("; outside {:.1} %", 100.0 * o))
+        .unwrap_or_default();
+    format!("{}: {replay}{closed}{outside}", r.file)
 }
 
 /// A time [s] as a person would write it: the sum of whole steps without its rounding noise
@@ -307,6 +342,31 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
         allow_large: a.allow_large,
     };
     let grid = sim_grid(model, &m, &request)?;
+    // The replicates, the valley's starts and the jackknife's refits each run the manoeuvre again:
+    // the step limit is on the whole command (201 GP draws of 1e7 steps passed as one run of 1e7).
+    let extra_runs = replicates.as_ref().map_or(0, ModelBands::runs)
+        + valley.as_ref().map_or(0, |v| v.members.len())
+        + jackknife.as_ref().map_or(0, |j| j.members.len());
+    let total_steps = grid.steps * (1 + extra_runs) as f64;
+    if extra_runs > 0
+        && total_steps > shipid_pipeline::simulate::MAX_TOTAL_STEPS_UNLESS_ALLOWED
+        && !a.allow_large
+    {
+        return Err(crate::bad_input(format!(
+            "{:.3e} RK4 steps per run × {} runs (the model and {extra_runs} {}) is {total_steps:.3e} steps, more than {:.0e}: give --allow-large to run it anyway, or a shorter --duration",
+            grid.steps,
+            1 + extra_runs,
+            match (
+                replicates.is_some(),
+                valley.is_some() || jackknife.is_some()
+            ) {
+                (true, true) => "band replicates, valley starts and jackknife refits",
+                (true, false) => "band replicates",
+                (false, _) => "valley starts and jackknife refits",
+            },
+            shipid_pipeline::simulate::MAX_TOTAL_STEPS_UNLESS_ALLOWED
+        )));
+    }
     if grid.decimated {
         eprintln!(
             "note: {:.3e} RK4 steps of {} s; the stored history keeps one sample every {} s (at most {:.0e} samples) to bound memory",
