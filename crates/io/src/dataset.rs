@@ -168,11 +168,11 @@ impl Dataset {
             }
             let manoeuvre = manoeuvre_of(path, i, entry)?;
             let csv = dir.join(&entry.file);
-            if !csv.is_file() {
+            if let Some(why) = crate::recording::not_a_file(&csv) {
                 return Err(InputError::key(
                     path,
                     format!("recording[{i}].file"),
-                    format!("recording file `{}` not found", csv.display()),
+                    format!("recording file `{}` {why}", csv.display()),
                 ));
             }
             // Different names of one file (a link, `sub/../a.csv`, a hard link) are caught here, where
@@ -1028,11 +1028,11 @@ fn propeller_data(
         (Some(k), _) => ([k[0], k[1], k[2]], None),
         (None, Some(f)) => {
             let csv = dir.join(f);
-            if !csv.is_file() {
+            if let Some(why) = crate::recording::not_a_file(&csv) {
                 return Err(InputError::key(
                     path,
                     "propeller.open_water",
-                    format!("open-water file `{}` not found", csv.display()),
+                    format!("open-water file `{}` {why}", csv.display()),
                 ));
             }
             let (k, curve) = read_open_water(&csv, f)?;

@@ -110,6 +110,9 @@ impl InputError {
                 // or a line number alone leaves the user to work out which table is meant.
                 let key = key.or_else(|| key_on_line(text, line)).map(|k| {
                     match table_path_at(text, line) {
+                        // On a table's own header (`[foo]` unknown at the top level) the key is
+                        // the table: its name already ends the path.
+                        Some(table) if header_names(text, line, &k) => table_key(&table),
                         Some(table) => format!("{table}.{k}"),
                         None => k,
                     }
@@ -181,6 +184,28 @@ fn table_path_at(text: &str, line: usize) -> Option<String> {
         }
     }
     table
+}
+
+/// Whether the 1-based `line` is a table header (`[foo]`, `[ship.foo]`, `[[foo]]`) whose last name
+/// is `key`.
+fn header_names(text: &str, line: usize, key: &str) -> bool {
+    let Some(l) = line.checked_sub(1).and_then(|i| text.lines().nth(i)) else {
+        return false;
+    };
+    let l = l.trim();
+    if !l.starts_with('[') {
+        return false;
+    }
+    let name = l.trim_start_matches('[').split(']').next().unwrap_or("");
+    name.rsplit('.').next().map(|n| n.trim().trim_matches('"')) == Some(key)
+}
+
+/// A table path as a key: `foo[0]` of an unknown `[[foo]]` is the array `foo`.
+fn table_key(table: &str) -> String {
+    match table.strip_suffix(']').and_then(|t| t.rsplit_once('[')) {
+        Some((name, index)) if index.chars().all(|c| c.is_ascii_digit()) => name.to_string(),
+        _ => table.to_string(),
+    }
 }
 
 /// The key assigned on a 1-based `line` (`lpp = "7.0"` → `lpp`), when the line is an assignment.

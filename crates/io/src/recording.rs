@@ -19,11 +19,29 @@ pub fn read_recording(path: &Path) -> Result<Recording, InputError> {
     parse_recording(path, &text)
 }
 
+/// Why `path` cannot be read as an input file, if it cannot: missing, a directory, or no regular
+/// file (a FIFO would block the read until a writer comes, `/dev/zero` never ends, and "not found"
+/// would send the user looking for a file that is there).
+pub fn not_a_file(path: &Path) -> Option<&'static str> {
+    match std::fs::metadata(path) {
+        Err(_) => Some("not found"),
+        Ok(m) if m.is_dir() => Some("is a directory, not a file"),
+        Ok(m) if !m.is_file() => Some("is not a regular file (a FIFO, device or socket)"),
+        Ok(_) => None,
+    }
+}
+
 /// The bytes of an input file, refused before reading when larger than [`MAX_FILE_BYTES`].
 pub fn read_bytes(path: &Path) -> Result<Vec<u8>, InputError> {
     let meta = std::fs::metadata(path).map_err(|e| InputError::read(path, &e))?;
     if meta.is_dir() {
         return Err(InputError::file(path, "is a directory, not a file"));
+    }
+    if !meta.is_file() {
+        return Err(InputError::file(
+            path,
+            "is not a regular file (a FIFO, device or socket)",
+        ));
     }
     if meta.len() > MAX_FILE_BYTES {
         return Err(InputError::file(
@@ -202,17 +220,46 @@ pub fn parse_recording(path: &Path, text: &str) -> Result<Recording, InputError>
     })
 }
 
-/// An unknown column that looks like a known one misspelt (`Psi`, `windspeed`, `wind_dir`): ignored
-/// like any other unknown column it would silently drop a recorded channel (a recorded wind read as
-/// calm), so it is refused with the name to write. Other unknown columns (`roll`, `torque`,
-/// `wind_gust`) are the source's own and ignored.
+/// An unknown column that looks like a known one misspelt (`Psi`, `windspeed`, `wind_dir`), named
+/// otherwise (`du`, `tws`, `true_wind_speed`, `cur_from`) or with its unit written otherwise than in
+/// square brackets (`u_dot(m/s2)`, `psi_deg`): ignored like any other unknown column it would silently
+/// drop a recorded channel (a recorded wind read as calm, recorded accelerations replaced by
+/// estimates), so it is refused with the name to write. Other unknown columns (`roll`, `torque`,
+/// `wind_gust`, `delta_cmd`) are the source's own and ignored.
 fn misspelt_column(name: &str) -> Option<String> {
+    if let Some(hint) = unit_written_otherwise(name) {
+        return Some(hint);
+    }
+    let (guess, spelling) = meant(name)?;
+    if spelling == Spelling::Case {
+        return Some(format!(
+            "not a column name: names are lower-case, write `{guess}` (an unknown column would be ignored)"
+        ));
+    }
+    Some(format!(
+        "not a column shipid knows; did you mean `{guess}`{}? An unknown column is ignored, and this one would drop a recorded channel (docs/data-format.md)",
+        meaning(guess, name)
+    ))
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Spelling {
+    /// A known name with capitals.
+    Case,
+    /// Misspelt, or a name other software uses for the channel.
+    Other,
+}
+
+/// The known column `name` most likely means, if it clearly means one.
+fn meant(name: &str) -> Option<(&'static str, Spelling)> {
     let known = || Quantity::RECORDING.iter().map(|q| q.name());
     let lower = name.to_lowercase();
     if let Some(k) = known().find(|k| *k == lower) {
-        return Some(format!(
-            "not a column name: names are lower-case, write `{k}` (an unknown column would be ignored)"
-        ));
+        return Some((k, Spelling::Case));
+    }
+    let norm = lower.replace([' ', '-', '.'], "_");
+    if let Some(k) = alias(&norm) {
+        return Some((k, Spelling::Other));
     }
     let close = known()
         .filter(|k| k.len() >= 5 && lower.len() >= 4)
@@ -220,38 +267,141 @@ fn misspelt_column(name: &str) -> Option<String> {
         .filter(|&(d, _)| d <= 2)
         .min_by_key(|&(d, _)| d)
         .map(|(_, k)| k);
-    let flow_word = ["wind", "current"]
-        .into_iter()
-        .find(|w| lower.starts_with(w) && !lower.starts_with("relative_"));
-    let guess = close.or_else(|| {
-        let flow = flow_word?;
-        let direction = ["dir", "from", "angle", "deg", "head"]
-            .iter()
-            .any(|d| lower.contains(d));
-        let speed = ["sp", "vel", "mag", "kn", "m_s", "ms"]
-            .iter()
-            .any(|d| lower.contains(d));
-        // A wind measured on board is the relative wind, which has columns of its own.
-        let relative = flow == "wind" && lower.contains("rel");
-        let (from, speed_name) = match (flow, relative) {
-            (_, true) => ("relative_wind_angle", "relative_wind_speed"),
-            ("wind", false) => ("wind_from", "wind_speed"),
-            _ => ("current_from", "current_speed"),
-        };
-        match (direction, speed) {
-            (true, false) => Some(from),
-            (false, true) => Some(speed_name),
-            _ => None,
+    close
+        .or_else(|| flow_column(&norm))
+        .map(|k| (k, Spelling::Other))
+}
+
+/// Names loggers and other tools give channels shipid reads under another name. Only unambiguous
+/// ones: `du` is read as du/dt, since shipid has no column for a speed change.
+fn alias(norm: &str) -> Option<&'static str> {
+    Some(match norm {
+        "du" | "dudt" | "du_dt" | "du/dt" | "u_acc" | "u_accel" | "surge_acc"
+        | "surge_acceleration" => "u_dot",
+        "dv" | "dvdt" | "dv_dt" | "dv/dt" | "v_acc" | "v_accel" | "sway_acc"
+        | "sway_acceleration" => "v_dot",
+        "dr" | "drdt" | "dr_dt" | "dr/dt" | "r_acc" | "r_accel" | "yaw_acc"
+        | "yaw_acceleration" => "r_dot",
+        // Sailing instruments: true wind speed / direction, apparent wind speed / angle.
+        "tws" => "wind_speed",
+        "twd" | "twa" => "wind_from",
+        "aws" => "relative_wind_speed",
+        "awa" => "relative_wind_angle",
+        _ => return None,
+    })
+}
+
+/// A wind or current speed or direction named otherwise (`wind_dir`, `true_wind_speed`,
+/// `apparent_wind_angle`, `cur_from`, `current_direction`): the flow from the name's start, speed or
+/// direction from a word in it; a name with neither (`wind_gust`) or both is the source's own.
+fn flow_column(norm: &str) -> Option<&'static str> {
+    const FLOWS: [(&str, &str); 10] = [
+        ("true_wind", "wind"),
+        ("truewind", "wind"),
+        ("apparent_wind", "relative"),
+        ("app_wind", "relative"),
+        ("rel_wind", "relative"),
+        ("relative_wind", "relative"),
+        ("wind", "wind"),
+        ("current", "current"),
+        ("curr_", "current"),
+        ("cur_", "current"),
+    ];
+    let (_, flow) = FLOWS.iter().find(|(p, _)| norm.starts_with(p))?;
+    let direction = ["dir", "from", "angle", "deg", "head"]
+        .iter()
+        .any(|d| norm.contains(d));
+    let speed = ["sp", "vel", "mag", "kn", "m_s", "ms"]
+        .iter()
+        .any(|d| norm.contains(d));
+    // A wind measured on board is the relative wind, which has columns of its own.
+    let relative = *flow == "relative" || (*flow == "wind" && norm.contains("rel"));
+    let (from, speed_name) = match (*flow, relative) {
+        (_, true) => ("relative_wind_angle", "relative_wind_speed"),
+        ("wind", false) => ("wind_from", "wind_speed"),
+        _ => ("current_from", "current_speed"),
+    };
+    match (direction, speed) {
+        (true, false) => Some(from),
+        (false, true) => Some(speed_name),
+        _ => None,
+    }
+}
+
+/// What a suggested column holds, where the name alone could mislead.
+fn meaning(guess: &str, written: &str) -> &'static str {
+    let lower = written.to_lowercase();
+    match guess {
+        // A true wind angle is off the bow; `wind_from` is earth-fixed.
+        "wind_from" if lower == "twa" || lower.contains("angle") => {
+            " (the direction it comes FROM, clockwise from north: a true wind angle off the bow needs the heading added)"
         }
-    })?;
-    let what = match guess {
         g if g.ends_with("_from") => " (the direction it comes FROM, clockwise from north)",
         "relative_wind_angle" => " (the angle off the bow the relative wind comes from)",
+        "u_dot" => " (the surge acceleration du/dt)",
+        "v_dot" => " (the sway acceleration dv/dt)",
+        "r_dot" => " (the yaw acceleration dr/dt; the rudder angle is `delta`)",
         _ => "",
-    };
+    }
+}
+
+/// A known column with its unit written otherwise than in square brackets: in another bracket
+/// (`u_dot(m/s2)`, `psi{deg}`, `r<deg/s>`) or after an underscore (`psi_deg`, `r_deg_s`). Refused with
+/// `name[unit]` to write rather than read: one unit syntax keeps every header's meaning plain, and
+/// `(…)` or `_deg` read as an unknown column would drop the channel.
+fn unit_written_otherwise(name: &str) -> Option<String> {
+    let consequence = "(docs/data-format.md); read as an unknown column, this one would be ignored and drop a recorded channel";
+    if let Some((base, unit)) = bracketed_unit(name) {
+        let lower = base.to_lowercase();
+        let q = Quantity::RECORDING
+            .into_iter()
+            .find(|q| q.name() == lower)
+            .or_else(|| meant(base).and_then(|(k, _)| Quantity::from_name(k)))?;
+        let k = q.name();
+        return Some(match q.dimension().to_si(unit) {
+            Some(_) => format!(
+                "a unit goes in square brackets after the name: write `{k}[{unit}]` {consequence}"
+            ),
+            None => format!(
+                "a unit goes in square brackets after the name, `{k}[UNIT]`, and `{unit}` is no unit of `{k}` (known: {}) {consequence}",
+                q.dimension().known_units()
+            ),
+        });
+    }
+    let lower = name.to_lowercase();
+    let (q, unit) = Quantity::RECORDING
+        .into_iter()
+        .filter(|q| {
+            lower.len() > q.name().len() + 1 && lower.starts_with(&format!("{}_", q.name()))
+        })
+        .filter_map(|q| {
+            let rest = name.get(q.name().len() + 1..)?;
+            [rest.to_string(), rest.replacen('_', "/", 1)]
+                .into_iter()
+                .find(|u| q.dimension().to_si(u).is_some())
+                .map(|u| (q, u))
+        })
+        .max_by_key(|(q, _)| q.name().len())?;
     Some(format!(
-        "not a column shipid knows; did you mean `{guess}`{what}? An unknown column is ignored, and this one would drop a recorded channel (docs/data-format.md)"
+        "not a column name: for `{k}` in {unit}, write `{k}[{unit}]`: a unit goes in square brackets after the name {consequence}",
+        k = q.name()
     ))
+}
+
+/// `u_dot(m/s2)` → ("u_dot", "m/s2"): a name with a unit in round, curly or angle brackets at its
+/// end (square brackets are the header's own syntax, split off before).
+fn bracketed_unit(name: &str) -> Option<(&str, &str)> {
+    let close = name.chars().last()?;
+    let open = match close {
+        ')' => '(',
+        '}' => '{',
+        '>' => '<',
+        _ => return None,
+    };
+    let at = name.find(open)?;
+    let base = name[..at].trim().trim_end_matches(['_', '-']);
+    let unit = name[at + 1..name.len() - 1].trim();
+    (!base.is_empty() && !unit.is_empty()).then_some((base, unit))
 }
 
 /// Levenshtein distance of two short ASCII-ish names.

@@ -91,6 +91,7 @@ impl Columns {
             }
         }
         self.check_gaps(path)?;
+        self.check_accelerations_complete(path)?;
         let wind = self.wind(path)?;
         let current = self.flow(path, Quantity::CurrentSpeed, Quantity::CurrentFrom)?;
         let mut take = |q: Quantity| self.values.remove(&q);
@@ -259,6 +260,42 @@ impl Columns {
             speed_m_s,
             from_rad,
         }))
+    }
+
+    /// Recorded accelerations are all three or none. Some of them alone cannot be used (the fit takes
+    /// u̇, v̇, ṙ from one source, and mixing recorded with estimated ones would fit one DOF to another
+    /// filter than the rest), and dropping them silently would fit estimated accelerations to a
+    /// recording that says it has its own, as with a lone wind or current column.
+    fn check_accelerations_complete(&self, path: &Path) -> Result<(), InputError> {
+        let all = [Quantity::UDot, Quantity::VDot, Quantity::RDot];
+        let (present, missing): (Vec<Quantity>, Vec<Quantity>) = all
+            .iter()
+            .copied()
+            .partition(|q| self.values.contains_key(q));
+        if present.is_empty() || missing.is_empty() {
+            return Ok(());
+        }
+        let names = |qs: &[Quantity]| {
+            qs.iter()
+                .map(|q| format!("`{}`", q.name()))
+                .collect::<Vec<_>>()
+                .join(" and ")
+        };
+        let (s, verb) = if present.len() == 1 {
+            ("", "needs")
+        } else {
+            ("s", "need")
+        };
+        let missing_s = if missing.len() == 1 { "" } else { "s" };
+        Err(InputError::line(
+            path,
+            self.header_line(),
+            format!(
+                "column{s} {} {verb} the column{missing_s} {} too: recorded accelerations are all three of u_dot, v_dot, r_dot (docs/data-format.md); give the missing one{missing_s}, or remove the others to have all three estimated from u, v, r",
+                names(&present),
+                names(&missing),
+            ),
+        ))
     }
 
     /// Every value after unit conversion must be finite and within its quantity's bound

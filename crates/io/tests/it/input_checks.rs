@@ -833,3 +833,174 @@ fn keys_a_manoeuvre_has_no_use_for_and_angles_beyond_the_controller_are_refused(
         assert!(e.contains(expected), "{e}");
     }
 }
+
+/// Regression: a recording with `u_dot` and `v_dot` but no `r_dot` was read as one without
+/// accelerations (all three estimated, the model file saying so) with nothing said; a lone wind or
+/// current column is refused, and so are some of the accelerations.
+#[test]
+fn some_but_not_all_recorded_accelerations_are_refused_naming_the_missing_ones() {
+    for (extra, expected) in [
+        (
+            "u_dot,v_dot",
+            "rec.csv:1: columns `u_dot` and `v_dot` need the column `r_dot` too",
+        ),
+        (
+            "r_dot[deg/s^2]",
+            "rec.csv:1: column `r_dot` needs the columns `u_dot` and `v_dot` too",
+        ),
+    ] {
+        let n = extra.split(',').count();
+        let text = recording_text(&format!("{HEADER},{extra}"), |_, row| {
+            row.extend(std::iter::repeat_n("0.0".to_string(), n))
+        });
+        let e = parse_recording(Path::new("rec.csv"), &text)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with(expected) && e.contains("recorded accelerations are all three"),
+            "{extra}: {e}"
+        );
+    }
+    let all = recording_text(&format!("{HEADER},u_dot,v_dot,r_dot"), |_, row| {
+        row.extend(std::iter::repeat_n("0.0".to_string(), 3))
+    });
+    assert!(
+        parse_recording(Path::new("rec.csv"), &all)
+            .unwrap()
+            .accelerations
+            .is_some()
+    );
+}
+
+/// Regression: `u_dot(m/s2)`, `du`, `true_wind_speed`, `true_wind_from`, `cur_speed` and
+/// `cur_from` were ignored as the source's own columns, the recorded accelerations, wind or current
+/// silently dropped, while `udot` and `wind_speed(m/s)` were refused. A known channel with its unit
+/// written otherwise than `name[unit]`, and the names other tools give these channels, are refused
+/// with the header to write; columns that name no channel shipid reads are still ignored.
+#[test]
+fn a_channel_under_another_name_or_unit_syntax_is_refused_with_the_header_to_write() {
+    let with_extra = |extra: &str| {
+        recording_text(&format!("{HEADER},{extra}"), |_, row| {
+            row.push("1.0".into())
+        })
+    };
+    for (extra, words) in [
+        ("u_dot(m/s2)", "write `u_dot[m/s2]`"),
+        ("U_dot (m/s^2)", "write `u_dot[m/s^2]`"),
+        ("r_dot{deg/s2}", "write `r_dot[deg/s2]`"),
+        ("n<rpm>", "write `n[rpm]`"),
+        ("udot(m/s2)", "write `u_dot[m/s2]`"),
+        ("wind_speed(m/s)", "write `wind_speed[m/s]`"),
+        (
+            "wind_from(grad)",
+            "`wind_from[UNIT]`, and `grad` is no unit of `wind_from` (known: rad, deg)",
+        ),
+        ("thrust_kN", "write `thrust[kN]`"),
+        ("n_rpm", "write `n[rpm]`"),
+        ("u_dot_m_s2", "write `u_dot[m/s2]`"),
+        ("current_from_deg", "write `current_from[deg]`"),
+        ("du", "did you mean `u_dot` (the surge acceleration du/dt)?"),
+        ("dv/dt", "did you mean `v_dot`"),
+        ("yaw_acc", "did you mean `r_dot`"),
+        ("true_wind_speed", "did you mean `wind_speed`?"),
+        (
+            "true_wind_from",
+            "did you mean `wind_from` (the direction it comes FROM",
+        ),
+        ("true_wind_direction", "did you mean `wind_from`"),
+        ("tws", "did you mean `wind_speed`?"),
+        ("twd", "did you mean `wind_from`"),
+        (
+            "twa",
+            "a true wind angle off the bow needs the heading added",
+        ),
+        ("apparent_wind_angle", "did you mean `relative_wind_angle`"),
+        ("aws", "did you mean `relative_wind_speed`"),
+        ("wind_dir", "did you mean `wind_from`"),
+        ("current_dir", "did you mean `current_from`"),
+        ("cur_speed", "did you mean `current_speed`?"),
+        ("cur_from", "did you mean `current_from`"),
+        ("curr_dir", "did you mean `current_from`"),
+    ] {
+        let e = parse_recording(Path::new("rec.csv"), &with_extra(extra)).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with(&format!("rec.csv:1:9: column `{extra}`: "))
+                && e.to_string().contains(words),
+            "{extra}: {e}"
+        );
+    }
+    for extra in [
+        "roll(deg)",
+        "heave_m",
+        "delta_cmd",
+        "wind_gust",
+        "current_ma",
+        "motor_current",
+        "cursor",
+        "dx",
+        "r_s",
+        "x(m)",
+    ] {
+        assert!(
+            parse_recording(Path::new("rec.csv"), &with_extra(extra)).is_ok(),
+            "{extra} refused"
+        );
+    }
+}
+
+/// Regression: an unknown top-level table `[foo]` was reported as key `foo.foo` (the table's
+/// header line read as a key inside it).
+#[test]
+fn an_unknown_table_is_named_by_its_own_path() {
+    for (table, key) in [
+        ("[foo]\nbar = 1\n", "foo"),
+        ("[ship.foo]\nbar = 1\n", "ship.foo"),
+        ("[[foo]]\nbar = 1\n", "foo"),
+    ] {
+        let text = format!("{SHIP}{table}");
+        let e = parse_dataset(Path::new("ds.toml"), &text)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains(&format!("key `{key}`: unknown field `foo`")),
+            "{table}: {e}"
+        );
+    }
+}
+
+/// Regression: a recording `file` that is a FIFO or a device (`/dev/zero`) was reported "not found";
+/// it is there, and no regular file.
+#[cfg(unix)]
+#[test]
+fn a_recording_that_is_a_fifo_or_a_device_is_named_as_no_regular_file() {
+    let dir = TempDir::new("special");
+    std::os::unix::fs::symlink("/dev/zero", dir.0.join("zero.csv")).unwrap();
+    let fifo = std::process::Command::new("mkfifo")
+        .arg(dir.0.join("pipe.csv"))
+        .status()
+        .is_ok_and(|s| s.success());
+    let entry = |f: &str| format!("[[recording]]\nfile = \"{f}\"\nkind = \"free\"\n");
+    let files: &[&str] = if fifo {
+        &["zero.csv", "pipe.csv"]
+    } else {
+        &["zero.csv"]
+    };
+    for f in files {
+        let ds = dir.0.join("ds.toml");
+        std::fs::write(&ds, format!("{SHIP}{}", entry(f))).unwrap();
+        let e = Dataset::load(&ds).unwrap_err().to_string();
+        assert!(
+            e.contains("key `recording[0].file`")
+                && e.ends_with(&format!(
+                    "{f}` is not a regular file (a FIFO, device or socket)"
+                )),
+            "{f}: {e}"
+        );
+        let e = read_recording(&dir.0.join(f)).unwrap_err().to_string();
+        assert!(
+            e.ends_with("is not a regular file (a FIFO, device or socket)"),
+            "{e}"
+        );
+    }
+}
