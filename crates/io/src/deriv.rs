@@ -8,7 +8,8 @@
 //! Window: its duration is a fixed fraction of the ship's time scale L/U0 ([`WINDOW_FRACTION_OF_L_OVER_U0`]),
 //! so that model and full scale are smoothed alike, and its number of samples follows from the sampling
 //! rate: h = round(T_w / (2 Δt_median)), at least 3. For KVLCC2 at model scale (L/U0 = 5.94 s) the window
-//! is 1.78 s: 19 samples at 10 Hz, 37 at 20 Hz.
+//! is 1.78 s: 19 samples at 10 Hz, 37 at 20 Hz. A coarsely sampled recording gets a longer window than
+//! asked for (7 samples at least: 30 s at 5 s sampling); [`EstimationWindow`] says which it got.
 
 use crate::types::{Accelerations, Recording, Ship};
 
@@ -19,6 +20,46 @@ pub const WINDOW_FRACTION_OF_L_OVER_U0: f64 = 0.3;
 
 /// Polynomial degree of the local fit.
 pub const DEGREE: usize = 3;
+
+/// An effective window longer than this many times the one asked for is too coarse a sampling for
+/// the estimate: beyond it the cubic smooths over a good part of a zig-zag's half period.
+pub const COARSE_FACTOR: f64 = 1.5;
+
+/// The window a recording's accelerations are estimated over: the one asked for and the one its
+/// sampling gives (whole samples, at least [`DEGREE`] on each side, at most the whole record), which
+/// is what a model file must state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EstimationWindow {
+    /// Asked for [s]: [`WINDOW_FRACTION_OF_L_OVER_U0`] × L/U0.
+    pub requested_s: f64,
+    /// Spanned by the samples of one window [s]: (samples − 1) × the median step.
+    pub effective_s: f64,
+    /// Samples in one window.
+    pub samples: usize,
+    /// Median time step [s].
+    pub step_s: f64,
+}
+
+impl EstimationWindow {
+    /// The project's default window for `ship` on the clock `t`, as [`Differentiator::for_ship`] uses.
+    pub fn of(t: &[f64], ship: &Ship) -> EstimationWindow {
+        let requested_s = WINDOW_FRACTION_OF_L_OVER_U0 * ship.lpp / ship.u0;
+        let d = Differentiator::for_window(t, requested_s);
+        let step_s = median_step(t).unwrap_or(0.0);
+        let samples = (2 * d.half_width + 1).min(t.len());
+        EstimationWindow {
+            requested_s,
+            effective_s: samples.saturating_sub(1) as f64 * step_s,
+            samples,
+            step_s,
+        }
+    }
+
+    /// The sampling is too coarse for the window asked for ([`COARSE_FACTOR`]).
+    pub fn too_coarse(&self) -> bool {
+        self.effective_s > COARSE_FACTOR * self.requested_s
+    }
+}
 
 /// A smoothing differentiator with a fixed half-width in samples.
 #[derive(Debug, Clone, Copy, PartialEq)]

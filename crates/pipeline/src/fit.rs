@@ -534,14 +534,63 @@ pub fn training_window(
             _ => None,
         },
         accelerations: if estimated {
-            format!(
-                "estimated: local cubic least squares (Savitzky–Golay), window {:.3} L/U0",
-                shipid_io::deriv::WINDOW_FRACTION_OF_L_OVER_U0
-            )
+            estimated_accelerations_text(&r.recording.t, &ds.ship)
         } else {
             "recorded".into()
         },
     }
+}
+
+/// How a recording's accelerations were estimated, with the window its sampling gave them (a coarse
+/// sampling lengthens it beyond the one asked for, and the file would otherwise state a window never
+/// used).
+fn estimated_accelerations_text(t: &[f64], ship: &shipid_io::Ship) -> String {
+    let w = shipid_io::deriv::EstimationWindow::of(t, ship);
+    let l_over_u0 = ship.lpp / ship.u0;
+    let asked = if w.too_coarse() {
+        format!(
+            "; {:.3} L/U0 asked for, the sampling is too coarse for it",
+            w.requested_s / l_over_u0
+        )
+    } else {
+        String::new()
+    };
+    format!(
+        "estimated: local cubic least squares (Savitzky–Golay), window {:.3} L/U0 ({} samples {} s apart{asked})",
+        w.effective_s / l_over_u0,
+        w.samples,
+        shipid_io::units::fmt_sig(w.step_s),
+    )
+}
+
+/// A warning for each chosen recording whose accelerations are estimated over a window much longer
+/// than the one asked for (its sampling too coarse, [`shipid_io::deriv::EstimationWindow`]): the fit
+/// then learns smeared accelerations, and nothing else would say so.
+pub fn acceleration_window_notes(
+    ds: &Dataset,
+    recordings: &[String],
+) -> Result<Vec<String>, PipelineError> {
+    let l_over_u0 = ds.ship.lpp / ds.ship.u0;
+    Ok(chosen_recordings(ds, recordings)?
+        .into_iter()
+        .filter(|r| r.recording.accelerations.is_none())
+        .filter_map(|r| {
+            let w = shipid_io::deriv::EstimationWindow::of(&r.recording.t, &ds.ship);
+            w.too_coarse().then(|| {
+                format!(
+                    "{}: sampled every {} s, too coarse for the accelerations the fit estimates: their smoothing window spans {} samples, {:.3} s ({:.3} L/U0), {:.1} × the {:.3} L/U0 ({:.3} s) asked for, and smears the manoeuvre's accelerations; record u_dot, v_dot and r_dot, or sample faster",
+                    r.file,
+                    shipid_io::units::fmt_sig(w.step_s),
+                    w.samples,
+                    w.effective_s,
+                    w.effective_s / l_over_u0,
+                    w.effective_s / w.requested_s,
+                    w.requested_s / l_over_u0,
+                    w.requested_s,
+                )
+            })
+        })
+        .collect())
 }
 
 /// Fit a set with an estimator on a data set.
@@ -814,3 +863,49 @@ pub fn fit_environment_notes(
 }
 
 pub use crate::validate::rms;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const KVLCC2_MODEL: shipid_io::Ship = shipid_io::Ship {
+        lpp: 7.0,
+        beam: 1.27,
+        draft: 0.46,
+        displacement: 3.27,
+        rho: 1000.0,
+        xg: 0.25,
+        kzz: 1.75,
+        u0: 1.179,
+        rudder_rate: 15.8,
+    };
+
+    fn clock(step_s: f64, samples: usize) -> Vec<f64> {
+        (0..samples).map(|i| i as f64 * step_s).collect()
+    }
+
+    /// Regression: the model file stated "window 0.300 L/U0" for estimated accelerations whatever the
+    /// sampling, while the differentiator takes at least 3 samples a side: at 5 s sampling the window
+    /// used was 30 s (5.05 L/U0), at 1 s 6 s.
+    #[test]
+    fn the_stated_acceleration_window_is_the_one_the_sampling_gives() {
+        for (step_s, window) in [
+            (0.1, "window 0.303 L/U0 (19 samples 0.1 s apart)"),
+            (
+                1.0,
+                "window 1.011 L/U0 (7 samples 1 s apart; 0.300 L/U0 asked for, the sampling is too coarse for it)",
+            ),
+            (
+                5.0,
+                "window 5.053 L/U0 (7 samples 5 s apart; 0.300 L/U0 asked for",
+            ),
+        ] {
+            let text = estimated_accelerations_text(&clock(step_s, 100), &KVLCC2_MODEL);
+            assert!(
+                text.starts_with("estimated: local cubic least squares (Savitzky–Golay), ")
+                    && text.contains(window),
+                "{step_s} s: {text}"
+            );
+        }
+    }
+}

@@ -122,6 +122,9 @@ fn training_warnings(
     // What the fit does with a recorded wind or current is said whether or not it validates after.
     let mut warnings =
         shipid_pipeline::fit::fit_environment_notes(ds, recordings).unwrap_or_default();
+    warnings.extend(
+        shipid_pipeline::fit::acceleration_window_notes(ds, recordings).unwrap_or_default(),
+    );
     for w in &warnings {
         eprintln!("warning: {w}");
     }

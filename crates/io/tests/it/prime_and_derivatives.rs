@@ -4,7 +4,7 @@ use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Normal};
 use shipid_io::PrimeScale;
-use shipid_io::deriv::Differentiator;
+use shipid_io::deriv::{Differentiator, EstimationWindow};
 
 fn kvlcc2() -> PrimeScale {
     PrimeScale {
@@ -144,6 +144,45 @@ fn exact_derivative_of_a_cubic_on_even_jittered_and_gapped_clocks() {
     check_exact_on_cubic(&gapped, 1.2);
     // A signal shorter than the window: one cubic through all of it.
     check_exact_on_cubic(&even[..9], 1.2);
+}
+
+/// Regression: the window a coarse sampling gives (at least 3 samples a side) was nowhere said; the
+/// model files stated 0.3 L/U0 for a 30 s window at 5 s sampling.
+#[test]
+fn the_estimation_window_is_the_one_the_sampling_gives() {
+    let ship = shipid_io::Ship {
+        lpp: 7.0,
+        beam: 1.27,
+        draft: 0.46,
+        displacement: 3.27,
+        rho: 1000.0,
+        xg: 0.25,
+        kzz: 1.75,
+        u0: 1.179,
+        rudder_rate: 15.8,
+    };
+    let at = |step_s: f64, samples: usize| {
+        let t: Vec<f64> = (0..samples).map(|i| i as f64 * step_s).collect();
+        EstimationWindow::of(&t, &ship)
+    };
+    let fine = at(0.1, 200);
+    assert_eq!(fine.samples, 19);
+    assert!(
+        (fine.effective_s - 1.8).abs() < 1e-9 && !fine.too_coarse(),
+        "{fine:?}"
+    );
+    assert!((fine.requested_s - 0.3 * 7.0 / 1.179).abs() < 1e-12);
+    let coarse = at(5.0, 100);
+    assert_eq!(coarse.samples, 7);
+    assert!(
+        (coarse.effective_s - 30.0).abs() < 1e-9 && coarse.too_coarse(),
+        "{coarse:?}"
+    );
+    // Up to 1.5 × the window asked for passes: at 0.4 s, 7 samples span 2.4 s, 1.35 × 1.78 s.
+    assert!(!at(0.4, 100).too_coarse() && at(1.0, 100).too_coarse());
+    // A record shorter than the window is fitted whole.
+    assert_eq!(at(5.0, 5).samples, 5);
+    assert!((at(5.0, 5).effective_s - 20.0).abs() < 1e-9);
 }
 
 #[test]
