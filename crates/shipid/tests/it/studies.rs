@@ -74,15 +74,15 @@ fn bad_study_files_name_the_file_and_key() {
     );
     check_bad(
         "repeated_overshoots.toml",
-        ": key `training.overshoots`: value 3 repeats value 2 (counting from 1)",
+        ": key `training.overshoots`: value 3 repeats value 2 (counting from 1): 4 OS twice",
     );
     check_bad(
         "repeated_lambda.toml",
-        ": key `estimator[0].lambda`: a value appears twice in the grid",
+        ": key `estimator[0].lambda`: a value appears twice in the grid (0.000001)",
     );
     check_bad(
         "repeated_similarity.toml",
-        ": key `estimator[0].similarity`: a value appears twice in the grid",
+        ": key `estimator[0].similarity`: a value appears twice in the grid (0.9)",
     );
     check_bad(
         "repeated_estimator.toml",
