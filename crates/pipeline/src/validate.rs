@@ -688,6 +688,12 @@ pub struct ValidatedRecording {
     pub validation: RecordingValidation,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub outside_identification_range: Option<f64>,
+    /// What the recording reaches past the training states' extremes, in words, when it goes clearly
+    /// past one ([`crate::range::RunReach::clearly_beyond`]): its predictions are extrapolations,
+    /// however small its share outside the leverage ellipsoid (a 45° turn was 1 % outside a model
+    /// trained to 35°, and nothing said so).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub beyond_training: Vec<String>,
 }
 
 /// Every recording of `ds` validated with the model loaded from `model_spec` (whose file names the
@@ -711,6 +717,12 @@ pub fn validate_dataset(
             outside_identification_range: envelope
                 .as_ref()
                 .and_then(|e| e.outside_share(model, &r.recording)),
+            beyond_training: envelope
+                .as_ref()
+                .and_then(|e| e.reach(model, &r.recording))
+                .filter(|reach| reach.clearly_beyond())
+                .map(|reach| reach.beyond())
+                .unwrap_or_default(),
         })
         .collect();
     let source = envelope.map_or(RangeSource::Unknown, |e| e.source);

@@ -467,6 +467,13 @@ fn validation_into(
             }),
         );
     }
+    for r in rows.iter().filter(|r| !r.beyond_training.is_empty()) {
+        eprintln!(
+            "warning: {}: the recording goes past the extremes of the states {model_spec} was identified on ({}): its predictions are extrapolations, whatever its `outside` share",
+            r.file,
+            r.beyond_training.join(", ")
+        );
+    }
     if let Emit::Into(sink) = emit {
         *sink = value;
     } else if as_json {

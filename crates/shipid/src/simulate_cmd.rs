@@ -86,10 +86,17 @@ pub fn run_replay(model_spec: &str, dataset: &Path, as_json: bool) -> Result<Out
             "`outside_identification_range`",
         ));
     }
+    let (rows, _) = shipid_pipeline::validate::validate_dataset(model.as_ref(), model_spec, &ds);
+    warnings.extend(rows.iter().filter(|r| !r.beyond_training.is_empty()).map(|r| {
+        format!(
+            "{}: the recording goes past the extremes of the states {model_spec} was identified on ({}): its predictions are extrapolations, whatever its `outside` share",
+            r.file,
+            r.beyond_training.join(", ")
+        )
+    }));
     for w in &warnings {
         eprintln!("warning: {w}");
     }
-    let (rows, _) = shipid_pipeline::validate::validate_dataset(model.as_ref(), model_spec, &ds);
     let any_failed = rows.iter().any(|r| r.validation.diverged());
     let recs: Map<String, Value> = rows
         .iter()

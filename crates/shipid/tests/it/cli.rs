@@ -156,6 +156,47 @@ fn validate_reports_the_share_of_states_outside_the_identification_range() {
     assert_eq!(outside("mmg:kvlcc2", "tc35_ps.csv"), None);
 }
 
+/// Regression: `validate` of a model trained on 20° of rudder against recordings at 35° gave their
+/// `outside` share (a 45° turn of a model trained to 35° was 1 % outside) and no word that their
+/// rudder was one the model never saw; `simulate` warned. Each recording past the training extremes
+/// is now named with what it reaches, and its own training run is not.
+#[test]
+fn validate_names_the_recordings_past_the_training_extremes() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("reduced32-zz20.toml");
+    let ds = common::root().join("data/kvlcc2-mmg/dataset.toml");
+    let (ds, model) = (ds.to_str().unwrap(), model.to_str().unwrap());
+    common::shipid_ok(&[
+        "fit",
+        ds,
+        "--set",
+        "reduced32",
+        "--recordings",
+        "zz20_20_ps.csv",
+        "--out",
+        model,
+    ]);
+    // The 35° runs diverge with this model (exit 1): their rows and warnings are still written.
+    let out = common::shipid(&["validate", model, ds, "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let beyond = |file: &str| v["recordings"][file]["beyond_training"].to_string();
+    assert!(
+        beyond("zz35_35_ps.csv").contains("rudder up to 35.0° (training ≤ 20.0°)"),
+        "{}",
+        beyond("zz35_35_ps.csv")
+    );
+    assert_eq!(beyond("zz20_20_ps.csv"), "null");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("warning: tc35_ps.csv: the recording goes past the extremes of the states"),
+        "{stderr}"
+    );
+    assert!(
+        !stderr.contains("warning: zz20_20_ps.csv: the recording goes past"),
+        "{stderr}"
+    );
+}
+
 #[test]
 fn generate_simulates_the_manoeuvres_asked_for_and_a_current_only_carries_the_track_along() {
     let dir = tempfile::tempdir().unwrap();
