@@ -437,7 +437,11 @@ fn check_heading_offset(
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &p| {
             (lo.min(p), hi.max(p))
         });
-    if residual <= NOISE_SHARE || hi - lo < HEADING_SPAN_FOR_OFFSET_RAD || hi.is_nan() || lo.is_nan() {
+    if residual <= NOISE_SHARE
+        || hi - lo < HEADING_SPAN_FOR_OFFSET_RAD
+        || hi.is_nan()
+        || lo.is_nan()
+    {
         return Ok(());
     }
     // measured ≈ c · predicted with c complex (x north, y east: a turn to starboard is +θ).

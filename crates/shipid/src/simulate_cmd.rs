@@ -74,7 +74,13 @@ pub fn run_replay(model_spec: &str, dataset: &Path, as_json: bool) -> Result<Out
     let ds = shipid_io::Dataset::load(dataset)?;
     // The same replay as validate's: the same warnings, and errors and metrics in the data set's L
     // and U0, so that both commands give one number under one key.
-    let mut warnings = crate::validate_cmd::ship_warnings(model_spec, model.ship(), &ds, dataset);
+    let mut warnings = crate::validate_cmd::ship_warnings(
+        model_spec,
+        model.ship(),
+        model.added_mass(),
+        &ds,
+        dataset,
+    );
     warnings.extend(shipid_pipeline::validate::validation_warnings(
         model_spec,
         Some(model.as_ref()),

@@ -33,7 +33,7 @@ pub fn run(
     shipid_pipeline::validate::require_recordings(&ds)?;
     // Validation still runs: its errors are what the user asked for; the warnings say what they
     // cannot mean.
-    for w in ship_warnings(model_spec, model.ship(), &ds, dataset) {
+    for w in ship_warnings(model_spec, model.ship(), model.added_mass(), &ds, dataset) {
         eprintln!("warning: {w}");
     }
     // A sparse GP carries its own identification range; a polynomial's needs its training data.
@@ -61,6 +61,7 @@ pub fn run(
 pub fn ship_warnings(
     model_spec: &str,
     model_ship: &Ship,
+    added_mass: &shipid_io::AddedMass,
     ds: &Dataset,
     dataset: &Path,
 ) -> Vec<String> {
@@ -71,7 +72,8 @@ pub fn ship_warnings(
             dataset.display()
         ));
     }
-    let differences = shipid_pipeline::model_file::ship_differences(model_ship, &ds.ship);
+    let mut differences = shipid_pipeline::model_file::ship_differences(model_ship, &ds.ship);
+    differences.extend(hardware_differences(model_spec, added_mass, ds));
     if !differences.is_empty() {
         warnings.push(format!(
             "{model_spec} on {}: the ships differ ({}): the errors below compare different ships",
@@ -80,4 +82,85 @@ pub fn ship_warnings(
         ));
     }
     warnings
+}
+
+/// Relative difference of a propeller's diameter, a rudder's area or span, or an added mass above
+/// which a model and a data set describe different hardware (two descriptions of one propeller agree
+/// to their rounding).
+const HARDWARE_TOLERANCE: f64 = 0.02;
+
+/// Where the model's propeller, rudder (an mmg model's) or added masses are not the data set's: the
+/// particulars of the hull agreed, so nothing was said, while an mmg model fitted with a 0.216 m
+/// propeller replayed a 0.204 m propeller's recordings 14 % slow on every straight.
+fn hardware_differences(
+    model_spec: &str,
+    added_mass: &shipid_io::AddedMass,
+    ds: &Dataset,
+) -> Vec<String> {
+    let differs = |m: f64, d: f64| (m - d).abs() > HARDWARE_TOLERANCE * m.abs().max(d.abs());
+    let mut out = Vec::new();
+    let mut compare = |key: &str, m: f64, d: f64, unit: &str| {
+        if differs(m, d) {
+            out.push(format!(
+                "{key} {} {unit} in the model, {} {unit} in the data set",
+                shipid_io::error::number(m),
+                shipid_io::error::number(d)
+            ));
+        }
+    };
+    if let Some(p) = mmg_parameters(model_spec) {
+        if let Some(prop) = &ds.propeller {
+            compare(
+                "propeller diameter",
+                p.propeller_diameter_m,
+                prop.diameter_m,
+                "m",
+            );
+        }
+        if let Some(r) = &ds.rudder {
+            compare("rudder area", p.rudder_area_m2, r.area_m2, "m²");
+            compare("rudder span", p.rudder_span_m, r.span_m, "m");
+        }
+    }
+    if let Some(a) = &ds.added_mass {
+        // Scaled by the larger of the pair's masses (inertias): a coupling term near zero in both
+        // is not a difference.
+        let m = ds.ship.rho * ds.ship.displacement;
+        let l = ds.ship.lpp;
+        for (key, mv, dv, scale, unit) in [
+            ("X_udot", added_mass.X_udot, a.X_udot, m, "kg"),
+            ("Y_vdot", added_mass.Y_vdot, a.Y_vdot, m, "kg"),
+            ("Y_rdot", added_mass.Y_rdot, a.Y_rdot, m * l, "kg m"),
+            ("N_vdot", added_mass.N_vdot, a.N_vdot, m * l, "kg m"),
+            (
+                "N_rdot",
+                added_mass.N_rdot,
+                a.N_rdot,
+                m * l * l * 0.0625,
+                "kg m²",
+            ),
+        ] {
+            if (mv - dv).abs() > HARDWARE_TOLERANCE * mv.abs().max(dv.abs()).max(0.01 * scale) {
+                out.push(format!(
+                    "added mass {key} {} {unit} in the model, {} {unit} in the data set",
+                    shipid_io::error::number(mv),
+                    shipid_io::error::number(dv)
+                ));
+            }
+        }
+    }
+    out
+}
+
+/// The MMG parameters of `model_spec` when it is an mmg model (the reference or a file).
+fn mmg_parameters(model_spec: &str) -> Option<shipid_sim::MmgParameters> {
+    if model_spec == "mmg:kvlcc2" {
+        return Some(shipid_sim::MmgParameters::kvlcc2());
+    }
+    let path = Path::new(model_spec);
+    let text = std::fs::read_to_string(path).ok()?;
+    shipid_pipeline::mmg::file::load_mmg_model_if_kind(path, &text)
+        .ok()
+        .flatten()
+        .map(|m| *m.parameters())
 }

@@ -125,8 +125,15 @@ fn a_refined_fit_s_jackknife_refits_spread_about_the_refined_model() {
         for (a, b) in pv.iter().zip(rv) {
             let expected = (a - p.value + r.value).clamp(r.lower, r.upper);
             let scale = 1e-9 * (1.0 + a.abs() + r.value.abs());
-            assert!((b - expected).abs() <= scale, "{}: {b} vs {expected}", r.name);
+            assert!(
+                (b - expected).abs() <= scale,
+                "{}: {b} vs {expected}",
+                r.name
+            );
         }
     }
-    assert!(moved > 0, "the refinement moved no parameter: nothing tested");
+    assert!(
+        moved > 0,
+        "the refinement moved no parameter: nothing tested"
+    );
 }

@@ -439,7 +439,14 @@ fn augmented_models_name_their_base_and_data_relative_to_themselves() {
         .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(0), "{err}");
-    assert!(!err.contains("warning"), "{err}");
+    // The training data are found (no warning that they cannot be read or changed); the current
+    // carries the recorded states past the training extremes, which validate names.
+    assert!(
+        err.lines()
+            .filter(|l| l.contains("warning"))
+            .all(|l| l.contains("goes past the extremes of the states")),
+        "{err}"
+    );
     // A changed base is refused, naming the key and both files.
     let wrap = t.join("moved/base/wrap.toml");
     let text = std::fs::read_to_string(&wrap).unwrap();
