@@ -408,11 +408,12 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
         .and_then(|e| e.reach(model, &out.recording));
     // Silence would read as "inside": without its training data a model's extrapolation cannot be
     // told, and the user is told why, as `validate` tells it.
-    let range_unavailable = if envelope.is_none() && model.own_range().is_none() {
+    let mut range_unavailable = if envelope.is_none() && model.own_range().is_none() {
         crate::print::training_range_warnings(a.model, "`outside` and the extrapolation warning")
     } else {
         Vec::new()
     };
+    range_unavailable.extend(crate::print::training_ship_warnings(a.model, model.ship()));
     for w in &range_unavailable {
         eprintln!("warning: {w}");
     }

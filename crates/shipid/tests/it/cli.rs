@@ -197,6 +197,40 @@ fn validate_names_the_recordings_past_the_training_extremes() {
     );
 }
 
+/// Regression: a model file whose `[ship]` was edited after the fit (U0 tenfold) simulated a 49.5°
+/// overshoot (14.3° true) as "0 % outside" without a word; `simulate` now compares the file's ship
+/// with its training data set's.
+#[test]
+fn simulate_of_a_model_whose_ship_is_not_its_training_data_s_warns() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("r32.toml");
+    let ds = common::root().join("data/kvlcc2-mmg/dataset.toml");
+    let (ds, model_s) = (ds.to_str().unwrap(), model.to_str().unwrap());
+    common::shipid_ok(&[
+        "fit",
+        ds,
+        "--recordings",
+        "zz20_20_ps.csv",
+        "--out",
+        model_s,
+    ]);
+    let simulate = || {
+        let out = common::shipid_ok(&["simulate", model_s, "--manoeuvre", "zigzag:20/20:port"]);
+        String::from_utf8_lossy(&out.stderr).to_string()
+    };
+    assert!(!simulate().contains("its [ship] is not"));
+    let text = std::fs::read_to_string(&model).unwrap();
+    let edited = text.replacen("u0 = 1.179", "u0 = 11.79", 1);
+    assert_ne!(edited, text, "no `u0 = 1.179` line to edit");
+    std::fs::write(&model, edited).unwrap();
+    let stderr = simulate();
+    assert!(
+        stderr.contains("its [ship] is not the ship of its training data")
+            && stderr.contains("u0 11.79 m/s in the model, 1.179 m/s in the data set"),
+        "{stderr}"
+    );
+}
+
 #[test]
 fn generate_simulates_the_manoeuvres_asked_for_and_a_current_only_carries_the_track_along() {
     let dir = tempfile::tempdir().unwrap();
