@@ -104,9 +104,14 @@ pub fn sim_grid(
     }
     let steps = (duration / dt).round();
     if steps > MAX_STEPS_UNLESS_ALLOWED && !request.allow_large {
+        // A duration nobody gave is the manoeuvre's standard one: named so, not as a flag's value
+        // with sixteen digits.
+        let duration_said = match request.duration_s {
+            Some(d) => format!("--duration {} s", shipid_io::error::number(d)),
+            None => format!("the manoeuvre's standard duration {duration:.1} s"),
+        };
         return Err(bad_input(format!(
-            "--duration {} s at --dt {} s is {steps:.3e} RK4 steps (more than {MAX_STEPS_UNLESS_ALLOWED:.0e}; a standard manoeuvre takes about {:.0}): give --allow-large to run it anyway (its stored history is then thinned to at most {MAX_STORED_SAMPLES:.0e} samples)",
-            shipid_io::error::number(duration),
+            "{duration_said} at --dt {} s is {steps:.3e} RK4 steps (more than {MAX_STEPS_UNLESS_ALLOWED:.0e}; a standard manoeuvre takes about {:.0}): give --allow-large to run it anyway (its stored history is then thinned to at most {MAX_STORED_SAMPLES:.0e} samples)",
             shipid_io::error::number(dt),
             (standard_duration_s(m, &ship) / DT_S).round()
         )));

@@ -187,6 +187,46 @@ fn replay_line(r: &shipid_pipeline::validate::ValidatedRecording) -> String {
     format!("{}: {replay}{closed}{outside}", r.file)
 }
 
+/// A JSON value of `simulate`'s report as text: numbers without their rounding noise, strings
+/// without quotes, a table as `key value, …` (the approach at another propeller rate, a wind, a
+/// current), where the text output printed the raw JSON.
+fn plain(v: &Value) -> String {
+    match v {
+        Value::Number(n) => n.as_f64().map_or_else(|| n.to_string(), short_number),
+        Value::String(s) => s.clone(),
+        Value::Array(items) => format!(
+            "[{}]",
+            items.iter().map(plain).collect::<Vec<_>>().join(", ")
+        ),
+        Value::Object(o) => o
+            .iter()
+            .map(|(k, v)| format!("{k} {}", plain(v)))
+            .collect::<Vec<_>>()
+            .join(", "),
+        other => other.to_string(),
+    }
+}
+
+/// A number with at most 6 significant digits, trailing zeros dropped (214.10000000000002 reads
+/// 214.1, 1e-7 stays 1e-7).
+fn short_number(x: f64) -> String {
+    if !x.is_finite() {
+        return x.to_string();
+    }
+    if x != 0.0 && (x.abs() < 1e-4 || x.abs() >= 1e9) {
+        let s = format!("{x:.5e}");
+        let (mantissa, exponent) = s.split_once('e').unwrap_or((&s, "0"));
+        let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+        return format!("{mantissa}e{exponent}");
+    }
+    let digits = (5 - x.abs().log10().floor() as i32).clamp(0, 12) as usize;
+    let s = format!("{x:.digits$}");
+    match s.contains('.') {
+        true => s.trim_end_matches('0').trim_end_matches('.').to_string(),
+        false => s,
+    }
+}
+
 /// A time [s] as a person would write it: the sum of whole steps without its rounding noise
 /// (1.2000000000000002 reads 1.2).
 fn seconds(t: f64) -> String {
@@ -305,7 +345,8 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
     };
     // t_a and t_check are divided by L/U0 with the ship's U0 (docs/conventions.md), not by the
     // approach speed: at 0.08 U0 a zig-zag's t_a read 20.7 "L/U0" without saying which U0.
-    if (approach_m_s / u0 - 1.0).abs() > 0.05 {
+    // A turning circle has no times to qualify.
+    if (approach_m_s / u0 - 1.0).abs() > 0.05 && matches!(m, Manoeuvre::ZigZag { .. }) {
         eprintln!(
             "note: times (t_a, t_check) are in L/U0 with U0 = {u0:.4} m/s, the ship's, not the approach speed {approach_m_s:.4} m/s: multiply by {:.4} for L/U_approach",
             approach_m_s / u0
@@ -549,6 +590,8 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
                 || k.ends_with("_valley")
                 || k.ends_with("_jackknife")
                 || k == "identification_range"
+                // On stderr already, each as its own line.
+                || k == "warnings"
             {
                 continue;
             }
@@ -574,15 +617,19 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
             // A metric with its unit and the digits its band has; other entries as they are.
             let shown = match (shipid_sim::metrics::metric_unit(k), v.as_f64()) {
                 (Some(unit), Some(x)) => format!("{x:.4} {unit}"),
-                _ => v.to_string(),
+                _ => plain(v),
             };
             println!("{k:>18}: {shown}{band}{valley}{jackknife}");
         }
         if let Some(r) = &reach {
+            // 0.04 % printed as "0.0 %" read as none outside.
+            let share = match 100.0 * r.outside {
+                p if p > 0.0 && p < 0.05 => "< 0.1".to_string(),
+                p => format!("{p:.1}"),
+            };
             println!(
-                "{:>18}: {:.1} % of the run ({})",
+                "{:>18}: {share} % of the run ({})",
                 "outside",
-                100.0 * r.outside,
                 r.source.describe()
             );
         }
@@ -616,7 +663,7 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
             println!(
                 "{:>18}: {} % over {} {} ({} diverged): {}{}",
                 "bands",
-                about["level"].as_f64().unwrap_or(f64::NAN) * 100.0,
+                short_number(about["level"].as_f64().unwrap_or(f64::NAN) * 100.0),
                 about["replicates"],
                 replicates.as_ref().map_or("", |r| r.noun()),
                 about["diverged"],
@@ -858,5 +905,35 @@ fn applies(key: &str, m: &Manoeuvre) -> bool {
         Manoeuvre::ZigZag { .. } => zigzag_key,
         Manoeuvre::Turning { .. } => !zigzag_key,
         Manoeuvre::Free => false,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check(x: f64, expected: &str) {
+        assert_eq!(short_number(x), expected, "{x:?}");
+    }
+
+    /// Regression: the text output printed `t_s: 214.10000000000002`, a band level of 1e-9 as
+    /// "0.00000010000000000000001 %" and a displacement of 312698.88000000006 m³.
+    #[test]
+    fn numbers_are_printed_without_their_rounding_noise() {
+        check(214.10000000000002, "214.1");
+        check(1e-7, "1e-7");
+        check(1.2345678e-7, "1.23457e-7");
+        check(312698.88000000006, "312699");
+        check(90.0, "90");
+        check(0.0, "0");
+        check(-0.0123456789, "-0.0123457");
+        check(2.5e12, "2.5e12");
+    }
+
+    #[test]
+    fn a_table_in_the_report_reads_as_keys_and_values() {
+        let v = json!({"approach_m_s": 1.0170000000000001, "rate_hz": 10.229});
+        assert_eq!(plain(&v), "approach_m_s 1.017, rate_hz 10.229");
+        assert_eq!(plain(&json!("text")), "text");
     }
 }
