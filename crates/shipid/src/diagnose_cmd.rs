@@ -193,6 +193,23 @@ pub fn run(args: &DiagnoseArgs) -> Result<Outcome, CliError> {
     report.model = Some(model_spec.to_string());
     report.dataset = Some(dataset.display().to_string());
     report.horizon_note = horizon_note;
+    // A recording past the training extremes (a 45° turn of a model trained to 35°) is judged on the
+    // model's extrapolation as much as on what the recordings add, however few of its states lie
+    // outside the leverage ellipsoid: said, as validate says it.
+    if let Some(e) = &envelope {
+        for r in &ds.recordings {
+            if let Some(reach) = e
+                .reach(base.as_ref(), &r.recording)
+                .filter(|reach| reach.clearly_beyond())
+            {
+                report.warnings.push(format!(
+                    "{}: the recording goes past the extremes of the states {model_spec} was identified on ({}): its mismatch is partly the model's extrapolation, not only an effect the recordings add",
+                    r.file,
+                    reach.beyond().join(", ")
+                ));
+            }
+        }
+    }
     // A base without a propeller-rate input replays every recording at the rate it was identified
     // at: a recording made at another rate is a mismatch the diagnosis should not be blamed for.
     if !base.takes_propeller_rate() {
