@@ -195,6 +195,18 @@ fn validate_names_the_recordings_past_the_training_extremes() {
         !stderr.contains("warning: zz20_20_ps.csv: the recording goes past"),
         "{stderr}"
     );
+    // diagnose says it too: its mismatch there is partly the model's extrapolation.
+    let out = common::shipid(&["diagnose", model, ds]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("warning: zz35_35_sb.csv: the recording goes past the extremes")
+            && stderr.contains("partly the model's extrapolation"),
+        "{stderr}"
+    );
+    assert!(
+        !stderr.contains("warning: zz20_20_ps.csv: the recording goes past"),
+        "{stderr}"
+    );
 }
 
 /// Regression: a model file whose `[ship]` was edited after the fit (U0 tenfold) simulated a 49.5°
