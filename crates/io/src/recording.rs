@@ -282,6 +282,9 @@ fn alias(norm: &str) -> Option<&'static str> {
         | "sway_acceleration" => "v_dot",
         "dr" | "drdt" | "dr_dt" | "dr/dt" | "r_acc" | "r_accel" | "yaw_acc"
         | "yaw_acceleration" => "r_dot",
+        // The propeller's (the shaft's) rate; an engine's rpm is not: a gearbox lies between.
+        "rpm" | "rps" | "prop_rpm" | "prop_rps" | "propeller_rpm" | "propeller_rps"
+        | "prop_rate" | "propeller_rate" | "shaft_rpm" | "shaft_speed" => "n",
         // Sailing instruments: true wind speed / direction, apparent wind speed / angle.
         "tws" => "wind_speed",
         "twd" | "twa" => "wind_from",

@@ -919,6 +919,10 @@ fn a_channel_under_another_name_or_unit_syntax_is_refused_with_the_header_to_wri
         ("wind_dir", "did you mean `wind_from`"),
         ("current_dir", "did you mean `current_from`"),
         ("cur_speed", "did you mean `current_speed`?"),
+        // A propeller rate under another name was dropped and the data set's constant rate used.
+        ("rpm", "did you mean `n`?"),
+        ("shaft_rpm", "did you mean `n`?"),
+        ("propeller_rate", "did you mean `n`?"),
         ("cur_from", "did you mean `current_from`"),
         ("curr_dir", "did you mean `current_from`"),
     ] {
@@ -941,6 +945,8 @@ fn a_channel_under_another_name_or_unit_syntax_is_refused_with_the_header_to_wri
         "dx",
         "r_s",
         "x(m)",
+        // An engine's rate is not the propeller's (a gearbox between): the source's own column.
+        "engine_rpm",
     ] {
         assert!(
             parse_recording(Path::new("rec.csv"), &with_extra(extra)).is_ok(),
