@@ -290,6 +290,47 @@ pub struct TrainingWindow {
     pub accelerations: String,
 }
 
+/// What a training window's `accelerations` says when they were measured; an estimate's text starts
+/// with [`ESTIMATED_ACCELERATIONS`].
+pub const RECORDED_ACCELERATIONS: &str = "recorded";
+/// The start of the `accelerations` of a window whose accelerations were estimated from the motions.
+pub const ESTIMATED_ACCELERATIONS: &str = "estimated";
+
+/// The first fault (key, message) of a model file's `[[training]]` windows, keys as
+/// `training[i].t_end_s`. Reports, `validate` and the bands' refits read these windows as the fit's
+/// data: a reversed window made the range check say "the training windows hold no states", which
+/// blamed the data, and an unknown `accelerations` is a statement about the fit no fit made.
+pub fn training_fault(training: &[TrainingWindow]) -> Option<(String, String)> {
+    for (i, w) in training.iter().enumerate() {
+        let key = |field: &str| format!("training[{i}].{field}");
+        for (field, v) in [("t_start_s", w.t_start_s), ("t_end_s", w.t_end_s)] {
+            if !v.is_finite() {
+                return Some((key(field), format!("must be a finite time [s], not {v}")));
+            }
+        }
+        if w.t_end_s <= w.t_start_s {
+            return Some((
+                key("t_end_s"),
+                format!(
+                    "{} s is not after t_start_s = {} s: the window of {} holds no sample",
+                    w.t_end_s, w.t_start_s, w.recording
+                ),
+            ));
+        }
+        let a = w.accelerations.as_str();
+        if a != RECORDED_ACCELERATIONS && !a.starts_with(ESTIMATED_ACCELERATIONS) {
+            return Some((
+                key("accelerations"),
+                format!(
+                    "\"{a}\" is not how a fit obtains accelerations: \"{RECORDED_ACCELERATIONS}\" or \
+                     \"{ESTIMATED_ACCELERATIONS}: …\" (as `shipid fit` writes it)"
+                ),
+            ));
+        }
+    }
+    None
+}
+
 /// A model file (TOML), written by `shipid fit`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -462,5 +503,55 @@ impl ModelFile {
             }
         }
         AbkowitzModel::new(set, coefficients, self.ship, self.added_mass)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn window(t_start_s: f64, t_end_s: f64, accelerations: &str) -> TrainingWindow {
+        TrainingWindow {
+            dataset: "dataset.toml".into(),
+            dataset_hash: None,
+            recording: "zz10_10_ps.csv".into(),
+            t_start_s,
+            t_end_s,
+            overshoots: None,
+            accelerations: accelerations.into(),
+        }
+    }
+
+    /// Regression: `t_end_s = -5` (before its start), a NaN time and `accelerations = "telepathy"`
+    /// were read; each is refused naming its window's key, and what `fit` writes is read.
+    #[test]
+    fn a_training_window_that_no_fit_writes_is_refused_naming_its_key() {
+        let estimated = "estimated: local cubic least squares (Savitzky–Golay), window 0.100 L/U0";
+        let good = [
+            window(0.0, 420.6, "recorded"),
+            window(5.0, 480.0, estimated),
+        ];
+        assert_eq!(training_fault(&good), None);
+        let key = |w: TrainingWindow| {
+            let mut all = good.to_vec();
+            all.push(w);
+            training_fault(&all).map(|(k, _)| k)
+        };
+        assert_eq!(
+            key(window(0.0, -5.0, "recorded")).as_deref(),
+            Some("training[2].t_end_s")
+        );
+        assert_eq!(
+            key(window(3.0, 3.0, "recorded")).as_deref(),
+            Some("training[2].t_end_s")
+        );
+        assert_eq!(
+            key(window(f64::NAN, 3.0, "recorded")).as_deref(),
+            Some("training[2].t_start_s")
+        );
+        assert_eq!(
+            key(window(0.0, 3.0, "telepathy")).as_deref(),
+            Some("training[2].accelerations")
+        );
     }
 }

@@ -20,7 +20,7 @@ pub mod set;
 
 pub use abkowitz::{
     AbkowitzModel, AugmentedModelFile, BootstrapRecord, EffectEntry, EnvironmentRecord,
-    EstimatorInfo, ModelError, ModelFile, Refinement, TrainingWindow,
+    EstimatorInfo, ModelError, ModelFile, Refinement, TrainingWindow, training_fault,
 };
 pub use calibration::{
     CalibrationDamage, CalibrationRecord, CheckedCalibration, FactorRecord, OutOfKindRecord,

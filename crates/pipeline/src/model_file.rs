@@ -51,12 +51,34 @@ fn parse_entries(path: &Path, entries: &[EffectEntry]) -> Result<Vec<Effect>, Pi
         .iter()
         .enumerate()
         .map(|(i, e)| {
-            e.effect.parse::<Effect>().map_err(|err| {
+            let at = |why: String| {
                 bad_input(format!(
-                    "{}: key `effects[{i}].effect`: {err}",
+                    "{}: key `effects[{i}].effect`: {why}",
                     path.display()
                 ))
-            })
+            };
+            let effect = e
+                .effect
+                .parse::<Effect>()
+                .map_err(|err| at(err.to_string()))?;
+            // The bounds `--wind`, `--current` and `generate --effect` hold a flow to: an edited
+            // current of 1e9 m/s was simulated until it "diverged", the edit read as the model's failure.
+            let (kind, speed, max) = match &effect {
+                Effect::Current(c) => (
+                    "current",
+                    c.speed_m_s,
+                    crate::generate::MAX_RECORDED_CURRENT_M_S,
+                ),
+                Effect::Wind(w) => ("wind", w.speed_m_s, crate::generate::MAX_RECORDED_WIND_M_S),
+                _ => return Ok(effect),
+            };
+            if speed > max {
+                return Err(at(format!(
+                    "{kind}: speed = {} m/s is beyond the {max} m/s a recorded {kind} may have",
+                    shipid_io::error::number(speed)
+                )));
+            }
+            Ok(effect)
         })
         .collect()
 }
@@ -149,6 +171,9 @@ fn load_parts(
     if table.as_ref().is_some_and(|t| t.contains_key("base")) {
         let file: AugmentedModelFile =
             toml::from_str(&text).map_err(|e| toml_error(path, &text, &e))?;
+        if let Some((key, msg)) = version_fault(&file.shipid_version) {
+            return Err(InputError::key(path, &key, msg).into());
+        }
         let base_spec = resolve_base(path, &file, chain)?;
         chain.push(absolute_path(path));
         let (base, mut effects) = load_parts(&base_spec, chain)?;
@@ -176,6 +201,9 @@ fn load_parts(
     let file: ModelFile = toml::from_str(&text).map_err(|e| toml_error(path, &text, &e))?;
     shipid_io::dataset::check_ship(path, &file.ship)?;
     shipid_io::dataset::check_added_mass(path, &file.added_mass, &file.ship)?;
+    if let Some((key, msg)) = polynomial_file_fault(&file) {
+        return Err(InputError::key(path, &key, msg).into());
+    }
     let model = file
         .to_model()
         .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
@@ -305,6 +333,97 @@ fn check_kind_matches_tables(
         .into()),
         None => Ok(()),
     }
+}
+
+/// `shipid_version` when it is not a version (see [`crate::mmg::file::is_version`]), as (key,
+/// message): the newer-version warning cannot compare it, so `"banana"` was read without a word.
+pub fn version_fault(version: &str) -> Option<(String, String)> {
+    (!crate::mmg::file::is_version(version)).then(|| {
+        (
+            "shipid_version".into(),
+            format!(
+                "\"{version}\" is not a version (MAJOR.MINOR.PATCH, as `shipid fit` writes it)"
+            ),
+        )
+    })
+}
+
+/// The largest |value| of a polynomial model file's prime coefficient. A fitted one is of order
+/// 1e-3 to 1 (forces ÷ ½ρL²U0², a cubic's too); 1e6 is far past any fit and still short of where
+/// a manoeuvre's sums overflow: `N_vvv = 1e308` ran to NaN accelerations at 5 s and read as a
+/// diverging model.
+pub const MAX_PRIME_COEFFICIENT: f64 = 1e6;
+
+/// The first fault (key, message) of a polynomial model file that its model's own checks do not
+/// name: the version, the coefficients' magnitudes, a shipped set's name over other terms, the
+/// estimator's hyper-parameters and the training windows. The ship must be checked.
+pub fn polynomial_file_fault(file: &ModelFile) -> Option<(String, String)> {
+    use shipid_io::error::number;
+    if let Some(fault) = version_fault(&file.shipid_version) {
+        return Some(fault);
+    }
+    for (dof, per) in &file.coefficients {
+        for (name, &v) in per {
+            if !(v.is_finite() && v.abs() <= MAX_PRIME_COEFFICIENT) {
+                return Some((
+                    format!("coefficients.{dof}.{name}"),
+                    format!(
+                        "{} is not a prime coefficient of at most {MAX_PRIME_COEFFICIENT:e} in \
+                         magnitude: fitted ones are of order 1e-3 to 1; a damaged number or a unit slip",
+                        number(v)
+                    ),
+                ));
+            }
+        }
+    }
+    if let Some(fault) = shipped_set_fault(&file.set) {
+        return Some(fault);
+    }
+    for (name, &v) in &file.estimator.hyper {
+        let max = shipid_estimators::MAX_HYPER_PARAMETER;
+        if !(v.is_finite() && (0.0..=max).contains(&v)) {
+            return Some((
+                format!("estimator.hyper.{name}"),
+                format!(
+                    "must be a hyper-parameter in [0, {}] (as `shipid fit` takes it), not {}",
+                    number(max),
+                    number(v)
+                ),
+            ));
+        }
+    }
+    shipid_model::training_fault(&file.training)
+}
+
+/// A set named as a shipped set but holding other terms: reports, studies and the calibration's
+/// out-of-kind rows go by the name, so a reduced32 fit renamed `full68` was reported as full68.
+fn shipped_set_fault(set: &shipid_model::SetFile) -> Option<(String, String)> {
+    let text = shipid_model::CoefficientSet::builtin_text(&set.name)?;
+    let shipped: shipid_model::SetFile = toml::from_str(text).ok()?;
+    let sorted = |terms: &[String]| {
+        let mut t = terms.to_vec();
+        t.sort();
+        t
+    };
+    let dofs = [
+        ("X", &set.x, &shipped.x),
+        ("Y", &set.y, &shipped.y),
+        ("N", &set.n, &shipped.n),
+    ];
+    let (dof, own, theirs) = dofs
+        .into_iter()
+        .find(|(_, own, theirs)| sorted(&own.terms) != sorted(&theirs.terms))?;
+    Some((
+        "set.name".into(),
+        format!(
+            "is the shipped set \"{}\", but the file's {dof} terms are not that set's ({} terms, \
+             the shipped set has {}): the set was renamed or its terms edited; a set of your own \
+             needs a name of its own",
+            set.name,
+            own.terms.len(),
+            theirs.terms.len()
+        ),
+    ))
 }
 
 /// A warning for a model file written by a newer shipid than this one (`shipid_version` above this
@@ -578,6 +697,12 @@ pub const GP_MIN_LENGTH_SCALE_SHARE: f64 = 1e-6;
 /// targets, hyper-parameters out of their domain, calibration factors. The ship must be checked.
 pub fn gp_file_fault(file: &GpModelFile) -> Option<(String, String)> {
     use shipid_io::error::number;
+    if let Some(fault) = version_fault(&file.shipid_version) {
+        return Some(fault);
+    }
+    if let Some(fault) = shipid_model::training_fault(&file.training) {
+        return Some(fault);
+    }
     let ship = &file.ship;
     let input_scale = [ship.u0, ship.u0, ship.u0 / ship.lpp, 1.0];
     let limits = [

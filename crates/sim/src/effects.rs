@@ -242,7 +242,7 @@ pub enum Effect {
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum EffectError {
     /// A parameter is out of its physical range.
-    #[error("{effect}: invalid {key} = {value}: {reason}")]
+    #[error("{effect}: invalid {key} = {}: {reason}", shipid_io::error::number(*value))]
     InvalidParameter {
         effect: &'static str,
         key: &'static str,
@@ -296,6 +296,14 @@ pub enum EffectParseError {
     #[error(transparent)]
     Invalid(#[from] EffectError),
 }
+
+/// The largest |direction| [deg] an effect's `from_deg` may have. A direction past a full turn is
+/// no direction anyone writes: `from_deg=1e300` came from a damaged number, and its sine and cosine
+/// are rounding noise, so it is refused rather than wrapped into some angle.
+pub const MAX_FROM_DEG: f64 = 360.0;
+
+const FROM_DEG_REASON: &str =
+    "must be a direction within ±360° [deg], clockwise from north, where the flow comes from";
 
 fn check(
     effect: &'static str,
@@ -378,7 +386,13 @@ impl Effect {
                     c.speed_m_s >= 0.0,
                     "must be a non-negative speed [m/s]",
                 )?;
-                check(e, "from_deg", c.from_deg, true, "must be finite [deg]")
+                check(
+                    e,
+                    "from_deg",
+                    c.from_deg,
+                    c.from_deg.abs() <= MAX_FROM_DEG,
+                    FROM_DEG_REASON,
+                )
             }
             Effect::Wind(w) => {
                 check(
@@ -388,7 +402,13 @@ impl Effect {
                     w.speed_m_s >= 0.0,
                     "must be a non-negative speed [m/s]",
                 )?;
-                check(e, "from_deg", w.from_deg, true, "must be finite [deg]")?;
+                check(
+                    e,
+                    "from_deg",
+                    w.from_deg,
+                    w.from_deg.abs() <= MAX_FROM_DEG,
+                    FROM_DEG_REASON,
+                )?;
                 for (key, a) in [("af", w.frontal_area_m2), ("al", w.lateral_area_m2)] {
                     if let Some(a) = a {
                         check(e, key, a, a >= 0.0, "must be a non-negative area [m²]")?;
@@ -937,6 +957,26 @@ mod tests {
                 yaw_factor: None,
             })
         );
+    }
+
+    /// Regression: `current:speed=0.5,from_deg=1e300` in a model file's `[[effects]]` was read, its
+    /// direction rounding noise; a direction past a full turn is refused, ±360° itself still read.
+    #[test]
+    fn a_direction_beyond_a_full_turn_is_refused() {
+        for text in [
+            "current:speed=0.5,from_deg=1e300",
+            "wind:speed=10,from=720",
+            "wind:speed=10,from=-360.5",
+        ] {
+            let e = text.parse::<Effect>().unwrap_err();
+            assert!(
+                e.to_string().contains("from_deg") && e.to_string().contains("360"),
+                "{text}: {e}"
+            );
+        }
+        for text in ["current:speed=0.5,from=360", "wind:speed=10,from=-360"] {
+            assert!(text.parse::<Effect>().is_ok(), "{text}");
+        }
     }
 
     #[test]

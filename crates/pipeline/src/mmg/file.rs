@@ -923,7 +923,13 @@ impl MmgModelFile {
                 ),
             ));
         }
+        if let Some(fault) = shipid_model::training_fault(&self.training) {
+            return Some(fault);
+        }
         let e = &self.estimator;
+        if let Some(fault) = self.left_out_fault() {
+            return Some(fault);
+        }
         // Written by `fit` (whose estimators these are), rather than `inverse` or by hand.
         let fitted = super::estimator::MmgEstimator::parse(&e.name).is_ok();
         if !(e.prior_weight.is_finite() && e.prior_weight >= 0.0) {
@@ -1035,6 +1041,36 @@ impl MmgModelFile {
                         "{name}: false, but its data_share {} is above estimator.determined_share = {} and it is off its bounds: the data determine it",
                         number(p.data_share),
                         number(e.determined_share)
+                    ),
+                ));
+            }
+        }
+        None
+    }
+
+    /// A jackknife refit that names a recording the fit did not train on: each refit leaves out
+    /// training recordings (`a.csv + b.csv` when grouped), and a report reads `left_out` as which.
+    fn left_out_fault(&self) -> Option<(String, String)> {
+        let j = self.estimator.jackknife.as_ref()?;
+        // Without training windows (a file written before they were stored) there is nothing to
+        // compare with.
+        if self.training.is_empty() {
+            return None;
+        }
+        for (k, group) in j.left_out.iter().enumerate() {
+            if let Some(name) = group
+                .split(" + ")
+                .find(|n| !self.training.iter().any(|w| w.recording == *n))
+            {
+                return Some((
+                    format!("estimator.jackknife.left_out[{k}]"),
+                    format!(
+                        "names \"{name}\", which is not a training recording of this model (`training[*].recording`: {})",
+                        self.training
+                            .iter()
+                            .map(|w| w.recording.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
                     ),
                 ));
             }
