@@ -222,6 +222,15 @@ pub fn parse_flow(flag: &str, text: &str) -> Result<ConstantFlow, PipelineError>
             flow.speed_m_s
         )));
     }
+    // As a model file's effects are held: 1e300° has no direction left in floating point, and 720°
+    // was echoed as given.
+    if flow.from_deg.abs() > shipid_sim::effects::MAX_FROM_DEG {
+        return Err(expected(&format!(
+            "the direction {}° is beyond ±{}° (a full turn)",
+            shipid_io::error::number(flow.from_deg),
+            shipid_sim::effects::MAX_FROM_DEG
+        )));
+    }
     // The bounds of a recorded wind or current: beyond them the run ends as a "diverged" model, and
     // the user's typo reads as the model's failure.
     let max = if flag == "--wind" {
