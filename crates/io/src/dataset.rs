@@ -271,7 +271,14 @@ impl Dataset {
 
     /// The recording with this file name.
     pub fn recording(&self, file: &str) -> Option<&DatasetRecording> {
-        self.recordings.iter().find(|r| r.file == file)
+        // As written in the data set first; then as the loader opens it, so that `sub/a.csv` names
+        // an entry written `./sub//a.csv` (it was refused as "not in the data set").
+        self.recordings.iter().find(|r| r.file == file).or_else(|| {
+            let wanted = normalised(file);
+            self.recordings
+                .iter()
+                .find(|r| normalised(&r.file) == wanted)
+        })
     }
 }
 

@@ -107,7 +107,9 @@ pub fn run(args: &DiagnoseArgs) -> Result<Outcome, CliError> {
     let mut ds = Dataset::load(dataset)?;
     if let Some(name) = only_recording {
         let names: Vec<String> = ds.recordings.iter().map(|r| r.file.clone()).collect();
-        ds.recordings.retain(|r| r.file == name);
+        // The data set's own spelling of the name given (`./a.csv` for `a.csv`).
+        let file = ds.recording(name).map(|r| r.file.clone());
+        ds.recordings.retain(|r| Some(&r.file) == file.as_ref());
         if ds.recordings.is_empty() {
             return Err(bad_input(format!(
                 "--recording {name}: {} has no such recording (it has: {})",

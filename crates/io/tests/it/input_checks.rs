@@ -1010,3 +1010,24 @@ fn a_recording_that_is_a_fifo_or_a_device_is_named_as_no_regular_file() {
         );
     }
 }
+
+/// Regression: `fit --recordings sub/a.csv` was refused as "not in the data set" when the entry was
+/// written `./sub//a.csv`, the same file as the loader opens it.
+#[test]
+fn a_recording_is_found_under_another_spelling_of_its_path() {
+    let dir = TempDir::new("spelling");
+    std::fs::create_dir_all(dir.0.join("sub")).unwrap();
+    std::fs::write(dir.0.join("sub/a.csv"), recording_text(HEADER, |_, _| {})).unwrap();
+    let ds = dir.0.join("ds.toml");
+    std::fs::write(
+        &ds,
+        format!("{SHIP}[[recording]]\nfile = \"./sub//a.csv\"\nkind = \"free\"\n"),
+    )
+    .unwrap();
+    let loaded = Dataset::load(&ds).unwrap();
+    for spelling in ["./sub//a.csv", "sub/a.csv", "sub/./a.csv"] {
+        let found = loaded.recording(spelling).map(|r| r.file.as_str());
+        assert_eq!(found, Some("./sub//a.csv"), "{spelling}");
+    }
+    assert!(loaded.recording("a.csv").is_none());
+}
