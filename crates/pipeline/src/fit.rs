@@ -879,18 +879,6 @@ pub use crate::validate::rms;
 mod tests {
     use super::*;
 
-    const KVLCC2_MODEL: shipid_io::Ship = shipid_io::Ship {
-        lpp: 7.0,
-        beam: 1.27,
-        draft: 0.46,
-        displacement: 3.27,
-        rho: 1000.0,
-        xg: 0.25,
-        kzz: 1.75,
-        u0: 1.179,
-        rudder_rate: 15.8,
-    };
-
     fn clock(step_s: f64, samples: usize) -> Vec<f64> {
         (0..samples).map(|i| i as f64 * step_s).collect()
     }
@@ -911,7 +899,8 @@ mod tests {
                 "window 5.053 L/U0 (7 samples 5 s apart; 0.300 L/U0 asked for",
             ),
         ] {
-            let text = estimated_accelerations_text(&clock(step_s, 100), &KVLCC2_MODEL);
+            let text =
+                estimated_accelerations_text(&clock(step_s, 100), &shipid_sim::kvlcc2_ship());
             assert!(
                 text.starts_with("estimated: local cubic least squares (Savitzky–Golay), ")
                     && text.contains(window),
