@@ -27,7 +27,7 @@ pub fn run_and_write(
     crate::outputs::check_folder(
         "--out",
         out,
-        &RUN_WRITES,
+        &run_writes(),
         &crate::outputs::Inputs::new()
             .file(&study.path, "the study file")
             .dataset(&study.dataset_path),
@@ -109,18 +109,15 @@ pub fn run_and_write(
     Ok((results, report))
 }
 
-/// The files a run writes at the top of its output folder (the cases' own go under `cases/`).
-const RUN_WRITES: [&str; 9] = [
-    "study.toml",
-    "run.json",
-    "summary.csv",
-    "summary.parquet",
-    "coefficients.csv",
-    "coefficients.parquet",
-    "diagnostics.csv",
-    "diagnostics.parquet",
-    shipid_report::REPORT_FILE,
-];
+/// The files a run writes at the top of its output folder (the cases' own go under `cases/`): its
+/// records, its tables (the ones a reference keeps) and its report.
+fn run_writes() -> Vec<&'static str> {
+    ["study.toml", "run.json"]
+        .into_iter()
+        .chain(shipid_study::reference::REFERENCE_TABLES)
+        .chain([shipid_report::REPORT_FILE])
+        .collect()
+}
 
 /// An output folder that is a file (or under one) is the user's mistake, named before any work.
 /// A study writes `cases/`, `figures/`, tables and a report into its folder and removes figures of
