@@ -156,6 +156,25 @@ fn validate_reports_the_share_of_states_outside_the_identification_range() {
     assert_eq!(outside("mmg:kvlcc2", "tc35_ps.csv"), None);
 }
 
+/// A reduced32 model fitted on the default data's ZZ20/20 port alone (rudder ≤ 20°), written into
+/// `dir`: the data set's path and the model's.
+fn fit_reduced32_on_zz20(dir: &std::path::Path) -> (String, std::path::PathBuf) {
+    let model = dir.join("reduced32-zz20.toml");
+    let ds = common::root().join("data/kvlcc2-mmg/dataset.toml");
+    let ds = ds.to_str().unwrap().to_string();
+    common::shipid_ok(&[
+        "fit",
+        &ds,
+        "--set",
+        "reduced32",
+        "--recordings",
+        "zz20_20_ps.csv",
+        "--out",
+        model.to_str().unwrap(),
+    ]);
+    (ds, model)
+}
+
 /// Regression: `validate` of a model trained on 20° of rudder against recordings at 35° gave their
 /// `outside` share (a 45° turn of a model trained to 35° was 1 % outside) and no word that their
 /// rudder was one the model never saw; `simulate` warned. Each recording past the training extremes
@@ -163,19 +182,8 @@ fn validate_reports_the_share_of_states_outside_the_identification_range() {
 #[test]
 fn validate_names_the_recordings_past_the_training_extremes() {
     let dir = tempfile::tempdir().unwrap();
-    let model = dir.path().join("reduced32-zz20.toml");
-    let ds = common::root().join("data/kvlcc2-mmg/dataset.toml");
-    let (ds, model) = (ds.to_str().unwrap(), model.to_str().unwrap());
-    common::shipid_ok(&[
-        "fit",
-        ds,
-        "--set",
-        "reduced32",
-        "--recordings",
-        "zz20_20_ps.csv",
-        "--out",
-        model,
-    ]);
+    let (ds, model) = fit_reduced32_on_zz20(dir.path());
+    let (ds, model) = (ds.as_str(), model.to_str().unwrap());
     // The 35° runs diverge with this model (exit 1): their rows and warnings are still written.
     let out = common::shipid(&["validate", model, ds, "--json"]);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
@@ -215,17 +223,8 @@ fn validate_names_the_recordings_past_the_training_extremes() {
 #[test]
 fn simulate_of_a_model_whose_ship_is_not_its_training_data_s_warns() {
     let dir = tempfile::tempdir().unwrap();
-    let model = dir.path().join("r32.toml");
-    let ds = common::root().join("data/kvlcc2-mmg/dataset.toml");
-    let (ds, model_s) = (ds.to_str().unwrap(), model.to_str().unwrap());
-    common::shipid_ok(&[
-        "fit",
-        ds,
-        "--recordings",
-        "zz20_20_ps.csv",
-        "--out",
-        model_s,
-    ]);
+    let (_, model) = fit_reduced32_on_zz20(dir.path());
+    let model_s = model.to_str().unwrap();
     let simulate = || {
         let out = common::shipid_ok(&["simulate", model_s, "--manoeuvre", "zigzag:20/20:port"]);
         String::from_utf8_lossy(&out.stderr).to_string()
