@@ -537,6 +537,9 @@ pub struct Envelope {
     range: Option<IdentificationRange>,
     /// The training states' extent (`None` when the training data cannot be read).
     pub training: Option<StateExtent>,
+    /// The ship of the training data set and its path, when it was read: a model file's own
+    /// `[ship]` is compared with it without reading the data set again.
+    pub training_dataset: Option<(shipid_io::Ship, PathBuf)>,
 }
 
 /// The training windows a model file records (following nothing: `path` is the file that holds them).
@@ -569,11 +572,13 @@ pub fn model_envelope(model_spec: &str, model: &dyn shipid_sim::Dynamics) -> Opt
     let training = read
         .as_ref()
         .and_then(|(data, windows)| StateExtent::of_windows(&data.1, windows));
+    let training_dataset = read.as_ref().map(|(data, _)| (data.1.ship, data.2.clone()));
     if model.own_range().is_some() {
         return Some(Envelope {
             source: RangeSource::Coverage,
             range: None,
             training,
+            training_dataset,
         });
     }
     let (data, windows) = read?;
@@ -593,6 +598,7 @@ pub fn model_envelope(model_spec: &str, model: &dyn shipid_sim::Dynamics) -> Opt
         source,
         range: Some(range),
         training,
+        training_dataset,
     })
 }
 

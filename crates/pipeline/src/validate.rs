@@ -711,18 +711,25 @@ pub fn validate_dataset(
     let rows = ds
         .recordings
         .iter()
-        .map(|r| ValidatedRecording {
-            file: r.file.clone(),
-            validation: validate_recording_with(model, r, &ds.ship, &windage),
-            outside_identification_range: envelope
-                .as_ref()
-                .and_then(|e| e.outside_share(model, &r.recording)),
-            beyond_training: envelope
-                .as_ref()
-                .and_then(|e| e.reach(model, &r.recording))
-                .filter(|reach| reach.clearly_beyond())
-                .map(|reach| reach.beyond())
-                .unwrap_or_default(),
+        .map(|r| {
+            // The reach holds the outside share: computed once (its leverage per sample is the
+            // costly part); the share alone where the recording has no extent to reach with.
+            let reach = envelope.as_ref().and_then(|e| e.reach(model, &r.recording));
+            ValidatedRecording {
+                file: r.file.clone(),
+                validation: validate_recording_with(model, r, &ds.ship, &windage),
+                outside_identification_range: reach.as_ref().map(|reach| reach.outside).or_else(
+                    || {
+                        envelope
+                            .as_ref()
+                            .and_then(|e| e.outside_share(model, &r.recording))
+                    },
+                ),
+                beyond_training: reach
+                    .filter(|reach| reach.clearly_beyond())
+                    .map(|reach| reach.beyond())
+                    .unwrap_or_default(),
+            }
         })
         .collect();
     let source = envelope.map_or(RangeSource::Unknown, |e| e.source);

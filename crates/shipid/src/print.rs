@@ -33,29 +33,31 @@ pub fn training_range_warnings(model_spec: &str, what: &str) -> Vec<String> {
     }
 }
 
-/// Where a model file's `[ship]` is not its training data set's: the file was edited after the fit
-/// (or assembled from two), and its predictions, scaled by its own ship, and its identification
-/// range, read from the data, do not belong together. `simulate` of a file with U0 edited tenfold
-/// predicted a 49.5° overshoot (14.3° true) "0 % outside" without a word; `validate` compares the
-/// ship with the data set it is given, which is usually the same check.
-pub fn training_ship_warnings(model_spec: &str, model_ship: &shipid_io::Ship) -> Vec<String> {
+/// Where a model file's `[ship]` is not its training data set's (`training`: that data set's ship
+/// and path, as the model's envelope read it): the file was edited after the fit (or assembled from
+/// two), and its predictions, scaled by its own ship, and its identification range, read from the
+/// data, do not belong together. `simulate` of a file with U0 edited tenfold predicted a 49.5°
+/// overshoot (14.3° true) "0 % outside" without a word; `validate` compares the ship with the data
+/// set it is given, which is usually the same check.
+pub fn training_ship_warnings(
+    model_spec: &str,
+    model_ship: &shipid_io::Ship,
+    training: Option<&(shipid_io::Ship, std::path::PathBuf)>,
+) -> Vec<String> {
     use shipid_pipeline::model_file::{ship_differences, ship_mismatch};
-    use shipid_pipeline::range::{TrainingSource, training_source};
-    let TrainingSource::Read { data, model, .. } = training_source(model_spec) else {
+    let Some((ship, path)) = training else {
         return Vec::new();
     };
-    let (_, ds, path) = data.as_ref();
-    let mut differences: Vec<String> = ship_mismatch(model_ship, &ds.ship)
+    let mut differences: Vec<String> = ship_mismatch(model_ship, ship)
         .map(|m| m.to_string())
         .into_iter()
         .collect();
-    differences.extend(ship_differences(model_ship, &ds.ship));
+    differences.extend(ship_differences(model_ship, ship));
     if differences.is_empty() {
         return Vec::new();
     }
     vec![format!(
-        "{}: its [ship] is not the ship of its training data {} ({}): the file was edited after the fit, or describes another ship than the one it was fitted on; its predictions and its identification range do not belong together",
-        model.display(),
+        "{model_spec}: its [ship] is not the ship of its training data {} ({}): the file was edited after the fit, or describes another ship than the one it was fitted on; its predictions and its identification range do not belong together",
         path.display(),
         differences.join("; ")
     )]

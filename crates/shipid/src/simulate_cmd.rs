@@ -454,7 +454,11 @@ pub fn run(a: &SimulateArgs<'_>) -> Result<Outcome, CliError> {
     } else {
         Vec::new()
     };
-    range_unavailable.extend(crate::print::training_ship_warnings(a.model, model.ship()));
+    range_unavailable.extend(crate::print::training_ship_warnings(
+        a.model,
+        model.ship(),
+        envelope.as_ref().and_then(|e| e.training_dataset.as_ref()),
+    ));
     for w in &range_unavailable {
         eprintln!("warning: {w}");
     }
